@@ -1,0 +1,24 @@
+// The skyloc subcommands. Each is a function taking the arguments after its name and
+// returning the process exit code; main() dispatches through kCommands.
+#pragma once
+
+#include <span>
+
+namespace skyloc::app {
+
+using CommandFn = int (*)(std::span<char* const> args);
+
+struct Command {
+  const char* name;
+  const char* summary;
+  CommandFn run;
+};
+
+int RunDemo(std::span<char* const> args);
+
+// Exit codes shared by every command.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;  // a runtime error (device, file contents)
+inline constexpr int kExitUsage = 2;    // bad command line
+
+}  // namespace skyloc::app

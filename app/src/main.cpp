@@ -1,0 +1,47 @@
+#include <cstdio>
+#include <cstring>
+#include <span>
+
+#include "commands.h"
+
+namespace skyloc::app {
+namespace {
+
+constexpr Command kCommands[] = {
+    {"demo", "localise on the simulated camera and print what happened", RunDemo},
+};
+
+void PrintUsage(std::FILE* out) {
+  std::fprintf(out, "usage: skyloc COMMAND [ARGS...]\n\ncommands:\n");
+  for (const Command& c : kCommands)
+    std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+  std::fprintf(out, "\n'skyloc COMMAND --help' describes a command.\n");
+}
+
+}  // namespace
+}  // namespace skyloc::app
+
+int main(int argc, char** argv) {
+  using namespace skyloc::app;
+  if (argc < 2) {
+    PrintUsage(stderr);
+    return kExitUsage;
+  }
+  const char* name = argv[1];
+  if (std::strcmp(name, "--help") == 0 || std::strcmp(name, "-h") == 0 ||
+      std::strcmp(name, "help") == 0) {
+    PrintUsage(stdout);
+    return kExitOk;
+  }
+  if (std::strcmp(name, "--version") == 0 || std::strcmp(name, "version") == 0) {
+    std::printf("skyloc %s\n", SKYLOC_VERSION);
+    return kExitOk;
+  }
+  for (const Command& c : kCommands) {
+    if (std::strcmp(name, c.name) == 0) {
+      return c.run(std::span<char* const>(argv + 2, static_cast<std::size_t>(argc - 2)));
+    }
+  }
+  std::fprintf(stderr, "skyloc: unknown command '%s'. Run 'skyloc --help' for the list.\n", name);
+  return kExitUsage;
+}

@@ -1,0 +1,39 @@
+# One library target per top-level folder. Public headers live under
+# <folder>/include/skyloc/<folder>/, sources under <folder>/src/. A module's sources
+# are listed by glob so that adding a file is one step; CONFIGURE_DEPENDS re-runs the
+# glob at build time.
+function(skyloc_add_module name)
+  cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS;EXTRA_SOURCES" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+  add_library(skyloc_${name} STATIC ${sources} ${ARG_EXTRA_SOURCES})
+  add_library(skyloc::${name} ALIAS skyloc_${name})
+  target_include_directories(skyloc_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(skyloc_${name}
+    PUBLIC ${ARG_PUBLIC_DEPS}
+    PRIVATE skyloc::warnings ${ARG_PRIVATE_DEPS})
+  target_link_libraries(skyloc_${name} PUBLIC skyloc::fp skyloc::sanitize)
+endfunction()
+
+# A GoogleTest executable whose cases are registered one by one with CTest. Under a
+# cross build gtest_discover_tests runs the binary through CMAKE_CROSSCOMPILING_EMULATOR.
+function(skyloc_add_gtest name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} skyloc::warnings GTest::gtest_main GTest::gmock)
+  target_compile_definitions(${name} PRIVATE
+    SKYLOC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    SKYLOC_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
+  set(labels ${ARG_LABELS})
+  if(CMAKE_CROSSCOMPILING)
+    list(APPEND labels cross)
+  endif()
+  # Labels are attached by a ctest-time include rather than gtest_discover_tests'
+  # PROPERTIES, which (CMake 3.25) splits a list value such as "unit;cross" apart.
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 120 TEST_LIST ${name}_TESTS)
+  set(label_script ${CMAKE_CURRENT_BINARY_DIR}/${name}_labels.cmake)
+  file(WRITE ${label_script}
+    "if(DEFINED ${name}_TESTS)\n"
+    "  set_tests_properties(\${${name}_TESTS} PROPERTIES LABELS \"${labels}\")\n"
+    "endif()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${label_script})
+endfunction()

@@ -1,0 +1,34 @@
+# Compiler options live on INTERFACE targets, never in global CMAKE_CXX_FLAGS, so a
+# third-party subproject (GoogleTest from source in cross builds) keeps its own flags.
+
+add_library(skyloc_warnings INTERFACE)
+add_library(skyloc::warnings ALIAS skyloc_warnings)
+target_compile_options(skyloc_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wsign-conversion -Wold-style-cast
+  -Wnon-virtual-dtor -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion
+  -Wformat=2 -Wimplicit-fallthrough -Wcast-qual -Wundef)
+if(SKYLOC_WERROR)
+  target_compile_options(skyloc_warnings INTERFACE -Werror)
+endif()
+
+# Floating point is IEEE everywhere: host and ARM must agree with the same reference
+# files. -ffp-contract=off stops GCC fusing a*b+c into FMA on aarch64 (x86-64 baseline
+# has no FMA), which would otherwise make the two architectures round differently.
+add_library(skyloc_fp INTERFACE)
+add_library(skyloc::fp ALIAS skyloc_fp)
+target_compile_options(skyloc_fp INTERFACE -ffp-contract=off -fno-fast-math)
+
+add_library(skyloc_sanitize INTERFACE)
+add_library(skyloc::sanitize ALIAS skyloc_sanitize)
+if(SKYLOC_SANITIZE)
+  target_compile_options(skyloc_sanitize INTERFACE
+    -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  target_link_options(skyloc_sanitize INTERFACE -fsanitize=address,undefined)
+  target_compile_definitions(skyloc_sanitize INTERFACE SKYLOC_SANITIZED=1)
+endif()
+
+find_program(SKYLOC_CCACHE ccache)
+if(SKYLOC_CCACHE)
+  set(CMAKE_C_COMPILER_LAUNCHER ${SKYLOC_CCACHE})
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${SKYLOC_CCACHE})
+endif()

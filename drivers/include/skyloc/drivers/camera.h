@@ -1,0 +1,87 @@
+// The camera interface every source of frames implements: V4L2, libcamera, the simulated
+// camera, dataset replay. Public non-virtual methods check the call order once, here, so
+// every implementation behaves the same way to the pipeline; implementations override
+// the private Do* hooks only.
+//
+//   Closed --Open()--> Open --Start()--> Streaming --Stop()--> Open --Close()--> Closed
+//
+// Buffers are allocated in Open() (sized from the configuration); Capture() hands out a
+// view of one of them that stays valid until the next Capture() or Stop().
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "skyloc/dsp/image.h"
+#include "skyloc/platform/clock.h"
+#include "skyloc/platform/status.h"
+
+namespace skyloc::drivers {
+
+// Where the camera was, when the source knows it (simulator, recorded datasets).
+struct Pose {
+  double x_m = 0, y_m = 0, z_m = 0;
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;
+};
+
+struct Frame {
+  dsp::ImageView image;
+  std::uint64_t sequence = 0;  // counts every frame the source produced, dropped ones too
+  Nanoseconds timestamp{0};    // CLOCK_MONOTONIC time the frame was captured
+  std::optional<Pose> pose;
+};
+
+struct CameraInfo {
+  char name[64] = {};  // e.g. "v4l2:/dev/video0", "sim:city"
+  int width = 0;
+  int height = 0;
+  dsp::PixelFormat format = dsp::PixelFormat::kGrey8;
+};
+
+// Health counters every camera keeps; the pipeline reports them at exit.
+struct CameraCounters {
+  std::uint64_t frames = 0;    // frames delivered by Capture()
+  std::uint64_t dropped = 0;   // gaps in the sequence numbers
+  std::uint64_t restarts = 0;  // times the device was closed and reopened after a fault
+  std::uint64_t errors = 0;    // Capture() calls that returned an error
+};
+
+class Camera {
+ public:
+  enum class State : std::uint8_t { kClosed, kOpen, kStreaming };
+
+  virtual ~Camera() = default;
+  Camera(const Camera&) = delete;
+  Camera& operator=(const Camera&) = delete;
+
+  Status Open();
+  Status Start();
+  // Waits up to `timeout` for the next frame. kDeadlineExceeded on timeout; kUnavailable
+  // when the device is gone and could not be recovered; kDataLoss for a corrupt frame
+  // (the next Capture() may succeed). End of a finite source (a dataset) is kOutOfRange.
+  Result<Frame> Capture(Nanoseconds timeout);
+  void Stop();
+  void Close();
+
+  State state() const { return state_; }
+  const CameraInfo& info() const { return info_; }
+  const CameraCounters& counters() const { return counters_; }
+
+ protected:
+  Camera() = default;
+  CameraInfo info_;
+  CameraCounters counters_;
+
+ private:
+  virtual Status DoOpen() = 0;
+  virtual Status DoStart() = 0;
+  virtual Result<Frame> DoCapture(Nanoseconds timeout) = 0;
+  virtual void DoStop() = 0;
+  virtual void DoClose() = 0;
+
+  State state_ = State::kClosed;
+};
+
+const char* CameraStateName(Camera::State state);
+
+}  // namespace skyloc::drivers

@@ -1,0 +1,56 @@
+// An array whose size is chosen at start-up (from the configuration) and never changes.
+// Allocate() is the only allocation; a failure is a Status, not an exception.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <new>
+#include <span>
+
+#include "skyloc/platform/status.h"
+
+namespace skyloc {
+
+template <typename T>
+class FixedArray {
+ public:
+  FixedArray() = default;
+  FixedArray(FixedArray&&) noexcept = default;
+  FixedArray& operator=(FixedArray&&) noexcept = default;
+  FixedArray(const FixedArray&) = delete;
+  FixedArray& operator=(const FixedArray&) = delete;
+
+  // Allocates `count` value-initialised elements. Calling it again replaces the storage;
+  // that is start-up work only.
+  Status Allocate(std::size_t count) {
+    data_.reset(new (std::nothrow) T[count == 0 ? 1 : count]());
+    if (!data_) {
+      size_ = 0;
+      return Status::Error(StatusCode::kResourceExhausted,
+                           "cannot allocate %zu elements of %zu bytes: lower the capacity in "
+                           "the configuration",
+                           count, sizeof(T));
+    }
+    size_ = count;
+    return Status::Ok();
+  }
+
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  T* data() { return data_.get(); }
+  const T* data() const { return data_.get(); }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+  std::span<T> span() { return {data_.get(), size_}; }
+  std::span<const T> span() const { return {data_.get(), size_}; }
+  T* begin() { return data_.get(); }
+  T* end() { return data_.get() + size_; }
+  const T* begin() const { return data_.get(); }
+  const T* end() const { return data_.get() + size_; }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  std::size_t size_ = 0;
+};
+
+}  // namespace skyloc

@@ -1,0 +1,231 @@
+#!/usr/bin/env bash
+# skyloc: install what is missing, build, test, run. See README.md.
+#
+#   ./skyloc.sh demo              build for this machine and run the demo on the simulated camera
+#   ./skyloc.sh test              host + sanitizer + aarch64 (qemu-user) builds, every test
+#   ./skyloc.sh build [KIND]      KIND: host (default), asan, aarch64, armhf, release
+#   ./skyloc.sh bench [FILTER]    Release build, run the Google Benchmark programs
+#   ./skyloc.sh run ARGS...       build host and run: skyloc ARGS...
+#   ./skyloc.sh deps [KIND]       only install the Debian packages KIND needs
+#   ./skyloc.sh format            clang-format every C++ file in place
+#
+# Builds go to build/<KIND>/, never into the source tree. Packages are installed with
+# apt-get only when missing (root, or sudo when available).
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+BUILD_ROOT="${SKYLOC_BUILD_ROOT:-$ROOT/build}"
+JOBS="${SKYLOC_JOBS:-$(nproc)}"
+
+say() { printf '\033[1mskyloc:\033[0m %s\n' "$*" >&2; }
+die() {
+  printf 'skyloc: error: %s\n' "$*" >&2
+  exit 1
+}
+
+# ---------------------------------------------------------------------------------------
+# Debian packages, by build kind.
+HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest libgtest-dev
+  libbenchmark-dev libeigen3-dev libtomlplusplus-dev libstb-dev libgpiod-dev gpiod
+  libcamera-dev)
+CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static)
+CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static)
+# Optional target libraries from Debian multiarch. The archive's architectures are not
+# always in step (a security update can reach amd64 before arm64), and then these are not
+# co-installable; the build then leaves the driver out and says so at configure time.
+CROSS_OPTIONAL_aarch64=(libgpiod-dev:arm64)
+CROSS_OPTIONAL_armhf=(libgpiod-dev:armhf)
+
+apt_updated=0
+as_root() {
+  if [ "$(id -u)" -eq 0 ]; then "$@"; elif command -v sudo >/dev/null; then sudo "$@"; else
+    die "need root to install packages ($*): run as root or install sudo"
+  fi
+}
+missing_packages() {
+  local p
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+  done
+}
+apt_update_once() {
+  [ "$apt_updated" = 1 ] && return 0
+  # An index that fails to download (a mirror mid-sync) is not fatal: apt keeps the old
+  # one, and the install below says clearly if a package is really unavailable.
+  as_root apt-get update -qq || say "apt-get update reported errors; continuing with the lists it has"
+  apt_updated=1
+}
+install_packages() {
+  local missing
+  missing=$(missing_packages "$@")
+  [ -z "$missing" ] && return 0
+  apt_update_once
+  say "installing: $(echo $missing | tr '\n' ' ')"
+  # shellcheck disable=SC2086
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing \
+    >"$BUILD_ROOT/apt.log" 2>&1 || {
+    tail -20 "$BUILD_ROOT/apt.log" >&2
+    die "apt-get install failed for: $(echo $missing | tr '\n' ' ') (log: $BUILD_ROOT/apt.log)"
+  }
+}
+install_optional() {
+  local p
+  for p in $(missing_packages "$@"); do
+    apt_update_once
+    if ! as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$p" \
+      >>"$BUILD_ROOT/apt.log" 2>&1; then
+      say "optional package $p is not installable right now; its driver is left out of this build"
+    fi
+  done
+}
+ensure_foreign_arch() {
+  local arch=$1
+  if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
+    as_root dpkg --add-architecture "$arch"
+    apt_updated=0
+  fi
+}
+
+deps() {
+  local kind=${1:-host}
+  mkdir -p "$BUILD_ROOT"
+  install_packages "${HOST_PACKAGES[@]}"
+  case "$kind" in
+    host | asan | release) ;;
+    aarch64)
+      install_packages "${CROSS_PACKAGES_aarch64[@]}"
+      ensure_foreign_arch arm64
+      install_optional "${CROSS_OPTIONAL_aarch64[@]}"
+      ;;
+    armhf)
+      install_packages "${CROSS_PACKAGES_armhf[@]}"
+      ensure_foreign_arch armhf
+      install_optional "${CROSS_OPTIONAL_armhf[@]}"
+      ;;
+    *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
+  esac
+}
+
+# ---------------------------------------------------------------------------------------
+configure_and_build() {
+  local kind=${1:-host}
+  local dir="$BUILD_ROOT/$kind"
+  local args=(-G Ninja -S "$ROOT" -B "$dir")
+  [ "${CI:-}" = "true" ] && args+=(-DSKYLOC_WERROR=ON)
+  case "$kind" in
+    host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
+    release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
+    asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=ON -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
+    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake") ;;
+    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake") ;;
+    *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
+  esac
+  say "configuring $kind in $dir"
+  cmake "${args[@]}" >"$BUILD_ROOT/configure-$kind.log" 2>&1 || {
+    cat "$BUILD_ROOT/configure-$kind.log" >&2
+    die "cmake configure failed for $kind"
+  }
+  grep -E "^-- skyloc:" "$BUILD_ROOT/configure-$kind.log" >&2 || true
+  say "building $kind ($JOBS jobs)"
+  cmake --build "$dir" -j "$JOBS" || die "build failed for $kind"
+}
+
+# Runs ctest in a build and records its pass/fail counts for the final summary line.
+TOTAL_PASSED=0
+TOTAL_FAILED=0
+FAILED_KINDS=()
+run_ctest() {
+  local kind=$1
+  shift
+  local dir="$BUILD_ROOT/$kind" log="$BUILD_ROOT/ctest-$kind.log" rc=0
+  say "testing $kind: ctest $*"
+  (cd "$dir" && ctest --output-on-failure -j "$JOBS" --timeout 900 "$@") 2>&1 | tee "$log" || rc=$?
+  local line passed failed
+  line=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log" | tail -1 || true)
+  if [ -z "$line" ]; then
+    FAILED_KINDS+=("$kind(no result)")
+    return 0
+  fi
+  failed=$(sed -E 's/.* ([0-9]+) tests failed out of ([0-9]+).*/\1/' <<<"$line")
+  local total
+  total=$(sed -E 's/.* tests failed out of ([0-9]+).*/\1/' <<<"$line")
+  passed=$((total - failed))
+  TOTAL_PASSED=$((TOTAL_PASSED + passed))
+  TOTAL_FAILED=$((TOTAL_FAILED + failed))
+  if [ "$rc" -ne 0 ] || [ "$failed" -ne 0 ]; then FAILED_KINDS+=("$kind"); fi
+}
+
+cmd_test() {
+  local start=$SECONDS
+  deps host
+  deps aarch64
+  configure_and_build host
+  run_ctest host
+  configure_and_build asan
+  # The sanitizer build runs every test but the VM ones (those exercise the host build's
+  # binaries in a guest, where the sanitizer runtime adds nothing).
+  run_ctest asan -LE hil
+  configure_and_build aarch64
+  run_ctest aarch64 -LE hil
+  say "all test runs took $((SECONDS - start)) s"
+  if [ ${#FAILED_KINDS[@]} -gt 0 ]; then
+    echo "failing builds: ${FAILED_KINDS[*]}"
+  fi
+  echo "total: ${TOTAL_PASSED} passed, ${TOTAL_FAILED} failed"
+  [ ${#FAILED_KINDS[@]} -eq 0 ]
+}
+
+cmd_demo() {
+  deps host
+  configure_and_build host
+  "$BUILD_ROOT/host/app/skyloc" demo "$@"
+}
+
+usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
+
+main() {
+  local cmd=${1:-}
+  [ -n "$cmd" ] || {
+    usage
+    exit 2
+  }
+  shift
+  mkdir -p "$BUILD_ROOT"
+  case "$cmd" in
+    demo) cmd_demo "$@" ;;
+    test) cmd_test "$@" ;;
+    build)
+      deps "${1:-host}"
+      configure_and_build "${1:-host}"
+      ;;
+    deps) deps "${1:-host}" ;;
+    bench)
+      deps host
+      local dir="$BUILD_ROOT/bench"
+      say "configuring Release benchmarks in $dir"
+      cmake -G Ninja -S "$ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF \
+        >"$BUILD_ROOT/configure-bench.log" 2>&1 || die "cmake configure failed (see $BUILD_ROOT/configure-bench.log)"
+      cmake --build "$dir" -j "$JOBS" || die "benchmark build failed"
+      local b
+      for b in "$dir"/tests/bench/*_bench; do
+        say "running $(basename "$b")"
+        "$b" ${1:+--benchmark_filter="$1"}
+      done
+      ;;
+    run)
+      deps host
+      configure_and_build host >&2
+      "$BUILD_ROOT/host/app/skyloc" "$@"
+      ;;
+    format)
+      git -C "$ROOT" ls-files '*.cpp' '*.h' | (cd "$ROOT" && xargs clang-format -i)
+      ;;
+    -h | --help | help) usage ;;
+    *)
+      usage >&2
+      die "unknown command '$cmd'"
+      ;;
+  esac
+}
+
+main "$@"
