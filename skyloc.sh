@@ -120,6 +120,11 @@ configure_and_build() {
     armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake") ;;
     *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
   esac
+  # A build folder configured by hand with another generator cannot be reused: start it afresh.
+  if [ -f "$dir/CMakeCache.txt" ] && ! grep -q "^CMAKE_GENERATOR:INTERNAL=Ninja$" "$dir/CMakeCache.txt"; then
+    say "$dir was configured with another generator; reconfiguring it from scratch"
+    rm -rf "$dir"
+  fi
   say "configuring $kind in $dir"
   cmake "${args[@]}" >"$BUILD_ROOT/configure-$kind.log" 2>&1 || {
     cat "$BUILD_ROOT/configure-$kind.log" >&2
