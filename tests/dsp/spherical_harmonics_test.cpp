@@ -38,7 +38,7 @@ TEST(RealSphericalHarmonics, MatchBoostInTheRealBasisUpToL120) {
   constexpr int kBands = 121;
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> theta_dist(0.0, kPi), phi_dist(0.0, 2 * kPi);
-  for (int trial = 0; trial < 6; ++trial) {
+  for (int trial = 0; trial < 3; ++trial) {
     const double theta = theta_dist(rng), phi = phi_dist(rng);
     const std::vector<double> y = RealSh(kBands, theta, phi);
     for (int l = 0; l < kBands; ++l) {
@@ -74,9 +74,9 @@ TEST(RealSphericalHarmonics, IndexLayoutAndLowOrderFormulas) {
 }
 
 // Orthonormality, directly: the full-sphere grid's quadrature Σ_s w_s y_k(s) y_k'(s) is the
-// identity for every pair k, k' with l, l' < L (all L^4 pairs, double precision).
+// identity for every pair k, k' with l, l' < 20 (all L^4 pairs, double precision).
 TEST(RealSphericalHarmonics, FullSphereQuadratureIsOrthonormalAllPairs) {
-  constexpr int kBands = 24;
+  constexpr int kBands = 20;
   const ShGrid grid =
       MakeGrid({.rings = kBands, .longitudes = 64, .coverage = ShCoverage::kFullSphere});
   const auto n = static_cast<Eigen::Index>(grid.sample_count());
@@ -106,39 +106,36 @@ TEST(RealSphericalHarmonics, FullSphereQuadratureIsOrthonormalAtL120) {
     p.emplace_back(LegendreTriangleSize(kBands));
     ASSERT_TRUE(NormalisedLegendre(kBands, r.cos_theta, r.sin_theta, p.back()));
   }
-  const double ring_sum_to_integral = grid.longitudes() / (2 * kPi);  // undo the 2π/n factor
+  // Latitude: for each m the matrix rows l = m..L-1, columns rings, scaled by sqrt(w_i·n/2π)
+  // (the ring weight without its 2π/n longitude factor): P·Pᵀ must be I/(2π).
+  const double ring_sum_to_integral = grid.longitudes() / (2 * kPi);
   double worst = 0;
   for (int m = 0; m < kBands; ++m) {
-    for (int l = m; l < kBands; ++l) {
-      for (int l2 = l; l2 < kBands; ++l2) {
-        double sum = 0;
-        for (std::size_t i = 0; i < p.size(); ++i)
-          sum += grid.rings()[i].weight * ring_sum_to_integral * p[i][LegendreIndex(l, m)] *
-                 p[i][LegendreIndex(l2, m)];
-        worst = std::max(worst, std::fabs(sum * 2 * kPi - (l == l2 ? 1.0 : 0.0)));
-      }
-    }
+    Eigen::MatrixXd pm(kBands - m, grid.ring_count());
+    for (int i = 0; i < grid.ring_count(); ++i)
+      for (int l = m; l < kBands; ++l)
+        pm(l - m, i) = std::sqrt(grid.ring(i).weight * ring_sum_to_integral) *
+                       p[static_cast<std::size_t>(i)][LegendreIndex(l, m)];
+    const Eigen::MatrixXd gram = 2 * kPi * pm * pm.transpose();
+    worst = std::max(
+        worst, (gram - Eigen::MatrixXd::Identity(kBands - m, kBands - m)).cwiseAbs().maxCoeff());
   }
   EXPECT_LT(worst, 1e-12);
-  worst = 0;
+  // Longitude: rows cos(mφ_j) and sin(mφ_j) for m < L; the sums of their products over the
+  // n points, times 2π/n, must be π·δ (2π for the cos m = 0 row, sin 0 is identically 0).
   const int n = grid.longitudes();
-  for (int m = 0; m < kBands; ++m) {
-    for (int m2 = 0; m2 < kBands; ++m2) {
-      double cc = 0, ss = 0, cs = 0;
-      for (int j = 0; j < n; ++j) {
-        const double phi = grid.phi(j);
-        cc += std::cos(m * phi) * std::cos(m2 * phi);
-        ss += std::sin(m * phi) * std::sin(m2 * phi);
-        cs += std::cos(m * phi) * std::sin(m2 * phi);
-      }
-      const double scale = 2 * kPi / n;
-      const double cc_expected = m == m2 ? (m == 0 ? 2 * kPi : kPi) : 0.0;
-      const double ss_expected = (m == m2 && m > 0) ? kPi : 0.0;
-      worst = std::max({worst, std::fabs(cc * scale - cc_expected),
-                        std::fabs(ss * scale - ss_expected), std::fabs(cs * scale)});
+  Eigen::MatrixXd trig(2 * kBands - 1, n);
+  for (int j = 0; j < n; ++j) {
+    for (int m = 0; m < kBands; ++m) {
+      trig(m, j) = std::cos(m * grid.phi(j));
+      if (m > 0)
+        trig(kBands + m - 1, j) = std::sin(m * grid.phi(j));
     }
   }
-  EXPECT_LT(worst, 1e-12);
+  Eigen::MatrixXd expected = kPi * Eigen::MatrixXd::Identity(2 * kBands - 1, 2 * kBands - 1);
+  expected(0, 0) = 2 * kPi;
+  const Eigen::MatrixXd sums = (2 * kPi / n) * trig * trig.transpose();
+  EXPECT_LT((sums - expected).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 // --- Fast projection against the naive reference ----------------------------------------
@@ -177,24 +174,28 @@ std::vector<float> SampleSky(const ShGrid& grid, const std::vector<Cap>& sky,
   return f;
 }
 
-void ExpectFastEqualsNaive(const ShGridConfig& config, int bands, const std::vector<float>& f,
-                           const char* what) {
+// Both projectors on one grid; every mask must give the same coefficients.
+void ExpectFastEqualsNaive(const ShGridConfig& config, int bands,
+                           const std::vector<std::pair<std::string, std::vector<float>>>& masks) {
   const ShGrid grid = MakeGrid(config);
   ShProjector fast;
   ShNaiveProjector naive;
   ASSERT_EQ(fast.Init(grid, bands), ShError::kOk);
   ASSERT_EQ(naive.Init(grid, bands), ShError::kOk);
   std::vector<float> a(ShCoefficientCount(bands)), b(a.size());
-  ASSERT_EQ(fast.Project(f, a), ShError::kOk);
-  ASSERT_EQ(naive.Project(f, b), ShError::kOk);
-  float largest = 0, worst = 0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    largest = std::max(largest, std::fabs(b[k]));
-    worst = std::max(worst, std::fabs(a[k] - b[k]));
+  for (const auto& [what, f] : masks) {
+    ASSERT_EQ(fast.Project(f, a), ShError::kOk);
+    ASSERT_EQ(naive.Project(f, b), ShError::kOk);
+    float largest = 0, worst = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      largest = std::max(largest, std::fabs(b[k]));
+      worst = std::max(worst, std::fabs(a[k] - b[k]));
+    }
+    ASSERT_GT(largest, 0.0f) << what;
+    // 1e-5 relative to the largest coefficient (float tables and FFT; typically ~1e-7).
+    EXPECT_LT(worst, 1e-5f * largest) << config.rings << "x" << config.longitudes << " L=" << bands
+                                      << " " << what << ": worst " << worst << " of " << largest;
   }
-  ASSERT_GT(largest, 0.0f) << what;
-  // 1e-5 relative to the largest coefficient (float tables and FFT; typically ~1e-7).
-  EXPECT_LT(worst, 1e-5f * largest) << what << ": worst " << worst << " of " << largest;
 }
 
 std::vector<float> RandomMask(const ShGridConfig& config, unsigned seed) {
@@ -229,17 +230,16 @@ TEST(ShProjector, EqualsNaiveOnRandomAndStructuredMasks) {
   const std::vector<std::pair<ShGridConfig, int>> cases = {
       {DefaultShGridConfig(32), 32},
       {PaperShGridConfig(), 32},
-      {PaperShGridConfig(), 68},  // m > 64 folds past Nyquist (aliased, identically in both)
+      {{.rings = 8, .longitudes = 32}, 24},  // m > 16 folds past Nyquist (aliased in both)
       {{.rings = 5, .longitudes = 16}, 40},  // m wraps around the FFT length twice
       {{.rings = 25, .longitudes = 64, .coverage = ShCoverage::kFullSphere}, 30},
   };
   for (const auto& [config, bands] : cases) {
-    const std::string name = std::to_string(config.rings) + "x" +
-                             std::to_string(config.longitudes) + " L=" + std::to_string(bands);
-    ExpectFastEqualsNaive(config, bands, RandomMask(config, 5), (name + " random").c_str());
-    for (int kind = 0; kind < 3; ++kind)
-      ExpectFastEqualsNaive(config, bands, StructuredMask(config, kind),
-                            (name + " structured " + std::to_string(kind)).c_str());
+    ExpectFastEqualsNaive(config, bands,
+                          {{"random", RandomMask(config, 5)},
+                           {"tilted cap", StructuredMask(config, 0)},
+                           {"longitude stripes", StructuredMask(config, 1)},
+                           {"latitude stripes", StructuredMask(config, 2)}});
   }
 }
 
