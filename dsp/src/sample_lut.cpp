@@ -80,6 +80,15 @@ SampleLutError SampleLut::Init(const Lens& lens, std::span<const double> ring_th
   return SampleLutError::kOk;
 }
 
+SampleLutError SampleLut::Init(const Lens& lens, const ShGrid& grid,
+                               const SampleLutOptions& options) {
+  std::vector<double> theta;
+  theta.reserve(grid.rings().size());
+  for (const ShRing& ring : grid.rings())
+    theta.push_back(ring.theta);
+  return Init(lens, theta, grid.longitudes(), options);
+}
+
 template <typename Predicate>
 void SampleLut::Gather(const ImageView& image, const Predicate& is_sky,
                        std::span<float> samples) const {

@@ -13,6 +13,7 @@
 
 #include "skyloc/dsp/image.h"
 #include "skyloc/dsp/lens.h"
+#include "skyloc/dsp/sh_grid.h"
 
 namespace skyloc::dsp {
 
@@ -37,6 +38,8 @@ class SampleLut {
   // Projects every grid direction through the lens. Not for the frame path.
   SampleLutError Init(const Lens& lens, std::span<const double> ring_theta, int n_phi,
                       const SampleLutOptions& options);
+  // The same for the rings and longitudes of an SH grid.
+  SampleLutError Init(const Lens& lens, const ShGrid& grid, const SampleLutOptions& options);
 
   // From a binary mask (kGrey8; any non-zero byte is sky).
   SampleLutError SampleMask(const ImageView& mask, std::span<float> samples) const;
