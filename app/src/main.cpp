@@ -9,6 +9,8 @@ namespace {
 
 constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
+    {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
+     RunDescribe},
 };
 
 void PrintUsage(std::FILE* out) {
