@@ -569,7 +569,7 @@ Status WritePrSvg(const std::string& path, const std::vector<Run>& runs) {
   std::FILE* out = f.get();
   const double left = 70, top = 40, w = 460, h = 400;
   const double legend_h = 22.0 * static_cast<double>(runs.size());
-  const double width = left + w + 30, height = top + h + 60 + legend_h;
+  const double width = left + w + 260, height = top + h + 60 + legend_h;
   auto sx = [&](double r) { return left + r * w; };
   auto sy = [&](double p) { return top + (1.0 - p) * h; };
   std::fprintf(out,
