@@ -260,6 +260,56 @@ TEST(SeqSlamStreaming, EqualsBatchWithTrailingWindow) {
   }
 }
 
+TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
+  const PlantedRoute route = MakeRoute(150, 40, 20.0, 1.1, 0.3f, 17u);
+  SeqSlamParams p;
+  std::vector<float> rounded = route.reference;
+  for (float& x : rounded)
+    x = FromBFloat16(ToBFloat16(x));
+  std::vector<SeqSlamMatch> batch(40);
+  ASSERT_EQ(BatchSeqSlam(rounded, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
+            SeqSlamError::kOk);
+  StreamingSeqSlam s;
+  ASSERT_EQ(s.Init(p, route.dim, 150, ReferenceStorage::kBFloat16), SeqSlamError::kOk);
+  for (int r = 0; r < 150; ++r) {
+    ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
+                                 .subspan(static_cast<std::size_t>(r * route.dim), 16)),
+              SeqSlamError::kOk);
+  }
+  AllocationScope scope;
+  int correct = 0;
+  for (int t = 0; t < 40; ++t) {
+    SeqSlamMatch m;
+    ASSERT_EQ(
+        s.Step(std::span<const float>(route.query).subspan(static_cast<std::size_t>(t * 16), 16),
+               &m),
+        SeqSlamError::kOk);
+    const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
+    ASSERT_EQ(m.valid, b.valid);
+    EXPECT_EQ(m.reference, b.reference);
+    EXPECT_EQ(m.score, b.score);
+    EXPECT_EQ(m.uniqueness, b.uniqueness);
+    correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_EQ(correct, 31);  // the rounding costs nothing here
+  EXPECT_EQ(StreamingSeqSlam::BytesPerReference(p, 120, ReferenceStorage::kBFloat16),
+            2u * 120 + 4u * (10 + 2));
+}
+
+TEST(SeqSlamStreaming, BFloat16RoundsToNearestEven) {
+  EXPECT_EQ(ToBFloat16(1.0f), 0x3F80);
+  EXPECT_EQ(ToBFloat16(-2.0f), 0xC000);
+  // 1 + 2^-8 lies halfway between 1 and 1 + 2^-7: ties go to the even mantissa (1).
+  EXPECT_EQ(ToBFloat16(1.0f + 0x1p-8f), 0x3F80);
+  // 1 + 3 * 2^-8 lies halfway between 1 + 2^-7 (odd) and 1 + 2^-6 (even): rounds up.
+  EXPECT_EQ(ToBFloat16(1.0f + 3 * 0x1p-8f), 0x3F82);
+  EXPECT_EQ(ToBFloat16(1.0f + 0x1p-8f + 0x1p-12f), 0x3F81);  // above halfway
+  EXPECT_EQ(FromBFloat16(0x3F81), 1.0f + 0x1p-7f);
+  EXPECT_TRUE(std::isnan(FromBFloat16(ToBFloat16(std::nanf("")))));
+  EXPECT_TRUE(std::isinf(FromBFloat16(ToBFloat16(INFINITY))));
+}
+
 TEST(SeqSlamStreaming, SingleImageModeMatchesEveryFrame) {
   // Unrelated neighbouring references: single frames are distinctive on their own.
   const PlantedRoute route = MakeRoute(100, 30, 10.0, 1.0, 0.05f, 3u, /*smooth=*/false);
