@@ -21,6 +21,8 @@ std::size_t Sz(int v) {
 int CountVelocities(const SeqSlamParams& p) {
   const double span =
       (static_cast<double>(p.v_max) - static_cast<double>(p.v_min)) / static_cast<double>(p.v_step);
+  if (!(span < kMaxVelocities))
+    return kMaxVelocities + 1;  // too many (or NaN): rejected, and no overflowing cast
   return static_cast<int>(std::floor(span + 1e-3)) + 1;
 }
 

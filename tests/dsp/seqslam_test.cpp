@@ -152,6 +152,8 @@ TEST(SeqSlamParams, Validation) {
   EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
   p.v_step = 0.001f;  // 401 velocities
   EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
+  p.v_step = 1e-30f;  // 4e29 velocities: must not overflow the count
+  EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
   p = SeqSlamParams{};
   p.v_min = std::nanf("");
   EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
