@@ -77,24 +77,13 @@ class ShProjector {
   int bands_ = 0;
   int rings_ = 0;
   int longitudes_ = 0;
-<<<<<<< HEAD
-  std::unique_ptr<Fft> fft_;
-=======
   RingFft fft_;                  // scales ring i by its quadrature weight
->>>>>>> lens
   std::vector<float> table_;     // per m: rings × padded(L - m) values, √2 folded in for m > 0
   std::vector<MBlock> blocks_;   // in m order, then l order
   std::vector<int> bin_;         // FFT bin of each m (m mod longitudes, folded)
   std::vector<float> bin_sign_;  // -1 where the fold conjugates (sin terms change sign)
-<<<<<<< HEAD
-  std::vector<float> ring_weight_;
-  std::vector<std::complex<float>> spectra_;  // rings × (longitudes/2 + 1)
-  std::vector<float> weighted_cos_;           // rings: w_i · Σ_j f cos(mφ_j) for the current m
-  std::vector<float> weighted_sin_;           // rings: w_i · Σ_j f sin(mφ_j)
-=======
   std::vector<float> cos_sums_;  // bins × rings: w_i · Σ_j f cos(kφ_j)
   std::vector<float> sin_sums_;  // bins × rings: w_i · Σ_j f sin(kφ_j)
->>>>>>> lens
 };
 
 // The reference: the paper's O(samples · L²) method, a table Y[k][s] = y_k(direction s)
