@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -271,9 +272,8 @@ struct GroundTruth {
   std::string description;
 };
 
-double Distance(const drivers::Pose& a, const drivers::Pose& b) {
-  return std::sqrt((a.x_m - b.x_m) * (a.x_m - b.x_m) + (a.y_m - b.y_m) * (a.y_m - b.y_m) +
-                   (a.z_m - b.z_m) * (a.z_m - b.z_m));
+dsp::Position3 PositionOf(const drivers::DatasetFrame& frame) {
+  return {frame.pose->x_m, frame.pose->y_m, frame.pose->z_m};
 }
 
 Status ReadGroundTruthCsv(const std::string& path, int n_query, int n_ref, GroundTruth* gt) {
@@ -356,22 +356,15 @@ Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset
   }
   gt.by_distance = o.tolerance_m > 0;
   gt.reference.assign(static_cast<std::size_t>(n_query), -1);
-  for (int q = 0; q < n_query; ++q) {
-    double best = INFINITY;
-    int best_r = -1;
-    for (int r = 0; r < n_ref; ++r) {
-      const double dist = Distance(*query.frames[static_cast<std::size_t>(q)].pose,
-                                   *ref.frames[static_cast<std::size_t>(r)].pose);
-      if (dist < best) {
-        best = dist;
-        best_r = r;
-      }
-    }
-    // With a distance tolerance, a query farther than it from the whole route is off it.
-    if (gt.by_distance && best > o.tolerance_m)
-      best_r = -1;
-    gt.reference[static_cast<std::size_t>(q)] = best_r;
-  }
+  std::vector<dsp::Position3> ref_xyz, query_xyz;
+  for (const drivers::DatasetFrame& f : ref.frames)
+    ref_xyz.push_back(PositionOf(f));
+  for (const drivers::DatasetFrame& f : query.frames)
+    query_xyz.push_back(PositionOf(f));
+  // With a distance tolerance, a query farther than it from the whole route is off it.
+  dsp::GroundTruthFromPositions(
+      ref_xyz, query_xyz, gt.by_distance ? o.tolerance_m : std::numeric_limits<double>::infinity(),
+      gt.reference);
   char text[96];
   if (gt.by_distance) {
     std::snprintf(text, sizeof text, "poses, correct within %.3g m", o.tolerance_m);
@@ -430,8 +423,9 @@ bool IsCorrect(const GroundTruth& gt, const EvalOptions& o, const drivers::Datas
   if (truth < 0 || matched < 0)
     return false;
   if (gt.by_distance) {
-    return Distance(*query.frames[static_cast<std::size_t>(q)].pose,
-                    *ref.frames[static_cast<std::size_t>(matched)].pose) <= o.tolerance_m;
+    return dsp::Distance(PositionOf(query.frames[static_cast<std::size_t>(q)]),
+                         PositionOf(ref.frames[static_cast<std::size_t>(matched)])) <=
+           o.tolerance_m;
   }
   return dsp::MatchWithinFrames(matched, truth, o.frame_tolerance);
 }
