@@ -423,8 +423,8 @@ bool IsCorrect(const GroundTruth& gt, const EvalOptions& o, const drivers::Datas
   if (truth < 0 || matched < 0)
     return false;
   if (gt.by_distance) {
-    return dsp::Distance(PositionOf(query.frames[static_cast<std::size_t>(q)]),
-                         PositionOf(ref.frames[static_cast<std::size_t>(matched)])) <=
+    return dsp::PositionDistance(PositionOf(query.frames[static_cast<std::size_t>(q)]),
+                                 PositionOf(ref.frames[static_cast<std::size_t>(matched)])) <=
            o.tolerance_m;
   }
   return dsp::MatchWithinFrames(matched, truth, o.frame_tolerance);

@@ -7,7 +7,7 @@
 
 namespace skyloc::dsp {
 
-double Distance(const Position3& a, const Position3& b) {
+double PositionDistance(const Position3& a, const Position3& b) {
   const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
@@ -20,7 +20,7 @@ void GroundTruthFromPositions(std::span<const Position3> reference,
     double best = std::numeric_limits<double>::infinity();
     int best_r = -1;
     for (std::size_t r = 0; r < reference.size(); ++r) {
-      const double d = Distance(query[q], reference[r]);
+      const double d = PositionDistance(query[q], reference[r]);
       if (d < best) {  // the first of equally near references
         best = d;
         best_r = static_cast<int>(r);

@@ -85,7 +85,7 @@ TEST(PlaceMetrics, GroundTruthFromPositions) {
   EXPECT_EQ(truth, (std::vector<int>{2, 1, -1, 1}));
   GroundTruthFromPositions(ref, query, std::numeric_limits<double>::infinity(), truth);
   EXPECT_EQ(truth[2], 3);
-  EXPECT_DOUBLE_EQ(Distance({0, 0, 0}, {2, 3, 6}), 7.0);
+  EXPECT_DOUBLE_EQ(PositionDistance({0, 0, 0}, {2, 3, 6}), 7.0);
 }
 
 }  // namespace

@@ -56,7 +56,7 @@ struct Position3 {
   double x = 0, y = 0, z = 0;
 };
 
-double Distance(const Position3& a, const Position3& b);
+double PositionDistance(const Position3& a, const Position3& b);
 
 // Ground truth from poses: truth[q] = the reference recorded nearest to query q, or -1 when
 // even that one is farther than max_distance_m (off the route; pass infinity for no limit).
