@@ -47,6 +47,7 @@ constexpr const char* kUsage =
     "  --camera FILE.toml     sky: the camera file (docs/CAMERA_FILE.md) for both runs;\n"
     "                         otherwise each dataset's camera.toml, otherwise an\n"
     "                         equidistant 185-degree lens filling the short image side\n"
+    "                         (equirectangular for 2:1 images), as skyloc describe\n"
     "  --lens MODEL, --fov DEG  sky: override the lens model / field of view\n"
     "  --bands N              sky: spherical-harmonic bands (default 120)\n"
     "\n"
@@ -217,8 +218,14 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
                              lp.width, lp.height);
       }
     } else {
+      // As `skyloc describe` guesses: a 2:1 image is a panorama, anything else a fisheye.
       lp.width = camera.info().width;
       lp.height = camera.info().height;
+      const double aspect = static_cast<double>(lp.width) / lp.height;
+      if (std::fabs(aspect - 2.0) < 0.05) {
+        lp.model = dsp::LensModel::kEquirectangular;
+        source = "default lens (equirectangular: a 2:1 image)";
+      }
     }
     if (o.lens)
       lp.model = *o.lens;
