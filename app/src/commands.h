@@ -15,6 +15,7 @@ struct Command {
 };
 
 int RunDemo(std::span<char* const> args);
+int RunEval(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);
 
 // Exit codes shared by every command.

@@ -9,6 +9,7 @@ namespace {
 
 constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
+    {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
     {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
      RunDescribe},
 };
