@@ -75,7 +75,10 @@ case "$ARCH" in
     # cortex-a53: -cpu max emulates pointer authentication, which makes TCG 4x slower.
     MACHINE=(-M virt -cpu cortex-a53)
     CONSOLE=ttyAMA0
-    LIBDIRS=(/usr/aarch64-linux-gnu/lib /usr/lib/aarch64-linux-gnu /lib/aarch64-linux-gnu)
+    # Debian's arm64 libraries (the set-up's sysroot) first: they are what a board runs;
+    # then the cross toolchain's and multiarch ones for what the sysroot lacks.
+    LIBDIRS=("$HIL_GUEST_SYSROOT/lib/aarch64-linux-gnu" "$HIL_GUEST_SYSROOT/usr/lib/aarch64-linux-gnu"
+      /usr/aarch64-linux-gnu/lib /usr/lib/aarch64-linux-gnu /lib/aarch64-linux-gnu)
     READELF=aarch64-linux-gnu-readelf
     command -v "$READELF" >/dev/null || READELF=readelf
     ;;
@@ -116,7 +119,7 @@ add_libs() {
   if [ -n "$interp" ] && [ -z "${copied[$interp]:-}" ]; then
     copied[$interp]=1
     local real=$interp
-    [ "$ARCH" = arm64 ] && [ ! -e "$real" ] && real=/usr/aarch64-linux-gnu/lib/$(basename "$interp")
+    [ "$ARCH" = arm64 ] && real=$HIL_GUEST_SYSROOT$interp
     mkdir -p "$OV$(dirname "$interp")"
     cp -L "$real" "$OV$interp"
   fi
@@ -148,12 +151,15 @@ for b in "${BINS[@]}"; do
   }
   add_program "$b"
 done
-if [ "$ARCH" = amd64 ]; then
-  # Debian's own tools for the baseline checks: v4l-utils, libcamera's cam, libgpiod's
-  # tools. libcamera loads its IPA modules and data from fixed paths.
-  for p in v4l2-ctl media-ctl cam gpiodetect gpioinfo gpioget gpioset; do
-    add_program "$(command -v "$p")"
-  done
+# Debian's own tools for the baseline checks and for setting up vimc's media graph:
+# v4l-utils and libgpiod's tools (for arm64 from the set-up's arm64 sysroot), and on
+# amd64 libcamera's cam.
+TOOLS=(v4l2-ctl media-ctl gpiodetect gpioinfo gpioget gpioset)
+if [ "$ARCH" = arm64 ]; then
+  for p in "${TOOLS[@]}"; do add_program "$HIL_GUEST_SYSROOT/usr/bin/$p"; done
+else
+  for p in "${TOOLS[@]}" cam; do add_program "$(command -v "$p")"; done
+  # libcamera loads its IPA modules and their data from fixed paths.
   LCDIR=/usr/lib/x86_64-linux-gnu/libcamera
   for f in "$LCDIR"/ipa_vimc.so "$LCDIR"/vimc_ipa_proxy; do add_program "$f" "$LCDIR"; done
   cp "$LCDIR/ipa_vimc.so.sign" "$OV$LCDIR/"

@@ -319,10 +319,32 @@ if ! stamp base; then
   done_step base
 fi
 
+# ---------------------------------------------------------------------------------------
+# arm64 guest tools: the host's v4l-utils and libgpiod tools are amd64 programs, so the
+# arm64 image gets Debian's arm64 builds, with their whole dependency closure, downloaded
+# through the private apt (empty dpkg status: every dependency is fetched) and unpacked
+# into a sysroot that run.sh takes programs and libraries from.
+SYSROOT=
+if [ "$ARCH" = arm64 ]; then
+  SYSROOT="$W/sysroot"
+  if ! stamp sysroot; then
+    say "downloading arm64 v4l-utils and gpiod with their dependencies"
+    archives="$CACHE/debs/arm64-tools"
+    rm -rf "$archives" "$SYSROOT" && mkdir -p "$archives/partial" "$SYSROOT"
+    apt-get "${APT_OPTS[@]}" -o "Dir::Cache::archives=$archives" --no-install-recommends -y -qq \
+      install --download-only v4l-utils gpiod >"$archives/download.log" 2>&1 ||
+      skip "apt-get could not download arm64 v4l-utils/gpiod (see $archives/download.log)"
+    for deb in "$archives"/*.deb; do dpkg-deb -x "$deb" "$SYSROOT"; done
+    rm -rf "$archives"
+    done_step sysroot
+  fi
+fi
+
 cat >"$STATE/ready.env" <<EOF
 HIL_ARCH=$ARCH
 HIL_KVER=$KVER
 HIL_KERNEL=$KERNEL
 HIL_BASE_INITRD=$BASE
+HIL_GUEST_SYSROOT=$SYSROOT
 EOF
 say "ready: kernel $KVER, $(wc -l <"$W/modules.list") modules ($((SECONDS - start)) s)"

@@ -3,25 +3,20 @@
 . /hil/tests/lib.sh
 
 echo "vivid (V4L2 webcam emulation)"
-[ -c "$HIL_VIVID_VIDEO" ] && ok "vivid capture node $HIL_VIVID_VIDEO" || bad "no vivid capture node"
+expect_node -c "$HIL_VIVID_VIDEO" "vivid capture node"
 echo "vimc (media-controller pipeline)"
-[ -c "$HIL_VIMC_MEDIA" ] && ok "vimc media node $HIL_VIMC_MEDIA" || bad "no vimc media node"
-[ -c "$HIL_VIMC_RAW0" ] && ok "vimc Raw Capture 0 at $HIL_VIMC_RAW0" || bad "no vimc Raw Capture 0 node"
+expect_node -c "$HIL_VIMC_MEDIA" "vimc media node"
+expect_node -c "$HIL_VIMC_RAW0" "vimc Raw Capture 0 node"
+expect_node -c "$HIL_VIMC_RGB" "vimc RGB/YUV Capture node"
 echo "gpio-sim"
-[ -c "/dev/$HIL_GPIOCHIP" ] && ok "gpio-sim chip /dev/$HIL_GPIOCHIP" || bad "no gpio-sim chip"
-[ -d "$HIL_GPIO_SIM_DIR" ] && ok "gpio-sim sysfs $HIL_GPIO_SIM_DIR" || bad "no gpio-sim sysfs folder"
+expect_node -c "/dev/$HIL_GPIOCHIP" "gpio-sim chip"
+expect_node -d "$HIL_GPIO_SIM_DIR" "gpio-sim sysfs folder"
 
 # An unrequested gpio-sim line reads back its pull: checks the simulator's sysfs side.
 echo pull-up >"$HIL_GPIO_SIM_DIR/sim_gpio7/pull"
 expect_eq "sim_gpio7 follows pull-up" "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio7/value")" 1
 echo pull-down >"$HIL_GPIO_SIM_DIR/sim_gpio7/pull"
 expect_eq "sim_gpio7 follows pull-down" "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio7/value")" 0
-
-if ! have v4l2-ctl; then
-  # arm64 image: Debian's tools are amd64 builds; the drivers suite streams instead.
-  echo "  (v4l-utils, libcamera and libgpiod tools are not in the $HIL_ARCH image: sysfs checks only)"
-  finish_scenario
-fi
 
 echo "vivid streaming with v4l2-ctl"
 check "vivid reports driver vivid" sh -c "v4l2-ctl -d $HIL_VIVID_VIDEO --info | grep -q 'Driver name *: vivid'"
@@ -49,10 +44,15 @@ check "vimc RGB/YUV Capture streams 3 RGB24 frames" v4l2-ctl -d "$HIL_VIMC_RGB" 
 expect_eq "vimc RGB frame bytes" "$(file_size /tmp/vimc.rgb)" $((3 * 640 * 480 * 3))
 rm -f /tmp/vimc.rgb
 
-echo "libcamera (vimc pipeline handler) with cam"
-check "cam lists a vimc camera" sh -c "cam -l 2>&1 | grep -q 'platform/vimc'"
-check "cam captures 3 640x480 frames from camera 1" sh -c \
-  "cam -c 1 -s role=viewfinder,width=640,height=480 --capture=3 2>&1 | grep -c 'seq:' | grep -qx 3"
+if have cam; then
+  echo "libcamera (vimc pipeline handler) with cam"
+  check "cam lists a vimc camera" sh -c "cam -l 2>&1 | grep -q 'platform/vimc'"
+  check "cam captures 3 640x480 frames from camera 1" sh -c \
+    "cam -c 1 -s role=viewfinder,width=640,height=480 --capture=3 2>&1 | grep -c 'seq:' | grep -qx 3"
+else
+  # The arm64 image has no libcamera: the cross build has no arm64 libcamera either.
+  echo "libcamera: not in the $HIL_ARCH image"
+fi
 
 echo "gpio-sim through libgpiod tools"
 check "gpiodetect lists the chip" sh -c "gpiodetect | grep -q '^$HIL_GPIOCHIP .*(8 lines)'"

@@ -19,6 +19,10 @@ check() {
 expect_eq() {
   if [ "$2" = "$3" ]; then ok "$1 ($2)"; else bad "$1: got '$2', expected '$3'"; fi
 }
+# expect_node -c|-d PATH DESCRIPTION
+expect_node() {
+  if [ -n "$2" ] && [ "$1" "$2" ]; then ok "$3 $2"; else bad "$3 missing ('$2')"; fi
+}
 file_size() { wc -c <"$1" | tr -d ' '; }
 have() { command -v "$1" >/dev/null 2>&1; }
 # Exit status of a scenario: 0 when every check passed.
