@@ -37,11 +37,15 @@ finish_scenario() {
 
 # vimc's "RGB/YUV Capture" pipeline (Sensor A -> Debayer A -> Scaler -> capture) set to
 # RGB24 WxH. Every enabled link is validated at STREAMON (EPIPE otherwise), including
-# Sensor A -> Raw Capture 0, so that node gets the matching Bayer format too.
+# Sensor A -> Raw Capture 0, so that node gets the matching Bayer format too. The links
+# are reset first: libcamera's vimc pipeline handler routes Sensor B -> Debayer B ->
+# Scaler instead, and leaves the graph that way.
 vimc_configure_rgb() { # WIDTH HEIGHT
   w=$1
   h=$2
-  media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Sensor A\":0[fmt:SRGGB8_1X8/${w}x${h}]" &&
+  media-ctl -d "$HIL_VIMC_MEDIA" -r &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -l '"Debayer A":1->"Scaler":0[1]' &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Sensor A\":0[fmt:SRGGB8_1X8/${w}x${h}]" &&
     media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Debayer A\":0[fmt:SRGGB8_1X8/${w}x${h}]" &&
     media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Debayer A\":1[fmt:RGB888_1X24/${w}x${h}]" &&
     media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Scaler\":0[fmt:RGB888_1X24/${w}x${h}]" &&
