@@ -116,10 +116,32 @@ private_apt_update() {
 }
 guest_apt_cache() { apt-cache "${APT_OPTS[@]}" "$@"; }
 
-# The current kernel ABI: linux-image-ARCH depends on linux-image-<ABI>-ARCH.
-kernel_abi() {
-  guest_apt_cache depends "linux-image-$ARCH" 2>/dev/null |
-    sed -nE "s/^ *Depends: linux-image-([0-9][^ ]*)-$ARCH\$/\1/p" | head -1
+# The current kernel ABI (linux-image-ARCH depends on linux-image-<ABI>-ARCH) and the
+# linux-source-6.1 version, from one apt-cache call: apt-cache re-reads every package list
+# on each call here (the container disables apt's binary cache), 2 s of CPU each. The
+# answer only changes when the lists do, so it is kept until they are newer.
+FACTS="$STATE/apt-facts.env"
+apt_lists_dir() {
+  if [ "$ARCH" = arm64 ]; then echo "$PRIVATE_APT/state/lists"; else apt-config dump Dir::State::lists |
+    sed -n 's/^Dir::State::lists "\(.*\)";/\1/p' | sed 's|^\([^/]\)|/var/lib/apt/\1|'; fi
+}
+read_apt_facts() {
+  ABI=
+  SRC_VERSION=
+  local lists
+  lists=$(apt_lists_dir)
+  if [ -f "$FACTS" ] && [ -d "$lists" ] && [ -z "$(find "$lists" -maxdepth 1 -newer "$FACTS" | head -1)" ]; then
+    # shellcheck disable=SC1090
+    . "$FACTS"
+    return 0
+  fi
+  local info
+  info=$(guest_apt_cache show --no-all-versions "linux-image-$ARCH" linux-source-6.1 2>/dev/null || true)
+  ABI=$(printf '%s\n' "$info" | sed -nE "s/^Depends: linux-image-([0-9][^ ,]*)-$ARCH( .*)?\$/\1/p" | head -1)
+  SRC_VERSION=$(printf '%s\n' "$info" | sed -n '/^Package: linux-source-6.1$/,/^$/s/^Version: //p' | head -1)
+  if [ -n "$ABI" ] && [ -n "$SRC_VERSION" ]; then
+    printf 'ABI=%s\nSRC_VERSION=%s\n' "$ABI" "$SRC_VERSION" >"$FACTS"
+  fi
 }
 
 if [ "$ARCH" = arm64 ]; then
@@ -128,12 +150,13 @@ if [ "$ARCH" = arm64 ]; then
     private_apt_update
   fi
 fi
-ABI=$(kernel_abi)
-if [ -z "$ABI" ]; then
+read_apt_facts
+if [ -z "$ABI" ] || [ -z "$SRC_VERSION" ]; then
   if [ "$ARCH" = arm64 ]; then private_apt_update; else apt_update_once; fi
-  ABI=$(kernel_abi)
+  read_apt_facts
 fi
 [ -n "$ABI" ] || skip "apt knows no linux-image-$ARCH package (apt-get update failed or no Debian sources)"
+[ -n "$SRC_VERSION" ] || skip "apt knows no linux-source-6.1 package"
 KVER="$ABI-$ARCH"
 HEADERS=/usr/src/linux-headers-$ABI-amd64
 
@@ -172,8 +195,6 @@ download() { # package[=version] -> path of the .deb (for ARCH or arch all)
 }
 
 # linux-source: only the files the four modules need are extracted (8 s of xz).
-SRC_VERSION=$(apt-cache show --no-all-versions linux-source-6.1 2>/dev/null | sed -n 's/^Version: //p' | head -1)
-[ -n "$SRC_VERSION" ] || skip "apt knows no linux-source-6.1 package"
 SRC="$CACHE/src/linux-source-$SRC_VERSION"
 if [ ! -f "$SRC/.stamp" ]; then
   deb=$(download "linux-source-6.1=$SRC_VERSION")
@@ -221,7 +242,7 @@ if [ "$ARCH" = arm64 ]; then
   STRIP=aarch64-linux-gnu-strip
 else
   MAKE_ARGS=()
-  STRIP=strip
+  STRIP="strip"
 fi
 [ -f "$HEADERS/Makefile" ] || die "kernel headers not found at $HEADERS"
 
