@@ -32,9 +32,10 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one
-# it needs when missing), and Debian's tools the baseline checks run in the guest.
+# it needs when missing), Debian's tools the baseline checks run in the guest, and
+# shellcheck for the harness's scripts (lint.shellcheck_hil*).
 HIL_PACKAGES=(qemu-system-x86 qemu-system-arm busybox-static kmod cpio bc xz-utils
-  v4l-utils gpiod libcamera-tools libcamera-ipa)
+  v4l-utils gpiod libcamera-tools libcamera-ipa shellcheck)
 HIL_PACKAGES_amd64=(linux-headers-amd64)
 CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static)
 CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static)

@@ -31,7 +31,7 @@ for entry in "${decoders[@]}"; do
   magic=${entry%%|*}
   decoder=${entry#*|}
   command -v "${decoder%% *}" >/dev/null || continue
-  for offset in $(LC_ALL=C grep -obUaP "$magic" "$image" | cut -d: -f1); do
+  while read -r offset; do
     # A decoder complains about the trailing bytes after the stream; what counts is the
     # output, so its exit status and messages are ignored.
     tail -c "+$((offset + 1))" "$image" | $decoder >"$tmp" 2>/dev/null || true
@@ -39,7 +39,7 @@ for entry in "${decoders[@]}"; do
       mv "$tmp" "$out"
       exit 0
     fi
-  done
+  done < <(LC_ALL=C grep -obUaP "$magic" "$image" | cut -d: -f1)
 done
 echo "extract-vmlinux: no compressed ELF kernel found in $image" >&2
 exit 1

@@ -41,10 +41,10 @@ while [ $# -gt 0 ]; do
   esac
   shift 2
 done
-[ -n "$ARCH" ] && [ -n "$TESTS" ] || {
+if [ -z "$ARCH" ] || [ -z "$TESTS" ]; then
   sed -n '2,16p' "$0" >&2
   exit 2
-}
+fi
 NAME=${NAME:-hil.$ARCH.${TESTS//,/+}}
 LOG=${LOG:-$ROOT/build/hil-logs/$NAME.log}
 STATE="$CACHE/$ARCH"
@@ -180,6 +180,7 @@ base_size=$(stat -c %s "$HIL_BASE_INITRD")
 # ---------------------------------------------------------------------------------------
 mkdir -p "$(dirname "$LOG")"
 APPEND="console=$CONSOLE quiet loglevel=4 panic=-1 rdinit=/init hil.tests=$TESTS"
+# shellcheck disable=SC2054 # the commas are QEMU's option syntax
 CMD=("$QEMU" -accel tcg,thread=multi "${MACHINE[@]}" -m 1024 -smp 1 -nodefaults -no-user-config
   -display none -serial stdio -monitor none -no-reboot
   -kernel "$HIL_KERNEL" -initrd "$WORK/initrd" -append "$APPEND")

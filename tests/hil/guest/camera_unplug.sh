@@ -8,6 +8,7 @@
 #    themselves through the files named by the environment below (contract in
 #    docs/HIL.md) and check the driver reports it cleanly and recovers. Until the suite
 #    has them this part is reported as SKIPPED (pending), never as passed.
+# shellcheck source=tests/hil/guest/lib.sh
 . /hil/tests/lib.sh
 
 DRV=/sys/bus/platform/drivers/vivid
@@ -54,7 +55,7 @@ done)
 expect_node -c "$node" "vivid capture node after the bind"
 check "vivid streams again after the bind" v4l2-ctl -d "$node" --stream-mmap=3 --stream-count=2 \
   --stream-to=/tmp/unplug-after.raw
-[ -s /tmp/unplug-after.raw ] && ok "frames after the bind" || bad "no frames after the bind"
+if [ -s /tmp/unplug-after.raw ]; then ok "frames after the bind"; else bad "no frames after the bind"; fi
 rm -f /tmp/unplug-after.raw
 
 echo "our V4L2 camera: the drivers suite's V4l2Unplug tests"
@@ -70,7 +71,8 @@ pending() {
 # the host.)
 "$T" --gtest_list_tests --gtest_filter='V4l2Unplug.*' | grep -q '^  ' ||
   pending "skyloc_drivers_tests has no V4l2Unplug test suite yet (contract: docs/HIL.md)"
-export SKYLOC_TEST_V4L2_DEVICE=vivid:"$(v4l2-ctl -d "$node" --info | sed -n 's/^[[:space:]]*Card type *: //p')"
+card=$(v4l2-ctl -d "$node" --info | sed -n 's/^[[:space:]]*Card type *: //p')
+export SKYLOC_TEST_V4L2_DEVICE="vivid:$card"
 export SKYLOC_TEST_V4L2_UNBIND="$DRV/unbind"
 export SKYLOC_TEST_V4L2_BIND="$DRV/bind"
 export SKYLOC_TEST_V4L2_PLATFORM_DEVICE="$DEV"

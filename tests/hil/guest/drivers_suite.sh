@@ -2,6 +2,7 @@
 # status output: Gpiod*) against vivid, vimc and gpio-sim, with the environment contract
 # of docs/DRIVERS.md. On the build machine those instances skip (no devices); here a
 # skipped real-driver instance is a failure: the VM exists to run them.
+# shellcheck source=tests/hil/guest/lib.sh
 . /hil/tests/lib.sh
 
 T=/hil/bin/skyloc_drivers_tests
@@ -35,13 +36,20 @@ run_suite() {
   "$T" --gtest_filter="$filter" --gtest_color=no >"$out" 2>&1
   rc=$?
   sed 's/^/    /' "$out"
-  if [ "$rc" -eq 0 ]; then ok "$label: suite exited 0"; else bad "$label: suite exited $rc"; fi
+  if [ "$rc" -eq 0 ]; then
+    ok "$label: suite exited 0"
+  elif [ "$rc" -gt 128 ]; then
+    # Killed by a signal: the test that was running has no result line.
+    bad "$label: suite killed by signal $((rc - 128)) during $(sed -n 's/^\[ RUN      \] //p' "$out" | tail -1)"
+  else
+    bad "$label: suite exited $rc"
+  fi
   # Result lines of parameterised tests end in "/<instance> (N ms)" (passed, skipped) or
   # "/<instance>, where GetParam() = ..." (failed).
   for inst in $(echo "$instances" | tr ',' ' '); do
-    passed=$(grep -c "^\[       OK \] .*/$inst[A-Za-z]* (" "$out")
-    failed=$(grep -c "^\[  FAILED  \] .*/$inst[A-Za-z]*[ ,].*ms)$" "$out")
-    skipped=$(grep -c "^\[  SKIPPED \] .*/$inst[A-Za-z]* (" "$out")
+    passed=$(grep -c "^\[       OK \] .*/${inst}[A-Za-z]* (" "$out")
+    failed=$(grep -c "^\[  FAILED  \] .*/${inst}[A-Za-z]*[ ,].*ms)$" "$out")
+    skipped=$(grep -c "^\[  SKIPPED \] .*/${inst}[A-Za-z]* (" "$out")
     summary="$inst: $passed passed, $failed failed, $skipped skipped"
     if [ "$skipped" -ne 0 ]; then
       bad "$label: $summary (nothing may skip inside the VM: is the environment above wrong?)"
@@ -83,65 +91,5 @@ fi
 
 echo "GPIO status output on gpio-sim"
 run_suite gpio-sim '*/Gpiod*' Gpiod
-
-finish_scenario
-fi
-
-export SKYLOC_TEST_GPIOCHIP="$HIL_GPIOCHIP"
-export SKYLOC_TEST_GPIO_LINES=0,1,2
-export SKYLOC_TEST_GPIO_INPUT_LINE=7
-export SKYLOC_TEST_GPIO_SIM_DIR="$HIL_GPIO_SIM_DIR"
-
-# A build without libcamera (the aarch64 cross build) has no libcamera instance to run:
-# it is left out, visibly.
-if ls /hil/lib/libcamera.so.* >/dev/null 2>&1; then
-  export SKYLOC_TEST_LIBCAMERA_CAMERA=first
-else
-  echo "  (this build has no libcamera driver: the Libcamera instance is not required)"
-fi
-
-# run_suite LABEL FILTER INSTANCES: runs the suite; passes when it exits 0, no test of the
-# listed instances (comma-separated parameter names) was skipped, and each of them passed
-# at least one test.
-run_suite() {
-  label=$1
-  filter=$2
-  instances=$3
-  out=/tmp/suite-$label.log
-  echo "--- $label: $T --gtest_filter=$filter"
-  "$T" --gtest_filter="$filter" --gtest_color=no >"$out" 2>&1
-  rc=$?
-  sed 's/^/    /' "$out"
-  if [ "$rc" -eq 0 ]; then ok "$label: suite exited 0"; else bad "$label: suite exited $rc"; fi
-  # Result lines of parameterised tests end in "/<instance> (N ms)" (passed, skipped) or
-  # "/<instance>, where GetParam() = ..." (failed).
-  for inst in $(echo "$instances" | tr ',' ' '); do
-    passed=$(grep -c "^\[       OK \] .*/$inst[A-Za-z]* (" "$out")
-    failed=$(grep -c "^\[  FAILED  \] .*/$inst[A-Za-z]*[ ,].*ms)$" "$out")
-    skipped=$(grep -c "^\[  SKIPPED \] .*/$inst[A-Za-z]* (" "$out")
-    summary="$inst: $passed passed, $failed failed, $skipped skipped"
-    if [ "$skipped" -ne 0 ]; then
-      bad "$label: $summary (nothing may skip inside the VM: is the environment above wrong?)"
-    elif [ "$passed" -eq 0 ] || [ "$failed" -ne 0 ]; then
-      bad "$label: $summary"
-    else
-      ok "$label: $summary"
-    fi
-  done
-}
-
-echo "vivid (V4L2), vimc (libcamera), gpio-sim (libgpiod): every suite"
-export SKYLOC_TEST_V4L2_DEVICE="$HIL_VIVID_VIDEO" SKYLOC_TEST_V4L2_SIZE=640x480
-run_suite vivid '*' "$required"
-
-echo "vimc through V4L2: the RGB/YUV Capture node, graph set up with media-ctl"
-if vimc_configure_rgb 640 480 >/tmp/media-ctl.log 2>&1; then
-  ok "vimc graph configured for RGB24 640x480"
-  export SKYLOC_TEST_V4L2_DEVICE="$HIL_VIMC_RGB"
-  run_suite vimc-v4l2 '*CameraCompliance*/V4l2' V4l2
-else
-  bad "media-ctl could not configure vimc"
-  sed 's/^/    /' /tmp/media-ctl.log
-fi
 
 finish_scenario

@@ -1,5 +1,6 @@
 # Baseline: the kernel's test drivers work with Debian's own tools, before any of our code
 # is involved. If this fails, a failing driver suite is the VM's fault, not ours.
+# shellcheck source=tests/hil/guest/lib.sh
 . /hil/tests/lib.sh
 
 echo "vivid (V4L2 webcam emulation)"

@@ -1,4 +1,5 @@
 # Shared helpers for the guest scenarios (sourced; busybox sh).
+# shellcheck disable=SC1091 # written by /init in the guest
 . /run/hil.env
 failures=0
 ok() { echo "  ok   $*"; }
@@ -21,7 +22,7 @@ expect_eq() {
 }
 # expect_node -c|-d PATH DESCRIPTION
 expect_node() {
-  if [ -n "$2" ] && [ "$1" "$2" ]; then ok "$3 $2"; else bad "$3 missing ('$2')"; fi
+  if [ -n "$2" ] && test "$1" "$2"; then ok "$3 $2"; else bad "$3 missing ('$2')"; fi
 }
 file_size() { wc -c <"$1" | tr -d ' '; }
 have() { command -v "$1" >/dev/null 2>&1; }
