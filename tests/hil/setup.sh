@@ -10,7 +10,7 @@
 #   - a bootable kernel (amd64: vmlinux extracted from the bzImage, booted through PVH);
 #   - the base initramfs: static busybox and the modules with their dependencies.
 #
-# Every step leaves a stamp file, so a second run costs a second or two. Exit status:
+# Every step leaves a stamp file, so a second run costs under a second. Exit status:
 # 0 ready; 77 skipped (the reason is printed and kept in CACHE/ARCH/skipped, where run.sh
 # finds it: no network to the Debian mirror, a package gone from the archive, not root);
 # anything else is a real failure (a module that no longer builds, say).
@@ -175,8 +175,15 @@ ensure_packages "${HOST_PKGS[@]}"
 
 W="$STATE/$KVER"
 mkdir -p "$W/stamps" "$CACHE/debs"
-stamp() { [ -f "$W/stamps/$1" ]; }
-done_step() { touch "$W/stamps/$1"; }
+# A stamp holds a hash of the scripts that make its step: editing setup.sh (a module
+# added, the irq_sim patch changed) or extract-vmlinux.sh redoes the build steps, not
+# the downloads.
+RECIPE=$(cat "$HERE/setup.sh" "$HERE/extract-vmlinux.sh" | sha256sum | cut -c1-16)
+stamp() { [ -f "$W/stamps/$1" ] && [ "$(cat "$W/stamps/$1")" = "$RECIPE" ]; }
+done_step() { echo "$RECIPE" >"$W/stamps/$1"; }
+# Unpacked downloads depend only on the package, which is in the folder's name.
+fetched() { [ -f "$W/stamps/$1" ]; }
+done_fetch() { touch "$W/stamps/$1"; }
 
 # ---------------------------------------------------------------------------------------
 # Downloads: apt-get download into the cache (the file name carries the version).
@@ -214,13 +221,13 @@ fi
 
 # The kernel image package, unpacked: the kernel and the modules we boot with.
 IMG="$W/image"
-if ! stamp image; then
+if ! fetched image; then
   deb=$(download "linux-image-$KVER")
   say "unpacking $(basename "$deb")"
   rm -rf "$IMG" && mkdir -p "$IMG"
   dpkg-deb -x "$deb" "$IMG"
   rm -f "$deb"
-  done_step image
+  done_fetch image
 fi
 MODDIR="$IMG/lib/modules/$KVER"
 
@@ -230,13 +237,13 @@ MODDIR="$IMG/lib/modules/$KVER"
 # and modpost work on arm64 objects).
 if [ "$ARCH" = arm64 ]; then
   HEADERS="$W/headers/usr/src/linux-headers-$KVER"
-  if ! stamp headers; then
+  if ! fetched headers; then
     deb=$(download "linux-headers-$KVER")
     rm -rf "$W/headers" && dpkg-deb -x "$deb" "$W/headers"
     ln -sfn /usr/lib/linux-kbuild-6.1/scripts "$HEADERS/scripts"
     ln -sfn /usr/lib/linux-kbuild-6.1/tools "$HEADERS/tools"
     rm -f "$deb"
-    done_step headers
+    done_fetch headers
   fi
   MAKE_ARGS=(ARCH=arm64 CROSS_COMPILE=aarch64-linux-gnu-)
   STRIP=aarch64-linux-gnu-strip
@@ -348,7 +355,7 @@ fi
 SYSROOT=
 if [ "$ARCH" = arm64 ]; then
   SYSROOT="$W/sysroot"
-  if ! stamp sysroot; then
+  if ! fetched sysroot; then
     say "downloading arm64 v4l-utils and gpiod with their dependencies"
     archives="$CACHE/debs/arm64-tools"
     rm -rf "$archives" "$SYSROOT" && mkdir -p "$archives/partial" "$SYSROOT"
@@ -357,9 +364,13 @@ if [ "$ARCH" = arm64 ]; then
       skip "apt-get could not download arm64 v4l-utils/gpiod (see $archives/download.log)"
     for deb in "$archives"/*.deb; do dpkg-deb -x "$deb" "$SYSROOT"; done
     rm -rf "$archives"
-    done_step sysroot
+    done_fetch sysroot
   fi
 fi
+
+# Superseded kernel ABIs and source versions (Debian moved on): their folders go.
+find "$STATE" -mindepth 1 -maxdepth 1 -type d ! -name "$KVER" -exec rm -rf {} +
+find "$CACHE/src" -mindepth 1 -maxdepth 1 -type d ! -name "linux-source-$SRC_VERSION" -exec rm -rf {} +
 
 cat >"$STATE/ready.env" <<EOF
 HIL_ARCH=$ARCH
