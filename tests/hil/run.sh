@@ -200,6 +200,6 @@ if [ -z "$result" ]; then
   exit 2
 fi
 if [ "$result" = "$SKIP" ]; then
-  echo "HIL SKIPPED: every scenario in the guest skipped (see $LOG)"
+  echo "HIL SKIPPED: a scenario in the guest skipped (PENDING lines say why; see $LOG)"
 fi
 exit "$result"
