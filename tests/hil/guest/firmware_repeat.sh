@@ -79,7 +79,8 @@ if [ "$rc" -eq 0 ]; then ok "teach exited 0"; else
   sed 's/^/       | /' /tmp/teach.err | tail -n 10
   finish_scenario
 fi
-expect_eq "teach printed a JSON line per frame" "$(grep -c '^{' /tmp/teach.out)" 30
+taught=$(grep -c '^{' /tmp/teach.out)
+if [ "$taught" -ge 30 ]; then ok "teach printed $taught JSON lines (30 frames)"; else bad "teach printed $taught JSON lines for 30 frames"; fi
 if [ -s "$ROUTE" ]; then ok "route database written ($(file_size "$ROUTE") bytes)"; else bad "no route database"; fi
 
 echo "repeat with the status on gpio-sim"
