@@ -125,7 +125,8 @@ deps() {
 configure_and_build() {
   local kind=${1:-host}
   local dir="$BUILD_ROOT/$kind"
-  local args=(-G Ninja -S "$ROOT" -B "$dir")
+  # The HIL VM cache is shared by the host and aarch64 builds (docs/HIL.md).
+  local args=(-G Ninja -S "$ROOT" -B "$dir" -DSKYLOC_HIL_CACHE="$BUILD_ROOT/hil-cache")
   [ "${CI:-}" = "true" ] && args+=(-DSKYLOC_WERROR=ON)
   case "$kind" in
     host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
