@@ -60,7 +60,12 @@ check "gpiodetect lists the chip" sh -c "gpiodetect | grep -q '^$HIL_GPIOCHIP .*
 check "gpioinfo shows the named line" sh -c "gpioinfo $HIL_GPIOCHIP | grep -q '\"status-lost\"'"
 gpioset --mode=signal "$HIL_GPIOCHIP" 0=1 2=0 &
 setter=$!
-sleep 1
+# Wait until gpioset holds the lines (a loaded TCG guest can take a while to start it).
+i=0
+while [ "$i" -lt 100 ] && ! gpioinfo "$HIL_GPIOCHIP" | grep -q '"gpioset"'; do
+  sleep 0.1
+  i=$((i + 1))
+done
 expect_eq "gpioset line 0 high, read back from sim_gpio0" "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio0/value")" 1
 expect_eq "gpioset line 2 low, read back from sim_gpio2" "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio2/value")" 0
 kill "$setter"
