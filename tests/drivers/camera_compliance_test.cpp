@@ -1,6 +1,7 @@
 // One compliance suite for every Camera implementation, in the spirit of libcamera's
-// lc-compliance: the same cases run against the simulated camera (always), a V4L2 device
-// (SKYLOC_TEST_V4L2_DEVICE) and a libcamera camera (SKYLOC_TEST_LIBCAMERA_CAMERA). Real
+// lc-compliance: the same cases run against the simulated camera and the V4L2 driver over
+// a scripted device (always), a V4L2 device (SKYLOC_TEST_V4L2_DEVICE) and a libcamera
+// camera (SKYLOC_TEST_LIBCAMERA_CAMERA). Real
 // instances are SKIPPED with the reason when no device is named or present; the HIL
 // harness runs them inside a VM against vivid and vimc.
 #include <gtest/gtest.h>
@@ -17,6 +18,7 @@
 #include "skyloc/platform/clock.h"
 #include "test_env.h"
 #if SKYLOC_WITH_V4L2
+#include "fake_v4l2_device.h"
 #include "skyloc/drivers/v4l2_camera.h"
 #endif
 #if SKYLOC_WITH_LIBCAMERA
@@ -106,6 +108,26 @@ std::unique_ptr<CameraUnderTest> MakeV4l2(std::string* skip) {
 #endif
 }
 
+// --- the V4L2 driver over a scripted device: its code paths on every build machine ---
+std::unique_ptr<CameraUnderTest> MakeV4l2Fake(std::string* skip) {
+#if SKYLOC_WITH_V4L2
+  (void)skip;
+  class Under final : public CameraUnderTest {
+   public:
+    Under() : camera_(V4l2CameraConfig{}, &device_) {}
+    Camera& camera() override { return camera_; }
+
+   private:
+    testing::FakeV4l2Device device_;
+    V4l2Camera camera_;
+  };
+  return std::make_unique<Under>();
+#else
+  *skip = "this build has no V4L2 driver (linux/videodev2.h missing)";
+  return nullptr;
+#endif
+}
+
 // --- libcamera ---
 std::unique_ptr<CameraUnderTest> MakeLibcamera(std::string* skip) {
 #if SKYLOC_WITH_LIBCAMERA
@@ -135,6 +157,7 @@ std::unique_ptr<CameraUnderTest> MakeLibcamera(std::string* skip) {
 
 const CameraCase kCases[] = {
     {"Simulated", MakeSim, nullptr, false},
+    {"V4l2FakeDevice", MakeV4l2Fake, nullptr, false},
     {"V4l2", MakeV4l2, nullptr, true},
     {"Libcamera", MakeLibcamera,
      "libcamera's own threads allocate for every request (Signal::emit, queued method "

@@ -15,14 +15,28 @@
 namespace skyloc::drivers {
 namespace {
 
-// ioctl, retried when a signal interrupts it (V4L2 ioctls may block).
-int Xioctl(int fd, unsigned long request, void* arg) {
-  int r = 0;
-  do {
-    r = ::ioctl(fd, request, arg);
-  } while (r == -1 && errno == EINTR);
-  return r;
-}
+class SystemIo final : public V4l2Io {
+ public:
+  int Open(const char* path, int flags) override { return ::open(path, flags); }
+  int Ioctl(int fd, unsigned long request, void* arg) override { return ::ioctl(fd, request, arg); }
+  int Poll(int fd, int timeout_ms) override {
+    pollfd pfd{fd, POLLIN, 0};
+    return ::poll(&pfd, 1, timeout_ms);
+  }
+  Nanoseconds Now() override { return clock_.Now(); }
+  void SleepFor(Nanoseconds d) override {
+    if (d <= Nanoseconds(0))
+      return;
+    timespec ts{};
+    ts.tv_sec = static_cast<time_t>(d.count() / 1'000'000'000);
+    ts.tv_nsec = static_cast<long>(d.count() % 1'000'000'000);
+    while (::nanosleep(&ts, &ts) == -1 && errno == EINTR) {
+    }
+  }
+
+ private:
+  MonotonicClock clock_;
+};
 
 // V4L2 fourcc as text ("YUYV"), for messages.
 struct FourccText {
@@ -59,16 +73,6 @@ bool IsCaptureDevice(const v4l2_capability& cap) {
   return (caps & V4L2_CAP_VIDEO_CAPTURE) != 0 && (caps & V4L2_CAP_STREAMING) != 0;
 }
 
-void SleepFor(Nanoseconds d) {
-  if (d <= Nanoseconds(0))
-    return;
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(d.count() / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(d.count() % 1'000'000'000);
-  while (::nanosleep(&ts, &ts) == -1 && errno == EINTR) {
-  }
-}
-
 int PollTimeoutMs(Nanoseconds remaining) {
   if (remaining <= Nanoseconds(0))
     return 0;
@@ -78,8 +82,22 @@ int PollTimeoutMs(Nanoseconds remaining) {
 
 }  // namespace
 
-V4l2Camera::V4l2Camera(const V4l2CameraConfig& config)
-    : config_(config), recovery_(config.recovery) {
+V4l2Io& SystemV4l2Io() {
+  static SystemIo io;
+  return io;
+}
+
+// ioctl, retried when a signal interrupts it (V4L2 ioctls may block).
+int V4l2Camera::Xioctl(int fd, unsigned long request, void* arg) {
+  int r = 0;
+  do {
+    r = io_->Ioctl(fd, request, arg);
+  } while (r == -1 && errno == EINTR);
+  return r;
+}
+
+V4l2Camera::V4l2Camera(const V4l2CameraConfig& config, V4l2Io* io)
+    : config_(config), io_(io != nullptr ? io : &SystemV4l2Io()), recovery_(config.recovery) {
   config_.device[sizeof(config_.device) - 1] = '\0';
   std::snprintf(info_.name, sizeof(info_.name), "v4l2:%.58s", config_.device);
   info_.width = config.width;
@@ -112,7 +130,7 @@ Status V4l2Camera::OpenDevice() {
   v4l2_capability cap{};
   if (config_.device[0] == '/') {
     std::snprintf(path_, sizeof(path_), "%s", config_.device);
-    const int fd = ::open(path_, O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    const int fd = io_->Open(path_, O_RDWR | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
       const int saved = errno;
       return Status::FromErrno(saved,
@@ -141,7 +159,7 @@ Status V4l2Camera::OpenDevice() {
     for (int n = 0; n < 64 && !found; ++n) {
       char candidate[32];
       std::snprintf(candidate, sizeof(candidate), "/dev/video%d", n);
-      UniqueFd fd(::open(candidate, O_RDWR | O_NONBLOCK | O_CLOEXEC));
+      UniqueFd fd(io_->Open(candidate, O_RDWR | O_NONBLOCK | O_CLOEXEC));
       if (!fd.is_valid())
         continue;
       v4l2_capability c{};
@@ -301,7 +319,7 @@ Status V4l2Camera::StartStreaming() {
   // The driver numbers frames from 0 again: continue our numbering from where it was.
   sequence_base_ = next_sequence_;
   have_sequence_ = false;
-  recovery_.Started(clock_.Now());
+  recovery_.Started(io_->Now());
   return Status::Ok();
 }
 
@@ -390,15 +408,15 @@ Status V4l2Camera::Requeue() {
   held_buffer_ = -1;
   if (Xioctl(fd_.get(), VIDIOC_QBUF, &buf) != 0) {
     const int saved = errno;
-    return Fail(saved, "VIDIOC_QBUF", clock_.Now());
+    return Fail(saved, "VIDIOC_QBUF", io_->Now());
   }
   return Status::Ok();
 }
 
 Result<Frame> V4l2Camera::DoCapture(Nanoseconds timeout) {
-  const Nanoseconds deadline = clock_.Now() + timeout;
+  const Nanoseconds deadline = io_->Now() + timeout;
   for (;;) {
-    Nanoseconds now = clock_.Now();
+    Nanoseconds now = io_->Now();
     if (recovery_.state() == StreamRecovery::State::kFailed) {
       return Status::Error(StatusCode::kUnavailable,
                            "camera %s: gave up after %u failed reopens: check the camera's "
@@ -408,18 +426,22 @@ Result<Frame> V4l2Camera::DoCapture(Nanoseconds timeout) {
     if (recovery_.state() == StreamRecovery::State::kBackingOff) {
       if (!recovery_.ReopenDue(now)) {
         if (recovery_.next_attempt() > deadline) {
-          SleepFor(deadline - now);
+          io_->SleepFor(deadline - now);
           return Status::Error(
               StatusCode::kUnavailable, "camera %s: device lost; next reopen attempt in %lld ms",
               info_.name,
               static_cast<long long>((recovery_.next_attempt() - deadline).count() / 1'000'000));
         }
-        SleepFor(recovery_.next_attempt() - now);
+        io_->SleepFor(recovery_.next_attempt() - now);
         continue;
       }
-      Status s = Recover(now);
-      if (!s.ok() && recovery_.state() == StreamRecovery::State::kFailed)
-        return s.AddContext("camera %s: reopening failed for good", info_.name);
+      const Status s = Recover(now);
+      if (!s.ok() && recovery_.state() == StreamRecovery::State::kFailed) {
+        return Status::Error(StatusCode::kUnavailable,
+                             "camera %s: gave up after %u failed reopens (last: %s): check the "
+                             "camera's cable and power, then restart skyloc",
+                             info_.name, recovery_.consecutive_failures(), s.message());
+      }
       continue;
     }
 
@@ -428,15 +450,14 @@ Result<Frame> V4l2Camera::DoCapture(Nanoseconds timeout) {
     const Nanoseconds wake =
         deadline < recovery_.stall_deadline() ? deadline : recovery_.stall_deadline();
     const Nanoseconds wait = wake - now;
-    pollfd pfd{fd_.get(), POLLIN, 0};
-    const int ready = ::poll(&pfd, 1, PollTimeoutMs(wait));
+    const int ready = io_->Poll(fd_.get(), PollTimeoutMs(wait));
     if (ready < 0) {
       const int saved = errno;
       if (saved == EINTR)
         continue;
-      return Fail(saved, "poll", clock_.Now());
+      return Fail(saved, "poll", io_->Now());
     }
-    now = clock_.Now();
+    now = io_->Now();
     if (ready == 0) {
       if (recovery_.IsStalled(now)) {
         CloseDevice();

@@ -24,6 +24,7 @@
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/mapped_buffer.h"
 #include "skyloc/drivers/stream_recovery.h"
+#include "skyloc/drivers/v4l2_io.h"
 #include "skyloc/platform/clock.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/platform/unique_fd.h"
@@ -43,7 +44,8 @@ class V4l2Camera final : public Camera {
  public:
   static constexpr std::uint32_t kMaxBuffers = 8;
 
-  explicit V4l2Camera(const V4l2CameraConfig& config);
+  // `io` (default: the real system calls) must outlive the camera.
+  explicit V4l2Camera(const V4l2CameraConfig& config, V4l2Io* io = nullptr);
   ~V4l2Camera() override { Close(); }
 
   // The /dev/video* node actually opened (resolved from a driver:card name).
@@ -68,8 +70,10 @@ class V4l2Camera final : public Camera {
   Status Fail(int saved_errno, const char* what, Nanoseconds now);
   Status Recover(Nanoseconds now);
 
+  int Xioctl(int fd, unsigned long request, void* arg);
+
   V4l2CameraConfig config_;
-  MonotonicClock clock_;
+  V4l2Io* io_;
   StreamRecovery recovery_;
   UniqueFd fd_;
   char path_[128] = {};
