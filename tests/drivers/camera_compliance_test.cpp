@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <ostream>
 #include <string>
 
 #include "skyloc/drivers/camera.h"
@@ -314,6 +315,11 @@ TEST_P(CameraCompliance, CaptureDoesNotAllocate) {
   }
   EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_EQ(failures, 0u);
+}
+
+// Shown by --gtest_list_tests (and so in CTest's test names) instead of raw bytes.
+void PrintTo(const CameraCase& c, std::ostream* os) {
+  *os << c.name;
 }
 
 std::string CaseName(const ::testing::TestParamInfo<CameraCase>& info) {

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <ostream>
 #include <string>
 
 #include "skyloc/drivers/simulated_status_output.h"
@@ -332,6 +333,11 @@ TEST_P(StatusOutputSuite, ButtonEdgesArriveThroughTheEventFd) {
     EXPECT_EQ(event->pressed, pressed);
   }
   EXPECT_EQ(under_->ReadButtonEvent().status().code(), StatusCode::kDeadlineExceeded);
+}
+
+// Shown by --gtest_list_tests (and so in CTest's test names) instead of raw bytes.
+void PrintTo(const OutputCase& c, std::ostream* os) {
+  *os << c.name;
 }
 
 std::string CaseName(const ::testing::TestParamInfo<OutputCase>& info) {
