@@ -33,7 +33,9 @@ StatusLines StatusPattern::Levels(LocalisationState state, float confidence,
                                   Nanoseconds now) const {
   StatusLines lines = Safe();
   if (mode_ == StatusLineMode::kLinePerState) {
-    lines.level[static_cast<std::size_t>(state)] = true;
+    const auto line = static_cast<std::size_t>(state);
+    if (line < lines.count)  // an out-of-range state (memory corruption) shows nothing
+      lines.level[line] = true;
     return lines;
   }
   const Blink blink = BlinkFor(state, confidence);

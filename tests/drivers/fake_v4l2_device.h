@@ -27,6 +27,8 @@ class FakeV4l2Device final : public V4l2Io {
   std::string node = "/dev/video0";
   std::vector<std::uint32_t> formats = {V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_GREY};
   Nanoseconds frame_interval = std::chrono::milliseconds(40);
+  std::uint32_t max_width = 64;
+  std::uint32_t max_height = 48;
   bool unplugged = false;            // open: ENOENT; ioctls on open descriptors: ENODEV
   bool stalled = false;              // streaming, but no frames
   std::uint32_t skip_sequences = 0;  // the driver lost frames before the next one
@@ -76,8 +78,8 @@ class FakeV4l2Device final : public V4l2Io {
         v4l2_pix_format& pix = static_cast<v4l2_format*>(arg)->fmt.pix;
         if (std::find(formats.begin(), formats.end(), pix.pixelformat) == formats.end())
           pix.pixelformat = formats[0];
-        pix.width = std::min(pix.width, 64u);  // a small sensor: the driver adjusts
-        pix.height = std::min(pix.height, 48u);
+        pix.width = std::min(pix.width, max_width);  // a small sensor: the driver adjusts
+        pix.height = std::min(pix.height, max_height);
         pix.bytesperline = pix.width * (pix.pixelformat == V4L2_PIX_FMT_YUYV ? 2 : 1) + 8;
         pix.sizeimage = pix.bytesperline * pix.height;
         format_ = pix;

@@ -145,6 +145,25 @@ TEST_F(V4l2FakeDeviceTest, UnplugThenReplugIsRecoveredWithBackoff) {
   EXPECT_EQ(camera_.counters().dropped, 0u);
 }
 
+TEST_F(V4l2FakeDeviceTest, ADeviceThatComesBackDifferentIsNotAccepted) {
+  OpenAndStart();
+  EXPECT_EQ(Next(), 0u);
+  device_.unplugged = true;
+  EXPECT_EQ(camera_.Capture(seconds(1)).status().code(), StatusCode::kUnavailable);
+  device_.unplugged = false;
+  device_.max_width = 32;  // another camera on the same port
+  Result<Frame> refused = camera_.Capture(milliseconds(150));
+  EXPECT_EQ(refused.status().code(), StatusCode::kUnavailable);
+  // The operator learns why the reopen did not count.
+  EXPECT_NE(std::string(refused.status().message()).find("came back as 32x48"), std::string::npos)
+      << refused.status().message();
+  EXPECT_EQ(camera_.recovery().consecutive_failures(), 1u);
+  EXPECT_EQ(camera_.info().width, 64);  // still what the pipeline was built for
+  device_.max_width = 64;               // the right camera again
+  EXPECT_EQ(Next(), 1u);
+  EXPECT_EQ(camera_.counters().restarts, 1u);
+}
+
 TEST_F(V4l2FakeDeviceTest, StalledStreamIsRestarted) {
   OpenAndStart();
   EXPECT_EQ(Next(), 0u);

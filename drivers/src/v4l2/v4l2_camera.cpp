@@ -351,10 +351,7 @@ Status V4l2Camera::DoStart() {
       return s;
     }
   }
-  Status s = StartStreaming();
-  if (!s.ok())
-    return s;
-  return Status::Ok();
+  return StartStreaming();
 }
 
 void V4l2Camera::DoStop() {
@@ -385,12 +382,24 @@ Status V4l2Camera::Fail(int saved_errno, const char* what, Nanoseconds now) {
 }
 
 Status V4l2Camera::Recover(Nanoseconds now) {
+  // The pipeline sized its buffers for the frames it had: a device that comes back with
+  // another size or format is not the same camera, so that reopen counts as failed.
+  const CameraInfo before = info_;
   Status s = OpenDevice();
+  if (s.ok() && (info_.width != before.width || info_.height != before.height ||
+                 info_.format != before.format)) {
+    s = Status::Error(StatusCode::kFailedPrecondition,
+                      "camera %s: came back as %dx%d %s, was %dx%d %s", info_.name, info_.width,
+                      info_.height, dsp::PixelFormatName(info_.format), before.width, before.height,
+                      dsp::PixelFormatName(before.format));
+    info_ = before;
+  }
   if (s.ok())
     s = StartStreaming();
   if (!s.ok()) {
     CloseDevice();
     recovery_.ReopenFailed(now);
+    last_reopen_error_ = s;
     return s;
   }
   recovery_.ReopenSucceeded(now);
@@ -428,9 +437,11 @@ Result<Frame> V4l2Camera::DoCapture(Nanoseconds timeout) {
         if (recovery_.next_attempt() > deadline) {
           io_->SleepFor(deadline - now);
           return Status::Error(
-              StatusCode::kUnavailable, "camera %s: device lost; next reopen attempt in %lld ms",
+              StatusCode::kUnavailable,
+              "camera %s: device lost; next reopen attempt in %lld ms (last attempt: %s)",
               info_.name,
-              static_cast<long long>((recovery_.next_attempt() - deadline).count() / 1'000'000));
+              static_cast<long long>((recovery_.next_attempt() - deadline).count() / 1'000'000),
+              recovery_.consecutive_failures() == 0 ? "none yet" : last_reopen_error_.message());
         }
         io_->SleepFor(recovery_.next_attempt() - now);
         continue;

@@ -75,6 +75,7 @@ class V4l2Camera final : public Camera {
   V4l2CameraConfig config_;
   V4l2Io* io_;
   StreamRecovery recovery_;
+  Status last_reopen_error_;  // why the last reopen failed, for the kUnavailable message
   UniqueFd fd_;
   char path_[128] = {};
   std::array<MappedBuffer, kMaxBuffers> buffers_;
