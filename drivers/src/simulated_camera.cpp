@@ -50,8 +50,10 @@ Status SimulatedCamera::DoOpen() {
   }
   stride_ = static_cast<std::size_t>(config_.width) *
             static_cast<std::size_t>(dsp::BytesPerPixelTimes2(config_.format)) / 2;
-  SKYLOC_TRY(pixels_.Allocate(stride_ * static_cast<std::size_t>(config_.height))
-                 .AddContext("camera %s: frame buffer", info_.name));
+  // Not SKYLOC_TRY(x.AddContext(...)): AddContext returns a reference into the temporary,
+  // which the macro would keep past its lifetime.
+  if (Status s = pixels_.Allocate(stride_ * static_cast<std::size_t>(config_.height)); !s.ok())
+    return s.AddContext("camera %s: frame buffer", info_.name);
   next_index_ = 0;
   have_timestamp_ = false;
   for (std::size_t i = 0; i < fault_count_; ++i)

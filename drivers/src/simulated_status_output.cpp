@@ -24,8 +24,8 @@ Status SimulatedStatusOutput::Open() {
                          "simulated status output: needs a clock and history_capacity > 0");
   }
   if (history_storage_.size() != config_.history_capacity) {
-    SKYLOC_TRY(history_storage_.Allocate(config_.history_capacity)
-                   .AddContext("simulated status output history"));
+    if (Status s = history_storage_.Allocate(config_.history_capacity); !s.ok())
+      return s.AddContext("simulated status output history");
   }
   history_.SetStorage(history_storage_.span());
   if (config_.has_button) {

@@ -153,9 +153,8 @@ Status LibcameraCamera::Configure() {
     }
     const libcamera::FrameBuffer::Plane& plane = buffer->planes()[0];
     // Map from the start of the dmabuf once; the plane may start at an offset in it.
-    SKYLOC_TRY(mappings_[i]
-                   .Map(plane.fd.get(), 0, plane.offset + plane.length)
-                   .AddContext("camera %s: buffer %zu", info_.name, i));
+    if (Status s = mappings_[i].Map(plane.fd.get(), 0, plane.offset + plane.length); !s.ok())
+      return s.AddContext("camera %s: buffer %zu", info_.name, i);
     plane_offsets_[i] = plane.offset;
     if (plane.length < frame_bytes_) {
       return Status::Error(StatusCode::kInternal,

@@ -291,9 +291,9 @@ Status V4l2Camera::OpenDevice() {
                            "camera %s: buffer %u has %u bytes, a frame needs %zu", info_.name, i,
                            buf.length, frame_bytes_);
     }
-    SKYLOC_TRY(buffers_[i]
-                   .Map(fd_.get(), static_cast<off_t>(buf.m.offset), buf.length)
-                   .AddContext("camera %s: buffer %u", info_.name, i));
+    if (Status s = buffers_[i].Map(fd_.get(), static_cast<off_t>(buf.m.offset), buf.length);
+        !s.ok())
+      return s.AddContext("camera %s: buffer %u", info_.name, i);
   }
   return Status::Ok();
 }
