@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 
@@ -23,6 +24,7 @@
 #include "skyloc/platform/clock.h"
 #include "test_env.h"
 #if SKYLOC_WITH_GPIOD
+#include "gpio_sim.h"
 #include "skyloc/drivers/gpio_status_output.h"
 #endif
 
@@ -89,70 +91,33 @@ class GpioOutput final : public OutputUnderTest {
   StatusOutput& output() override { return output_; }
 
   Result<bool> ReadBack(std::size_t i) override {
-    std::string path;
-    SKYLOC_TRY(SimFile(config_.lines[i], "value", &path));
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
-      const int saved = errno;
-      return Status::FromErrno(saved, "reading back %s", path.c_str());
-    }
-    char c = 0;
-    const ssize_t n = ::read(fd, &c, 1);
-    ::close(fd);
-    if (n != 1)
-      return Status::Error(StatusCode::kDataLoss, "%s is empty", path.c_str());
-    return c == '1';
+    SKYLOC_TRY(FindPins());
+    return pins_->Level(config_.lines[i]);
   }
   bool has_button() override { return config_.button_line >= 0; }
   Status SetButton(bool pressed) override {
-    // gpio-sim: pulling the simulated pin up or down is what a button does to the input.
-    std::string path;
-    SKYLOC_TRY(SimFile(static_cast<unsigned>(config_.button_line), "pull", &path));
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
-    if (fd < 0) {
-      const int saved = errno;
-      return Status::FromErrno(saved, "opening %s", path.c_str());
-    }
-    const char* text = pressed ? "pull-up" : "pull-down";
-    const ssize_t n = ::write(fd, text, std::strlen(text));
-    const int saved = errno;
-    ::close(fd);
-    if (n < 0)
-      return Status::FromErrno(saved, "writing %s to %s", text, path.c_str());
-    return Status::Ok();
+    SKYLOC_TRY(FindPins());
+    return pins_->Pull(static_cast<unsigned>(config_.button_line), pressed);
   }
   int button_fd() override { return output_.button_event_fd(); }
   Result<ButtonEvent> ReadButtonEvent() override { return output_.ReadButtonEvent(); }
 
  private:
-  // <gpio-sim dir of the chip>/sim_gpio<offset>/<file>.
-  Status SimFile(unsigned offset, const char* file, std::string* path) {
-    std::string dir;
-    if (const char* env = testing::Env("SKYLOC_TEST_GPIO_SIM_DIR")) {
-      dir = env;
-    } else {
-      if (output_.chip_name()[0] == '\0') {
-        return Status::Error(StatusCode::kFailedPrecondition,
-                             "read-back needs the chip open (to learn its name)");
-      }
-      const std::string pattern =
-          std::string("/sys/devices/platform/gpio-sim.*/") + output_.chip_name();
-      glob_t g{};
-      if (::glob(pattern.c_str(), 0, nullptr, &g) == 0 && g.gl_pathc > 0)
-        dir = g.gl_pathv[0];
-      ::globfree(&g);
-      if (dir.empty()) {
-        return Status::Error(StatusCode::kNotFound,
-                             "%s is not a gpio-sim chip (no %s): set SKYLOC_TEST_GPIO_SIM_DIR",
-                             output_.chip_name(), pattern.c_str());
-      }
-    }
-    *path = dir + "/sim_gpio" + std::to_string(offset) + "/" + file;
+  // Found once, while the chip is open (its name locates the sysfs folder), and kept so
+  // the lines can be read after Close() too.
+  Status FindPins() {
+    if (pins_.has_value())
+      return Status::Ok();
+    Result<testing::GpioSimPins> found = testing::GpioSimPins::Find(output_.chip_name());
+    if (!found.ok())
+      return found.status();
+    pins_ = std::move(found).value();
     return Status::Ok();
   }
 
   GpioStatusOutputConfig config_;
   GpioStatusOutput output_;
+  std::optional<testing::GpioSimPins> pins_;
 };
 #endif
 
@@ -298,6 +263,8 @@ TEST_P(StatusOutputSuite, CloseLeavesTheLinesOffAndReopens) {
   ASSERT_OK(output().Show(LocalisationState::kLost, 0.0f, milliseconds(0)));
   EXPECT_NE(ReadAll(), Off());
   output().Close();
+  // Released lines are not driven any more: on gpio-sim they fall to the pull-down.
+  EXPECT_EQ(ReadAll(), Off());
   ASSERT_OK(output().Open());  // lines were released: requesting them again works
   EXPECT_EQ(ReadAll(), Off());
   output().Close();
