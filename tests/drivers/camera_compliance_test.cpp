@@ -52,8 +52,6 @@ struct CameraCase {
   const char* name;
   // The camera to test, or nullptr with *skip saying why it cannot be tested here.
   std::unique_ptr<CameraUnderTest> (*make)(std::string* skip);
-  // Why Capture() cannot be proven allocation-free for this camera (nullptr: it can).
-  const char* allocation_exemption;
   // Frame timestamps are CLOCK_MONOTONIC times (real devices), so they must lie near now.
   bool monotonic_clock_timestamps;
 };
@@ -157,14 +155,18 @@ std::unique_ptr<CameraUnderTest> MakeLibcamera(std::string* skip) {
 }
 
 const CameraCase kCases[] = {
-    {"Simulated", MakeSim, nullptr, false},
-    {"V4l2FakeDevice", MakeV4l2Fake, nullptr, false},
-    {"V4l2", MakeV4l2, nullptr, true},
-    {"Libcamera", MakeLibcamera,
-     "libcamera's own threads allocate for every request (Signal::emit, queued method "
-     "calls); the driver's part is allocation-free by construction",
-     true},
+    {"Simulated", MakeSim, false},
+    {"V4l2FakeDevice", MakeV4l2Fake, false},
+    {"V4l2", MakeV4l2, true},
+    {"Libcamera", MakeLibcamera, true},
 };
+
+// The cameras whose Capture() can be proven allocation-free with the process-wide
+// allocation counter. Not libcamera: its own threads allocate for every request
+// (queued method calls, Signal::emit), which the counter cannot tell apart from ours;
+// LibcameraCamera's part (SPSC hand-over, eventfd, request reuse) allocates nothing by
+// construction.
+const CameraCase kAllocationFreeCases[] = {kCases[0], kCases[1], kCases[2]};
 
 constexpr Nanoseconds kFrameTimeout = seconds(5);  // vimc under QEMU TCG: ~6 fps
 constexpr int kFrames = 8;
@@ -196,10 +198,11 @@ class CameraCompliance : public ::testing::TestWithParam<CameraCase> {
         EXPECT_GT(frame->timestamp, last_timestamp_) << "frame " << i;
       }
       if (GetParam().monotonic_clock_timestamps) {
-        // Frames are stamped by the kernel on CLOCK_MONOTONIC when they were captured: not
-        // in the future and not from long ago.
+        // Frames are stamped on CLOCK_MONOTONIC (not CLOCK_REALTIME, which would be decades
+        // off): near now. Not strictly before now: vivid stamps a frame with its nominal
+        // frame time, which can lie a frame period (~35 ms seen) after the dequeue.
         const Nanoseconds now = MonotonicClock().Now();
-        EXPECT_LE(frame->timestamp, now);
+        EXPECT_LT(frame->timestamp, now + seconds(1));
         EXPECT_GT(frame->timestamp, now - seconds(10));
       }
       have_last_ = true;
@@ -300,9 +303,9 @@ TEST_P(CameraCompliance, ZeroTimeoutReturnsAFrameOrDeadlineExceeded) {
   CaptureFrames(2);
 }
 
-TEST_P(CameraCompliance, CaptureDoesNotAllocate) {
-  if (GetParam().allocation_exemption != nullptr)
-    GTEST_SKIP() << GetParam().allocation_exemption;
+class CameraCaptureAllocation : public CameraCompliance {};
+
+TEST_P(CameraCaptureAllocation, CaptureDoesNotAllocate) {
   ASSERT_TRUE(AllocationCounterActive());
   ASSERT_OK(camera().Open());
   ASSERT_OK(camera().Start());
@@ -327,6 +330,8 @@ std::string CaseName(const ::testing::TestParamInfo<CameraCase>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllCameras, CameraCompliance, ::testing::ValuesIn(kCases), CaseName);
+INSTANTIATE_TEST_SUITE_P(AllocationFreeCameras, CameraCaptureAllocation,
+                         ::testing::ValuesIn(kAllocationFreeCases), CaseName);
 
 }  // namespace
 }  // namespace skyloc::drivers

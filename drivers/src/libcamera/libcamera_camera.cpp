@@ -215,6 +215,9 @@ Status LibcameraCamera::DoStart() {
   // libcamera numbers frames afresh after start(): continue our numbering.
   have_sequence_ = false;
   for (std::size_t i = 0; i < request_count_; ++i) {
+    // After a Stop() the requests come back cancelled; libcamera asserts (and aborts) when
+    // a request that is not pending is queued and completed again, so reset each one.
+    requests_[i]->reuse(libcamera::Request::ReuseBuffers);
     Status s = QueueRequest(requests_[i].get());
     if (!s.ok()) {
       DoStop();
