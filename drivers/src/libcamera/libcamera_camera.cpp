@@ -168,6 +168,8 @@ Status LibcameraCamera::Configure() {
       return FromLibcamera(ret, info_.name, "adding a buffer to a request");
   }
   camera_->requestCompleted.connect(this, &LibcameraCamera::OnRequestCompleted);
+  camera_->disconnected.connect(this, &LibcameraCamera::OnDisconnected);
+  disconnected_.store(false, std::memory_order_release);
   have_sequence_ = false;
   next_sequence_ = 0;
   return Status::Ok();
@@ -179,6 +181,12 @@ void LibcameraCamera::OnRequestCompleted(libcamera::Request* request) {
     overflows_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
+  const std::uint64_t one = 1;
+  (void)!::write(completed_fd_.get(), &one, sizeof(one));
+}
+
+void LibcameraCamera::OnDisconnected() {
+  disconnected_.store(true, std::memory_order_release);
   const std::uint64_t one = 1;
   (void)!::write(completed_fd_.get(), &one, sizeof(one));
 }
@@ -228,7 +236,7 @@ Status LibcameraCamera::DoStart() {
 }
 
 Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
-  if (held_ != nullptr) {
+  if (held_ != nullptr && !disconnected_.load(std::memory_order_acquire)) {
     held_->reuse(libcamera::Request::ReuseBuffers);
     libcamera::Request* request = held_;
     held_ = nullptr;
@@ -237,6 +245,12 @@ Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
   const auto deadline = MonotonicClock().Now() + timeout;
   libcamera::Request* request = nullptr;
   while (!completed_.TryPop(&request)) {
+    if (disconnected_.load(std::memory_order_acquire)) {
+      return Status::Error(StatusCode::kUnavailable,
+                           "camera %s: disconnected (unplugged?): reconnect it, then restart "
+                           "the stream (Close/Open)",
+                           info_.name);
+    }
     const Nanoseconds remaining = deadline - MonotonicClock().Now();
     const int timeout_ms = remaining <= Nanoseconds(0)
                                ? 0
@@ -311,8 +325,10 @@ void LibcameraCamera::DoStop() {
 
 void LibcameraCamera::DoClose() {
   DoStop();
-  if (camera_)
+  if (camera_) {
     camera_->requestCompleted.disconnect(this);
+    camera_->disconnected.disconnect(this);
+  }
   for (auto& r : requests_)
     r.reset();
   for (MappedBuffer& m : mappings_)

@@ -14,6 +14,9 @@
 // Stop():  sets `stopping` first so nothing is queued any more (queuing while the camera
 //          stops crashed libcamera in the VM study), camera->stop() (cancels pending
 //          requests, which still come through the queue), then drains the queue.
+// Unplug:  libcamera's `disconnected` signal makes Capture() return kUnavailable from
+//          then on; unlike the V4L2 driver this one does not reopen by itself (Close()
+//          and Open() again once the camera is back).
 #pragma once
 
 #include <array>
@@ -70,6 +73,8 @@ class LibcameraCamera final : public Camera {
   Status QueueRequest(libcamera::Request* request);
   // libcamera's thread: hands the request over, nothing else.
   void OnRequestCompleted(libcamera::Request* request);
+  // libcamera's thread: the camera was unplugged. Flags it and wakes Capture().
+  void OnDisconnected();
 
   LibcameraCameraConfig config_;
   std::unique_ptr<libcamera::CameraManager> manager_;
@@ -89,6 +94,7 @@ class LibcameraCamera final : public Camera {
   UniqueFd completed_fd_;  // eventfd: counts requests pushed into completed_
   SpscQueue<libcamera::Request*, 16> completed_;
   std::atomic<bool> stopping_{false};
+  std::atomic<bool> disconnected_{false};
   std::atomic<std::uint64_t> overflows_{0};
   libcamera::Request* held_ = nullptr;  // the request whose buffer the last Frame shows
   // libcamera numbers frames from 0 again after each start(); ours keep increasing.
