@@ -31,6 +31,7 @@ class FakeV4l2Device final : public V4l2Io {
   std::uint32_t max_height = 48;
   bool unplugged = false;            // open: ENOENT; ioctls on open descriptors: ENODEV
   bool stalled = false;              // streaming, but no frames
+  bool spurious_wakeups = false;     // poll() says ready every 10 ms, but there is no frame
   std::uint32_t skip_sequences = 0;  // the driver lost frames before the next one
   bool next_frame_error = false;     // V4L2_BUF_FLAG_ERROR on the next frame
   bool next_frame_short = false;     // bytesused half the image on the next frame
@@ -169,6 +170,10 @@ class FakeV4l2Device final : public V4l2Io {
     if (unplugged)
       return 1;  // POLLERR: the next ioctl reports ENODEV
     const Nanoseconds timeout = std::chrono::milliseconds(timeout_ms);
+    if (spurious_wakeups) {
+      now_ += std::chrono::milliseconds(10);
+      return 1;
+    }
     if (!streaming_ || queue_size_ == 0 || stalled || frame_interval > timeout) {
       now_ += timeout;
       return 0;

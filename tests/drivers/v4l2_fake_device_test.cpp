@@ -117,6 +117,17 @@ TEST_F(V4l2FakeDeviceTest, ZeroTimeoutIsDeadlineExceeded) {
   EXPECT_EQ(Next(), 0u);
 }
 
+TEST_F(V4l2FakeDeviceTest, SpuriousWakeupsStillEndAtTheDeadline) {
+  OpenAndStart();
+  EXPECT_EQ(Next(), 0u);
+  device_.spurious_wakeups = true;
+  const Nanoseconds before = device_.Now();
+  EXPECT_EQ(camera_.Capture(milliseconds(100)).status().code(), StatusCode::kDeadlineExceeded);
+  EXPECT_EQ(device_.Now() - before, milliseconds(100));
+  device_.spurious_wakeups = false;
+  EXPECT_EQ(Next(), 1u);
+}
+
 TEST_F(V4l2FakeDeviceTest, UnplugThenReplugIsRecoveredWithBackoff) {
   OpenAndStart();
   EXPECT_EQ(Next(), 0u);

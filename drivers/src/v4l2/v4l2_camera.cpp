@@ -490,8 +490,13 @@ Result<Frame> V4l2Camera::DoCapture(Nanoseconds timeout) {
     buf.memory = V4L2_MEMORY_MMAP;
     if (Xioctl(fd_.get(), VIDIOC_DQBUF, &buf) != 0) {
       const int saved = errno;
-      if (saved == EAGAIN)
+      if (saved == EAGAIN) {  // woken without a frame (spurious, or an event)
+        if (now >= deadline) {
+          return Status::Error(StatusCode::kDeadlineExceeded, "camera %s: no frame within %lld ms",
+                               info_.name, static_cast<long long>(timeout.count() / 1'000'000));
+        }
         continue;
+      }
       return Fail(saved, "VIDIOC_DQBUF", now);
     }
     if (buf.index >= buffer_count_) {
