@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "skyloc/drivers/frame_source.h"
+#include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/clock.h"
 
 namespace skyloc::drivers {
@@ -129,6 +130,24 @@ TEST_F(SimulatedCameraTest, FaultsFireOncePerOpen) {
     camera_.Close();
   }
   EXPECT_EQ(camera_.counters().dropped, 2u);
+}
+
+TEST_F(SimulatedCameraTest, FaultPathsDoNotAllocate) {
+  ASSERT_TRUE(AllocationCounterActive());
+  ASSERT_TRUE(camera_.InjectFault({CameraFault::Kind::kDrop, 1, 2}).ok());
+  ASSERT_TRUE(camera_.InjectFault({CameraFault::Kind::kStall, 4, 2}).ok());
+  ASSERT_TRUE(camera_.InjectFault({CameraFault::Kind::kDisconnect, 5, 2}).ok());
+  ASSERT_TRUE(camera_.InjectFault({CameraFault::Kind::kCorruptSize, 6, 1}).ok());
+  OpenAndStart();
+  AllocationScope scope;
+  int ok = 0, failed = 0;
+  for (int i = 0; i < 12; ++i) {
+    Result<Frame> f = camera_.Capture(milliseconds(10));
+    (f.ok() ? ok : failed) += 1;
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_EQ(failed, 5);  // 2 stalls, 2 unplugged calls, 1 corrupt frame
+  EXPECT_EQ(ok, 7);
 }
 
 TEST_F(SimulatedCameraTest, FiniteSourceEndsWithOutOfRange) {

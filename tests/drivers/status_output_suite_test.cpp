@@ -271,7 +271,7 @@ TEST_P(StatusOutputSuite, CloseLeavesTheLinesOffAndReopens) {
   output().Close();  // harmless
 }
 
-TEST_P(StatusOutputSuite, ShowDoesNotAllocate) {
+TEST_P(StatusOutputSuite, ShowAndSafeStateDoNotAllocate) {
   ASSERT_TRUE(AllocationCounterActive());
   ASSERT_OK(output().Open());
   AllocationScope scope;
@@ -283,6 +283,8 @@ TEST_P(StatusOutputSuite, ShowDoesNotAllocate) {
       break;
     }
   }
+  // The fatal-error path: the safe state must be reachable without the heap.
+  EXPECT_TRUE(output().SafeState().ok());
   EXPECT_EQ(scope.allocations(), 0u);
 }
 

@@ -11,6 +11,7 @@
 
 #include "fake_v4l2_device.h"
 #include "skyloc/drivers/v4l2_camera.h"
+#include "skyloc/platform/alloc_counter.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -172,6 +173,25 @@ TEST_F(V4l2FakeDeviceTest, ADeviceThatComesBackDifferentIsNotAccepted) {
   EXPECT_EQ(camera_.info().width, 64);  // still what the pipeline was built for
   device_.max_width = 64;               // the right camera again
   EXPECT_EQ(Next(), 1u);
+  EXPECT_EQ(camera_.counters().restarts, 1u);
+}
+
+TEST_F(V4l2FakeDeviceTest, FaultsAndRecoveryDoNotAllocate) {
+  // The pipeline keeps calling Capture() through an outage: losing the device, backing
+  // off, reopening (open, format, mmap) and resuming must not touch the heap either.
+  ASSERT_TRUE(AllocationCounterActive());
+  OpenAndStart();
+  EXPECT_EQ(Next(), 0u);
+  AllocationScope scope;
+  device_.unplugged = true;
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(camera_.Capture(milliseconds(300)).status().code(), StatusCode::kUnavailable);
+  device_.unplugged = false;
+  EXPECT_EQ(Next(), 1u);
+  device_.next_frame_error = true;
+  EXPECT_EQ(camera_.Capture(seconds(1)).status().code(), StatusCode::kDataLoss);
+  EXPECT_EQ(Next(), 3u);
+  EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_EQ(camera_.counters().restarts, 1u);
 }
 
