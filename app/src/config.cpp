@@ -2,6 +2,8 @@
 
 #include <toml++/toml.h>
 
+#include "skyloc/dsp/sh_grid.h"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdarg>
@@ -27,10 +29,9 @@ constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
     {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
 constexpr EnumName<GridPreset> kGridPresets[] = {
     {"auto", GridPreset::kAuto}, {"paper", GridPreset::kPaper}, {"custom", GridPreset::kCustom}};
-constexpr EnumName<DistanceMetric> kDistanceMetrics[] = {
-    {"l1", DistanceMetric::kL1}, {"l2", DistanceMetric::kL2}, {"cosine", DistanceMetric::kCosine}};
-constexpr EnumName<Normalisation> kNormalisations[] = {
-    {"none", Normalisation::kNone}, {"l1", Normalisation::kL1}, {"l2", Normalisation::kL2}};
+constexpr EnumName<Normalisation> kNormalisations[] = {{"none", Normalisation::kNone},
+                                                       {"divide_by_a0", Normalisation::kDivideByA0},
+                                                       {"unit_l2", Normalisation::kUnitL2}};
 constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
                                                              {"sim", StatusOutputKind::kSim},
                                                              {"gpio", StatusOutputKind::kGpio}};
@@ -241,22 +242,18 @@ class SectionReader {
 void ResolveGrid(DescriptorConfig* d) {
   switch (d->grid) {
     case GridPreset::kAuto: {
-      // Unaliased for band limit L: L Gauss-Legendre rings on the sphere (L/2 on the upper
-      // hemisphere, rounded up) and at least 2L longitudes, rounded up to a power of two
-      // for the per-ring FFT.
-      d->rings = (d->bands + 1) / 2;
-      int lon = 1;
-      while (lon < 2 * d->bands)
-        lon *= 2;
-      d->longitudes = lon;
+      const dsp::ShGridConfig g = dsp::DefaultShGridConfig(d->bands);
+      d->rings = g.rings;
+      d->longitudes = g.longitudes;
       break;
     }
-    case GridPreset::kPaper:
-      // Stone et al. 2016: 2000 samples on the upper hemisphere, 120 bands.
+    case GridPreset::kPaper: {
+      const dsp::ShGridConfig g = dsp::PaperShGridConfig();
       d->bands = 120;
-      d->rings = 20;
-      d->longitudes = 100;
+      d->rings = g.rings;
+      d->longitudes = g.longitudes;
       break;
+    }
     case GridPreset::kCustom:
       break;
   }
@@ -272,9 +269,6 @@ const char* SegmentationMethodName(SegmentationMethod method) {
 }
 const char* GridPresetName(GridPreset preset) {
   return NameOf(kGridPresets, preset);
-}
-const char* DistanceMetricName(DistanceMetric metric) {
-  return NameOf(kDistanceMetrics, metric);
 }
 const char* NormalisationName(Normalisation normalisation) {
   return NameOf(kNormalisations, normalisation);
@@ -355,7 +349,6 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Enum("grid", &c.descriptor.grid, kGridPresets);
     r.Int("rings", &c.descriptor.rings, 0, 1024);
     r.Int("longitudes", &c.descriptor.longitudes, 0, 4096);
-    r.Enum("distance", &c.descriptor.distance, kDistanceMetrics);
     r.Enum("normalisation", &c.descriptor.normalisation, kNormalisations);
     if (error.ok() && c.descriptor.grid == GridPreset::kCustom) {
       if (c.descriptor.rings < 1)

@@ -15,15 +15,13 @@ namespace skyloc::app {
 enum class CameraKind : std::uint8_t { kSim, kV4l2, kLibcamera, kDataset };
 enum class SegmentationMethod : std::uint8_t { kOtsu, kFixed };
 enum class GridPreset : std::uint8_t { kAuto, kPaper, kCustom };
-enum class DistanceMetric : std::uint8_t { kL1, kL2, kCosine };
-enum class Normalisation : std::uint8_t { kNone, kL1, kL2 };
+enum class Normalisation : std::uint8_t { kNone, kDivideByA0, kUnitL2 };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
 
 const char* CameraKindName(CameraKind kind);
 const char* SegmentationMethodName(SegmentationMethod method);
 const char* GridPresetName(GridPreset preset);
-const char* DistanceMetricName(DistanceMetric metric);
 const char* NormalisationName(Normalisation normalisation);
 const char* StatusOutputKindName(StatusOutputKind kind);
 const char* StatusEncodingName(StatusEncoding encoding);
@@ -53,11 +51,12 @@ struct SegmentationConfig {
 struct DescriptorConfig {
   int bands = 64;  // L: amplitudes a_0..a_{L-1}
   GridPreset grid = GridPreset::kAuto;
-  // Resolved by the parser: auto = the unaliased grid for `bands` (rings >= L/2 on the
-  // upper hemisphere, longitudes >= 2L); paper = 2000 points, 120 bands.
+  // Resolved by the parser from dsp/sh_grid.h: auto = DefaultShGridConfig(bands), the
+  // unaliased grid; paper = PaperShGridConfig() (2000 points, 120 bands).
   int rings = 0;
   int longitudes = 0;
-  DistanceMetric distance = DistanceMetric::kL1;
+  // There is no distance key: streaming SeqSLAM compares descriptors by mean absolute
+  // difference (L1), as OpenSeqSLAM does.
   Normalisation normalisation = Normalisation::kNone;
 
   bool operator==(const DescriptorConfig&) const = default;

@@ -32,6 +32,10 @@ TEST(Config, AutoGridIsUnaliased) {
   ASSERT_TRUE(odd.ok());
   EXPECT_EQ(odd->descriptor.rings, 4);
   EXPECT_EQ(odd->descriptor.longitudes, 16);
+  Result<Config> paper = ParseConfig("[descriptor]\ngrid = \"paper\"\n", "t.toml");
+  ASSERT_TRUE(paper.ok());
+  EXPECT_EQ(paper->descriptor.bands, 120);
+  EXPECT_EQ(paper->descriptor.rings * paper->descriptor.longitudes, 2000);
 }
 
 TEST(Config, ReadsEveryKindOfValue) {
@@ -47,7 +51,7 @@ threshold = 90
 grid = "custom"
 rings = 12
 longitudes = 64
-distance = "cosine"
+normalisation = "unit_l2"
 [seqslam]
 ds = 1
 [realtime]
@@ -66,7 +70,7 @@ encoding = "blink"
   EXPECT_EQ(c->segmentation.threshold, 90);
   EXPECT_EQ(c->descriptor.rings, 12);
   EXPECT_EQ(c->descriptor.longitudes, 64);
-  EXPECT_EQ(c->descriptor.distance, DistanceMetric::kCosine);
+  EXPECT_EQ(c->descriptor.normalisation, Normalisation::kUnitL2);
   EXPECT_EQ(c->seqslam.ds, 1);
   EXPECT_TRUE(c->realtime.mlockall);
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
@@ -105,7 +109,7 @@ const BadCase kBadCases[] = {
     {"[descriptor]\nrings = 10\n", "[descriptor] rings"},
     {"[descriptor]\ngrid = \"custom\"\n", "[descriptor] rings", ":1:"},
     {"[descriptor]\nbands = 64\ngrid = \"paper\"\n", "[descriptor] bands"},
-    {"[descriptor]\ndistance = \"hamming\"\n", "[descriptor] distance"},
+    {"[descriptor]\ndistance = \"l1\"\n", "[descriptor] distance"},
     {"[descriptor]\nnormalisation = \"max\"\n", "[descriptor] normalisation"},
     {"[seqslam]\nds = 0\n", "[seqslam] ds"},
     {"[seqslam]\nds = 101\n", "[seqslam] ds"},
