@@ -15,6 +15,10 @@ struct Command {
 };
 
 int RunDemo(std::span<char* const> args);
+int RunTeach(std::span<char* const> args);
+int RunRepeat(std::span<char* const> args);
+int RunReplay(std::span<char* const> args);
+int RunRoute(std::span<char* const> args);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

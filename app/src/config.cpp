@@ -2,8 +2,6 @@
 
 #include <toml++/toml.h>
 
-#include "skyloc/dsp/sh_grid.h"
-
 #include <cerrno>
 #include <cmath>
 #include <cstdarg>
@@ -11,6 +9,8 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+
+#include "skyloc/dsp/sh_grid.h"
 
 namespace skyloc::app {
 namespace {

@@ -41,8 +41,8 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
                       static_cast<double>(r.uniqueness), static_cast<double>(r.confidence),
                       dsp::TrackStateName(r.state), latency_us);
   }
-  if (n > 0 && std::fwrite(line, 1, static_cast<std::size_t>(n), out_) !=
-                   static_cast<std::size_t>(n))
+  if (n > 0 &&
+      std::fwrite(line, 1, static_cast<std::size_t>(n), out_) != static_cast<std::size_t>(n))
     failed_ = true;
   // One line per frame must reach a pipe reader promptly.
   if (std::fflush(out_) != 0)
@@ -117,7 +117,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
       if (frame.pose) {
         meta.has_pose = true;
-        meta.pose = {frame.pose->x_m,       frame.pose->y_m,         frame.pose->z_m,
+        meta.pose = {frame.pose->x_m,      frame.pose->y_m,       frame.pose->z_m,
                      frame.pose->roll_deg, frame.pose->pitch_deg, frame.pose->yaw_deg};
       }
       {

@@ -67,11 +67,11 @@ struct LoopOptions {
 };
 
 struct LoopSummary {
-  std::uint64_t frames = 0;          // frames through the pipeline
-  std::uint64_t capture_errors = 0;  // timeouts and corrupt frames skipped
+  std::uint64_t frames = 0;            // frames through the pipeline
+  std::uint64_t capture_errors = 0;    // timeouts and corrupt frames skipped
   std::uint64_t state_frames[3] = {};  // frames shown as LOST, SEARCHING, LOCALISED
-  bool end_of_source = false;        // a finite source (dataset) ran out
-  bool stopped = false;              // SIGINT/SIGTERM or RequestStop()
+  bool end_of_source = false;          // a finite source (dataset) ran out
+  bool stopped = false;                // SIGINT/SIGTERM or RequestStop()
 };
 
 // Runs until stopped. `status` and `sink` may be null; `route` is required for teach.

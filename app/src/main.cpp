@@ -9,6 +9,10 @@ namespace {
 
 constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
+    {"teach", "record a route's sky descriptors into a route database", RunTeach},
+    {"repeat", "localise live against a taught route (one JSON line per frame)", RunRepeat},
+    {"replay", "run a recorded dataset through the repeat pipeline", RunReplay},
+    {"route", "inspect or recover a route database file", RunRoute},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "skyloc/drivers/camera_file.h"
+
 namespace skyloc::app {
 namespace {
 
@@ -33,12 +35,17 @@ void Hash(std::uint64_t* h, const T& v) {
 
 Result<dsp::LensParams> LensFromConfig(const Config& config) {
   if (!config.camera.lens_file.empty()) {
-    // The camera-file reader belongs to `skyloc describe` (sky descriptor issue); until it
-    // is wired here, a lens file is refused rather than silently ignored.
-    return Status::Error(StatusCode::kUnimplemented,
-                         "[camera] lens_file = \"%s\": lens files are not read by the firmware "
-                         "yet; remove the key to use the default 185-degree fisheye",
-                         config.camera.lens_file.c_str());
+    Result<dsp::LensParams> p = drivers::LoadCameraFile(config.camera.lens_file.c_str());
+    if (!p.ok())
+      return p;
+    if (p->width != config.camera.width || p->height != config.camera.height) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "camera file %s is for %dx%d images but [camera] width x height is "
+                           "%dx%d: make them agree",
+                           config.camera.lens_file.c_str(), p->width, p->height,
+                           config.camera.width, config.camera.height);
+    }
+    return p;
   }
   dsp::LensParams p;
   p.model = dsp::LensModel::kEquidistant;
@@ -75,8 +82,7 @@ Status Pipeline::Init(const Config& config) {
   options.grid.rings = config.descriptor.rings;
   options.grid.longitudes = config.descriptor.longitudes;
   options.segmentation.fixed_threshold =
-      config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold
-                                                               : -1;
+      config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold : -1;
   options.normalisation = ToDsp(config.descriptor.normalisation);
   if (const dsp::DescriptorError e = descriptor_.Init(lens_, options); !e.ok())
     return Status::Error(StatusCode::kInvalidArgument, "[descriptor]: %s", e.message);
@@ -128,8 +134,10 @@ Status Pipeline::Init(const Config& config) {
 
 Status Pipeline::SetRoute(const RouteFrames& route) {
   if (route.dim() != static_cast<std::size_t>(dim())) {
-    return Status::Error(StatusCode::kFailedPrecondition, "route has %zu-value descriptors, the "
-                         "pipeline %d", route.dim(), dim());
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "route has %zu-value descriptors, the "
+                         "pipeline %d",
+                         route.dim(), dim());
   }
   seqslam_.ClearReferences();
   for (std::size_t i = 0; i < route.size(); ++i) {
@@ -153,8 +161,8 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result) {
   if (const dsp::DescriptorError e = descriptor_.Compute(image, amplitudes_.span(), &segmentation);
       !e.ok()) {
     return Status::Error(StatusCode::kDataLoss, "frame %llu (%dx%d %s): %s",
-                         static_cast<unsigned long long>(result->frame), image.width,
-                         image.height, dsp::PixelFormatName(image.format), e.message);
+                         static_cast<unsigned long long>(result->frame), image.width, image.height,
+                         dsp::PixelFormatName(image.format), e.message);
   }
   result->threshold = segmentation.threshold;
   result->sky_fraction = static_cast<float>(segmentation.sky_fraction);

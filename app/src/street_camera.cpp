@@ -26,8 +26,8 @@ double Unit(std::uint64_t x) {
 // Height of the building at street position x on one side (0 = left, 1 = right).
 double BuildingHeight(std::uint64_t seed, int side, double x) {
   const auto block = static_cast<std::int64_t>(std::floor(x / kBlockLength));
-  const std::uint64_t key = seed * 1000003u + static_cast<std::uint64_t>(block) * 2u +
-                            static_cast<std::uint64_t>(side);
+  const std::uint64_t key =
+      seed * 1000003u + static_cast<std::uint64_t>(block) * 2u + static_cast<std::uint64_t>(side);
   const double u = Unit(key);
   if (u < 0.12)
     return 0.0;  // a gap: a side street or a yard
@@ -128,8 +128,8 @@ Result<drivers::Frame> StreetCamera::DoCapture(Nanoseconds) {
   frame.image = {pixels_.data(), options_.width, options_.height,
                  static_cast<std::size_t>(options_.width), dsp::PixelFormat::kGrey8};
   frame.sequence = next_;
-  frame.timestamp = Nanoseconds(static_cast<std::int64_t>(static_cast<double>(next_) * 1e9 /
-                                                          options_.fps));
+  frame.timestamp =
+      Nanoseconds(static_cast<std::int64_t>(static_cast<double>(next_) * 1e9 / options_.fps));
   drivers::Pose pose;
   pose.x_m = x_m_;
   pose.z_m = kCameraHeight;

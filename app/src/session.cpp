@@ -1,0 +1,276 @@
+#include "session.h"
+
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "recording_status_output.h"
+#include "skyloc/drivers/dataset.h"
+#include "skyloc/dsp/place_metrics.h"
+#include "skyloc/platform/realtime.h"
+#include "skyloc/platform/signals.h"
+
+namespace skyloc::app {
+namespace {
+
+// Keeps every frame's result (replay and the demo evaluate them at the end). Storage is
+// allocated before the loop; a full recorder drops further frames and counts them.
+class ResultRecorder final : public FrameSink {
+ public:
+  Status Allocate(std::size_t capacity) { return results_.Allocate(capacity); }
+  void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
+    if (size_ < results_.size())
+      results_[size_++] = r;
+    else
+      ++dropped_;
+  }
+  std::span<const FrameResult> results() const { return {results_.data(), size_}; }
+
+ private:
+  FixedArray<FrameResult> results_;
+  std::size_t size_ = 0;
+  std::uint64_t dropped_ = 0;
+};
+
+double Distance(const RouteFrameMeta& route, const drivers::Pose& pose) {
+  return std::hypot(route.pose[0] - pose.x_m, route.pose[1] - pose.y_m);
+}
+
+// Precision/recall of the recorded matches, with ground truth from the poses: a query
+// frame's truth is the nearest route frame, if within the tolerance (else it is off the
+// route); a match is correct when the matched route frame is within the tolerance.
+void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, double tolerance,
+              SessionReport* report) {
+  std::vector<dsp::EvaluatedMatch> matches;  // after the loop: allocation is fine here
+  for (const FrameResult& r : results) {
+    if (!r.has_pose)
+      return;  // no ground truth
+    bool on_route = false;
+    for (std::size_t i = 0; i < route.size() && !on_route; ++i)
+      on_route = route.meta(i).has_pose && Distance(route.meta(i), r.pose) <= tolerance;
+    const bool correct =
+        r.matched && r.best_index >= 0 && static_cast<std::size_t>(r.best_index) < route.size() &&
+        route.meta(static_cast<std::size_t>(r.best_index)).has_pose &&
+        Distance(route.meta(static_cast<std::size_t>(r.best_index)), r.pose) <= tolerance;
+    if (r.state == dsp::TrackState::kLocalised) {
+      ++report->localised_frames;
+      report->localised_correct += correct ? 1 : 0;
+    }
+    if (!r.matched)
+      continue;
+    matches.push_back({r.uniqueness, on_route, correct});
+  }
+  if (matches.empty())
+    return;
+  std::vector<std::size_t> order(matches.size());
+  std::vector<dsp::PrPoint> curve(matches.size());
+  const std::size_t points = dsp::PrecisionRecallCurve(matches, order, curve);
+  const dsp::PrSummary pr =
+      dsp::SummarisePrecisionRecall(matches, std::span<const dsp::PrPoint>(curve.data(), points));
+  report->evaluated = true;
+  report->precision_at_full_recall = pr.precision_at_full_recall;
+  report->recall_at_full_precision = pr.recall_at_full_precision;
+  report->area_under_curve = pr.area_under_curve;
+  report->evaluated_matches = pr.evaluated;
+  report->correct_matches = pr.correct;
+}
+
+Result<std::unique_ptr<drivers::Camera>> MakeCamera(const Config& config, const SessionArgs& args) {
+  if (!args.dataset.empty())
+    return std::unique_ptr<drivers::Camera>(new drivers::DatasetCamera(args.dataset));
+  switch (config.camera.kind) {
+    case CameraKind::kSim: {
+      StreetCameraOptions o = args.sim;
+      o.width = config.camera.width;
+      o.height = config.camera.height;
+      o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
+      o.fps = config.camera.fps;
+      return std::unique_ptr<drivers::Camera>(new StreetCamera(o));
+    }
+    case CameraKind::kDataset:
+      return std::unique_ptr<drivers::Camera>(new drivers::DatasetCamera(config.camera.dataset));
+    case CameraKind::kV4l2:
+    case CameraKind::kLibcamera:
+      break;
+  }
+  return Status::Error(StatusCode::kUnimplemented,
+                       "[camera] kind = \"%s\" is not built into this skyloc yet; use \"sim\" "
+                       "or \"dataset\"",
+                       CameraKindName(config.camera.kind));
+}
+
+Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config) {
+  switch (config.status.kind) {
+    case StatusOutputKind::kNone:
+      return std::unique_ptr<drivers::StatusOutput>();
+    case StatusOutputKind::kSim:
+      return std::unique_ptr<drivers::StatusOutput>(new RecordingStatusOutput());
+    case StatusOutputKind::kGpio:
+      break;
+  }
+  return Status::Error(StatusCode::kUnimplemented,
+                       "[status] kind = \"gpio\" is not built into this skyloc yet; use \"sim\" "
+                       "or \"none\"");
+}
+
+void PrintWarning(const char* label, const Status& s) {
+  if (!s.ok())
+    std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
+}
+
+// Everything after the configuration is read. Errors return; RunSession prints them.
+Status Run(const SessionArgs& args, Config config, SessionReport* report) {
+  const char* label = args.label;
+  SKYLOC_TRY(InstallSignalHandlers());
+
+  // The camera first: its real frame size is what the pipeline is built for.
+  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::Camera> camera, MakeCamera(config, args));
+  SKYLOC_TRY(camera->Open());
+  const drivers::CameraInfo& info = camera->info();
+  if (config.camera.kind == CameraKind::kSim || !args.dataset.empty() ||
+      config.camera.kind == CameraKind::kDataset) {
+    config.camera.width = info.width;  // a recorded or simulated source fixes the size
+    config.camera.height = info.height;
+  } else if (info.width != config.camera.width || info.height != config.camera.height) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
+                         "height to what the camera supports",
+                         info.name, info.width, info.height, config.camera.width,
+                         config.camera.height);
+  }
+
+  Pipeline pipeline;
+  SKYLOC_TRY(pipeline.Init(config));
+
+  RouteDbWriter writer;
+  RouteFrames route;
+  if (args.mode == LoopMode::kTeach) {
+    Status s = writer.Create(args.route_path.c_str(), pipeline.route_settings(),
+                             static_cast<std::size_t>(config.route_db.flush_every), args.force);
+    if (s.code() == StatusCode::kFailedPrecondition)
+      s.AddContext("(pass --force to replace it)");
+    SKYLOC_TRY(s);
+  } else {
+    SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
+                              static_cast<std::size_t>(pipeline.dim())));
+    RouteDbLoadReport loaded;
+    const RouteDbSettings want = pipeline.route_settings();
+    SKYLOC_TRY(
+        LoadRouteDb(args.route_path.c_str(), &want, RouteDbLoadPolicy::kStrict, &route, &loaded));
+    if (route.size() == 0) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "route %s has no frames: teach it "
+                           "again",
+                           args.route_path.c_str());
+    }
+    SKYLOC_TRY(pipeline.SetRoute(route));
+    report->route_frames = route.size();
+  }
+
+  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status, MakeStatusOutput(config));
+  if (status)
+    SKYLOC_TRY(status->Open());
+
+  ResultRecorder recorder;
+  // Replay (a dataset) and bounded simulated runs keep every result for the evaluation.
+  const bool evaluate =
+      args.mode == LoopMode::kRepeat &&
+      (!args.dataset.empty() || (config.camera.kind == CameraKind::kSim && args.max_frames > 0));
+  if (evaluate) {
+    std::size_t capacity = args.max_frames;
+    if (auto* d = dynamic_cast<drivers::DatasetCamera*>(camera.get()))
+      capacity = d->dataset().frames.size();
+    SKYLOC_TRY(recorder.Allocate(capacity));
+  }
+  JsonLinesSink json(args.json);
+  TeeSink outer(args.json != nullptr ? &json : nullptr, args.extra_sink);
+  TeeSink sink(&outer, evaluate ? &recorder : nullptr);
+
+  // Real-time setup last: mlockall(MCL_FUTURE) then covers nothing new.
+  RealtimeOptions rt;
+  rt.sched_fifo_priority = config.realtime.sched_fifo_priority;
+  rt.lock_memory = config.realtime.mlockall;
+  rt.cpu = config.realtime.cpu_affinity;
+  const RealtimeReport rt_report = ApplyRealtime(rt);
+  PrintWarning(label, rt_report.scheduling);
+  PrintWarning(label, rt_report.memory_lock);
+  PrintWarning(label, rt_report.affinity);
+
+  SKYLOC_TRY(camera->Start());
+  LoopOptions loop;
+  loop.mode = args.mode;
+  loop.max_frames = args.max_frames;
+  loop.paced = args.paced;
+  loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
+  const Status loop_status =
+      RunFrameLoop(*camera, status.get(), pipeline,
+                   args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop, &report->loop);
+
+  // Shutdown, whatever happened in the loop: keep what was taught, lines to safe state.
+  Status shutdown;
+  if (args.mode == LoopMode::kTeach && writer.is_open()) {
+    shutdown = writer.Commit();
+    report->route_frames = writer.frames_durable();
+    if (shutdown.ok()) {
+      std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
+                   static_cast<unsigned long long>(writer.frames_durable()));
+    }
+  }
+  if (status) {
+    PrintWarning(label, status->SafeState());
+    status->Close();
+  }
+  camera->Stop();
+  camera->Close();
+  pipeline.latency().Print(stderr);
+  if (json.write_failed())
+    std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", label);
+  if (evaluate)
+    Evaluate(recorder.results(), route, args.tolerance_m, report);
+  SKYLOC_TRY(loop_status);
+  return shutdown;
+}
+
+}  // namespace
+
+int RunSession(const SessionArgs& args, SessionReport* report) {
+  SessionReport local;
+  if (report == nullptr)
+    report = &local;
+  Config config = DefaultConfig();
+  if (!args.config_path.empty()) {
+    Result<Config> loaded = LoadConfigFile(args.config_path.c_str());
+    if (!loaded.ok()) {
+      std::fprintf(stderr, "%s: %s\n", args.label, loaded.status().message());
+      return 1;
+    }
+    config = *loaded;
+  }
+  const Status s = Run(args, config, report);
+  if (!s.ok()) {
+    std::fprintf(stderr, "%s: %s\n", args.label, s.message());
+    return 1;
+  }
+  std::fprintf(stderr,
+               "%s: %llu frames (%llu LOST, %llu SEARCHING, %llu LOCALISED), %llu capture "
+               "errors%s\n",
+               args.label, static_cast<unsigned long long>(report->loop.frames),
+               static_cast<unsigned long long>(report->loop.state_frames[0]),
+               static_cast<unsigned long long>(report->loop.state_frames[1]),
+               static_cast<unsigned long long>(report->loop.state_frames[2]),
+               static_cast<unsigned long long>(report->loop.capture_errors),
+               report->loop.stopped ? ", stopped by signal" : "");
+  if (report->evaluated) {
+    std::fprintf(stderr,
+                 "%s: precision at 100%% recall %.3f, recall at 100%% precision %.3f, AUC %.3f "
+                 "(%d matches, %d correct within %.1f m); LOCALISED frames correct: %llu of "
+                 "%llu\n",
+                 args.label, report->precision_at_full_recall, report->recall_at_full_precision,
+                 report->area_under_curve, report->evaluated_matches, report->correct_matches,
+                 args.tolerance_m, static_cast<unsigned long long>(report->localised_correct),
+                 static_cast<unsigned long long>(report->localised_frames));
+  }
+  return 0;
+}
+
+}  // namespace skyloc::app
