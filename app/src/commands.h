@@ -19,6 +19,7 @@ int RunTeach(std::span<char* const> args);
 int RunRepeat(std::span<char* const> args);
 int RunReplay(std::span<char* const> args);
 int RunRoute(std::span<char* const> args);
+int RunEval(std::span<char* const> args);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

@@ -13,6 +13,7 @@ constexpr Command kCommands[] = {
     {"repeat", "localise live against a taught route (one JSON line per frame)", RunRepeat},
     {"replay", "run a recorded dataset through the repeat pipeline", RunReplay},
     {"route", "inspect or recover a route database file", RunRoute},
+    {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
 };
 
 void PrintUsage(std::FILE* out) {

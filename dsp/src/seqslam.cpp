@@ -104,7 +104,8 @@ float EnhancementShift(int n, int contrast_window) {
   return static_cast<float>(static_cast<double>(m - 1) / std::sqrt(static_cast<double>(m)));
 }
 
-void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out) {
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out,
+                   std::span<float> scratch) {
   const int n = static_cast<int>(d.size());
   if (n == 0)
     return;
@@ -112,38 +113,61 @@ void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<floa
   // DD(i,:) = (D(i,:) - mean(D(a:b,:))) ./ std(D(a:b,:)). The window slides by one row per
   // step, so its sums are kept running (in double: a few ulp of drift over 100k rows)
   // instead of recomputed: O(N) rather than O(N * R).
+  //
+  // Pass 1 (sequential): the window mean into out[] and its variance into scratch[]. The
+  // only loop-carried work is one add per running sum; the divisions by the window size
+  // use reciprocals that change only near the ends.
   const int half = contrast_window / 2;
   const float shift = EnhancementShift(n, contrast_window);
   double sum = 0.0, sum_sq = 0.0;
-  int lo = 0, hi = -1;  // current window rows [lo, hi]
+  int m = 0;
+  for (int r = 0; r <= std::min(n - 1, half); ++r) {
+    const double v = static_cast<double>(d[Sz(r)]);
+    sum += v;
+    sum_sq += v * v;
+    ++m;
+  }
+  int m_cached = -1;
+  double inv_m = 0.0, inv_m1 = 0.0;
   for (int i = 0; i < n; ++i) {
-    const int want_lo = std::max(0, i - half);
-    const int want_hi = std::min(n - 1, i + half);
-    while (hi < want_hi) {
-      ++hi;
-      const double v = static_cast<double>(d[Sz(hi)]);
-      sum += v;
-      sum_sq += v * v;
+    if (m != m_cached) {
+      m_cached = m;
+      inv_m = 1.0 / m;
+      inv_m1 = m > 1 ? 1.0 / (m - 1) : 0.0;
     }
-    while (lo < want_lo) {
-      const double v = static_cast<double>(d[Sz(lo)]);
-      sum -= v;
-      sum_sq -= v * v;
-      ++lo;
+    const double mean = sum * inv_m;
+    const double var = (sum_sq - sum * mean) * inv_m1;
+    // A window whose values are all equal has variance 0 but the running sums leave a
+    // rounding residue: anything below 1e-10 of the mean square counts as zero and the
+    // entry is "no contrast" (0), never NaN or Inf (note 5). A 1-row window has no std.
+    const double floor_var = 1e-10 * (sum_sq * inv_m) + 1e-30;
+    out[Sz(i)] = static_cast<float>(mean);
+    scratch[Sz(i)] = m > 1 && var > floor_var ? static_cast<float>(var) : 0.0f;
+    // Slide to row i + 1: row i + half + 1 enters, row i - half leaves.
+    double delta = 0.0, delta_sq = 0.0;
+    const int enter = i + half + 1, leave = i - half;
+    if (enter < n) {
+      const double v = static_cast<double>(d[Sz(enter)]);
+      delta += v;
+      delta_sq += v * v;
+      ++m;
     }
-    const int m = hi - lo + 1;
-    float z = 0.0f;
-    if (m > 1) {
-      const double mean = sum / m;
-      const double var = (sum_sq - sum * mean) / (m - 1);
-      // A window whose values are all equal has variance 0 but the running sums leave a
-      // rounding residue: anything below 1e-10 of the mean square counts as zero and the
-      // entry is "no contrast" (0), never NaN or Inf (note 5).
-      const double floor_var = 1e-10 * (sum_sq / m) + 1e-30;
-      if (var > floor_var)
-        z = static_cast<float>((static_cast<double>(d[Sz(i)]) - mean) / std::sqrt(var));
+    if (leave >= 0) {
+      const double v = static_cast<double>(d[Sz(leave)]);
+      delta -= v;
+      delta_sq -= v * v;
+      --m;
     }
-    out[Sz(i)] = z + shift;
+    sum += delta;
+    sum_sq += delta_sq;
+  }
+  // Pass 2 (independent per row, vectorises): z-score plus the shift (note 4). The
+  // reciprocal square root is taken of max(var, tiny) so no lane ever divides by zero.
+  for (std::size_t i = 0; i < Sz(n); ++i) {
+    const float var = scratch[i];
+    const float inv_std = 1.0f / std::sqrt(std::max(var, 1e-30f));
+    const float z = var > 0.0f ? (d[i] - out[i]) * inv_std : 0.0f;
+    out[i] = z + shift;
   }
 }
 
@@ -194,7 +218,18 @@ SeqSlamMatch TrajectorySearch::Search(std::span<const float* const> columns, int
         continue;
       const int count = s_end - b0;
       std::fill(acc, acc + count, 0.0f);
-      for (int j = 0; j < len; ++j) {
+      // Four columns per pass over the block: one load and store of the partial sums per
+      // four adds. The adds stay in the order j = 0, 1, 2, ... (no reassociation).
+      int j = 0;
+      for (; j + 4 <= len; j += 4) {
+        const float* c0 = columns[Sz(j)] + offset(k, j) + b0;
+        const float* c1 = columns[Sz(j + 1)] + offset(k, j + 1) + b0;
+        const float* c2 = columns[Sz(j + 2)] + offset(k, j + 2) + b0;
+        const float* c3 = columns[Sz(j + 3)] + offset(k, j + 3) + b0;
+        for (int i = 0; i < count; ++i)
+          acc[i] = (((acc[i] + c0[i]) + c1[i]) + c2[i]) + c3[i];
+      }
+      for (; j < len; ++j) {
         const float* col = columns[Sz(j)] + offset(k, j) + b0;
         for (int i = 0; i < count; ++i)
           acc[i] += col[i];
@@ -280,9 +315,10 @@ SeqSlamError EnhanceDifferenceMatrix(std::span<const float> d, int n_ref, int n_
     return SeqSlamError::kSizeMismatch;
   if (contrast_window < 0 || contrast_window > kMaxWindow)
     return SeqSlamError::kBadContrastWindow;
+  std::vector<float> scratch(Sz(n_ref));
   for (int q = 0; q < n_query; ++q) {
     EnhanceColumn(d.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), contrast_window,
-                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)));
+                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), scratch);
   }
   return SeqSlamError::kOk;
 }
@@ -394,7 +430,9 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
   DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
   // Ring slots are `capacity` floats apart; only the first `size` of each are used.
   float* slot = ring_.data() + Sz(head_) * Sz(capacity_);
-  EnhanceColumn(diff, params_.contrast_window, std::span<float>(slot, n));
+  // scores_ is free until the search: the enhancement's scratch.
+  EnhanceColumn(diff, params_.contrast_window, std::span<float>(slot, n),
+                std::span<float>(scores_.data(), n));
   head_ = (head_ + 1) % len;
   count_ = std::min(count_ + 1, len);
   if (count_ < len)

@@ -331,8 +331,8 @@ TEST(SeqSlamBatch, PlantedRouteFoundAtEveryVelocity) {
 
 TEST(SeqSlamEnhancement, ZeroVarianceGivesFiniteOutput) {
   // A constant column (all references equally far) and a database of identical frames.
-  std::vector<float> d(50, 3.0f), out(50);
-  EnhanceColumn(d, 10, out);
+  std::vector<float> d(50, 3.0f), out(50), scratch(50);
+  EnhanceColumn(d, 10, out, scratch);
   for (float x : out)
     EXPECT_FLOAT_EQ(x, EnhancementShift(50, 10));
   std::vector<float> same(20 * 8, 0.5f), query(8, 0.5f);

@@ -110,8 +110,7 @@ TEST(ShGrid, InvalidConfigsAreErrorsWithMessages) {
   EXPECT_EQ(grid.Init({.rings = 8, .longitudes = 3}), ShError::kLongitudesOutOfRange);
   EXPECT_EQ(grid.Init({.rings = 8, .longitudes = kMaxShLongitudes + 1}),
             ShError::kLongitudesOutOfRange);
-  EXPECT_NE(std::string(ShErrorMessage(ShError::kRingsOutOfRange)).find("ring"),
-            std::string::npos);
+  EXPECT_NE(std::string(ShErrorMessage(ShError::kRingsOutOfRange)).find("ring"), std::string::npos);
 }
 
 }  // namespace

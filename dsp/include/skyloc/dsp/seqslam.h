@@ -108,8 +108,9 @@ void DifferenceColumn(std::span<const float> database, int dim, std::span<const 
 
 // Local contrast enhancement of one column of D: out[r] = (d[r] - mean) / std over rows
 // max(0, r - R/2) .. min(N - 1, r + R/2) (sample std, as MATLAB's std), plus the shift of
-// note 4 above; 0 + shift where the std is 0. O(N) with running sums.
-void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out);
+// note 4 above; 0 + shift where the std is 0. O(N) with running sums. scratch: >= N floats.
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out,
+                   std::span<float> scratch);
 
 // The constant added by EnhanceColumn for a database of n references (note 4).
 float EnhancementShift(int n, int contrast_window);
