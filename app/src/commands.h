@@ -20,6 +20,7 @@ int RunRepeat(std::span<char* const> args);
 int RunReplay(std::span<char* const> args);
 int RunRoute(std::span<char* const> args);
 int RunEval(std::span<char* const> args);
+int RunDescribe(std::span<char* const> args);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

@@ -14,6 +14,8 @@ constexpr Command kCommands[] = {
     {"replay", "run a recorded dataset through the repeat pipeline", RunReplay},
     {"route", "inspect or recover a route database file", RunRoute},
     {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
+    {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
+     RunDescribe},
 };
 
 void PrintUsage(std::FILE* out) {
