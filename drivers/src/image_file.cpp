@@ -1,0 +1,274 @@
+#include "skyloc/drivers/image_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <string>
+
+// The one translation unit that compiles stb's implementations. Only PNG is built
+// in (PNM is read below); everything else stb could decode is rejected as "not an image".
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#define STBI_NO_LINEAR
+#define STBI_NO_HDR
+#define STBI_FAILURE_USERMSG
+#include <stb/stb_image.h>
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STBI_WRITE_NO_STDIO
+#include <stb/stb_image_write.h>
+
+namespace skyloc::drivers {
+namespace {
+
+struct StbFree {
+  void operator()(void* p) const { stbi_image_free(p); }
+};
+
+// Binary PGM/PPM are read here rather than by stb: stb 2.27 returns 16-bit PNM samples
+// in host byte order (PNM is big-endian), ignores the maxval and does not notice a
+// truncated file. Header: magic, width, height, maxval, separated by whitespace and
+// '#' comments, then exactly one whitespace byte before the samples.
+struct PnmHeader {
+  int channels = 0;  // 0: not a binary PNM
+  long width = 0, height = 0, maxval = 0;
+};
+
+PnmHeader ReadPnmHeader(std::FILE* f) {
+  PnmHeader h;
+  char magic[2];
+  if (std::fread(magic, 1, 2, f) != 2 || magic[0] != 'P' || (magic[1] != '5' && magic[1] != '6'))
+    return h;
+  long* values[3] = {&h.width, &h.height, &h.maxval};
+  for (long* v : values) {
+    int c = std::fgetc(f);
+    for (;;) {
+      if (c == '#') {
+        while (c != EOF && c != '\n')
+          c = std::fgetc(f);
+      } else if (c == ' ' || c == '\t' || c == '\n' || c == '\r') {
+        c = std::fgetc(f);
+      } else {
+        break;
+      }
+    }
+    if (c < '0' || c > '9')
+      return h;
+    while (c >= '0' && c <= '9' && *v < 1000000) {
+      *v = *v * 10 + (c - '0');
+      c = std::fgetc(f);
+    }
+    if (v == values[2] && c != ' ' && c != '\t' && c != '\n' && c != '\r')
+      return h;
+  }
+  h.channels = magic[1] == '5' ? 1 : 3;
+  return h;
+}
+
+Result<OwnedImage> ReadPnm(std::FILE* f, const PnmHeader& h, const char* path) {
+  if (h.width <= 0 || h.height <= 0 || h.width > 65535 || h.height > 65535)
+    return Status::Error(StatusCode::kInvalidArgument, "PNM image '%s' has a bad size %ldx%ld",
+                         path, h.width, h.height);
+  if (h.maxval <= 0 || h.maxval > 65535)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "PNM image '%s' has unsupported depth (maxval %ld; 1..65535 allowed)",
+                         path, h.maxval);
+  SKYLOC_TRY_ASSIGN(
+      OwnedImage image,
+      OwnedImage::Allocate(static_cast<int>(h.width), static_cast<int>(h.height),
+                           h.channels == 1 ? dsp::PixelFormat::kGrey8 : dsp::PixelFormat::kRgb24));
+  const std::size_t count = static_cast<std::size_t>(h.width) * static_cast<std::size_t>(h.height) *
+                            static_cast<std::size_t>(h.channels);
+  std::uint8_t* out = image.mutable_view().data;
+  const auto maxval = static_cast<unsigned>(h.maxval);
+  const std::size_t sample_bytes = maxval > 255 ? 2 : 1;
+  // Decoded through a small stack buffer: 16-bit samples are big-endian, any maxval scales.
+  std::uint8_t chunk[4096];
+  std::size_t done = 0;
+  while (done < count) {
+    const std::size_t samples = std::min(count - done, sizeof chunk / sample_bytes);
+    if (std::fread(chunk, sample_bytes, samples, f) != samples)
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "PNM image '%s' is truncated: %zu of %zu samples present", path, done,
+                           count);
+    for (std::size_t i = 0; i < samples; ++i) {
+      unsigned v = sample_bytes == 2 ? (unsigned{chunk[2 * i]} << 8) | chunk[2 * i + 1] : chunk[i];
+      if (v > maxval)
+        v = maxval;
+      out[done + i] = static_cast<std::uint8_t>((v * 255u + maxval / 2) / maxval);
+    }
+    done += samples;
+  }
+  return image;
+}
+
+}  // namespace
+
+Result<OwnedImage> OwnedImage::Allocate(int width, int height, dsp::PixelFormat format) {
+  if (width <= 0 || height <= 0 || width > 65535 || height > 65535 ||
+      (format == dsp::PixelFormat::kYuyv && width % 2 != 0)) {
+    return Status::Error(StatusCode::kInvalidArgument, "image size %dx%d (%s) is not allowed",
+                         width, height, dsp::PixelFormatName(format));
+  }
+  OwnedImage image;
+  image.width_ = width;
+  image.height_ = height;
+  image.format_ = format;
+  image.stride_ = dsp::ImageView{nullptr, width, height, 0, format}.RowBytes();
+  image.pixels_.reset(new (std::nothrow)
+                          std::uint8_t[image.stride_ * static_cast<std::size_t>(height)]());
+  if (!image.pixels_)
+    return Status::Error(StatusCode::kResourceExhausted, "no memory for a %dx%d image", width,
+                         height);
+  return image;
+}
+
+Result<OwnedImage> LoadImage(const char* path) {
+  std::FILE* f = std::fopen(path, "rb");
+  if (f == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot open image '%s'", path);
+  }
+  const PnmHeader pnm = ReadPnmHeader(f);
+  if (pnm.channels != 0) {
+    Result<OwnedImage> image = ReadPnm(f, pnm, path);
+    std::fclose(f);
+    return image;
+  }
+  std::rewind(f);
+  int width = 0, height = 0, channels = 0;
+  if (stbi_info_from_file(f, &width, &height, &channels) == 0) {
+    const char* why = stbi_failure_reason();
+    std::fclose(f);
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "'%s' is not a PNG, binary PGM (P5) or binary PPM (P6) image (%s); "
+                         "convert it, e.g. 'convert IN OUT.png'",
+                         path, why != nullptr ? why : "unknown format");
+  }
+  const bool grey = channels <= 2;
+  const int want = grey ? 1 : 3;
+  // stb reduces 16-bit PNGs to their high byte and drops alpha.
+  std::unique_ptr<void, StbFree> decoded(stbi_load_from_file(f, &width, &height, &channels, want));
+  std::fclose(f);
+  if (!decoded) {
+    const char* why = stbi_failure_reason();
+    return Status::Error(StatusCode::kInvalidArgument, "cannot decode image '%s': %s", path,
+                         why != nullptr ? why : "corrupt or truncated file");
+  }
+  SKYLOC_TRY_ASSIGN(OwnedImage image,
+                    OwnedImage::Allocate(
+                        width, height, grey ? dsp::PixelFormat::kGrey8 : dsp::PixelFormat::kRgb24));
+  const std::size_t count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
+                            static_cast<std::size_t>(want);
+  std::memcpy(image.mutable_view().data, decoded.get(), count);
+  return image;
+}
+
+namespace {
+
+struct PngSink {
+  std::FILE* file = nullptr;
+  bool failed = false;
+  int saved_errno = 0;
+};
+
+void WriteToSink(void* context, void* data, int size) {
+  auto* sink = static_cast<PngSink*>(context);
+  if (sink->failed || size <= 0)
+    return;
+  if (std::fwrite(data, 1, static_cast<std::size_t>(size), sink->file) !=
+      static_cast<std::size_t>(size)) {
+    sink->failed = true;
+    sink->saved_errno = errno;
+  }
+}
+
+}  // namespace
+
+Status SavePng(const char* path, dsp::ImageView image) {
+  if (image.empty())
+    return Status::Error(StatusCode::kInvalidArgument, "cannot write an empty image to '%s'", path);
+  // stb writes packed grey or RGB: convert BGR and YUYV into a temporary copy.
+  int channels = 1;
+  std::unique_ptr<std::uint8_t[]> converted;
+  const std::uint8_t* pixels = image.data;
+  int stride = static_cast<int>(image.stride);
+  const std::size_t w = static_cast<std::size_t>(image.width);
+  if (image.format == dsp::PixelFormat::kRgb24 || image.format == dsp::PixelFormat::kBgr24)
+    channels = 3;
+  if (image.format == dsp::PixelFormat::kBgr24 || image.format == dsp::PixelFormat::kYuyv) {
+    const std::size_t row_bytes = w * static_cast<std::size_t>(channels);
+    converted.reset(new (std::nothrow)
+                        std::uint8_t[row_bytes * static_cast<std::size_t>(image.height)]);
+    if (!converted)
+      return Status::Error(StatusCode::kResourceExhausted, "no memory to convert '%s'", path);
+    for (int y = 0; y < image.height; ++y) {
+      const std::uint8_t* in = image.Row(y);
+      std::uint8_t* out = converted.get() + row_bytes * static_cast<std::size_t>(y);
+      for (std::size_t x = 0; x < w; ++x) {
+        if (image.format == dsp::PixelFormat::kYuyv) {
+          out[x] = in[2 * x];
+        } else {
+          out[3 * x + 0] = in[3 * x + 2];
+          out[3 * x + 1] = in[3 * x + 1];
+          out[3 * x + 2] = in[3 * x + 0];
+        }
+      }
+    }
+    pixels = converted.get();
+    stride = static_cast<int>(row_bytes);
+  }
+
+  std::string temp = std::string(path) + ".XXXXXX";
+  const int fd = mkstemp(temp.data());
+  if (fd < 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot create a temporary file next to '%s'", path);
+  }
+  PngSink sink;
+  sink.file = fdopen(fd, "wb");
+  if (sink.file == nullptr) {
+    const int saved = errno;
+    close(fd);
+    unlink(temp.c_str());
+    return Status::FromErrno(saved, "cannot write '%s'", temp.c_str());
+  }
+  const int written = stbi_write_png_to_func(WriteToSink, &sink, image.width, image.height,
+                                             channels, pixels, stride);
+  if (!sink.failed && std::fflush(sink.file) != 0) {
+    sink.failed = true;
+    sink.saved_errno = errno;
+  }
+  if (!sink.failed && fsync(fileno(sink.file)) != 0) {
+    sink.failed = true;
+    sink.saved_errno = errno;
+  }
+  if (std::fclose(sink.file) != 0 && !sink.failed) {
+    sink.failed = true;
+    sink.saved_errno = errno;
+  }
+  if (written == 0 || sink.failed) {
+    unlink(temp.c_str());
+    if (sink.failed)
+      return Status::FromErrno(sink.saved_errno, "cannot write PNG '%s'", path);
+    return Status::Error(StatusCode::kInternal, "PNG encoder failed for '%s'", path);
+  }
+  // mkstemp creates 0600; give the image the usual permissions (umask applies).
+  const mode_t mask = umask(0);
+  umask(mask);
+  chmod(temp.c_str(), 0666 & ~mask);  // a failure only leaves the file private
+  if (std::rename(temp.c_str(), path) != 0) {
+    const int saved = errno;
+    unlink(temp.c_str());
+    return Status::FromErrno(saved, "cannot rename '%s' to '%s'", temp.c_str(), path);
+  }
+  return Status::Ok();
+}
+
+}  // namespace skyloc::drivers

@@ -1,0 +1,145 @@
+#include "skyloc/drivers/image_file.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+namespace skyloc::drivers {
+namespace {
+
+class ImageFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/skyloc_image_file_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override {
+    const int rc = std::system(("rm -rf '" + dir_ + "'").c_str());
+    EXPECT_EQ(rc, 0);
+  }
+  std::string Path(const char* name) const { return dir_ + "/" + name; }
+  void WriteBytes(const std::string& path, const std::string& bytes) const {
+    std::ofstream(path, std::ios::binary) << bytes;
+  }
+  std::string dir_;
+};
+
+OwnedImage Gradient(int w, int h, dsp::PixelFormat format) {
+  auto r = OwnedImage::Allocate(w, h, format);
+  EXPECT_TRUE(r.ok()) << r.status().message();
+  OwnedImage image = std::move(r).value();
+  dsp::MutableImageView v = image.mutable_view();
+  const std::size_t row_bytes = dsp::ImageView(v).RowBytes();
+  for (int y = 0; y < h; ++y)
+    for (std::size_t i = 0; i < row_bytes; ++i)
+      v.Row(y)[i] = static_cast<std::uint8_t>((static_cast<std::size_t>(y) * 7 + i * 3) & 0xff);
+  return image;
+}
+
+TEST_F(ImageFileTest, GreyPngRoundTripsExactly) {
+  OwnedImage image = Gradient(37, 21, dsp::PixelFormat::kGrey8);
+  ASSERT_TRUE(SavePng(Path("g.png").c_str(), image.view()).ok());
+  auto loaded = LoadImage(Path("g.png").c_str());
+  ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+  ASSERT_EQ(loaded->format(), dsp::PixelFormat::kGrey8);
+  ASSERT_EQ(loaded->width(), 37);
+  ASSERT_EQ(loaded->height(), 21);
+  for (int y = 0; y < 21; ++y)
+    for (int x = 0; x < 37; ++x)
+      ASSERT_EQ(loaded->view().Row(y)[x], image.view().Row(y)[x]);
+}
+
+TEST_F(ImageFileTest, BgrIsWrittenAsRgb) {
+  OwnedImage image = Gradient(5, 3, dsp::PixelFormat::kBgr24);
+  ASSERT_TRUE(SavePng(Path("c.png").c_str(), image.view()).ok());
+  auto loaded = LoadImage(Path("c.png").c_str());
+  ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+  ASSERT_EQ(loaded->format(), dsp::PixelFormat::kRgb24);
+  for (int y = 0; y < 3; ++y) {
+    for (int x = 0; x < 5; ++x) {
+      const std::uint8_t* bgr = image.view().Row(y) + 3 * x;
+      const std::uint8_t* rgb = loaded->view().Row(y) + 3 * x;
+      EXPECT_EQ(rgb[0], bgr[2]);
+      EXPECT_EQ(rgb[1], bgr[1]);
+      EXPECT_EQ(rgb[2], bgr[0]);
+    }
+  }
+}
+
+TEST_F(ImageFileTest, SaveReplacesInPlaceAndLeavesNoTemporaryFiles) {
+  OwnedImage image = Gradient(8, 8, dsp::PixelFormat::kGrey8);
+  ASSERT_TRUE(SavePng(Path("a.png").c_str(), image.view()).ok());
+  ASSERT_TRUE(SavePng(Path("a.png").c_str(), image.view()).ok());
+  int files = 0;
+  FILE* ls = popen(("ls -A '" + dir_ + "'").c_str(), "r");
+  ASSERT_NE(ls, nullptr);
+  char line[256];
+  while (fgets(line, sizeof line, ls) != nullptr)
+    ++files;
+  pclose(ls);
+  EXPECT_EQ(files, 1);
+}
+
+TEST_F(ImageFileTest, SaveIntoMissingDirectoryNamesThePath) {
+  OwnedImage image = Gradient(8, 8, dsp::PixelFormat::kGrey8);
+  const std::string path = Path("no/such/dir/x.png");
+  Status s = SavePng(path.c_str(), image.view());
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.message()).find(path), std::string::npos) << s.message();
+}
+
+TEST_F(ImageFileTest, PgmAt8And16BitAndOddMaxvalScalesTo255) {
+  // 2x1 P5 at maxval 255, 65535 (big-endian samples) and 1023: all become 0..255.
+  WriteBytes(Path("a.pgm"), std::string("P5\n# comment\n2 1\n255\n") + '\x10' + '\xf0');
+  WriteBytes(Path("b.pgm"), std::string("P5 2 1 65535\n") + '\x12' + '\x34' + '\xff' + '\xff');
+  WriteBytes(Path("c.pgm"), std::string("P5 2 1 1023\n") + '\x01' + '\xff' + '\x03' + '\xff');
+  auto a = LoadImage(Path("a.pgm").c_str());
+  auto b = LoadImage(Path("b.pgm").c_str());
+  auto c = LoadImage(Path("c.pgm").c_str());
+  ASSERT_TRUE(a.ok()) << a.status().message();
+  ASSERT_TRUE(b.ok()) << b.status().message();
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(a->view().data[0], 0x10);
+  EXPECT_EQ(a->view().data[1], 0xf0);
+  EXPECT_EQ(b->view().data[0], (0x1234 * 255 + 65535 / 2) / 65535);
+  EXPECT_EQ(b->view().data[1], 255);
+  EXPECT_EQ(c->view().data[0], (511 * 255 + 1023 / 2) / 1023);
+  EXPECT_EQ(c->view().data[1], 255);
+}
+
+TEST_F(ImageFileTest, PpmLoadsAsRgb) {
+  WriteBytes(Path("a.ppm"), std::string("P6\n1 1\n255\n") + '\x01' + '\x02' + '\x03');
+  auto a = LoadImage(Path("a.ppm").c_str());
+  ASSERT_TRUE(a.ok()) << a.status().message();
+  EXPECT_EQ(a->format(), dsp::PixelFormat::kRgb24);
+  EXPECT_EQ(a->view().data[0], 1);
+  EXPECT_EQ(a->view().data[1], 2);
+  EXPECT_EQ(a->view().data[2], 3);
+}
+
+TEST_F(ImageFileTest, ErrorsNameTheFileAndTheProblem) {
+  const std::string missing = Path("missing.png");
+  auto r = LoadImage(missing.c_str());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(std::string(r.status().message()).find(missing), std::string::npos);
+
+  WriteBytes(Path("text.png"), "this is not an image\n");
+  auto t = LoadImage(Path("text.png").c_str());
+  ASSERT_FALSE(t.ok());
+  EXPECT_EQ(t.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(t.status().message()).find("text.png"), std::string::npos);
+
+  WriteBytes(Path("short.pgm"), "P5 4 4 255\nab");  // truncated pixel data
+  auto s = LoadImage(Path("short.pgm").c_str());
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.status().message()).find("short.pgm"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace skyloc::drivers

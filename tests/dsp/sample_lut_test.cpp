@@ -1,0 +1,198 @@
+#include "skyloc/dsp/sample_lut.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "skyloc/dsp/segmentation.h"
+#include "skyloc/dsp/sh_grid.h"
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// An analytic sky: a spherical cap (body frame) of half-angle `alpha` around `axis`.
+struct Cap {
+  Eigen::Vector3d axis;
+  double alpha;
+  bool Contains(const Eigen::Vector3d& d) const { return d.dot(axis) > std::cos(alpha); }
+  double BoundaryDistance(const Eigen::Vector3d& d) const {
+    return std::fabs(std::acos(std::clamp(d.dot(axis), -1.0, 1.0)) - alpha);
+  }
+};
+
+const Cap kCap{Eigen::Vector3d(std::sin(25 * kDeg) * std::cos(0.7),
+                               std::sin(25 * kDeg) * std::sin(0.7), std::cos(25 * kDeg)),
+               55 * kDeg};
+
+// Draws the cap through the lens: each pixel is sky (220) when its body-frame ray is in
+// the cap, ground (30) otherwise, 0 outside the image circle.
+std::vector<std::uint8_t> DrawCap(const Lens& lens, const Cap& cap) {
+  const int w = lens.params().width, h = lens.params().height;
+  std::vector<std::uint8_t> grey(static_cast<std::size_t>(w * h));
+  Eigen::Vector3d ray;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      grey[static_cast<std::size_t>(y * w + x)] =
+          lens.PixelToRay(x, y, &ray) ? (cap.Contains(ray) ? 220 : 30) : 0;
+  return grey;
+}
+
+Lens MakeLens(LensModel model, int w, int h, double pitch_deg) {
+  LensParams p;
+  p.model = model;
+  p.width = w;
+  p.height = h;
+  p.fov_deg = 185.0;
+  p.pitch_deg = pitch_deg;
+  Lens lens;
+  EXPECT_EQ(lens.Init(p), LensError::kOk);
+  return lens;
+}
+
+// Every sample whose direction is clearly inside or outside the cap (and clearly inside
+// or outside the field of view) equals the analytic answer; boundary samples are skipped.
+void ExpectSamplesMatchCap(const Lens& lens, int footprint, double margin_deg) {
+  ShGrid grid;
+  ASSERT_EQ(grid.Init(DefaultShGridConfig(64)), ShError::kOk);
+  SampleLut lut;
+  SampleLutOptions options;
+  options.footprint = footprint;
+  ASSERT_EQ(lut.Init(lens, grid, options), SampleLutError::kOk);
+  ASSERT_EQ(lut.size(), grid.sample_count());
+  const std::vector<std::uint8_t> grey = DrawCap(lens, kCap);
+  const ImageView image{grey.data(), lens.params().width, lens.params().height,
+                        static_cast<std::size_t>(lens.params().width), PixelFormat::kGrey8};
+  std::vector<float> samples(lut.size());
+  ASSERT_EQ(lut.SampleImage(image, 128, samples), SampleLutError::kOk);
+  std::size_t checked = 0, sky = 0;
+  for (std::size_t s = 0; s < samples.size(); ++s) {
+    const ShDirection dir = grid.direction(s);
+    const Eigen::Vector3d d(dir.x, dir.y, dir.z);
+    const Eigen::Vector3d camera = lens.camera_to_body().transpose() * d;
+    const double off_axis = std::acos(std::clamp(camera(2), -1.0, 1.0));
+    const bool edge_of_view = lens.params().model != LensModel::kEquirectangular &&
+                              std::fabs(off_axis - lens.max_theta()) < margin_deg * kDeg;
+    if (kCap.BoundaryDistance(d) < margin_deg * kDeg || edge_of_view)
+      continue;
+    double x, y;
+    const bool expected = lens.RayToPixel(d, &x, &y) && kCap.Contains(d);
+    ++checked;
+    sky += expected ? 1 : 0;
+    ASSERT_EQ(samples[s], expected ? 1.0f : 0.0f)
+        << "sample " << s << " theta " << dir.theta << " phi " << dir.phi;
+  }
+  // The test means something only if most samples were checked and both classes occur.
+  EXPECT_GT(checked, samples.size() * 85 / 100);
+  EXPECT_GT(sky, checked / 5);
+  EXPECT_LT(sky, checked * 4 / 5);
+}
+
+TEST(SampleLut, FisheyeSamplesAgreeWithTheAnalyticCap) {
+  // 400 px across 185 degrees: 0.46 degrees a pixel; rounding to the nearest pixel moves
+  // a sample by at most ~0.33 degrees, so a 1-degree margin isolates the boundary.
+  ExpectSamplesMatchCap(MakeLens(LensModel::kEquidistant, 400, 400, 0.0), 1, 1.0);
+  ExpectSamplesMatchCap(MakeLens(LensModel::kEquisolid, 480, 400, 12.0), 1, 1.0);
+  // A 3x3 footprint reaches 1.5 pixels further.
+  ExpectSamplesMatchCap(MakeLens(LensModel::kEquidistant, 400, 400, -8.0), 3, 1.5);
+}
+
+TEST(SampleLut, EquirectangularSamplesAgreeIncludingTheWrapColumn) {
+  ExpectSamplesMatchCap(MakeLens(LensModel::kEquirectangular, 720, 360, 0.0), 1, 1.0);
+  ExpectSamplesMatchCap(MakeLens(LensModel::kEquirectangular, 720, 360, 0.0), 3, 1.5);
+}
+
+TEST(SampleLut, FootprintAveragesAndOutsideTheViewIsGround) {
+  const Lens lens = MakeLens(LensModel::kEquidistant, 300, 300, 0.0);
+  ShGrid grid;
+  ASSERT_EQ(grid.Init(DefaultShGridConfig(32)), ShError::kOk);
+  SampleLut lut;
+  ASSERT_EQ(lut.Init(lens, grid, SampleLutOptions{3}), SampleLutError::kOk);
+  // An all-sky frame: interior samples are 1, samples at the edge of the circle have some
+  // taps outside it (fractions of 1/9), and nothing exceeds 1.
+  std::vector<std::uint8_t> white(300 * 300, 255);
+  std::vector<float> samples(lut.size());
+  ASSERT_EQ(lut.SampleImage({white.data(), 300, 300, 300, PixelFormat::kGrey8}, 128, samples),
+            SampleLutError::kOk);
+  int partial = 0;
+  for (float s : samples) {
+    EXPECT_GE(s, 0.0f);
+    EXPECT_LE(s, 1.0f);
+    const float ninths = s * 9.0f;
+    EXPECT_NEAR(ninths, std::round(ninths), 1e-5f);
+    partial += (s > 0.0f && s < 1.0f) ? 1 : 0;
+  }
+  EXPECT_GT(lut.visible_fraction(), 0.99);  // 185 degrees sees the whole upper hemisphere
+  EXPECT_GT(std::count(samples.begin(), samples.end(), 1.0f),
+            static_cast<std::ptrdiff_t>(samples.size() * 9 / 10));
+
+  // A 120-degree lens does not see the low rings: they are ground even in an all-sky frame.
+  LensParams narrow = lens.params();
+  narrow.fov_deg = 120.0;
+  Lens narrow_lens;
+  ASSERT_EQ(narrow_lens.Init(narrow), LensError::kOk);
+  ASSERT_EQ(lut.Init(narrow_lens, grid, SampleLutOptions{1}), SampleLutError::kOk);
+  ASSERT_EQ(lut.SampleImage({white.data(), 300, 300, 300, PixelFormat::kGrey8}, 128, samples),
+            SampleLutError::kOk);
+  for (std::size_t s = 0; s < samples.size(); ++s) {
+    if (grid.direction(s).theta > 61 * kDeg) {
+      ASSERT_EQ(samples[s], 0.0f) << s;
+    } else if (grid.direction(s).theta < 59 * kDeg) {
+      ASSERT_EQ(samples[s], 1.0f) << s;
+    }
+  }
+  EXPECT_LT(lut.visible_fraction(), 0.75);
+}
+
+TEST(SampleLut, DirectThresholdingEqualsSamplingTheMask) {
+  for (int footprint : {1, 3}) {
+    const Lens lens = MakeLens(LensModel::kEquidistant, 320, 240, 5.0);
+    ShGrid grid;
+    ASSERT_EQ(grid.Init(DefaultShGridConfig(48)), ShError::kOk);
+    SampleLut lut;
+    ASSERT_EQ(lut.Init(lens, grid, SampleLutOptions{footprint}), SampleLutError::kOk);
+    // A noisy RGB frame, so many pixels sit near the threshold.
+    std::vector<std::uint8_t> rgb(320 * 240 * 3);
+    std::uint32_t state = 12345;
+    for (auto& b : rgb) {
+      state = state * 1664525u + 1013904223u;
+      b = static_cast<std::uint8_t>(state >> 24);
+    }
+    const ImageView image{rgb.data(), 320, 240, 320 * 3, PixelFormat::kRgb24};
+    SkySegmenter seg;
+    ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
+    std::vector<std::uint8_t> mask(320 * 240);
+    SegmentationResult r;
+    ASSERT_EQ(seg.Segment(image, {mask.data(), 320, 240, 320, PixelFormat::kGrey8}, &r),
+              SegmentationError::kOk);
+    std::vector<float> direct(lut.size()), via_mask(lut.size());
+    ASSERT_EQ(lut.SampleImage(image, r.threshold, direct), SampleLutError::kOk);
+    ASSERT_EQ(lut.SampleMask({mask.data(), 320, 240, 320, PixelFormat::kGrey8}, via_mask),
+              SampleLutError::kOk);
+    EXPECT_EQ(direct, via_mask) << "footprint " << footprint;
+  }
+}
+
+TEST(SampleLut, BadArgumentsAreRejected) {
+  const Lens lens = MakeLens(LensModel::kEquidistant, 100, 100, 0.0);
+  SampleLut lut;
+  const double rings[] = {0.1, 0.5};
+  EXPECT_EQ(lut.Init(lens, rings, 16, SampleLutOptions{2}), SampleLutError::kBadFootprint);
+  EXPECT_EQ(lut.Init(lens, rings, 0, {}), SampleLutError::kBadGrid);
+  const double bad_rings[] = {-0.1};
+  EXPECT_EQ(lut.Init(lens, bad_rings, 16, {}), SampleLutError::kBadGrid);
+  ASSERT_EQ(lut.Init(lens, rings, 16, {}), SampleLutError::kOk);
+  std::vector<std::uint8_t> frame(100 * 100);
+  std::vector<float> samples(31);
+  EXPECT_EQ(lut.SampleImage({frame.data(), 100, 100, 100, PixelFormat::kGrey8}, 1, samples),
+            SampleLutError::kBadOutputSize);
+  samples.resize(32);
+  EXPECT_EQ(lut.SampleImage({frame.data(), 99, 100, 100, PixelFormat::kGrey8}, 1, samples),
+            SampleLutError::kSizeMismatch);
+}
+
+}  // namespace
+}  // namespace skyloc::dsp

@@ -1,0 +1,162 @@
+#include "skyloc/dsp/sky_descriptor.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "skyloc/platform/alloc_counter.h"
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A street canyon, body frame: sky where the elevation clears two walls running along
+// `heading`, plus a tree (a cap of ground) over one pavement. Rotating the heading yaws the
+// whole sky about the zenith.
+bool CanyonSky(const Eigen::Vector3d& d, double heading) {
+  const Eigen::Vector3d across(-std::sin(heading), std::cos(heading), 0.0);
+  const double side = d.dot(across);
+  if (d(2) <= 0.0)
+    return false;
+  const double wall = side > 0 ? 1.3 : 0.8;  // wall height over distance, each side
+  if (std::fabs(side) * wall > d(2))
+    return false;
+  const Eigen::Vector3d tree = Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) *
+                               Eigen::Vector3d(std::cos(40 * kDeg), 0.0, std::sin(40 * kDeg));
+  return d.dot(tree) < std::cos(15 * kDeg);
+}
+
+std::vector<std::uint8_t> DrawCanyon(const Lens& lens, double heading) {
+  const int w = lens.params().width, h = lens.params().height;
+  std::vector<std::uint8_t> grey(static_cast<std::size_t>(w * h));
+  Eigen::Vector3d ray;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      grey[static_cast<std::size_t>(y * w + x)] =
+          lens.PixelToRay(x, y, &ray) ? (CanyonSky(ray, heading) ? 210 : 40) : 5;
+  return grey;
+}
+
+Lens FisheyeLens(int w, int h) {
+  LensParams p;
+  p.width = w;
+  p.height = h;
+  p.fov_deg = 185.0;
+  Lens lens;
+  EXPECT_EQ(lens.Init(p), LensError::kOk);
+  return lens;
+}
+
+double RelativeL2(const std::vector<float>& a, const std::vector<float>& b) {
+  double diff = 0, norm = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const double x = a[i], y = b[i];
+    diff += (x - y) * (x - y);
+    norm += x * x;
+  }
+  return std::sqrt(diff / norm);
+}
+
+TEST(SkyDescriptor, YawChangesTheSpectrumByUnderOnePercent) {
+  const Lens lens = FisheyeLens(480, 480);
+  SkyDescriptor descriptor;
+  SkyDescriptorOptions options;
+  options.bands = 32;
+  // Twice the rings and longitudes the 32 bands need: a hard-edged mask is not band-limited,
+  // and on the minimal grid its edge aliases into a few percent of yaw dependence.
+  options.grid = DefaultShGridConfig(64);
+  ASSERT_TRUE(descriptor.Init(lens, options).ok());
+  std::vector<float> a0(32), a1(32), other(32);
+  const std::vector<std::uint8_t> f0 = DrawCanyon(lens, 0.0);
+  const std::vector<std::uint8_t> f1 = DrawCanyon(lens, 37 * kDeg);
+  SegmentationResult r0, r1;
+  ASSERT_TRUE(descriptor.Compute({f0.data(), 480, 480, 480, PixelFormat::kGrey8}, a0, &r0).ok());
+  ASSERT_TRUE(descriptor.Compute({f1.data(), 480, 480, 480, PixelFormat::kGrey8}, a1, &r1).ok());
+  EXPECT_LT(RelativeL2(a0, a1), 0.01);
+  EXPECT_NEAR(r0.sky_fraction, r1.sky_fraction, 0.005);
+  EXPECT_GE(r0.threshold, 40);
+  EXPECT_LT(r0.threshold, 210);
+  // a_0 = sky solid angle / sqrt(4 pi): compare with the sampled hemisphere's sky share.
+  EXPECT_GT(a0[0], 0.1f);
+
+  // A different place (narrower canyon: higher walls) is much farther away than the yaw.
+  std::vector<std::uint8_t> f2 = f0;
+  Eigen::Vector3d ray;
+  for (int y = 0; y < 480; ++y)
+    for (int x = 0; x < 480; ++x)
+      if (lens.PixelToRay(x, y, &ray) && std::fabs(ray(1)) * 2.5 > ray(2) && ray(2) > 0)
+        f2[static_cast<std::size_t>(y * 480 + x)] = 40;
+  ASSERT_TRUE(descriptor.Compute({f2.data(), 480, 480, 480, PixelFormat::kGrey8}, other).ok());
+  EXPECT_GT(DescriptorDistance(a0, other), 5 * DescriptorDistance(a0, a1));
+}
+
+TEST(SkyDescriptor, DirectAndViaMaskPathsGiveTheSameDescriptor) {
+  const Lens lens = FisheyeLens(320, 240);
+  const std::vector<std::uint8_t> frame = DrawCanyon(lens, 0.3);
+  const ImageView image{frame.data(), 320, 240, 320, PixelFormat::kGrey8};
+  SkyDescriptorOptions options;
+  options.bands = 24;
+  SkyDescriptor direct, via_mask;
+  ASSERT_TRUE(direct.Init(lens, options).ok());
+  options.path = SamplingPath::kViaMask;
+  ASSERT_TRUE(via_mask.Init(lens, options).ok());
+  std::vector<float> a(24), b(24);
+  ASSERT_TRUE(direct.Compute(image, a).ok());
+  ASSERT_TRUE(via_mask.Compute(image, b).ok());
+  EXPECT_EQ(a, b);
+  EXPECT_TRUE(direct.mask().empty());
+  ASSERT_FALSE(via_mask.mask().empty());
+  EXPECT_EQ(via_mask.mask().Row(120)[160], kMaskSky);  // the zenith is open sky
+}
+
+TEST(SkyDescriptor, PaperGridAndErrors) {
+  const Lens lens = FisheyeLens(200, 200);
+  SkyDescriptorOptions options;
+  options.grid = PaperShGridConfig();
+  SkyDescriptor descriptor;
+  ASSERT_TRUE(descriptor.Init(lens, options).ok());
+  EXPECT_EQ(descriptor.lut().size(), 2000u);
+  EXPECT_EQ(descriptor.bands(), 120);
+  std::vector<std::uint8_t> frame(200 * 200, 100);
+  std::vector<float> a(119);
+  DescriptorError e = descriptor.Compute({frame.data(), 200, 200, 200, PixelFormat::kGrey8}, a);
+  EXPECT_EQ(e.stage, DescriptorError::Stage::kProjection);
+  a.resize(120);
+  e = descriptor.Compute({frame.data(), 199, 200, 200, PixelFormat::kGrey8}, a);
+  EXPECT_EQ(e.stage, DescriptorError::Stage::kSegmentation);
+  EXPECT_NE(std::string(e.message).find("size"), std::string::npos);
+  options.bands = 0;
+  EXPECT_EQ(descriptor.Init(lens, options).stage, DescriptorError::Stage::kGrid);
+}
+
+TEST(SkyDescriptor, ComputeAllocatesNothingOverManyFrames) {
+  ASSERT_TRUE(AllocationCounterActive());
+  const Lens lens = FisheyeLens(320, 240);
+  std::vector<std::vector<std::uint8_t>> frames;
+  for (int i = 0; i < 4; ++i)
+    frames.push_back(DrawCanyon(lens, i * 0.4));
+  for (SamplingPath path : {SamplingPath::kDirect, SamplingPath::kViaMask}) {
+    SkyDescriptorOptions options;
+    options.bands = 64;
+    options.path = path;
+    options.sampling.footprint = 3;
+    SkyDescriptor descriptor;
+    ASSERT_TRUE(descriptor.Init(lens, options).ok());
+    std::vector<float> amplitudes(64);
+    SegmentationResult r;
+    AllocationScope scope;
+    for (int i = 0; i < 100; ++i) {
+      const auto& f = frames[static_cast<std::size_t>(i % 4)];
+      ASSERT_TRUE(
+          descriptor.Compute({f.data(), 320, 240, 320, PixelFormat::kGrey8}, amplitudes, &r).ok());
+    }
+    EXPECT_EQ(scope.allocations(), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace skyloc::dsp
