@@ -1,0 +1,545 @@
+#include "skyloc/drivers/dataset.h"
+
+#include <dirent.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <string_view>
+#include <system_error>
+#include <utility>
+
+// stb with static linkage so another file of the library may include it too without
+// duplicate symbols.
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#define STBI_ONLY_PNM
+#define STB_IMAGE_WRITE_STATIC
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wpedantic"
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
+#pragma GCC diagnostic pop
+
+namespace skyloc::drivers {
+namespace {
+
+constexpr int kPoseColumns = 6;
+
+bool FileExists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+bool DirExists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+bool HasImageExtension(std::string_view name) {
+  auto ends = [&](std::string_view ext) {
+    if (name.size() <= ext.size())
+      return false;
+    std::string_view tail = name.substr(name.size() - ext.size());
+    return std::equal(tail.begin(), tail.end(), ext.begin(), ext.end(), [](char a, char b) {
+      return (a >= 'A' && a <= 'Z' ? static_cast<char>(a - 'A' + 'a') : a) == b;
+    });
+  };
+  return ends(".png") || ends(".pgm");
+}
+
+// Splits one CSV line at commas (the format has no quoting: file names may not contain
+// commas, which ReadDataset reports).
+std::vector<std::string_view> SplitFields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    if (comma == std::string_view::npos) {
+      fields.push_back(line.substr(start));
+      break;
+    }
+    fields.push_back(line.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return fields;
+}
+
+bool ParseDouble(std::string_view s, double* out) {
+  if (s.empty())
+    return false;
+  const char* end = s.data() + s.size();
+  auto [ptr, ec] = std::from_chars(s.data(), end, *out);
+  return ec == std::errc() && ptr == end && std::isfinite(*out);
+}
+
+bool ParseInt(std::string_view s, int* out) {
+  if (s.empty())
+    return false;
+  const char* end = s.data() + s.size();
+  auto [ptr, ec] = std::from_chars(s.data(), end, *out);
+  return ec == std::errc() && ptr == end;
+}
+
+Status ListFrames(const std::string& frames_dir, std::vector<std::string>* names) {
+  DIR* d = ::opendir(frames_dir.c_str());
+  if (d == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot list %s", frames_dir.c_str());
+  }
+  while (const dirent* e = ::readdir(d)) {
+    const std::string_view name(e->d_name);
+    if (name.empty() || name[0] == '.' || !HasImageExtension(name))
+      continue;
+    names->emplace_back(name);
+  }
+  ::closedir(d);
+  std::sort(names->begin(), names->end());
+  return Status::Ok();
+}
+
+Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Dataset* ds) {
+  std::FILE* f = std::fopen(csv_path.c_str(), "rb");
+  if (f == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot open %s", csv_path.c_str());
+  }
+  std::string text;
+  char buffer[65536];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0)
+    text.append(buffer, n);
+  const bool read_error = std::ferror(f) != 0;
+  const int saved = errno;
+  std::fclose(f);
+  if (read_error)
+    return Status::FromErrno(saved, "cannot read %s", csv_path.c_str());
+
+  const std::string pose_header = std::string(kDatasetCsvHeader) + "," + kDatasetCsvPoseColumns;
+  std::size_t pos = 0;
+  int line_no = 0;
+  std::size_t expected_fields = 0;
+  while (pos < text.size()) {
+    std::size_t eol = text.find('\n', pos);
+    const bool last = eol == std::string::npos;
+    if (last)
+      eol = text.size();
+    std::string_view line(text.data() + pos, eol - pos);
+    pos = eol + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r')
+      line.remove_suffix(1);
+    if (line_no == 1) {
+      if (line == kDatasetCsvHeader) {
+        expected_fields = 3;
+      } else if (line == pose_header) {
+        expected_fields = 3 + kPoseColumns;
+        ds->has_poses = true;
+      } else {
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "%s:1: header must be '%s' or '%s', got '%.*s'", csv_path.c_str(),
+                             kDatasetCsvHeader, pose_header.c_str(),
+                             static_cast<int>(std::min<std::size_t>(line.size(), 60)), line.data());
+      }
+      continue;
+    }
+    if (line.empty()) {
+      if (last || pos >= text.size())
+        break;  // a trailing newline
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%d: empty line in the middle of the file", csv_path.c_str(),
+                           line_no);
+    }
+    const std::vector<std::string_view> fields = SplitFields(line);
+    if (fields.size() != expected_fields) {
+      return Status::Error(StatusCode::kInvalidArgument, "%s:%d: expected %zu fields, got %zu",
+                           csv_path.c_str(), line_no, expected_fields, fields.size());
+    }
+    DatasetFrame frame;
+    if (!ParseInt(fields[0], &frame.index)) {
+      return Status::Error(StatusCode::kInvalidArgument, "%s:%d: index '%.*s' is not an integer",
+                           csv_path.c_str(), line_no, static_cast<int>(fields[0].size()),
+                           fields[0].data());
+    }
+    const int expected_index = static_cast<int>(ds->frames.size());
+    if (frame.index != expected_index) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%d: index %d out of order (expected %d: indices count 0, 1, 2, ...)",
+                           csv_path.c_str(), line_no, frame.index, expected_index);
+    }
+    frame.file = std::string(fields[1]);
+    if (frame.file.empty() || frame.file.find('/') != std::string::npos ||
+        !HasImageExtension(frame.file)) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%d: file '%s' must be a .png or .pgm name inside frames/",
+                           csv_path.c_str(), line_no, frame.file.c_str());
+    }
+    if (!ParseDouble(fields[2], &frame.timestamp_s)) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%d: timestamp_s '%.*s' is not a number", csv_path.c_str(), line_no,
+                           static_cast<int>(fields[2].size()), fields[2].data());
+    }
+    if (!ds->frames.empty() && frame.timestamp_s < ds->frames.back().timestamp_s) {
+      return Status::Error(
+          StatusCode::kInvalidArgument, "%s:%d: timestamp_s %.6f goes backwards (previous %.6f)",
+          csv_path.c_str(), line_no, frame.timestamp_s, ds->frames.back().timestamp_s);
+    }
+    if (ds->has_poses) {
+      static constexpr const char* kNames[kPoseColumns] = {"x_m",      "y_m",       "z_m",
+                                                           "roll_deg", "pitch_deg", "yaw_deg"};
+      double v[kPoseColumns];
+      for (int i = 0; i < kPoseColumns; ++i) {
+        const std::string_view field = fields[static_cast<std::size_t>(3 + i)];
+        if (!ParseDouble(field, &v[i])) {
+          return Status::Error(StatusCode::kInvalidArgument, "%s:%d: %s '%.*s' is not a number",
+                               csv_path.c_str(), line_no, kNames[i], static_cast<int>(field.size()),
+                               field.data());
+        }
+      }
+      frame.pose = Pose{v[0], v[1], v[2], v[3], v[4], v[5]};
+    }
+    const std::string image_path = frames_dir + "/" + frame.file;
+    if (!FileExists(image_path)) {
+      return Status::Error(StatusCode::kNotFound, "%s:%d: image %s does not exist",
+                           csv_path.c_str(), line_no, image_path.c_str());
+    }
+    ds->frames.push_back(std::move(frame));
+  }
+  if (line_no == 0) {
+    return Status::Error(StatusCode::kInvalidArgument, "%s: empty file (expected header '%s')",
+                         csv_path.c_str(), kDatasetCsvHeader);
+  }
+  ds->has_timestamps = true;
+  return Status::Ok();
+}
+
+Status MakeDirs(const std::string& path) {
+  std::string partial;
+  std::size_t pos = 0;
+  while (pos <= path.size()) {
+    std::size_t slash = path.find('/', pos);
+    if (slash == std::string::npos)
+      slash = path.size();
+    partial = path.substr(0, slash);
+    pos = slash + 1;
+    if (partial.empty())
+      continue;
+    if (::mkdir(partial.c_str(), 0777) != 0) {
+      const int saved = errno;
+      if (saved != EEXIST)
+        return Status::FromErrno(saved, "cannot create folder %s", partial.c_str());
+      if (!DirExists(partial))
+        return Status::Error(StatusCode::kInvalidArgument, "%s exists and is not a folder",
+                             partial.c_str());
+    }
+  }
+  return Status::Ok();
+}
+
+// Writes a binary PGM (P5) in one go.
+Status WritePgm(const std::string& path, const dsp::ImageView& image) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot create %s", path.c_str());
+  }
+  bool ok = std::fprintf(f, "P5\n%d %d\n255\n", image.width, image.height) > 0;
+  const std::size_t w = static_cast<std::size_t>(image.width);
+  std::vector<std::uint8_t> row(w);
+  for (int y = 0; ok && y < image.height; ++y) {
+    const std::uint8_t* src = image.Row(y);
+    if (image.format == dsp::PixelFormat::kYuyv) {
+      for (std::size_t x = 0; x < w; ++x)
+        row[x] = src[2 * x];
+      ok = std::fwrite(row.data(), 1, w, f) == w;
+    } else {
+      ok = std::fwrite(src, 1, w, f) == w;
+    }
+  }
+  const int saved = errno;
+  if (std::fclose(f) != 0 || !ok)
+    return Status::FromErrno(saved, "cannot write %s", path.c_str());
+  return Status::Ok();
+}
+
+Status WritePng(const std::string& path, const dsp::ImageView& image) {
+  const std::size_t w = static_cast<std::size_t>(image.width);
+  std::vector<std::uint8_t> rgb(w * 3 * static_cast<std::size_t>(image.height));
+  for (int y = 0; y < image.height; ++y) {
+    const std::uint8_t* src = image.Row(y);
+    std::uint8_t* dst = rgb.data() + static_cast<std::size_t>(y) * w * 3;
+    for (std::size_t x = 0; x < w; ++x) {
+      const bool bgr = image.format == dsp::PixelFormat::kBgr24;
+      dst[3 * x + 0] = src[3 * x + (bgr ? 2 : 0)];
+      dst[3 * x + 1] = src[3 * x + 1];
+      dst[3 * x + 2] = src[3 * x + (bgr ? 0 : 2)];
+    }
+  }
+  if (stbi_write_png(path.c_str(), image.width, image.height, 3, rgb.data(), image.width * 3) ==
+      0) {
+    return Status::Error(StatusCode::kUnavailable, "cannot write %s (disk full or no permission?)",
+                         path.c_str());
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+std::string Dataset::FramePath(std::size_t i) const {
+  return dir + "/frames/" + frames[i].file;
+}
+
+Result<Dataset> ReadDataset(const std::string& dir) {
+  Dataset ds;
+  ds.dir = dir;
+  while (ds.dir.size() > 1 && ds.dir.back() == '/')
+    ds.dir.pop_back();
+  if (!DirExists(ds.dir)) {
+    return Status::Error(StatusCode::kNotFound, "dataset folder %s does not exist", ds.dir.c_str());
+  }
+  const std::string frames_dir = ds.dir + "/frames";
+  if (!DirExists(frames_dir)) {
+    return Status::Error(StatusCode::kNotFound,
+                         "%s: no frames/ folder (a dataset is DIR/frames/*.png|*.pgm plus "
+                         "DIR/frames.csv, see docs/DATASETS.md)",
+                         ds.dir.c_str());
+  }
+  const std::string csv_path = ds.dir + "/frames.csv";
+  if (FileExists(csv_path)) {
+    SKYLOC_TRY(ReadCsv(csv_path, frames_dir, &ds));
+    if (ds.frames.empty()) {
+      return Status::Error(StatusCode::kInvalidArgument, "%s: no frames after the header",
+                           csv_path.c_str());
+    }
+  } else {
+    std::vector<std::string> names;
+    SKYLOC_TRY(ListFrames(frames_dir, &names));
+    if (names.empty()) {
+      return Status::Error(StatusCode::kNotFound, "%s: no .png or .pgm images and no %s",
+                           frames_dir.c_str(), csv_path.c_str());
+    }
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      DatasetFrame frame;
+      frame.index = static_cast<int>(i);
+      frame.file = names[i];
+      frame.timestamp_s = static_cast<double>(i) / 10.0;
+      ds.frames.push_back(std::move(frame));
+    }
+  }
+  const std::string camera = ds.dir + "/camera.toml";
+  if (FileExists(camera))
+    ds.camera_toml = camera;
+  return ds;
+}
+
+DatasetWriter::~DatasetWriter() {
+  (void)Close();
+}
+
+DatasetWriter::DatasetWriter(DatasetWriter&& other) noexcept
+    : dir_(std::move(other.dir_)),
+      csv_(std::exchange(other.csv_, nullptr)),
+      with_poses_(other.with_poses_),
+      next_index_(other.next_index_) {}
+
+DatasetWriter& DatasetWriter::operator=(DatasetWriter&& other) noexcept {
+  if (this != &other) {
+    (void)Close();
+    dir_ = std::move(other.dir_);
+    csv_ = std::exchange(other.csv_, nullptr);
+    with_poses_ = other.with_poses_;
+    next_index_ = other.next_index_;
+  }
+  return *this;
+}
+
+Status DatasetWriter::Open(const std::string& dir, bool with_poses) {
+  if (csv_ != nullptr) {
+    return Status::Error(StatusCode::kFailedPrecondition, "dataset writer: %s is already open",
+                         dir_.c_str());
+  }
+  dir_ = dir;
+  while (dir_.size() > 1 && dir_.back() == '/')
+    dir_.pop_back();
+  SKYLOC_TRY(MakeDirs(dir_ + "/frames"));
+  const std::string csv_path = dir_ + "/frames.csv";
+  // "x": fail if the file exists, so an earlier recording is never overwritten.
+  csv_ = std::fopen(csv_path.c_str(), "wx");
+  if (csv_ == nullptr) {
+    const int saved = errno;
+    if (saved == EEXIST) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s already exists: choose a new folder (a recording is never "
+                           "overwritten)",
+                           csv_path.c_str());
+    }
+    return Status::FromErrno(saved, "cannot create %s", csv_path.c_str());
+  }
+  with_poses_ = with_poses;
+  next_index_ = 0;
+  const int written = with_poses
+                          ? std::fprintf(csv_, "%s,%s\n", kDatasetCsvHeader, kDatasetCsvPoseColumns)
+                          : std::fprintf(csv_, "%s\n", kDatasetCsvHeader);
+  if (written < 0 || std::fflush(csv_) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot write %s", csv_path.c_str());
+  }
+  return Status::Ok();
+}
+
+Status DatasetWriter::Append(const dsp::ImageView& image, double timestamp_s,
+                             const std::optional<Pose>& pose) {
+  if (csv_ == nullptr)
+    return Status::Error(StatusCode::kFailedPrecondition, "dataset writer: Append() before Open()");
+  if (image.empty()) {
+    return Status::Error(StatusCode::kInvalidArgument, "dataset %s: frame %d is an empty image",
+                         dir_.c_str(), next_index_);
+  }
+  char name[32];
+  const bool png =
+      image.format == dsp::PixelFormat::kRgb24 || image.format == dsp::PixelFormat::kBgr24;
+  std::snprintf(name, sizeof name, "%06d.%s", next_index_, png ? "png" : "pgm");
+  const std::string path = dir_ + "/frames/" + name;
+  SKYLOC_TRY(png ? WritePng(path, image) : WritePgm(path, image));
+  return AppendRow(name, timestamp_s, pose);
+}
+
+Status DatasetWriter::AppendRow(const std::string& file, double timestamp_s,
+                                const std::optional<Pose>& pose) {
+  if (csv_ == nullptr) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "dataset writer: AppendRow() before Open()");
+  }
+  if (file.empty() || file.find(',') != std::string::npos || file.find('/') != std::string::npos ||
+      !HasImageExtension(file)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "dataset %s: frame file '%s' must be a .png/.pgm name without ',' or '/'",
+                         dir_.c_str(), file.c_str());
+  }
+  if (!std::isfinite(timestamp_s)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "dataset %s: frame %d timestamp is not finite", dir_.c_str(), next_index_);
+  }
+  if (with_poses_ != pose.has_value()) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "dataset %s: frame %d %s a pose but the dataset was opened %s poses",
+                         dir_.c_str(), next_index_, pose ? "has" : "lacks",
+                         with_poses_ ? "with" : "without");
+  }
+  // %.17g round-trips a double exactly; timestamps get microsecond text.
+  int written;
+  if (pose) {
+    written = std::fprintf(csv_, "%d,%s,%.6f,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", next_index_,
+                           file.c_str(), timestamp_s, pose->x_m, pose->y_m, pose->z_m,
+                           pose->roll_deg, pose->pitch_deg, pose->yaw_deg);
+  } else {
+    written = std::fprintf(csv_, "%d,%s,%.6f\n", next_index_, file.c_str(), timestamp_s);
+  }
+  if (written < 0 || std::fflush(csv_) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot append to %s/frames.csv", dir_.c_str());
+  }
+  ++next_index_;
+  return Status::Ok();
+}
+
+Status DatasetWriter::Close() {
+  if (csv_ == nullptr)
+    return Status::Ok();
+  std::FILE* f = std::exchange(csv_, nullptr);
+  if (std::fclose(f) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot close %s/frames.csv", dir_.c_str());
+  }
+  return Status::Ok();
+}
+
+// ---- DatasetCamera ---------------------------------------------------------------------
+
+namespace {
+
+// Decodes one image file to grey into `out` (resized only when the size differs, which
+// DatasetCamera rejects after the first frame). PGM P5 8-bit is parsed here without
+// stb; PNG goes through stb_image (which allocates while decoding: replay is a laptop tool).
+Status LoadGrey(const std::string& path, std::vector<std::uint8_t>* out, int* width, int* height) {
+  int w = 0, h = 0, channels = 0;
+  stbi_uc* data = stbi_load(path.c_str(), &w, &h, &channels, 1);
+  if (data == nullptr) {
+    return Status::Error(StatusCode::kDataLoss, "cannot decode image %s: %s", path.c_str(),
+                         stbi_failure_reason());
+  }
+  const std::size_t bytes = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (out->size() != bytes)
+    out->resize(bytes);
+  std::memcpy(out->data(), data, bytes);
+  stbi_image_free(data);
+  *width = w;
+  *height = h;
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status DatasetCamera::DoOpen() {
+  std::snprintf(info_.name, sizeof info_.name, "dataset:%s", dir_.c_str());
+  SKYLOC_TRY_ASSIGN(dataset_, ReadDataset(dir_));
+  int w = 0, h = 0;
+  SKYLOC_TRY(LoadGrey(dataset_.FramePath(0), &pixels_, &w, &h));
+  info_.width = w;
+  info_.height = h;
+  info_.format = dsp::PixelFormat::kGrey8;
+  next_ = 0;
+  return Status::Ok();
+}
+
+Status DatasetCamera::DoStart() {
+  next_ = 0;
+  return Status::Ok();
+}
+
+Result<Frame> DatasetCamera::DoCapture(Nanoseconds /*timeout*/) {
+  if (next_ >= dataset_.frames.size()) {
+    return Status::Error(StatusCode::kOutOfRange, "dataset %s: end of the %zu frames",
+                         dataset_.dir.c_str(), dataset_.frames.size());
+  }
+  const std::size_t i = next_++;
+  int w = 0, h = 0;
+  SKYLOC_TRY(LoadGrey(dataset_.FramePath(i), &pixels_, &w, &h));
+  if (w != info_.width || h != info_.height) {
+    return Status::Error(
+        StatusCode::kDataLoss, "dataset %s: frame %zu (%s) is %dx%d but the first frame is %dx%d",
+        dataset_.dir.c_str(), i, dataset_.frames[i].file.c_str(), w, h, info_.width, info_.height);
+  }
+  const DatasetFrame& f = dataset_.frames[i];
+  Frame frame;
+  frame.image =
+      dsp::ImageView{pixels_.data(), w, h, static_cast<std::size_t>(w), dsp::PixelFormat::kGrey8};
+  frame.sequence = static_cast<std::uint64_t>(i);
+  frame.timestamp = Nanoseconds(static_cast<std::int64_t>(std::llround(f.timestamp_s * 1e9)));
+  frame.pose = f.pose;
+  return frame;
+}
+
+void DatasetCamera::DoStop() {}
+
+void DatasetCamera::DoClose() {
+  dataset_ = Dataset{};
+  pixels_.clear();
+  pixels_.shrink_to_fit();
+}
+
+}  // namespace skyloc::drivers

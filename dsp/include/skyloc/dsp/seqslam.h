@@ -1,0 +1,213 @@
+// SeqSLAM (Milford & Wyeth 2012) as OpenSeqSLAM (Suenderhauf 2013) implements it, over any
+// descriptor vectors: a difference matrix D (reference rows x query columns, mean absolute
+// difference), local contrast enhancement of each entry against its +-R/2 neighbouring
+// reference rows, and a search for the straight trajectory through ds query columns, at
+// velocities vmin..vmax reference frames per query frame, with the lowest summed
+// enhanced difference. Two engines share every numerical step, so they agree bit for bit:
+//
+//  - the batch engine (offline, `skyloc eval`): whole matrices, centred window (as
+//    OpenSeqSLAM) or trailing window (what the firmware can do);
+//  - StreamingSeqSlam (the firmware): a fixed reference database and a ring of the last
+//    ds enhanced difference columns; Step() is causal and allocates nothing.
+//
+// Storage convention: D is kept column by column (query-major): column q, the differences
+// of query q to all N references, is contiguous (d[q * N + r]). That is the unit the
+// streaming engine produces per frame and what the search reads sequentially.
+//
+// Deliberate differences from OpenSeqSLAM (MATLAB, openSeqSLAM.m / doFindMatches.m), each
+// also noted where it happens in seqslam.cpp:
+//  1. A trajectory covers ds query frames. OpenSeqSLAM rounds ds up to even and spans
+//     ds + 1 columns (N - ds/2 .. N + ds/2); ds = 1 (single image) is then impossible.
+//  2. The velocities are vmin, vmin + vstep, ... <= vmax. OpenSeqSLAM steps 1/ds (its
+//     `vskip` is unused); with the defaults (ds = 10, step 0.1) both give 0.8..1.2.
+//  3. D is divided by the descriptor length (mean absolute difference). OpenSeqSLAM
+//     divides by the number of reference images; the scale cancels in the enhancement.
+//  4. Enhanced values are shifted by the constant (m-1)/sqrt(m), m = min(N, 2*floor(R/2)+1):
+//     the most negative z-score a window of m samples can produce, so every value is >= 0.
+//     OpenSeqSLAM subtracts the global minimum of the enhanced matrix, which needs the
+//     whole run (not causal). Every trajectory has the same length, so the shift changes
+//     no ranking; the uniqueness ratio differs slightly.
+//  5. A zero standard deviation (all neighbours equal) gives 0, not NaN.
+//  6. The matched reference is the best trajectory's row at the query frame itself
+//     (start + floor(v * position)), not start + ds/2 whatever the velocity.
+//  7. Trajectories that leave the database are not candidates. OpenSeqSLAM appends a row
+//     of +inf to reach the same effect; the C++ ports append it before the enhancement
+//     (corrupting the last rows' statistics) and decode flat indices with wrap-around:
+//     neither is done here.
+//  8. With no runner-up outside the uniqueness window (a database shorter than the
+//     window) the uniqueness is 1 ("not distinctive"); OpenSeqSLAM fails on an empty min.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace skyloc::dsp {
+
+enum class SeqSlamError : std::uint8_t {
+  kOk = 0,
+  kBadSequenceLength,    // ds outside 1..kMaxSequenceLength
+  kBadVelocity,          // vmin < 0, vmax < vmin, vmax > 8, vstep <= 0 or > kMaxVelocities steps
+  kBadContrastWindow,    // R outside 0..kMaxWindow
+  kBadUniquenessWindow,  // Rwindow outside 0..kMaxWindow
+  kBadDimension,         // descriptor length < 1
+  kBadCapacity,          // database capacity < 1
+  kSizeMismatch,         // a span's size does not match the sizes given
+  kDatabaseFull,         // AddReference beyond the capacity given to Init
+  kNotInitialised,       // StreamingSeqSlam used before a successful Init
+  kEmptyDatabase,        // Step() with no reference frames
+};
+
+// A sentence saying what is wrong, for the caller to turn into its error.
+const char* SeqSlamErrorMessage(SeqSlamError error);
+
+inline constexpr int kMaxSequenceLength = 1000;
+inline constexpr int kMaxVelocities = 64;
+inline constexpr int kMaxWindow = 10000;
+
+struct SeqSlamParams {
+  int sequence_length = 10;  // ds: query frames in one trajectory (1 = single image)
+  float v_min = 0.8f;        // reference frames per query frame
+  float v_max = 1.2f;
+  float v_step = 0.1f;
+  int uniqueness_window = 10;  // Rwindow: starts within +-Rwindow/2 of the best are excluded
+  int contrast_window = 10;    // R: enhancement uses the +-R/2 neighbouring reference rows
+};
+
+SeqSlamError ValidateSeqSlamParams(const SeqSlamParams& params);
+
+enum class SeqSlamWindow : std::uint8_t {
+  kCentred,   // query frames t - ds/2 .. t - ds/2 + ds - 1 (OpenSeqSLAM; needs the future)
+  kTrailing,  // query frames t - ds + 1 .. t (causal: the firmware's engine)
+};
+
+struct SeqSlamMatch {
+  // False when the window does not fit in the query frames around t, or no trajectory
+  // fits in the database; the other fields are then meaningless.
+  bool valid = false;
+  int reference = -1;  // the reference frame matched to query frame t
+  int start = -1;      // the reference row where the best trajectory starts
+  float velocity = 0;  // its velocity (reference frames per query frame)
+  // Sum of the shifted enhanced differences along the trajectory (>= 0, lower = better).
+  float score = 0;
+  // score / lowest score of the starts outside +-Rwindow/2 of the best start: 0..1, lower
+  // is more distinctive (OpenSeqSLAM's match quality; accept when below a threshold).
+  float uniqueness = 1;
+  // 1 - uniqueness: 0 = no better than the runner-up elsewhere on the route, 1 = the
+  // runner-up is infinitely worse. See docs/SEQSLAM.md.
+  float confidence = 0;
+};
+
+// ---- Building blocks (shared by both engines) -----------------------------------------
+
+// out[r] = mean over d of |database[r * dim + d] - query[d]|, for the N = out.size()
+// references stored row by row in `database`.
+void DifferenceColumn(std::span<const float> database, int dim, std::span<const float> query,
+                      std::span<float> out);
+
+// Local contrast enhancement of one column of D: out[r] = (d[r] - mean) / std over rows
+// max(0, r - R/2) .. min(N - 1, r + R/2) (sample std, as MATLAB's std), plus the shift of
+// note 4 above; 0 + shift where the std is 0. O(N) with running sums.
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out);
+
+// The constant added by EnhanceColumn for a database of n references (note 4).
+float EnhancementShift(int n, int contrast_window);
+
+// The trajectory search over a window of ds enhanced columns.
+class TrajectorySearch {
+ public:
+  // Allocates the velocity offset table (start-up only).
+  SeqSlamError Init(const SeqSlamParams& params);
+
+  // columns: ds pointers to enhanced columns of n floats, oldest query frame first.
+  // position: which of the ds query frames the match is reported for (0..ds-1).
+  // scores: scratch of >= n floats; on return scores[s] is the best trajectory score
+  // starting at reference row s (+inf when no velocity fits). Allocates nothing.
+  SeqSlamMatch Search(std::span<const float* const> columns, int n, int position,
+                      std::span<float> scores) const;
+
+  int sequence_length() const { return sequence_length_; }
+  int velocity_count() const { return velocity_count_; }
+  float velocity(int k) const { return velocities_[static_cast<std::size_t>(k)]; }
+  // floor(j * v_k): reference rows advanced after j query frames at velocity k.
+  int offset(int k, int j) const {
+    return offsets_[static_cast<std::size_t>(k * sequence_length_ + j)];
+  }
+
+ private:
+  int sequence_length_ = 0;
+  int velocity_count_ = 0;
+  int uniqueness_window_ = 0;
+  std::vector<float> velocities_;
+  std::vector<int> offsets_;  // velocity_count_ x sequence_length_
+};
+
+// ---- Batch engine ----------------------------------------------------------------------
+
+// d (query-major, n_query x n_ref) = DifferenceColumn of every query.
+SeqSlamError ComputeDifferenceMatrix(std::span<const float> reference, std::span<const float> query,
+                                     int dim, std::span<float> d);
+
+// Enhances every column of d into out (same layout).
+SeqSlamError EnhanceDifferenceMatrix(std::span<const float> d, int n_ref, int n_query,
+                                     int contrast_window, std::span<float> out);
+
+// SeqSLAM from a difference matrix d (query-major): enhancement then, for every query
+// frame t, the search over the window around it. matches.size() must be n_query.
+SeqSlamError SeqSlamFromDifferences(std::span<const float> d, int n_ref, int n_query,
+                                    const SeqSlamParams& params, SeqSlamWindow window,
+                                    std::span<SeqSlamMatch> matches);
+
+// SeqSLAM from descriptors (reference and query stored row by row, dim floats each).
+// Allocates the difference matrices (n_ref x n_query floats, twice): an offline tool.
+SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const float> query, int dim,
+                          const SeqSlamParams& params, SeqSlamWindow window,
+                          std::span<SeqSlamMatch> matches);
+
+// ---- Streaming engine (firmware) -------------------------------------------------------
+
+class StreamingSeqSlam {
+ public:
+  // Allocates everything (the only allocation): the database of `capacity` descriptors of
+  // `dim` floats, the ring of ds enhanced columns and the per-step scratch.
+  SeqSlamError Init(const SeqSlamParams& params, int dim, int capacity);
+
+  // Appends a reference descriptor (the taught route, in order). Forgets the query
+  // history: the ring's columns were computed against the smaller database.
+  SeqSlamError AddReference(std::span<const float> descriptor);
+  void ClearReferences();
+  // Forgets the query history (e.g. after a gap in the frames).
+  void ResetQueries();
+
+  // One query frame: difference column, enhancement, trajectory search over the last ds
+  // frames (trailing window). `out->valid` is false until ds frames have been seen.
+  // O(N * (dim + velocities * ds)), allocates nothing.
+  SeqSlamError Step(std::span<const float> query, SeqSlamMatch* out);
+
+  int size() const { return size_; }
+  int capacity() const { return capacity_; }
+  int dim() const { return dim_; }
+  int frames_in_window() const { return count_; }
+
+  // Bytes Init allocates per reference frame: descriptor, ds ring entries, two scratch
+  // floats (the difference column and the per-start scores).
+  static std::size_t BytesPerReference(const SeqSlamParams& params, int dim);
+  std::size_t AllocatedBytes() const;
+
+ private:
+  SeqSlamParams params_;
+  TrajectorySearch search_;
+  int dim_ = 0;
+  int capacity_ = 0;
+  int size_ = 0;
+  int head_ = 0;                     // ring slot the next column goes into
+  int count_ = 0;                    // columns in the ring (<= ds)
+  std::vector<float> database_;      // capacity x dim
+  std::vector<float> ring_;          // ds x capacity enhanced columns
+  std::vector<float> difference_;    // capacity
+  std::vector<float> scores_;        // capacity
+  std::vector<const float*> order_;  // ds column pointers, oldest first
+};
+
+}  // namespace skyloc::dsp

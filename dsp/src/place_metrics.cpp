@@ -1,0 +1,69 @@
+#include "skyloc/dsp/place_metrics.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace skyloc::dsp {
+
+std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,
+                                 std::span<std::size_t> order, std::span<PrPoint> curve) {
+  const std::size_t n = std::min(matches.size(), order.size());
+  std::iota(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n), std::size_t{0});
+  std::stable_sort(
+      order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n),
+      [&](std::size_t a, std::size_t b) { return matches[a].uniqueness < matches[b].uniqueness; });
+  int positives = 0;  // queries with a ground truth: TP + FN at every threshold
+  for (std::size_t i = 0; i < n; ++i)
+    positives += matches[i].has_ground_truth ? 1 : 0;
+  int tp = 0, fp = 0, accepted_positives = 0;
+  std::size_t points = 0;
+  std::size_t i = 0;
+  while (i < n && points < curve.size()) {
+    const float threshold = matches[order[i]].uniqueness;
+    // Matches with equal uniqueness are accepted together.
+    while (i < n && matches[order[i]].uniqueness == threshold) {
+      const EvaluatedMatch& m = matches[order[i]];
+      if (m.has_ground_truth)
+        ++accepted_positives;
+      if (m.has_ground_truth && m.correct) {
+        ++tp;
+      } else {
+        ++fp;
+      }
+      ++i;
+    }
+    PrPoint p;
+    p.threshold = threshold;
+    p.true_positives = tp;
+    p.false_positives = fp;
+    p.false_negatives = positives - accepted_positives;
+    p.precision = tp + fp > 0 ? static_cast<double>(tp) / (tp + fp) : 1.0;
+    const int denominator = tp + p.false_negatives;
+    p.recall = denominator > 0 ? static_cast<double>(tp) / denominator : 0.0;
+    curve[points++] = p;
+  }
+  return points;
+}
+
+PrSummary SummarisePrecisionRecall(std::span<const EvaluatedMatch> matches,
+                                   std::span<const PrPoint> curve) {
+  PrSummary s;
+  s.evaluated = static_cast<int>(matches.size());
+  for (const EvaluatedMatch& m : matches) {
+    s.with_ground_truth += m.has_ground_truth ? 1 : 0;
+    s.correct += m.has_ground_truth && m.correct ? 1 : 0;
+  }
+  if (curve.empty())
+    return s;
+  s.precision_at_full_recall = curve.back().precision;
+  double previous_recall = 0.0;
+  for (const PrPoint& p : curve) {
+    s.area_under_curve += (p.recall - previous_recall) * p.precision;
+    previous_recall = p.recall;
+    if (p.false_positives == 0)
+      s.recall_at_full_precision = std::max(s.recall_at_full_precision, p.recall);
+  }
+  return s;
+}
+
+}  // namespace skyloc::dsp

@@ -1,0 +1,420 @@
+#include "skyloc/dsp/seqslam.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+std::size_t Sz(int v) {
+  return static_cast<std::size_t>(v);
+}
+
+// Number of velocities vmin, vmin + vstep, ... <= vmax (with a tolerance of a thousandth
+// of a step so 0.8 + 4 * 0.1 counts as <= 1.2 despite rounding).
+int CountVelocities(const SeqSlamParams& p) {
+  const double span =
+      (static_cast<double>(p.v_max) - static_cast<double>(p.v_min)) / static_cast<double>(p.v_step);
+  return static_cast<int>(std::floor(span + 1e-3)) + 1;
+}
+
+}  // namespace
+
+const char* SeqSlamErrorMessage(SeqSlamError error) {
+  switch (error) {
+    case SeqSlamError::kOk:
+      return "ok";
+    case SeqSlamError::kBadSequenceLength:
+      return "sequence length ds must be 1..1000 frames";
+    case SeqSlamError::kBadVelocity:
+      return "velocities need 0 <= vmin <= vmax <= 8 and vstep > 0 with at most 64 steps";
+    case SeqSlamError::kBadContrastWindow:
+      return "contrast enhancement window R must be 0..10000 frames";
+    case SeqSlamError::kBadUniquenessWindow:
+      return "uniqueness window Rwindow must be 0..10000 frames";
+    case SeqSlamError::kBadDimension:
+      return "descriptor length must be at least 1";
+    case SeqSlamError::kBadCapacity:
+      return "reference database capacity must be at least 1 frame";
+    case SeqSlamError::kSizeMismatch:
+      return "a buffer's size does not match the frame counts and descriptor length";
+    case SeqSlamError::kDatabaseFull:
+      return "reference database is full (raise its capacity)";
+    case SeqSlamError::kNotInitialised:
+      return "SeqSLAM engine used before Init succeeded";
+    case SeqSlamError::kEmptyDatabase:
+      return "no reference frames to match against";
+  }
+  return "unknown SeqSLAM error";
+}
+
+SeqSlamError ValidateSeqSlamParams(const SeqSlamParams& p) {
+  if (p.sequence_length < 1 || p.sequence_length > kMaxSequenceLength)
+    return SeqSlamError::kBadSequenceLength;
+  if (!(p.v_min >= 0.0f) || !(p.v_max >= p.v_min) || !(p.v_max <= 8.0f) || !(p.v_step > 0.0f))
+    return SeqSlamError::kBadVelocity;
+  if (CountVelocities(p) > kMaxVelocities)
+    return SeqSlamError::kBadVelocity;
+  if (p.contrast_window < 0 || p.contrast_window > kMaxWindow)
+    return SeqSlamError::kBadContrastWindow;
+  if (p.uniqueness_window < 0 || p.uniqueness_window > kMaxWindow)
+    return SeqSlamError::kBadUniquenessWindow;
+  return SeqSlamError::kOk;
+}
+
+// ---- Building blocks -------------------------------------------------------------------
+
+void DifferenceColumn(std::span<const float> database, int dim, std::span<const float> query,
+                      std::span<float> out) {
+  const std::size_t d = Sz(dim);
+  const float inv_dim = 1.0f / static_cast<float>(dim);
+  // Eight independent partial sums: the compiler vectorises the lanes without reordering
+  // any single sum (no fast-math), so the result is the same on every build.
+  constexpr std::size_t kLanes = 8;
+  const std::size_t whole = d - d % kLanes;
+  const float* q = query.data();
+  for (std::size_t r = 0; r < out.size(); ++r) {
+    const float* row = database.data() + r * d;
+    float lane[kLanes] = {};
+    for (std::size_t i = 0; i < whole; i += kLanes) {
+      for (std::size_t l = 0; l < kLanes; ++l)
+        lane[l] += std::fabs(row[i + l] - q[i + l]);
+    }
+    for (std::size_t i = whole; i < d; ++i)
+      lane[i - whole] += std::fabs(row[i] - q[i]);
+    const float sum =
+        ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+    // Mean absolute difference (OpenSeqSLAM divides by the number of references instead:
+    // a constant scale that the enhancement removes; note 3 in seqslam.h).
+    out[r] = sum * inv_dim;
+  }
+}
+
+float EnhancementShift(int n, int contrast_window) {
+  const int half = contrast_window / 2;
+  const int m = std::min(n, 2 * half + 1);
+  if (m <= 1)
+    return 0.0f;
+  // |x_i - mean| / s <= (m - 1) / sqrt(m) for the sample std s of m values (Samuelson's
+  // inequality), so adding this makes every enhanced value >= 0 (note 4 in seqslam.h).
+  return static_cast<float>(static_cast<double>(m - 1) / std::sqrt(static_cast<double>(m)));
+}
+
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out) {
+  const int n = static_cast<int>(d.size());
+  if (n == 0)
+    return;
+  // OpenSeqSLAM (doContrastEnhancement.m): rows a = max(1, i - R/2) .. b = min(N, i + R/2),
+  // DD(i,:) = (D(i,:) - mean(D(a:b,:))) ./ std(D(a:b,:)). The window slides by one row per
+  // step, so its sums are kept running (in double: a few ulp of drift over 100k rows)
+  // instead of recomputed: O(N) rather than O(N * R).
+  const int half = contrast_window / 2;
+  const float shift = EnhancementShift(n, contrast_window);
+  double sum = 0.0, sum_sq = 0.0;
+  int lo = 0, hi = -1;  // current window rows [lo, hi]
+  for (int i = 0; i < n; ++i) {
+    const int want_lo = std::max(0, i - half);
+    const int want_hi = std::min(n - 1, i + half);
+    while (hi < want_hi) {
+      ++hi;
+      const double v = static_cast<double>(d[Sz(hi)]);
+      sum += v;
+      sum_sq += v * v;
+    }
+    while (lo < want_lo) {
+      const double v = static_cast<double>(d[Sz(lo)]);
+      sum -= v;
+      sum_sq -= v * v;
+      ++lo;
+    }
+    const int m = hi - lo + 1;
+    float z = 0.0f;
+    if (m > 1) {
+      const double mean = sum / m;
+      const double var = (sum_sq - sum * mean) / (m - 1);
+      // A window whose values are all equal has variance 0 but the running sums leave a
+      // rounding residue: anything below 1e-10 of the mean square counts as zero and the
+      // entry is "no contrast" (0), never NaN or Inf (note 5).
+      const double floor_var = 1e-10 * (sum_sq / m) + 1e-30;
+      if (var > floor_var)
+        z = static_cast<float>((static_cast<double>(d[Sz(i)]) - mean) / std::sqrt(var));
+    }
+    out[Sz(i)] = z + shift;
+  }
+}
+
+// ---- Trajectory search -----------------------------------------------------------------
+
+SeqSlamError TrajectorySearch::Init(const SeqSlamParams& params) {
+  const SeqSlamError e = ValidateSeqSlamParams(params);
+  if (e != SeqSlamError::kOk)
+    return e;
+  sequence_length_ = params.sequence_length;
+  uniqueness_window_ = params.uniqueness_window;
+  velocity_count_ = CountVelocities(params);
+  velocities_.assign(Sz(velocity_count_), 0.0f);
+  offsets_.assign(Sz(velocity_count_ * sequence_length_), 0);
+  for (int k = 0; k < velocity_count_; ++k) {
+    // Velocities step by v_step (OpenSeqSLAM steps by 1/ds; note 2).
+    const double v = static_cast<double>(params.v_min) + k * static_cast<double>(params.v_step);
+    velocities_[Sz(k)] = static_cast<float>(v);
+    for (int j = 0; j < sequence_length_; ++j) {
+      // OpenSeqSLAM: idx_add = floor((0:ds) .* v). The 1e-9 keeps 9.000000000000002 and
+      // 8.999999999999998 (0.9 * 10 in binary) on the same side.
+      offsets_[Sz(k * sequence_length_ + j)] = static_cast<int>(std::floor(j * v + 1e-9));
+    }
+  }
+  return SeqSlamError::kOk;
+}
+
+SeqSlamMatch TrajectorySearch::Search(std::span<const float* const> columns, int n, int position,
+                                      std::span<float> scores) const {
+  SeqSlamMatch match;
+  const int len = sequence_length_;
+  const int last = len - 1;
+  // Starts are processed in blocks whose partial sums stay in L1; within a block the
+  // innermost loop runs over consecutive starts, reading each column contiguously, so it
+  // vectorises. Every score is summed j = 0, 1, ..., ds-1 in that order whatever the
+  // blocking: batch and streaming give identical floats.
+  constexpr int kBlock = 512;
+  float acc[kBlock];
+  for (int b0 = 0; b0 < n; b0 += kBlock) {
+    const int b1 = std::min(n, b0 + kBlock);
+    float* best = scores.data() + b0;
+    std::fill(best, best + (b1 - b0), kInf);
+    for (int k = 0; k < velocity_count_; ++k) {
+      // A trajectory from start s must end inside the database: s + offset(k, ds-1) < n
+      // (OpenSeqSLAM's +inf row does the same; note 7).
+      const int s_end = std::min(b1, n - offset(k, last));
+      if (s_end <= b0)
+        continue;
+      const int count = s_end - b0;
+      std::fill(acc, acc + count, 0.0f);
+      for (int j = 0; j < len; ++j) {
+        const float* col = columns[Sz(j)] + offset(k, j) + b0;
+        for (int i = 0; i < count; ++i)
+          acc[i] += col[i];
+      }
+      for (int i = 0; i < count; ++i)
+        best[i] = std::min(best[i], acc[i]);
+    }
+  }
+
+  // Best start (the first on ties, as MATLAB's min).
+  int best_s = -1;
+  float best_score = kInf;
+  for (int s = 0; s < n; ++s) {
+    if (scores[Sz(s)] < best_score) {
+      best_score = scores[Sz(s)];
+      best_s = s;
+    }
+  }
+  if (best_s < 0)
+    return match;  // no trajectory fits in the database
+
+  // Its velocity: recomputed with the same summation order, the first k reaching the min.
+  int best_k = 0;
+  for (int k = 0; k < velocity_count_; ++k) {
+    if (best_s + offset(k, last) >= n)
+      continue;
+    float sum = 0.0f;
+    for (int j = 0; j < len; ++j)
+      sum += columns[Sz(j)][best_s + offset(k, j)];
+    if (sum == best_score) {
+      best_k = k;
+      break;
+    }
+  }
+
+  // Runner-up: the lowest score outside starts best_s - Rwindow/2 .. best_s + Rwindow/2
+  // (OpenSeqSLAM's `window` / `not_window`).
+  const int half = uniqueness_window_ / 2;
+  const int w0 = best_s - half, w1 = best_s + half;
+  float second = kInf;
+  for (int s = 0; s < n; ++s) {
+    if (s >= w0 && s <= w1)
+      continue;
+    second = std::min(second, scores[Sz(s)]);
+  }
+
+  match.valid = true;
+  match.start = best_s;
+  match.velocity = velocities_[Sz(best_k)];
+  // The reference under query frame `position` on the best trajectory (note 6).
+  match.reference = best_s + offset(best_k, position);
+  match.score = best_score;
+  // No finite runner-up, or both zero: nothing shows this match is distinctive (note 8).
+  if (second == kInf || !(second > 0.0f)) {
+    match.uniqueness = 1.0f;
+  } else {
+    match.uniqueness = std::clamp(best_score / second, 0.0f, 1.0f);
+  }
+  match.confidence = 1.0f - match.uniqueness;
+  return match;
+}
+
+// ---- Batch engine ----------------------------------------------------------------------
+
+SeqSlamError ComputeDifferenceMatrix(std::span<const float> reference, std::span<const float> query,
+                                     int dim, std::span<float> d) {
+  if (dim < 1)
+    return SeqSlamError::kBadDimension;
+  const std::size_t dd = Sz(dim);
+  if (reference.size() % dd != 0 || query.size() % dd != 0)
+    return SeqSlamError::kSizeMismatch;
+  const std::size_t n_ref = reference.size() / dd, n_query = query.size() / dd;
+  if (d.size() != n_ref * n_query)
+    return SeqSlamError::kSizeMismatch;
+  for (std::size_t q = 0; q < n_query; ++q)
+    DifferenceColumn(reference, dim, query.subspan(q * dd, dd), d.subspan(q * n_ref, n_ref));
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError EnhanceDifferenceMatrix(std::span<const float> d, int n_ref, int n_query,
+                                     int contrast_window, std::span<float> out) {
+  if (n_ref < 0 || n_query < 0 || d.size() != Sz(n_ref) * Sz(n_query) || out.size() != d.size())
+    return SeqSlamError::kSizeMismatch;
+  if (contrast_window < 0 || contrast_window > kMaxWindow)
+    return SeqSlamError::kBadContrastWindow;
+  for (int q = 0; q < n_query; ++q) {
+    EnhanceColumn(d.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), contrast_window,
+                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)));
+  }
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError SeqSlamFromDifferences(std::span<const float> d, int n_ref, int n_query,
+                                    const SeqSlamParams& params, SeqSlamWindow window,
+                                    std::span<SeqSlamMatch> matches) {
+  TrajectorySearch search;
+  SeqSlamError e = search.Init(params);
+  if (e != SeqSlamError::kOk)
+    return e;
+  if (matches.size() != Sz(n_query))
+    return SeqSlamError::kSizeMismatch;
+  std::vector<float> enhanced(d.size());
+  e = EnhanceDifferenceMatrix(d, n_ref, n_query, params.contrast_window, enhanced);
+  if (e != SeqSlamError::kOk)
+    return e;
+  const int len = params.sequence_length;
+  std::vector<float> scores(Sz(n_ref));
+  std::vector<const float*> columns(Sz(len));
+  for (int t = 0; t < n_query; ++t) {
+    matches[Sz(t)] = SeqSlamMatch{};
+    // Centred: frames t - ds/2 .. t - ds/2 + ds - 1 (OpenSeqSLAM's N - ds/2 .. N + ds/2
+    // with one frame fewer; note 1). Trailing: t - ds + 1 .. t.
+    const int first = window == SeqSlamWindow::kCentred ? t - len / 2 : t - len + 1;
+    if (first < 0 || first + len > n_query || n_ref == 0)
+      continue;
+    for (int j = 0; j < len; ++j)
+      columns[Sz(j)] = enhanced.data() + Sz(first + j) * Sz(n_ref);
+    matches[Sz(t)] = search.Search(columns, n_ref, t - first, scores);
+  }
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const float> query, int dim,
+                          const SeqSlamParams& params, SeqSlamWindow window,
+                          std::span<SeqSlamMatch> matches) {
+  if (dim < 1)
+    return SeqSlamError::kBadDimension;
+  if (reference.size() % Sz(dim) != 0 || query.size() % Sz(dim) != 0)
+    return SeqSlamError::kSizeMismatch;
+  const int n_ref = static_cast<int>(reference.size() / Sz(dim));
+  const int n_query = static_cast<int>(query.size() / Sz(dim));
+  std::vector<float> d(Sz(n_ref) * Sz(n_query));
+  const SeqSlamError e = ComputeDifferenceMatrix(reference, query, dim, d);
+  if (e != SeqSlamError::kOk)
+    return e;
+  return SeqSlamFromDifferences(d, n_ref, n_query, params, window, matches);
+}
+
+// ---- Streaming engine ------------------------------------------------------------------
+
+SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int capacity) {
+  SeqSlamError e = search_.Init(params);
+  if (e != SeqSlamError::kOk)
+    return e;
+  if (dim < 1)
+    return SeqSlamError::kBadDimension;
+  if (capacity < 1)
+    return SeqSlamError::kBadCapacity;
+  params_ = params;
+  dim_ = dim;
+  capacity_ = capacity;
+  const std::size_t len = Sz(params.sequence_length);
+  database_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  ring_.assign(len * Sz(capacity), 0.0f);
+  difference_.assign(Sz(capacity), 0.0f);
+  scores_.assign(Sz(capacity), 0.0f);
+  order_.assign(len, nullptr);
+  size_ = 0;
+  ResetQueries();
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError StreamingSeqSlam::AddReference(std::span<const float> descriptor) {
+  if (capacity_ == 0)
+    return SeqSlamError::kNotInitialised;
+  if (descriptor.size() != Sz(dim_))
+    return SeqSlamError::kSizeMismatch;
+  if (size_ >= capacity_)
+    return SeqSlamError::kDatabaseFull;
+  std::copy(descriptor.begin(), descriptor.end(), database_.data() + Sz(size_) * Sz(dim_));
+  ++size_;
+  ResetQueries();
+  return SeqSlamError::kOk;
+}
+
+void StreamingSeqSlam::ClearReferences() {
+  size_ = 0;
+  ResetQueries();
+}
+
+void StreamingSeqSlam::ResetQueries() {
+  head_ = 0;
+  count_ = 0;
+}
+
+SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* out) {
+  *out = SeqSlamMatch{};
+  if (capacity_ == 0)
+    return SeqSlamError::kNotInitialised;
+  if (query.size() != Sz(dim_))
+    return SeqSlamError::kSizeMismatch;
+  if (size_ == 0)
+    return SeqSlamError::kEmptyDatabase;
+  const std::size_t n = Sz(size_);
+  const int len = params_.sequence_length;
+  std::span<float> diff(difference_.data(), n);
+  DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
+  // Ring slots are `capacity` floats apart; only the first `size` of each are used.
+  float* slot = ring_.data() + Sz(head_) * Sz(capacity_);
+  EnhanceColumn(diff, params_.contrast_window, std::span<float>(slot, n));
+  head_ = (head_ + 1) % len;
+  count_ = std::min(count_ + 1, len);
+  if (count_ < len)
+    return SeqSlamError::kOk;  // warming up: not a full sequence yet
+  // Oldest first: the ring is full, so the oldest column is at head_.
+  for (int j = 0; j < len; ++j)
+    order_[Sz(j)] = ring_.data() + Sz((head_ + j) % len) * Sz(capacity_);
+  *out = search_.Search(order_, size_, len - 1, std::span<float>(scores_.data(), n));
+  return SeqSlamError::kOk;
+}
+
+std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int dim) {
+  return sizeof(float) * (Sz(dim) + Sz(params.sequence_length) + 2);
+}
+
+std::size_t StreamingSeqSlam::AllocatedBytes() const {
+  return sizeof(float) * (database_.size() + ring_.size() + difference_.size() + scores_.size()) +
+         sizeof(const float*) * order_.size() +
+         sizeof(int) * Sz(search_.velocity_count() * search_.sequence_length()) +
+         sizeof(float) * Sz(search_.velocity_count());
+}
+
+}  // namespace skyloc::dsp
