@@ -17,7 +17,7 @@ class RenderedCameraTest : public ::testing::Test {
     motion.max_frames = 5;
     motion.bumps_deg = 5;
     ASSERT_TRUE(BuildTrajectory(world_.route, world_.route_closed, motion, &trajectory_).ok());
-    config_.render = {64, 48, 185.0};
+    config_.lens = DefaultSimLens(64, 48);
   }
   World world_;
   std::vector<TrajectoryPoint> trajectory_;

@@ -56,25 +56,14 @@ int CountAbove(const Image& img, int threshold) {
   return n;
 }
 
-TEST(Lens, PixelAndDirectionRoundTrip) {
-  const FisheyeLens lens = EquidistantLens(320, 240);
-  EXPECT_NEAR(lens.focal_px * lens.max_theta_rad, 120.0, 1e-9);
-  for (double u : {10.5, 100.25, 160.0, 250.5}) {
-    for (double v : {30.5, 120.0, 200.75}) {
-      Vec3 d;
-      if (!PixelToDirection(lens, u, v, &d))
-        continue;
-      EXPECT_NEAR(Length(d), 1.0, 1e-6);
-      double u2, v2;
-      ASSERT_TRUE(DirectionToPixel(lens, d, &u2, &v2));
-      EXPECT_NEAR(u2, u, 1e-3);
-      EXPECT_NEAR(v2, v, 1e-3);
-    }
-  }
-  Vec3 d;
-  EXPECT_FALSE(PixelToDirection(lens, 0.5, 0.5, &d));  // a corner: outside the circle
-  ASSERT_TRUE(PixelToDirection(lens, 160 + 120 * 90.0 / 92.5, 120, &d));
-  EXPECT_NEAR(d.z, 0.0, 1e-6);  // 90 degrees from the axis: the horizon
+// Focal length of the equidistant lens, pixels per radian.
+double Focal(const Renderer& r) {
+  return r.lens().radius_px() / r.lens().max_theta();
+}
+
+bool InCircle(const Renderer& r, int x, int y) {
+  Eigen::Vector3d d;
+  return r.lens().PixelToCameraRay(x, y, &d);
 }
 
 // Inside a tube of radius R whose rim is H above the camera, the sky is a disc of angular
@@ -84,14 +73,14 @@ TEST(Renderer, SkyDiscInsideATubeMatchesTheAnalyticRadius) {
   AddTube(world, 10.0, 11.0, 720);
   ASSERT_TRUE(world.Finish().ok());
   Renderer renderer;
-  ASSERT_TRUE(renderer.Init(&world, {240, 240, 185.0}).ok());
+  ASSERT_TRUE(renderer.Init(&world, DefaultSimLens(240, 240)).ok());
   const drivers::Pose pose{0, 0, 1.0, 0, 0, 33};  // level; yaw must not matter
   Image mask(240, 240, dsp::PixelFormat::kGrey8);
   ASSERT_TRUE(renderer.RenderSkyMask(pose, mask.view).ok());
   Image uv(240, 240, dsp::PixelFormat::kGrey8);
   ASSERT_TRUE(renderer.Render(pose, PlainLighting(), Spectrum::kUv, 0, uv.view).ok());
 
-  const double predicted_px = renderer.lens().focal_px * std::atan2(10.0, 10.0);
+  const double predicted_px = Focal(renderer) * std::atan2(10.0, 10.0);
   const double mask_px = std::sqrt(CountAbove(mask, 127) / kPi);
   const double uv_px = std::sqrt(CountAbove(uv, 128) / kPi);
   EXPECT_NEAR(mask_px, predicted_px, 1.0);
@@ -109,7 +98,7 @@ class WallTest : public ::testing::Test {
     const Material m{0.5f, 0.5f, 0.5f, 0.03f, Texture::kPlain};
     world_.AddBox(20 + 1, 0, 0, 2, 400, 16, 0, m);  // front face at x = 20, top 16 m
     ASSERT_TRUE(world_.Finish().ok());
-    ASSERT_TRUE(renderer_.Init(&world_, {300, 300, 185.0}).ok());
+    ASSERT_TRUE(renderer_.Init(&world_, DefaultSimLens(300, 300)).ok());
   }
   // Sky pixels counted from the image centre outwards along (dx, dy) until the first
   // blocked one: the skyline's distance from the centre, to within a pixel.
@@ -131,7 +120,7 @@ class WallTest : public ::testing::Test {
     return n;
   }
   double PredictedRadius(double elevation_rad, double pitch_deg) {
-    return renderer_.lens().focal_px * (kPi / 2 - elevation_rad + pitch_deg * kDeg);
+    return Focal(renderer_) * (kPi / 2 - elevation_rad + pitch_deg * kDeg);
   }
   World world_;
   Renderer renderer_;
@@ -164,7 +153,7 @@ TEST(Renderer, SameSeedAndPoseGiveIdenticalBytes) {
   World world;
   ASSERT_TRUE(MakeProceduralWorld(WorldKind::kCity, 5, &world).ok());
   Renderer renderer;
-  ASSERT_TRUE(renderer.Init(&world, {96, 64, 185.0}).ok());
+  ASSERT_TRUE(renderer.Init(&world, DefaultSimLens(96, 64)).ok());
   const drivers::Pose pose{world.route[0].x + 3, world.route[0].y, 1.2, 3, -5, 20};
   Lighting lighting;
   ASSERT_TRUE(LightingPreset("dawn", 9, &lighting));
@@ -181,7 +170,7 @@ TEST(Renderer, SameSeedAndPoseGiveIdenticalBytes) {
   World again;
   ASSERT_TRUE(MakeProceduralWorld(WorldKind::kCity, 5, &again).ok());
   Renderer renderer2;
-  ASSERT_TRUE(renderer2.Init(&again, {96, 64, 185.0}).ok());
+  ASSERT_TRUE(renderer2.Init(&again, DefaultSimLens(96, 64)).ok());
   Image a(96, 64, dsp::PixelFormat::kGrey8), b(96, 64, dsp::PixelFormat::kGrey8);
   ASSERT_TRUE(renderer.Render(pose, lighting, Spectrum::kUv, 1, a.view).ok());
   ASSERT_TRUE(renderer2.Render(pose, lighting, Spectrum::kUv, 1, b.view).ok());
@@ -192,8 +181,7 @@ dsp::Histogram256 HistogramInCircle(const Image& img, const Renderer& r) {
   dsp::Histogram256 h{};
   for (int y = 0; y < img.view.height; ++y) {
     for (int x = 0; x < img.view.width; ++x) {
-      Vec3 d;
-      if (PixelToDirection(r.lens(), x + 0.5, y + 0.5, &d))
+      if (InCircle(r, x, y))
         ++h[img.at(x, y)];
     }
   }
@@ -206,7 +194,7 @@ TEST(Renderer, OtsuOnTheUvImageRecoversTheSkyMask) {
   World world;
   ASSERT_TRUE(MakeProceduralWorld(WorldKind::kForest, 2, &world).ok());
   Renderer renderer;
-  ASSERT_TRUE(renderer.Init(&world, {120, 120, 185.0}).ok());
+  ASSERT_TRUE(renderer.Init(&world, DefaultSimLens(120, 120)).ok());
   Lighting lighting;
   ASSERT_TRUE(LightingPreset("noon", 1, &lighting));
   const drivers::Pose pose{world.route[40].x, world.route[40].y, 1.0, 0, 0, 0};
@@ -217,8 +205,7 @@ TEST(Renderer, OtsuOnTheUvImageRecoversTheSkyMask) {
   int agree = 0, total = 0, sky = 0;
   for (int y = 0; y < 120; ++y) {
     for (int x = 0; x < 120; ++x) {
-      Vec3 d;
-      if (!PixelToDirection(renderer.lens(), x + 0.5, y + 0.5, &d))
+      if (!InCircle(renderer, x, y))
         continue;
       ++total;
       sky += mask.at(x, y) == 255 ? 1 : 0;
@@ -237,7 +224,7 @@ TEST(Renderer, FlareBrightensGroundNearTheSun) {
   world.AddBox(-30, 0, 0, 2, 2, 0.5, 0, Material{});  // something to build a BVH from
   ASSERT_TRUE(world.Finish().ok());
   Renderer renderer;
-  ASSERT_TRUE(renderer.Init(&world, {200, 200, 185.0}).ok());
+  ASSERT_TRUE(renderer.Init(&world, DefaultSimLens(200, 200)).ok());
   Lighting lighting = PlainLighting();
   lighting.sun_azimuth_deg = 0;  // ahead
   lighting.sun_elevation_deg = 5;
@@ -249,7 +236,7 @@ TEST(Renderer, FlareBrightensGroundNearTheSun) {
   ASSERT_TRUE(renderer.Render(pose, lighting, Spectrum::kUv, 0, with.view).ok());
   lighting.flare = 0;
   ASSERT_TRUE(renderer.Render(pose, lighting, Spectrum::kUv, 0, without.view).ok());
-  const int x = 100, y_ground = static_cast<int>(100 - renderer.lens().focal_px * 73 * kDeg);
+  const int x = 100, y_ground = static_cast<int>(100 - Focal(renderer) * 73 * kDeg);
   EXPECT_LT(without.at(x, y_ground), 100);
   EXPECT_GT(with.at(x, y_ground), without.at(x, y_ground) + 60);
   EXPECT_GT(with.at(x, y_ground), 128);  // brighter than mid-grey: Otsu would call it sky
@@ -262,14 +249,14 @@ TEST(Renderer, RejectsAMismatchedOutput) {
   world.AddBox(0, 0, 0, 1, 1, 1, 0, Material{});
   ASSERT_TRUE(world.Finish().ok());
   Renderer renderer;
-  ASSERT_TRUE(renderer.Init(&world, {64, 48, 185.0}).ok());
+  ASSERT_TRUE(renderer.Init(&world, DefaultSimLens(64, 48)).ok());
   Image rgb(64, 48, dsp::PixelFormat::kRgb24);
   EXPECT_EQ(renderer.Render({}, Lighting{}, Spectrum::kUv, 0, rgb.view).code(),
             StatusCode::kInvalidArgument);
   Image small(32, 48, dsp::PixelFormat::kGrey8);
   EXPECT_EQ(renderer.RenderSkyMask({}, small.view).code(), StatusCode::kInvalidArgument);
   Renderer bad;
-  EXPECT_EQ(bad.Init(&world, {4, 48, 185.0}).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(bad.Init(&world, DefaultSimLens(4, 48)).code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -9,15 +9,15 @@ RenderedCamera::RenderedCamera(const World* world, std::span<const TrajectoryPoi
     : world_(world), trajectory_(trajectory), config_(config) {}
 
 Status RenderedCamera::DoOpen() {
-  SKYLOC_TRY(renderer_.Init(world_, config_.render).AddContext("simulated camera"));
+  SKYLOC_TRY(renderer_.Init(world_, config_.lens).AddContext("simulated camera"));
   const bool uv = config_.spectrum == Spectrum::kUv;
-  const auto bytes = static_cast<std::size_t>(config_.render.width) *
-                     static_cast<std::size_t>(config_.render.height) * (uv ? 1u : 3u);
+  const auto bytes = static_cast<std::size_t>(config_.lens.width) *
+                     static_cast<std::size_t>(config_.lens.height) * (uv ? 1u : 3u);
   SKYLOC_TRY(buffer_.Allocate(bytes));
   std::snprintf(info_.name, sizeof info_.name, "sim:%s:%s", WorldKindName(world_->kind),
                 SpectrumName(config_.spectrum));
-  info_.width = config_.render.width;
-  info_.height = config_.render.height;
+  info_.width = config_.lens.width;
+  info_.height = config_.lens.height;
   info_.format = uv ? dsp::PixelFormat::kGrey8 : dsp::PixelFormat::kRgb24;
   return Status::Ok();
 }

@@ -183,42 +183,13 @@ const char* SpectrumName(Spectrum s) {
   return s == Spectrum::kUv ? "uv" : "visible";
 }
 
-FisheyeLens EquidistantLens(int width, int height, double fov_deg) {
-  FisheyeLens lens;
-  lens.width = width;
-  lens.height = height;
-  lens.cx = width / 2.0;
-  lens.cy = height / 2.0;
-  lens.max_theta_rad = fov_deg / 2.0 * kDegToRad;
-  lens.focal_px = std::min(width, height) / 2.0 / lens.max_theta_rad;
-  return lens;
-}
-
-bool PixelToDirection(const FisheyeLens& lens, double u, double v, Vec3* direction) {
-  const double dx = u - lens.cx, dy = v - lens.cy;
-  const double r = std::hypot(dx, dy);
-  const double theta = r / lens.focal_px;
-  if (theta > lens.max_theta_rad)
-    return false;
-  const double s = r > 0 ? std::sin(theta) / r : 0.0;
-  *direction = {static_cast<float>(dx * s), static_cast<float>(dy * s),
-                static_cast<float>(std::cos(theta))};
-  return true;
-}
-
-bool DirectionToPixel(const FisheyeLens& lens, Vec3 direction, double* u, double* v) {
-  const double dx = direction.x, dy = direction.y, dz = direction.z;
-  const double n = std::sqrt(dx * dx + dy * dy + dz * dz);
-  if (n <= 0)
-    return false;
-  const double theta = std::acos(std::clamp(dz / n, -1.0, 1.0));
-  if (theta > lens.max_theta_rad)
-    return false;
-  const double rxy = std::hypot(dx, dy);
-  const double r = lens.focal_px * theta;
-  *u = lens.cx + (rxy > 0 ? dx / rxy * r : 0.0);
-  *v = lens.cy + (rxy > 0 ? dy / rxy * r : 0.0);
-  return true;
+dsp::LensParams DefaultSimLens(int width, int height) {
+  dsp::LensParams p;
+  p.model = dsp::LensModel::kEquidistant;
+  p.width = width;
+  p.height = height;
+  p.fov_deg = 185.0;
+  return p;
 }
 
 bool LightingPreset(const char* name, std::uint64_t seed, Lighting* lighting) {
@@ -269,31 +240,33 @@ Rotation BodyToWorld(const drivers::Pose& pose) {
   return r;
 }
 
-Status Renderer::Init(const World* world, const RenderConfig& config) {
+Status Renderer::Init(const World* world, const dsp::LensParams& lens) {
   if (world == nullptr || world->bvh().node_count() == 0)
     return Status::Error(StatusCode::kFailedPrecondition, "renderer: the world is not built");
-  if (config.width < 8 || config.height < 8 || config.width > 8192 || config.height > 8192) {
+  if (lens.width < 8 || lens.height < 8 || lens.width > 8192 || lens.height > 8192) {
     return Status::Error(StatusCode::kInvalidArgument,
-                         "renderer: image size %dx%d is outside 8..8192 pixels a side",
-                         config.width, config.height);
+                         "renderer: image size %dx%d is outside 8..8192 pixels a side", lens.width,
+                         lens.height);
   }
-  if (!(config.fov_deg > 10 && config.fov_deg < 360)) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "renderer: field of view %g degrees is outside 10..360", config.fov_deg);
-  }
+  const dsp::LensError error = lens_.Init(lens);
+  if (error != dsp::LensError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "renderer: %s",
+                         dsp::LensErrorMessage(error));
   world_ = world;
-  config_ = config;
-  lens_ = EquidistantLens(config.width, config.height, config.fov_deg);
-  const auto n = static_cast<std::size_t>(config.width) * static_cast<std::size_t>(config.height);
+  width_ = lens.width;
+  height_ = lens.height;
+  const auto n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
   SKYLOC_TRY(rays_.Allocate(n));
   SKYLOC_TRY(inside_.Allocate(n));
-  for (int y = 0; y < config.height; ++y) {
-    for (int x = 0; x < config.width; ++x) {
-      const auto i = static_cast<std::size_t>(y) * static_cast<std::size_t>(config.width) +
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) {
+      const auto i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
                      static_cast<std::size_t>(x);
-      Vec3 d;
-      inside_[i] = PixelToDirection(lens_, x + 0.5, y + 0.5, &d) ? 1 : 0;
-      rays_[i] = d;
+      Eigen::Vector3d d;
+      inside_[i] = lens_.PixelToRay(x, y, &d) ? 1 : 0;
+      rays_[i] = inside_[i] ? Vec3{static_cast<float>(d.x()), static_cast<float>(d.y()),
+                                   static_cast<float>(d.z())}
+                            : Vec3{};
     }
   }
   return Status::Ok();
@@ -302,13 +275,12 @@ Status Renderer::Init(const World* world, const RenderConfig& config) {
 Status Renderer::CheckOutput(const dsp::MutableImageView& out, dsp::PixelFormat format) const {
   if (world_ == nullptr)
     return Status::Error(StatusCode::kFailedPrecondition, "renderer: Init() was not called");
-  if (out.data == nullptr || out.width != config_.width || out.height != config_.height ||
-      out.format != format ||
+  if (out.data == nullptr || out.width != width_ || out.height != height_ || out.format != format ||
       out.stride < static_cast<std::size_t>(out.width) *
                        static_cast<std::size_t>(dsp::BytesPerPixelTimes2(format) / 2)) {
     return Status::Error(StatusCode::kInvalidArgument,
-                         "renderer: output must be a %dx%d %s image, got %dx%d %s", config_.width,
-                         config_.height, dsp::PixelFormatName(format), out.width, out.height,
+                         "renderer: output must be a %dx%d %s image, got %dx%d %s", width_, height_,
+                         dsp::PixelFormatName(format), out.width, out.height,
                          dsp::PixelFormatName(out.format));
   }
   return Status::Ok();
@@ -360,21 +332,21 @@ Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spe
       cam[i] =
           to_world.m[0][i] * fl.sun.x + to_world.m[1][i] * fl.sun.y + to_world.m[2][i] * fl.sun.z;
     double su, sv;
-    if (DirectionToPixel(lens_, cam, &su, &sv) && !bvh.AnyHit({origin, fl.sun}, 1e-4f, kFar) &&
-        CloudDensity(fl, fl.sun) < 0.7f) {
+    if (lens_.RayToPixel(Eigen::Vector3d(double{cam.x}, double{cam.y}, double{cam.z}), &su, &sv) &&
+        !bvh.AnyHit({origin, fl.sun}, 1e-4f, kFar) && CloudDensity(fl, fl.sun) < 0.7f) {
       fl.flare_on = true;
       fl.flare = static_cast<float>(lighting.flare) * (1 - fl.cloud) * fl.sky * (uv ? 1.0f : 0.6f);
       fl.su = static_cast<float>(su);
       fl.sv = static_cast<float>(sv);
-      fl.radius = static_cast<float>(lens_.focal_px * lens_.max_theta_rad);
-      const float ax = fl.su - static_cast<float>(lens_.cx);
-      const float ay = fl.sv - static_cast<float>(lens_.cy);
+      fl.radius = static_cast<float>(lens_.radius_px());
+      const float ax = fl.su - static_cast<float>(lens_.centre_x());
+      const float ay = fl.sv - static_cast<float>(lens_.centre_y());
       const float an = std::sqrt(ax * ax + ay * ay);
       fl.axis_x = an > 1e-3f ? ax / an : 1.0f;
       fl.axis_y = an > 1e-3f ? ay / an : 0.0f;
       for (int k = 0; k < 3; ++k) {
-        fl.gx[k] = static_cast<float>(lens_.cx) - kGhostPosition[k] * ax;
-        fl.gy[k] = static_cast<float>(lens_.cy) - kGhostPosition[k] * ay;
+        fl.gx[k] = static_cast<float>(lens_.centre_x()) - kGhostPosition[k] * ax;
+        fl.gy[k] = static_cast<float>(lens_.centre_y()) - kGhostPosition[k] * ay;
       }
     }
   }
@@ -387,10 +359,10 @@ Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spe
   };
 
   const Rgb horizon_haze = Rgb{0.7f, 0.78f, 0.88f} * fl.sky;
-  for (int y = 0; y < config_.height; ++y) {
+  for (int y = 0; y < height_; ++y) {
     std::uint8_t* row = out.Row(y);
-    for (int x = 0; x < config_.width; ++x) {
-      const auto i = static_cast<std::size_t>(y) * static_cast<std::size_t>(config_.width) +
+    for (int x = 0; x < width_; ++x) {
+      const auto i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
                      static_cast<std::size_t>(x);
       if (inside_[i] == 0) {
         if (uv) {
@@ -444,7 +416,7 @@ Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spe
         colour = VisibleSky(fl, d);
       }
       if (fl.flare_on) {
-        const float f = FlareAt(fl, static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
+        const float f = FlareAt(fl, static_cast<float>(x), static_cast<float>(y));
         value += f;
         colour = colour + Rgb{1.0f, 0.92f, 0.8f} * f;
       }
@@ -466,10 +438,10 @@ Status Renderer::RenderSkyMask(const drivers::Pose& pose, const dsp::MutableImag
   const Rotation to_world = WorldFromCamera(pose);
   const Vec3 origin{static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
                     static_cast<float>(pose.z_m)};
-  for (int y = 0; y < config_.height; ++y) {
+  for (int y = 0; y < height_; ++y) {
     std::uint8_t* row = out.Row(y);
-    for (int x = 0; x < config_.width; ++x) {
-      const auto i = static_cast<std::size_t>(y) * static_cast<std::size_t>(config_.width) +
+    for (int x = 0; x < width_; ++x) {
+      const auto i = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
                      static_cast<std::size_t>(x);
       if (inside_[i] == 0) {
         row[x] = 0;

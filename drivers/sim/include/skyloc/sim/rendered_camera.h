@@ -16,7 +16,7 @@
 namespace skyloc::sim {
 
 struct RenderedCameraConfig {
-  RenderConfig render;
+  dsp::LensParams lens = DefaultSimLens(320, 240);  // also fixes the image size
   Spectrum spectrum = Spectrum::kUv;
   Lighting lighting;
 };

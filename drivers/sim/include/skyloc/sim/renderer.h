@@ -7,8 +7,11 @@
 //   camera      optical axis = body +z (the sky); image right = body left (+y), image down
 //               = body backward (-x): the top of the image is the direction of travel, as
 //               seen lying on one's back with the head forward.
-//   lens        equidistant, r = f * theta, 185 degrees across the shorter image side by
-//               default, centred; pixels outside the image circle are black.
+//   lens        dsp::Lens (skyloc/dsp/lens.h, the same model and camera file as the real
+//               camera): equidistant 185 degrees across the shorter side by default. The
+//               lens's own "body" frame (its mount rotation applied) is taken as the
+//               camera frame above, so a camera file's mount angles tilt the view too.
+//               Pixels outside the image circle are black.
 //
 // Init() allocates a table of per-pixel ray directions; Render() allocates nothing and is
 // deterministic: the same world, pose, lighting and frame seed give the same bytes.
@@ -18,6 +21,7 @@
 
 #include "skyloc/drivers/camera.h"
 #include "skyloc/dsp/image.h"
+#include "skyloc/dsp/lens.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/sim/world.h"
@@ -29,21 +33,6 @@ enum class Spectrum : std::uint8_t {
   kVisible,  // kRgb24: coloured, textured, sun-shaded scene and a blue, cloudy sky
 };
 const char* SpectrumName(Spectrum s);
-
-// The projection between pixels and camera-frame directions. One function pair so that the
-// simulator has exactly one lens model.
-struct FisheyeLens {
-  int width = 0, height = 0;
-  double cx = 0, cy = 0;     // principal point (pixel centres at integer + 0.5 coordinates)
-  double focal_px = 0;       // r = focal_px * theta
-  double max_theta_rad = 0;  // half the field of view
-};
-FisheyeLens EquidistantLens(int width, int height, double fov_deg = 185.0);
-// Camera-frame unit direction through pixel position (u, v) (u right, v down, pixel (i, j)
-// centre at (i + 0.5, j + 0.5)); false outside the image circle.
-bool PixelToDirection(const FisheyeLens& lens, double u, double v, Vec3* direction);
-// Pixel position of a camera-frame direction; false outside the field of view.
-bool DirectionToPixel(const FisheyeLens& lens, Vec3 direction, double* u, double* v);
 
 // What changes between runs in the same place: sun, clouds, exposure, sensor noise.
 struct Lighting {
@@ -60,11 +49,8 @@ struct Lighting {
 // "dawn", "noon", "overcast" -> a preset; false for anything else.
 bool LightingPreset(const char* name, std::uint64_t seed, Lighting* lighting);
 
-struct RenderConfig {
-  int width = 320;
-  int height = 240;
-  double fov_deg = 185.0;
-};
+// The default lens: equidistant, 185 degrees, centred, circle filling the shorter side.
+dsp::LensParams DefaultSimLens(int width, int height);
 
 // Rotation from body to world for a pose (row-major 3x3).
 struct Rotation {
@@ -80,7 +66,7 @@ Rotation BodyToWorld(const drivers::Pose& pose);
 class Renderer {
  public:
   // `world` must outlive the renderer. Allocates the ray table.
-  Status Init(const World* world, const RenderConfig& config);
+  Status Init(const World* world, const dsp::LensParams& lens);
 
   // Renders one view into `out` (kGrey8 for kUv, kRgb24 for kVisible, width x height of
   // the config). `frame_seed` varies the sensor noise from frame to frame.
@@ -91,15 +77,16 @@ class Renderer {
   // pixel is outside the image circle). kGrey8.
   Status RenderSkyMask(const drivers::Pose& pose, const dsp::MutableImageView& out) const;
 
-  const FisheyeLens& lens() const { return lens_; }
-  const RenderConfig& config() const { return config_; }
+  const dsp::Lens& lens() const { return lens_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
 
  private:
   Status CheckOutput(const dsp::MutableImageView& out, dsp::PixelFormat format) const;
 
   const World* world_ = nullptr;
-  RenderConfig config_;
-  FisheyeLens lens_;
+  int width_ = 0, height_ = 0;
+  dsp::Lens lens_;
   FixedArray<Vec3> rays_;            // camera-frame direction of every pixel
   FixedArray<std::uint8_t> inside_;  // 1 inside the image circle
 };
