@@ -9,6 +9,7 @@ namespace {
 
 constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
+    {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
 };
 
 void PrintUsage(std::FILE* out) {

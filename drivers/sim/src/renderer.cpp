@@ -199,6 +199,7 @@ bool LightingPreset(const char* name, std::uint64_t seed, Lighting* lighting) {
     l.sun_azimuth_deg = 160;
     l.sun_elevation_deg = 60;
     l.cloud_cover = 0.15;
+    l.flare = 0.6;  // high sun: the flare sits mostly on sky
   } else if (std::strcmp(name, "dawn") == 0) {
     // Low sun in the field of view: the strongest flare, a dimmer sky.
     l.sun_azimuth_deg = 75;

@@ -203,15 +203,15 @@ void MakeForest(World& w, Rng& rng) {
   const Polyline route(w.route, false);
   // Trees scattered in a corridor; density and side depend on the section.
   for (double s = -30; s < 480; s += 1.0) {
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < 6; ++k) {
       const double offset = rng.Uniform(-40, 40);
       const bool forest = s < 250;
       const bool edge = s >= 250 && s < 450;
       double p = 0;
       if (forest)
-        p = 0.35;
+        p = 0.4;
       else if (edge && offset < -3)
-        p = 0.3;  // forest on the right
+        p = 0.25;  // forest on the right
       if (rng.Uniform() >= p || std::fabs(offset) < 2.5)
         continue;
       // Clearings: canopy gaps every so often along the track.
