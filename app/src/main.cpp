@@ -10,6 +10,7 @@ namespace {
 constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
     {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
+    {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -203,4 +203,66 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
   return Status::Ok();
 }
 
+Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
+                         std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
+                         ProgressFn progress, void* context) {
+  World world;
+  SKYLOC_TRY(LoadSevilleWorld((seville_dir + "/world5000_triangles.csv").c_str(), &world));
+  struct Query {
+    const char* name;
+    bool same_ant;
+  };
+  static constexpr Query kQueries[] = {
+      {"ant1_route2", true},  {"ant1_route3", true},  {"ant1_route4", true},
+      {"ant1_route5", true},  {"ant2_route1", false}, {"ant3_route1", false},
+      {"ant4_route1", false}, {"ant7_route1", false},
+  };
+  auto load = [&](const char* name, std::vector<Point2>* route) {
+    return LoadRouteCsv((seville_dir + "/routes/" + name + ".csv").c_str(), route);
+  };
+  std::vector<Point2> reference_route;
+  SKYLOC_TRY(load(kAntsReferenceRoute, &reference_route));
+  rows->clear();
+  for (const double height : camera_heights_m) {
+    ExperimentOptions o = options;
+    o.camera_height_m = height;
+    RunSpec reference_spec;
+    char label[96];
+    std::snprintf(label, sizeof label, "%s at %.2f m", kAntsReferenceRoute, height);
+    reference_spec.label = label;
+    reference_spec.motion.seed = 501;
+    LightingPreset("noon", 601, &reference_spec.lighting);
+    RunDescriptors reference;
+    Report(progress, context, label);
+    SKYLOC_TRY(DescribeRun(world, reference_route, false, reference_spec, o, &reference));
+    std::uint64_t k = 0;
+    for (const Query& q : kQueries) {
+      ++k;
+      std::vector<Point2> route;
+      SKYLOC_TRY(load(q.name, &route));
+      RunSpec spec;
+      std::snprintf(label, sizeof label, "%s at %.2f m", q.name, height);
+      spec.label = label;
+      spec.motion.seed = 510 + k;
+      LightingPreset("noon", 610 + k, &spec.lighting);
+      RunDescriptors query;
+      Report(progress, context, label);
+      SKYLOC_TRY(DescribeRun(world, route, false, spec, o, &query));
+      AntsRow row;
+      row.query = q.name;
+      row.same_ant = q.same_ant;
+      row.camera_height_m = height;
+      SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
+      const auto with_truth =
+          std::count_if(row.sky.truth.begin(), row.sky.truth.end(), [](int t) { return t >= 0; });
+      row.truth_fraction = row.sky.truth.empty() ? 0
+                                                 : static_cast<double>(with_truth) /
+                                                       static_cast<double>(row.sky.truth.size());
+      rows->push_back(std::move(row));
+    }
+  }
+  return Status::Ok();
+}
+
 }  // namespace skyloc::sim

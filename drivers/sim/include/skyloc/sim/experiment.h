@@ -97,4 +97,20 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
                               std::vector<ManoeuvreRow>* rows, ProgressFn progress = nullptr,
                               void* context = nullptr);
 
+// Ants (Seville habitat): one ant's route as the reference, other routes of the same ant
+// and of other ants as queries, at each camera height (ant ~0.01 m, small robot ~0.1 m).
+struct AntsRow {
+  std::string query;  // route name, e.g. "ant1_route2"
+  bool same_ant = false;
+  double camera_height_m = 0;
+  double truth_fraction = 0;  // query frames within max_offset_m of the reference route
+  MethodScore sky, vanilla;
+};
+
+inline constexpr const char* kAntsReferenceRoute = "ant1_route1";
+
+Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
+                         std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
+                         ProgressFn progress = nullptr, void* context = nullptr);
+
 }  // namespace skyloc::sim
