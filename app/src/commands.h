@@ -21,6 +21,8 @@ int RunReplay(std::span<char* const> args);
 int RunRoute(std::span<char* const> args);
 int RunEval(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);
+int RunSimulate(std::span<char* const> args);
+int RunExperiment(std::span<char* const> args);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;
