@@ -12,13 +12,16 @@ namespace skyloc::app {
 namespace {
 
 constexpr const char* kTeachUsage =
-    "usage: skyloc teach --route FILE.db [--config FILE] [--frames N] [--force]\n"
+    "usage: skyloc teach --route FILE.db [--config FILE] [--frames N] [--force] [SIM]\n"
     "  Records the sky descriptors of a route into FILE.db until SIGINT/SIGTERM, the end\n"
-    "  of the camera's run or N frames; prints one JSON line per frame.\n";
+    "  of the camera's run or N frames; prints one JSON line per frame.\n"
+    "  SIM (camera.kind = \"sim\" only): --tilt DEG --zigzag DEG --bumps DEG --yaw DEG\n"
+    "  --lighting noon|dawn|overcast --run N (jitter, clouds, noise seed)\n";
 constexpr const char* kRepeatUsage =
-    "usage: skyloc repeat --route FILE.db [--config FILE] [--frames N]\n"
+    "usage: skyloc repeat --route FILE.db [--config FILE] [--frames N] [SIM]\n"
     "  Localises live against a taught route; one JSON line per frame (frame, timestamp,\n"
-    "  best_index, uniqueness, confidence, state, latency_us) until SIGINT/SIGTERM.\n";
+    "  best_index, uniqueness, confidence, state, latency_us) until SIGINT/SIGTERM.\n"
+    "  SIM: as for teach. A finite run with poses ends with precision/recall.\n";
 constexpr const char* kReplayUsage =
     "usage: skyloc replay DATASET --route FILE.db [--config FILE] [--pace recorded|fast]\n"
     "                     [--frames N] [--tolerance-m X]\n"
@@ -63,6 +66,29 @@ int ParseModeArgs(const char* name, const char* usage, std::span<char* const> ar
     } else if (std::strcmp(a, "--frames") == 0) {
       if (!need(a) || !ParseCount(next, &s->max_frames)) {
         std::fprintf(stderr, "skyloc %s: --frames needs a whole number\n", name);
+        return kExitUsage;
+      }
+      ++i;
+    } else if (std::strcmp(a, "--tilt") == 0 || std::strcmp(a, "--zigzag") == 0 ||
+               std::strcmp(a, "--bumps") == 0 || std::strcmp(a, "--yaw") == 0) {
+      char* end = nullptr;
+      const double v = next != nullptr ? std::strtod(next, &end) : 0.0;
+      if (next == nullptr || end == next || *end != '\0' || !(v >= -90 && v <= 90)) {
+        std::fprintf(stderr, "skyloc %s: %s needs degrees in -90..90\n", name, a);
+        return kExitUsage;
+      }
+      ++i;
+      (a[2] == 't'   ? s->sim.tilt_deg
+       : a[2] == 'z' ? s->sim.zigzag_deg
+       : a[2] == 'b' ? s->sim.bumps_deg
+                     : s->sim.yaw_deg) = v;
+    } else if (std::strcmp(a, "--lighting") == 0) {
+      if (!need(a))
+        return kExitUsage;
+      s->sim.lighting = args[++i];
+    } else if (std::strcmp(a, "--run") == 0) {
+      if (!need(a) || !ParseCount(next, &s->sim.run_seed)) {
+        std::fprintf(stderr, "skyloc %s: --run needs a whole number\n", name);
         return kExitUsage;
       }
       ++i;

@@ -327,7 +327,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.String("device", &c.camera.device, false);
     r.String("dataset", &c.camera.dataset, true);
     r.String("lens_file", &c.camera.lens_file, true);
-    r.OneOf("sim_world", &c.camera.sim_world, {"city", "forest", "repetitive"});
+    r.OneOf("sim_world", &c.camera.sim_world, {"city", "forest", "repetitive", "street"});
     r.Int64("sim_seed", &c.camera.sim_seed, 0, INT64_MAX);
     r.Int("width", &c.camera.width, 16, 8192);
     r.Int("height", &c.camera.height, 16, 8192);

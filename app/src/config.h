@@ -80,9 +80,9 @@ struct CapacityConfig {
 };
 
 struct StateMachineConfig {
-  double enter_confidence = 0.5;  // a frame is "good" at or above this confidence
-  double stay_confidence = 0.3;   // once localised, frames at or above this keep it
-  double max_uniqueness = 0.9;    // best/second-best score ratio; above it the match is ambiguous
+  double enter_confidence = 0.1;  // a frame is "good" at or above this confidence
+  double stay_confidence = 0.05;  // once localised, frames at or above this keep it
+  double max_uniqueness = 0.95;   // best/second-best score ratio; above it the match is ambiguous
   int confirm_frames = 5;         // consecutive good, consistent frames to become LOCALISED
   int drop_frames = 5;            // consecutive misses to fall from LOCALISED to SEARCHING
   int lost_frames = 10;           // consecutive misses to fall from SEARCHING to LOST

@@ -1,5 +1,6 @@
 #include "session.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -9,6 +10,10 @@
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/platform/realtime.h"
 #include "skyloc/platform/signals.h"
+#include "skyloc/sim/motion.h"
+#include "skyloc/sim/rendered_camera.h"
+#include "skyloc/sim/world.h"
+#include "street_camera.h"
 
 namespace skyloc::app {
 namespace {
@@ -75,20 +80,75 @@ void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, do
   report->correct_matches = pr.correct;
 }
 
-Result<std::unique_ptr<drivers::Camera>> MakeCamera(const Config& config, const SessionArgs& args) {
-  if (!args.dataset.empty())
-    return std::unique_ptr<drivers::Camera>(new drivers::DatasetCamera(args.dataset));
+// The frame source and what it needs to stay alive (a simulated world and trajectory).
+struct CameraSource {
+  std::unique_ptr<sim::World> world;
+  std::vector<sim::TrajectoryPoint> trajectory;
+  std::unique_ptr<drivers::Camera> camera;
+  std::size_t frames = 0;  // a finite source's length; 0 = endless
+};
+
+Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* source) {
+  if (config.camera.sim_world == "street") {
+    StreetCameraOptions o;
+    o.width = config.camera.width;
+    o.height = config.camera.height;
+    o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
+    o.fps = config.camera.fps;
+    o.step_m = run.spacing_m;
+    o.speed_jitter = std::min(run.speed_jitter, 0.5);
+    o.tilt_deg = run.tilt_deg;
+    o.zigzag_deg = run.zigzag_deg;
+    o.brightness = run.lighting == "dawn" ? 0.6 : run.lighting == "overcast" ? 0.8 : 1.0;
+    source->camera = std::make_unique<StreetCamera>(o);
+    return Status::Ok();
+  }
+  sim::WorldKind kind{};
+  if (!sim::ParseWorldKind(config.camera.sim_world.c_str(), &kind))
+    return Status::Error(StatusCode::kInvalidArgument, "[camera] sim_world \"%s\" is unknown",
+                         config.camera.sim_world.c_str());
+  source->world = std::make_unique<sim::World>();
+  SKYLOC_TRY(sim::MakeProceduralWorld(kind, static_cast<std::uint64_t>(config.camera.sim_seed),
+                                      source->world.get()));
+  sim::MotionConfig motion;
+  motion.frame_spacing_m = run.spacing_m;
+  motion.speed_jitter = run.speed_jitter;
+  motion.height_m = run.camera_height_m;
+  motion.tilt_deg = run.tilt_deg;
+  motion.zigzag_deg = run.zigzag_deg;
+  motion.bumps_deg = run.bumps_deg;
+  motion.yaw_offset_deg = run.yaw_deg;
+  motion.frame_period_s = 1.0 / config.camera.fps;
+  motion.seed = run.run_seed;
+  SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
+                                  &source->trajectory));
+  sim::RenderedCameraConfig camera;
+  SKYLOC_TRY_ASSIGN(camera.lens, LensFromConfig(config));
+  if (!sim::LightingPreset(run.lighting.c_str(), run.run_seed, &camera.lighting))
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "lighting \"%s\" is not dawn, noon or "
+                         "overcast",
+                         run.lighting.c_str());
+  source->camera =
+      std::make_unique<sim::RenderedCamera>(source->world.get(), source->trajectory, camera);
+  source->frames = source->trajectory.size();
+  return Status::Ok();
+}
+
+Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* source) {
+  if (!args.dataset.empty() || config.camera.kind == CameraKind::kDataset) {
+    auto camera = std::make_unique<drivers::DatasetCamera>(
+        args.dataset.empty() ? config.camera.dataset : args.dataset);
+    SKYLOC_TRY(camera->Open());
+    source->frames = camera->dataset().frames.size();
+    source->camera = std::move(camera);
+    return Status::Ok();
+  }
   switch (config.camera.kind) {
-    case CameraKind::kSim: {
-      StreetCameraOptions o = args.sim;
-      o.width = config.camera.width;
-      o.height = config.camera.height;
-      o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
-      o.fps = config.camera.fps;
-      return std::unique_ptr<drivers::Camera>(new StreetCamera(o));
-    }
+    case CameraKind::kSim:
+      SKYLOC_TRY(MakeSimSource(config, args.sim, source));
+      return source->camera->Open();
     case CameraKind::kDataset:
-      return std::unique_ptr<drivers::Camera>(new drivers::DatasetCamera(config.camera.dataset));
     case CameraKind::kV4l2:
     case CameraKind::kLibcamera:
       break;
@@ -124,8 +184,9 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   SKYLOC_TRY(InstallSignalHandlers());
 
   // The camera first: its real frame size is what the pipeline is built for.
-  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::Camera> camera, MakeCamera(config, args));
-  SKYLOC_TRY(camera->Open());
+  CameraSource source;
+  SKYLOC_TRY(MakeCamera(config, args, &source));
+  drivers::Camera* camera = source.camera.get();
   const drivers::CameraInfo& info = camera->info();
   if (config.camera.kind == CameraKind::kSim || !args.dataset.empty() ||
       config.camera.kind == CameraKind::kDataset) {
@@ -172,16 +233,14 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     SKYLOC_TRY(status->Open());
 
   ResultRecorder recorder;
-  // Replay (a dataset) and bounded simulated runs keep every result for the evaluation.
-  const bool evaluate =
-      args.mode == LoopMode::kRepeat &&
-      (!args.dataset.empty() || (config.camera.kind == CameraKind::kSim && args.max_frames > 0));
-  if (evaluate) {
-    std::size_t capacity = args.max_frames;
-    if (auto* d = dynamic_cast<drivers::DatasetCamera*>(camera.get()))
-      capacity = d->dataset().frames.size();
-    SKYLOC_TRY(recorder.Allocate(capacity));
-  }
+  // A finite run (a dataset, a simulated trajectory, --frames) keeps every result for the
+  // evaluation at the end; it needs poses, which those sources have.
+  std::size_t run_frames = source.frames;
+  if (args.max_frames > 0 && (run_frames == 0 || args.max_frames < run_frames))
+    run_frames = static_cast<std::size_t>(args.max_frames);
+  const bool evaluate = args.mode == LoopMode::kRepeat && run_frames > 0;
+  if (evaluate)
+    SKYLOC_TRY(recorder.Allocate(run_frames));
   JsonLinesSink json(args.json);
   TeeSink outer(args.json != nullptr ? &json : nullptr, args.extra_sink);
   TeeSink sink(&outer, evaluate ? &recorder : nullptr);

@@ -11,9 +11,22 @@
 
 #include "config.h"
 #include "frame_loop.h"
-#include "street_camera.h"
 
 namespace skyloc::app {
+
+// A simulated run (camera.kind = "sim"); the world, its seed and the image size come from
+// the configuration ([camera] sim_world, sim_seed, width, height, lens_file).
+struct SimRun {
+  double spacing_m = 1.0;     // mean distance between frames
+  double speed_jitter = 0.2;  // speed varies within (1 +- jitter)
+  double camera_height_m = 1.0;
+  double tilt_deg = 0;            // constant pitch (the paper's alpha)
+  double zigzag_deg = 0;          // yaw weave amplitude
+  double bumps_deg = 0;           // roll/pitch random walk bound
+  double yaw_deg = 0;             // constant heading offset
+  std::string lighting = "noon";  // noon, dawn, overcast
+  std::uint64_t run_seed = 1;     // jitter, bumps, clouds, noise
+};
 
 struct SessionArgs {
   LoopMode mode = LoopMode::kRepeat;
@@ -27,9 +40,8 @@ struct SessionArgs {
   FrameSink* extra_sink = nullptr;
   double tolerance_m = 2.0;  // replay/demo: a match within this distance is correct
   const char* label = "skyloc";
-  // camera.kind = "sim": the manoeuvres of the run (the demo's tilt, zig-zag, lighting).
-  // Size, seed and fps come from the configuration.
-  StreetCameraOptions sim;
+  // camera.kind = "sim": how this run moves and what the light is like.
+  SimRun sim;
 };
 
 struct SessionReport {
