@@ -78,6 +78,11 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       // A signal interrupted the wait: the loop condition sees the flag.
       if (StopRequested())
         break;
+      // No frame means no localisation: the lines go to the safe state until frames flow
+      // again, and the SeqSLAM sequence starts over (it needs consecutive frames).
+      if (status != nullptr)
+        (void)status->SafeState();
+      pipeline.ResetTracking();
       if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
           ++errors_in_a_row < options.max_consecutive_errors) {
         ++s.capture_errors;

@@ -217,3 +217,93 @@ TEST(JsonLines, RepeatAndTeachLines) {
 
 }  // namespace
 }  // namespace skyloc::app
+
+namespace skyloc::app {
+namespace {
+
+// A camera that fails on the frames a test chooses, delegating the others to the street.
+class FlakyCamera final : public drivers::Camera {
+ public:
+  FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code)
+      : street_(Street(0)), fail_from_(fail_from), fail_count_(fail_count), code_(code) {}
+
+ private:
+  Status DoOpen() override {
+    SKYLOC_TRY(street_.Open());
+    info_ = street_.info();
+    return Status::Ok();
+  }
+  Status DoStart() override { return street_.Start(); }
+  Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
+    const std::uint64_t call = calls_++;
+    if (call >= fail_from_ && call < fail_from_ + fail_count_)
+      return Status::Error(code_, "injected fault at call %llu",
+                           static_cast<unsigned long long>(call));
+    return street_.Capture(timeout);
+  }
+  void DoStop() override { street_.Stop(); }
+  void DoClose() override { street_.Close(); }
+
+  StreetCamera street_;
+  std::uint64_t fail_from_, fail_count_, calls_ = 0;
+  StatusCode code_;
+};
+
+class FrameLoopFaults : public testing::Test {
+ protected:
+  void SetUp() override {
+    ClearSignalFlags();
+    ASSERT_TRUE(pipeline_.Init(SmallConfig()).ok());
+    RouteFrames route;
+    Teach(pipeline_, 100, &route);
+    ASSERT_TRUE(pipeline_.SetRoute(route).ok());
+    ASSERT_TRUE(status_.Open().ok());
+  }
+  Pipeline pipeline_;
+  RecordingStatusOutput status_;
+};
+
+TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
+  FlakyCamera camera(40, 3, StatusCode::kDeadlineExceeded);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  LoopSummary summary;
+  // 40 frames, then 3 timeouts, then 1 frame.
+  options.max_frames = 40;
+  ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
+  EXPECT_FALSE(status_.is_safe()) << "a state is shown while frames flow";
+  options.max_frames = 1;
+  ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
+  EXPECT_EQ(summary.capture_errors, 3u);
+  EXPECT_EQ(summary.frames, 1u);
+  // The SeqSLAM sequence restarted: the frame after the gap has no match yet (ds = 10).
+  EXPECT_EQ(status_.last_state(), drivers::LocalisationState::kLost);
+}
+
+TEST_F(FrameLoopFaults, AStalledCameraIsFatalAndNamed) {
+  FlakyCamera camera(5, 1000, StatusCode::kDeadlineExceeded);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopSummary summary;
+  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, {}, &summary);
+  EXPECT_EQ(s.code(), StatusCode::kDeadlineExceeded);
+  EXPECT_NE(std::string(s.message()).find("sim:street"), std::string::npos) << s.message();
+  EXPECT_EQ(summary.frames, 5u);
+  EXPECT_TRUE(status_.is_safe());
+}
+
+TEST_F(FrameLoopFaults, AVanishedCameraIsFatalAtOnce) {
+  FlakyCamera camera(7, 1000, StatusCode::kUnavailable);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopSummary summary;
+  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, {}, &summary);
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable);
+  EXPECT_EQ(summary.frames, 7u);
+  EXPECT_EQ(summary.capture_errors, 0u);
+  EXPECT_TRUE(status_.is_safe());
+}
+
+}  // namespace
+}  // namespace skyloc::app
