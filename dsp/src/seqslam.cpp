@@ -1,8 +1,10 @@
 #include "skyloc/dsp/seqslam.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace skyloc::dsp {
@@ -19,6 +21,8 @@ std::size_t Sz(int v) {
 int CountVelocities(const SeqSlamParams& p) {
   const double span =
       (static_cast<double>(p.v_max) - static_cast<double>(p.v_min)) / static_cast<double>(p.v_step);
+  if (!(span < kMaxVelocities))
+    return kMaxVelocities + 1;  // too many (or NaN): rejected, and no overflowing cast
   return static_cast<int>(std::floor(span + 1e-3)) + 1;
 }
 
@@ -90,6 +94,49 @@ void DifferenceColumn(std::span<const float> database, int dim, std::span<const 
         ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
     // Mean absolute difference (OpenSeqSLAM divides by the number of references instead:
     // a constant scale that the enhancement removes; note 3 in seqslam.h).
+    out[r] = sum * inv_dim;
+  }
+}
+
+std::uint16_t ToBFloat16(float value) {
+  const std::uint32_t bits = std::bit_cast<std::uint32_t>(value);
+  if (std::isnan(value))
+    return static_cast<std::uint16_t>((bits >> 16) | 0x40u);  // stays a NaN
+  const std::uint32_t rounding = 0x7FFFu + ((bits >> 16) & 1u);
+  return static_cast<std::uint16_t>((bits + rounding) >> 16);
+}
+
+float FromBFloat16(std::uint16_t value) {
+  return std::bit_cast<float>(static_cast<std::uint32_t>(value) << 16);
+}
+
+void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
+                              std::span<const float> query, std::span<float> out) {
+  // The loop of DifferenceColumn with the conversion in front of each element: same lanes,
+  // same order, so the result equals DifferenceColumn over the converted database.
+  const std::size_t d = Sz(dim);
+  const float inv_dim = 1.0f / static_cast<float>(dim);
+  constexpr std::size_t kLanes = 8;
+  const std::size_t whole = d - d % kLanes;
+  const float* q = query.data();
+  for (std::size_t r = 0; r < out.size(); ++r) {
+    const std::uint16_t* row = database.data() + r * d;
+    float lane[kLanes] = {};
+    for (std::size_t i = 0; i < whole; i += kLanes) {
+      // Widen eight elements at once (shift into the high half), then reinterpret: the
+      // form the vectoriser turns into unpack + subtract + and-not.
+      std::uint32_t bits[kLanes];
+      for (std::size_t l = 0; l < kLanes; ++l)
+        bits[l] = static_cast<std::uint32_t>(row[i + l]) << 16;
+      float value[kLanes];
+      std::memcpy(value, bits, sizeof value);
+      for (std::size_t l = 0; l < kLanes; ++l)
+        lane[l] += std::fabs(value[l] - q[i + l]);
+    }
+    for (std::size_t i = whole; i < d; ++i)
+      lane[i - whole] += std::fabs(FromBFloat16(row[i]) - q[i]);
+    const float sum =
+        ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
     out[r] = sum * inv_dim;
   }
 }
@@ -371,7 +418,8 @@ SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const floa
 
 // ---- Streaming engine ------------------------------------------------------------------
 
-SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int capacity) {
+SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int capacity,
+                                    ReferenceStorage storage) {
   SeqSlamError e = search_.Init(params);
   if (e != SeqSlamError::kOk)
     return e;
@@ -383,7 +431,16 @@ SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int ca
   dim_ = dim;
   capacity_ = capacity;
   const std::size_t len = Sz(params.sequence_length);
-  database_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  storage_ = storage;
+  database_.clear();
+  database_.shrink_to_fit();
+  database_bf16_.clear();
+  database_bf16_.shrink_to_fit();
+  if (storage == ReferenceStorage::kFloat32) {
+    database_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  } else {
+    database_bf16_.assign(Sz(capacity) * Sz(dim), 0);
+  }
   ring_.assign(len * Sz(capacity), 0.0f);
   difference_.assign(Sz(capacity), 0.0f);
   scores_.assign(Sz(capacity), 0.0f);
@@ -400,7 +457,13 @@ SeqSlamError StreamingSeqSlam::AddReference(std::span<const float> descriptor) {
     return SeqSlamError::kSizeMismatch;
   if (size_ >= capacity_)
     return SeqSlamError::kDatabaseFull;
-  std::copy(descriptor.begin(), descriptor.end(), database_.data() + Sz(size_) * Sz(dim_));
+  const std::size_t at = Sz(size_) * Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    std::copy(descriptor.begin(), descriptor.end(), database_.data() + at);
+  } else {
+    for (std::size_t i = 0; i < descriptor.size(); ++i)
+      database_bf16_[at + i] = ToBFloat16(descriptor[i]);
+  }
   ++size_;
   ResetQueries();
   return SeqSlamError::kOk;
@@ -427,7 +490,12 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
   const std::size_t n = Sz(size_);
   const int len = params_.sequence_length;
   std::span<float> diff(difference_.data(), n);
-  DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
+  } else {
+    DifferenceColumnBFloat16(std::span<const std::uint16_t>(database_bf16_.data(), n * Sz(dim_)),
+                             dim_, query, diff);
+  }
   // Ring slots are `capacity` floats apart; only the first `size` of each are used.
   float* slot = ring_.data() + Sz(head_) * Sz(capacity_);
   // scores_ is free until the search: the enhancement's scratch.
@@ -444,13 +512,15 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
   return SeqSlamError::kOk;
 }
 
-std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int dim) {
-  return sizeof(float) * (Sz(dim) + Sz(params.sequence_length) + 2);
+std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int dim,
+                                                ReferenceStorage storage) {
+  const std::size_t element = storage == ReferenceStorage::kFloat32 ? 4 : 2;
+  return element * Sz(dim) + sizeof(float) * (Sz(params.sequence_length) + 2);
 }
 
 std::size_t StreamingSeqSlam::AllocatedBytes() const {
   return sizeof(float) * (database_.size() + ring_.size() + difference_.size() + scores_.size()) +
-         sizeof(const float*) * order_.size() +
+         sizeof(std::uint16_t) * database_bf16_.size() + sizeof(const float*) * order_.size() +
          sizeof(int) * Sz(search_.velocity_count() * search_.sequence_length()) +
          sizeof(float) * Sz(search_.velocity_count());
 }

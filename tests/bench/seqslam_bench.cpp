@@ -27,11 +27,11 @@ std::vector<float> RandomFloats(std::size_t n, unsigned seed) {
   return v;
 }
 
-void BM_StreamingStep(benchmark::State& state) {
+void StreamingStep(benchmark::State& state, skyloc::dsp::ReferenceStorage storage) {
   const int n = static_cast<int>(state.range(0));
   SeqSlamParams p;  // ds 10, 5 velocities
   StreamingSeqSlam engine;
-  if (engine.Init(p, kDim, n) != skyloc::dsp::SeqSlamError::kOk) {
+  if (engine.Init(p, kDim, n, storage) != skyloc::dsp::SeqSlamError::kOk) {
     state.SkipWithError("Init failed");
     return;
   }
@@ -50,9 +50,23 @@ void BM_StreamingStep(benchmark::State& state) {
     ++t;
   }
   state.counters["bytes_per_ref"] =
-      static_cast<double>(StreamingSeqSlam::BytesPerReference(p, kDim));
+      static_cast<double>(StreamingSeqSlam::BytesPerReference(p, kDim, storage));
+}
+
+void BM_StreamingStep(benchmark::State& state) {
+  StreamingStep(state, skyloc::dsp::ReferenceStorage::kFloat32);
 }
 BENCHMARK(BM_StreamingStep)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
+// The database stored as bfloat16: half the bytes the difference column reads.
+void BM_StreamingStepBFloat16(benchmark::State& state) {
+  StreamingStep(state, skyloc::dsp::ReferenceStorage::kBFloat16);
+}
+BENCHMARK(BM_StreamingStepBFloat16)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMicrosecond);
 
 // The parts of a step, to see where the time goes.
 void BM_DifferenceColumn(benchmark::State& state) {
