@@ -133,4 +133,26 @@ BENCHMARK(BM_Sample)
     ->Args({0, 3})
     ->Unit(benchmark::kMicrosecond);
 
+// The SH stage alone on the same frame's samples, to read the breakdown above.
+void BM_ProjectAndAmplitudes(benchmark::State& state) {
+  const Lens lens = MakeLens();
+  const std::vector<std::uint8_t> frame = Frame(lens);
+  ShGrid grid;
+  SampleLut lut;
+  ShProjector projector;
+  if (grid.Init(DefaultShGridConfig(120)) != ShError::kOk ||
+      lut.Init(lens, grid, SampleLutOptions{}) != SampleLutError::kOk ||
+      projector.Init(grid, 120) != ShError::kOk)
+    std::abort();
+  std::vector<float> samples(lut.size()), coefficients(projector.coefficient_count()),
+      amplitudes(120);
+  lut.SampleImage(View(frame), 120, samples);
+  for (auto _ : state) {
+    projector.Project(samples, coefficients);
+    AmplitudeSpectrum(coefficients, 120, amplitudes);
+    benchmark::DoNotOptimize(amplitudes.data());
+  }
+}
+BENCHMARK(BM_ProjectAndAmplitudes)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
