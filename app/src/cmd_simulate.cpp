@@ -3,6 +3,7 @@
 // and the demo. docs/SIMULATOR.md describes the worlds, renderer and options.
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
