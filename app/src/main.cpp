@@ -11,6 +11,8 @@ constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
     {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
     {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
+    {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
+     RunDescribe},
 };
 
 void PrintUsage(std::FILE* out) {

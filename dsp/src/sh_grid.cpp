@@ -111,8 +111,8 @@ ShError ShGrid::Init(const ShGridConfig& config) {
   rings_.clear();
   if (const ShError e = ValidateShGridConfig(config); e != ShError::kOk)
     return e;
-  const int nodes = config.coverage == ShCoverage::kUpperHemisphere ? 2 * config.rings
-                                                                     : config.rings;
+  const int nodes =
+      config.coverage == ShCoverage::kUpperHemisphere ? 2 * config.rings : config.rings;
   std::vector<double> x(static_cast<std::size_t>(nodes));
   std::vector<double> w(static_cast<std::size_t>(nodes));
   GaussLegendreNodes(nodes, x, w);

@@ -44,16 +44,15 @@ std::size_t PaddedLength(int count) {
 
 }  // namespace
 
-bool RealSphericalHarmonics(int bands, double cos_theta, double sin_theta, double phi,
-                            std::span<double> legendre_scratch, std::span<double> out) {
-  if (bands < 1 || out.size() < ShCoefficientCount(bands) ||
-      !NormalisedLegendre(bands, cos_theta, sin_theta, legendre_scratch))
-    return false;
+namespace {
+
+// y_lm(θ, φ) for all l < bands from the Legendre triangle of cos θ.
+void ExpandRealSh(int bands, std::span<const double> legendre, double phi, std::span<double> out) {
   for (int m = 0; m < bands; ++m) {
     const double c = std::cos(m * phi);
     const double s = std::sin(m * phi);
     for (int l = m; l < bands; ++l) {
-      const double p = legendre_scratch[LegendreIndex(l, m)];
+      const double p = legendre[LegendreIndex(l, m)];
       if (m == 0) {
         out[ShIndex(l, 0)] = p;
       } else {
@@ -62,6 +61,16 @@ bool RealSphericalHarmonics(int bands, double cos_theta, double sin_theta, doubl
       }
     }
   }
+}
+
+}  // namespace
+
+bool RealSphericalHarmonics(int bands, double cos_theta, double sin_theta, double phi,
+                            std::span<double> legendre_scratch, std::span<double> out) {
+  if (bands < 1 || out.size() < ShCoefficientCount(bands) ||
+      !NormalisedLegendre(bands, cos_theta, sin_theta, legendre_scratch))
+    return false;
+  ExpandRealSh(bands, legendre_scratch, phi, out);
   return true;
 }
 
@@ -235,10 +244,12 @@ ShError ShNaiveProjector::Init(const ShGrid& grid, int bands) {
   weighted_.assign(samples, 0.0);
   std::vector<double> legendre(LegendreTriangleSize(bands));
   std::vector<double> y(coefficients);
+  const auto longitudes = static_cast<std::size_t>(grid.longitudes());
   for (std::size_t s = 0; s < samples; ++s) {
-    const ShDirection d = grid.direction(s);
-    const ShRing& r = grid.ring(static_cast<int>(s / static_cast<std::size_t>(grid.longitudes())));
-    RealSphericalHarmonics(bands, r.cos_theta, r.sin_theta, d.phi, legendre, y);
+    const ShRing& r = grid.ring(static_cast<int>(s / longitudes));
+    if (s % longitudes == 0)
+      NormalisedLegendre(bands, r.cos_theta, r.sin_theta, legendre);
+    ExpandRealSh(bands, legendre, grid.phi(static_cast<int>(s % longitudes)), y);
     for (std::size_t k = 0; k < coefficients; ++k)
       table_[k * samples + s] = static_cast<float>(y[k]);
     sample_weight_[s] = r.weight;

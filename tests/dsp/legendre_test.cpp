@@ -30,8 +30,8 @@ TEST(Legendre, MatchesBoostLongDoubleAtL256) {
         const long double ref = boost::math::spherical_harmonic_r<long double>(
             static_cast<unsigned>(l), m, static_cast<long double>(theta), 0.0L);
         const double scale = std::sqrt((2.0 * l + 1) / (4 * std::numbers::pi));
-        worst = std::max(
-            worst, std::fabs(p[LegendreIndex(l, m)] - static_cast<double>(ref)) / scale);
+        worst =
+            std::max(worst, std::fabs(p[LegendreIndex(l, m)] - static_cast<double>(ref)) / scale);
       }
     }
     EXPECT_LT(worst, 1e-12) << "theta=" << theta;

@@ -23,11 +23,11 @@ TEST(GaussLegendre, FivePointRuleMatchesTabulatedValues) {
 }
 
 TEST(GaussLegendre, IntegratesPolynomialsUpToDegree2nMinus1Exactly) {
-  for (int n : {1, 2, 7, 40, 120, 240, 513}) {
+  for (int n : {1, 2, 7, 40, 120, 240}) {
     std::vector<double> x(static_cast<std::size_t>(n)), w(static_cast<std::size_t>(n));
     ASSERT_TRUE(GaussLegendreNodes(n, x, w));
     // Legendre polynomials are a well-conditioned test basis: ∫P_k = 2δ_k0, k ≤ 2n-1.
-    for (int k = 0; k <= 2 * n - 1; k += (k < 10 ? 1 : 7)) {
+    for (int k = 0; k <= 2 * n - 1; k += (k < 10 ? 1 : 13)) {
       long double sum = 0;
       for (std::size_t i = 0; i < x.size(); ++i) {
         long double p_prev = 1, p = x[i];
@@ -110,8 +110,7 @@ TEST(ShGrid, InvalidConfigsAreErrorsWithMessages) {
   EXPECT_EQ(grid.Init({.rings = 8, .longitudes = 3}), ShError::kLongitudesOutOfRange);
   EXPECT_EQ(grid.Init({.rings = 8, .longitudes = kMaxShLongitudes + 1}),
             ShError::kLongitudesOutOfRange);
-  EXPECT_NE(std::string(ShErrorMessage(ShError::kRingsOutOfRange)).find("ring"),
-            std::string::npos);
+  EXPECT_NE(std::string(ShErrorMessage(ShError::kRingsOutOfRange)).find("ring"), std::string::npos);
 }
 
 }  // namespace

@@ -73,9 +73,9 @@ class ShProjector {
   // registers over the rings where the table is not negligible.
   struct MBlock {
     int m = 0;
-    int l_begin = 0;           // first l of the block
-    int width = 0;             // 8 or 16 (the table is zero-padded past l = L-1)
-    int first_ring = 0;        // rings outside [first_ring, end_ring) hold only |P̄| < 1e-9
+    int l_begin = 0;     // first l of the block
+    int width = 0;       // 8 or 16 (the table is zero-padded past l = L-1)
+    int first_ring = 0;  // rings outside [first_ring, end_ring) hold only |P̄| < 1e-9
     int end_ring = 0;
     std::size_t table_offset = 0;  // of P̄(ring first_ring, l_begin) in table_
     std::size_t stride = 0;        // floats from one ring to the next in this m's table
@@ -85,10 +85,10 @@ class ShProjector {
   int rings_ = 0;
   int longitudes_ = 0;
   std::unique_ptr<Fft> fft_;
-  std::vector<float> table_;        // per m: rings × padded(L - m) values, √2 folded in for m > 0
-  std::vector<MBlock> blocks_;      // in m order, then l order
-  std::vector<int> bin_;            // FFT bin of each m (m mod longitudes, folded)
-  std::vector<float> bin_sign_;     // -1 where the fold conjugates (sin terms change sign)
+  std::vector<float> table_;     // per m: rings × padded(L - m) values, √2 folded in for m > 0
+  std::vector<MBlock> blocks_;   // in m order, then l order
+  std::vector<int> bin_;         // FFT bin of each m (m mod longitudes, folded)
+  std::vector<float> bin_sign_;  // -1 where the fold conjugates (sin terms change sign)
   std::vector<float> ring_weight_;
   std::vector<std::complex<float>> spectra_;  // rings × (longitudes/2 + 1)
   std::vector<float> weighted_cos_;           // rings: w_i · Σ_j f cos(mφ_j) for the current m
@@ -111,9 +111,9 @@ class ShNaiveProjector {
  private:
   int bands_ = 0;
   std::size_t samples_ = 0;
-  std::vector<float> table_;            // row k holds y_k at every sample
-  std::vector<double> sample_weight_;   // quadrature weight of each sample
-  std::vector<double> weighted_;        // w·f for the current call
+  std::vector<float> table_;           // row k holds y_k at every sample
+  std::vector<double> sample_weight_;  // quadrature weight of each sample
+  std::vector<double> weighted_;       // w·f for the current call
 };
 
 enum class AmplitudeNormalisation : std::uint8_t {

@@ -1,0 +1,32 @@
+// The camera file: a TOML description of the image size, the lens model and the mount,
+// read at start-up by describe, replay, simulate and the camera drivers. The format is
+// documented in docs/CAMERA_FILE.md (config/camera-equidistant-185.toml is an example).
+// Every error names the file, the key and the fix; unknown keys are errors, so a typo
+// never silently falls back to a default.
+#pragma once
+
+#include <string_view>
+
+#include "skyloc/dsp/lens.h"
+#include "skyloc/platform/status.h"
+
+namespace skyloc::drivers {
+
+// Reads and validates a camera file (including the OCamCalib file it may name, relative
+// to the camera file's directory). The result has passed dsp::Lens::Init.
+Result<dsp::LensParams> LoadCameraFile(const char* path);
+
+// The same from text already in memory. `source` names it in messages; `base_dir` is where
+// a relative ocamcalib_file is looked up.
+Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* source,
+                                        const char* base_dir);
+
+// Reads an OCamCalib toolbox calib_results.txt: the ss polynomial (count then
+// coefficients), invpol (count then coefficients), centre "row column", affine "c d e",
+// and optionally the image size "height width"; '#' lines are comments.
+Result<dsp::OCamCalibModel> LoadOCamCalibFile(const char* path);
+
+// dsp::Lens::Init with its error turned into a Status naming `source` and the fix.
+Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* lens);
+
+}  // namespace skyloc::drivers

@@ -1,0 +1,399 @@
+#include "skyloc/drivers/camera_file.h"
+
+#include <toml++/toml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <initializer_list>
+#include <string>
+
+namespace skyloc::drivers {
+namespace {
+
+using dsp::LensModel;
+using dsp::LensParams;
+
+// Where a key sits, for messages: "camera.toml:7: lens.fov_deg".
+struct Where {
+  const char* source;
+  const char* table;
+  const char* key;
+  unsigned line;
+};
+
+Where At(const char* source, const char* table, const char* key, const toml::node& node) {
+  return {source, table, key, static_cast<unsigned>(node.source().begin.line)};
+}
+
+Status KeyError(const Where& w, const char* what) {
+  return Status::Error(StatusCode::kInvalidArgument, "%s:%u: %s.%s %s", w.source, w.line, w.table,
+                       w.key, what);
+}
+
+// Unknown keys are errors: a misspelt key must not silently leave a default in place.
+Status CheckKeys(const toml::table& table, const char* source, const char* table_name,
+                 std::initializer_list<const char*> allowed) {
+  for (auto&& [key, node] : table) {
+    bool known = false;
+    for (const char* a : allowed)
+      known = known || key.str() == a;
+    if (!known) {
+      std::string list;
+      for (const char* a : allowed) {
+        if (!list.empty())
+          list += ", ";
+        list += a;
+      }
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%u: unknown key '%s' in [%s]: remove it or use one of: %s", source,
+                           static_cast<unsigned>(node.source().begin.line),
+                           std::string(key.str()).c_str(), table_name, list.c_str());
+    }
+  }
+  return Status::Ok();
+}
+
+// A number (integer or float) if present; `present` says whether it was.
+Status GetNumber(const toml::table& table, const char* source, const char* table_name,
+                 const char* key, double* out, bool* present = nullptr) {
+  const toml::node* node = table.get(key);
+  if (present != nullptr)
+    *present = node != nullptr;
+  if (node == nullptr)
+    return Status::Ok();
+  const Where w = At(source, table_name, key, *node);
+  if (!node->is_number())
+    return KeyError(w, "must be a number");
+  const double v = node->value<double>().value_or(NAN);
+  if (!std::isfinite(v))
+    return KeyError(w, "must be a finite number");
+  *out = v;
+  return Status::Ok();
+}
+
+Status GetInteger(const toml::table& table, const char* source, const char* table_name,
+                  const char* key, long min, long max, int* out, bool* present) {
+  const toml::node* node = table.get(key);
+  *present = node != nullptr;
+  if (node == nullptr)
+    return Status::Ok();
+  const Where w = At(source, table_name, key, *node);
+  if (!node->is_integer())
+    return KeyError(w, "must be a whole number of pixels (e.g. 640)");
+  const std::int64_t v = node->value<std::int64_t>().value_or(0);
+  if (v < min || v > max) {
+    char what[96];
+    std::snprintf(what, sizeof what, "= %lld is out of range: use %ld..%ld",
+                  static_cast<long long>(v), min, max);
+    return KeyError(w, what);
+  }
+  *out = static_cast<int>(v);
+  return Status::Ok();
+}
+
+// A fixed-length array of numbers.
+Status GetNumbers(const toml::table& table, const char* source, const char* table_name,
+                  const char* key, std::size_t count, double* out, bool* present) {
+  const toml::node* node = table.get(key);
+  *present = node != nullptr;
+  if (node == nullptr)
+    return Status::Ok();
+  const Where w = At(source, table_name, key, *node);
+  const toml::array* array = node->as_array();
+  char what[96];
+  std::snprintf(what, sizeof what, "must be an array of %zu numbers", count);
+  if (array == nullptr || array->size() != count)
+    return KeyError(w, what);
+  for (std::size_t i = 0; i < count; ++i) {
+    const toml::node* item = array->get(i);
+    if (item == nullptr || !item->is_number())
+      return KeyError(w, what);
+    out[i] = item->value<double>().value_or(NAN);
+    if (!std::isfinite(out[i]))
+      return KeyError(w, what);
+  }
+  return Status::Ok();
+}
+
+// A key that does not apply to the chosen model is an error rather than ignored.
+Status RejectFor(const toml::table& lens, const char* source, const char* model,
+                 std::initializer_list<const char*> keys) {
+  for (const char* key : keys) {
+    if (const toml::node* node = lens.get(key)) {
+      char what[128];
+      std::snprintf(what, sizeof what, "does not apply to model \"%s\": remove it", model);
+      return KeyError(At(source, "lens", key, *node), what);
+    }
+  }
+  return Status::Ok();
+}
+
+std::string Directory(const char* path) {
+  const char* slash = std::strrchr(path, '/');
+  if (slash == nullptr)
+    return ".";
+  if (slash == path)
+    return "/";
+  return std::string(path, static_cast<std::size_t>(slash - path));
+}
+
+Status ParseLens(const toml::table& lens, const char* source, const char* base_dir, LensParams* p) {
+  SKYLOC_TRY(
+      CheckKeys(lens, source, "lens",
+                {"model", "fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"}));
+  if (const toml::node* node = lens.get("model")) {
+    const Where w = At(source, "lens", "model", *node);
+    const std::optional<std::string> name = node->value<std::string>();
+    if (!name || !dsp::ParseLensModel(name->c_str(), &p->model))
+      return KeyError(w,
+                      "must be one of \"equidistant\", \"equisolid\", \"kannala_brandt\", "
+                      "\"ocamcalib\", \"equirectangular\"");
+  }
+  const char* model = dsp::LensModelName(p->model);
+  bool present = false;
+  SKYLOC_TRY(GetNumber(lens, source, "lens", "fov_deg", &p->fov_deg, &present));
+  if (present && !(p->fov_deg > 0.0 && p->fov_deg <= 360.0))
+    return KeyError(At(source, "lens", "fov_deg", *lens.get("fov_deg")),
+                    "is out of range: use a field of view in (0, 360] degrees, e.g. 185");
+  double centre[2];
+  SKYLOC_TRY(GetNumbers(lens, source, "lens", "centre", 2, centre, &present));
+  if (present) {
+    p->centre_x = centre[0];
+    p->centre_y = centre[1];
+  }
+  SKYLOC_TRY(GetNumber(lens, source, "lens", "radius_px", &p->radius_px, &present));
+  if (present && !(p->radius_px > 0.0))
+    return KeyError(At(source, "lens", "radius_px", *lens.get("radius_px")),
+                    "must be a positive number of pixels");
+
+  switch (p->model) {
+    case LensModel::kEquidistant:
+    case LensModel::kEquisolid:
+      SKYLOC_TRY(RejectFor(lens, source, model, {"fx", "fy", "k", "ocamcalib_file"}));
+      break;
+    case LensModel::kEquirectangular:
+      SKYLOC_TRY(RejectFor(lens, source, model,
+                           {"fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"}));
+      break;
+    case LensModel::kKannalaBrandt: {
+      SKYLOC_TRY(RejectFor(lens, source, model, {"ocamcalib_file"}));
+      bool has_fx = false, has_fy = false;
+      SKYLOC_TRY(GetNumber(lens, source, "lens", "fx", &p->fx, &has_fx));
+      SKYLOC_TRY(GetNumber(lens, source, "lens", "fy", &p->fy, &has_fy));
+      if (!has_fx || !has_fy)
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "%s: model \"kannala_brandt\" needs lens.fx and lens.fy (pixels, "
+                             "OpenCV's K[0][0] and K[1][1])",
+                             source);
+      for (const char* key : {"fx", "fy"}) {
+        if (!(*lens.get(key)->value<double>() > 0.0))
+          return KeyError(At(source, "lens", key, *lens.get(key)),
+                          "must be a positive focal length in pixels");
+      }
+      SKYLOC_TRY(GetNumbers(lens, source, "lens", "k", 4, p->k.data(), &present));
+      break;
+    }
+    case LensModel::kOCamCalib: {
+      SKYLOC_TRY(RejectFor(lens, source, model, {"fx", "fy", "k", "centre"}));
+      const toml::node* node = lens.get("ocamcalib_file");
+      if (node == nullptr)
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "%s: model \"ocamcalib\" needs lens.ocamcalib_file = "
+                             "\"calib_results.txt\" (the OCamCalib toolbox output)",
+                             source);
+      const std::optional<std::string> file = node->value<std::string>();
+      if (!file || file->empty())
+        return KeyError(At(source, "lens", "ocamcalib_file", *node),
+                        "must be a file name (relative to the camera file)");
+      const std::string path = (*file)[0] == '/' ? *file : std::string(base_dir) + "/" + *file;
+      Result<dsp::OCamCalibModel> ocam = LoadOCamCalibFile(path.c_str());
+      if (!ocam.ok()) {
+        Status s = ocam.status();
+        return s.AddContext("%s: lens.ocamcalib_file", source);
+      }
+      p->ocam = *ocam;
+      break;
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* lens) {
+  const dsp::LensError e = lens->Init(params);
+  if (e == dsp::LensError::kOk)
+    return Status::Ok();
+  return Status::Error(StatusCode::kInvalidArgument, "%s: invalid %s lens: %s", source,
+                       dsp::LensModelName(params.model), dsp::LensErrorMessage(e));
+}
+
+Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* source,
+                                        const char* base_dir) {
+  toml::parse_result parsed = toml::parse(text, std::string_view(source));
+  if (!parsed) {
+    const toml::parse_error& error = parsed.error();
+    return Status::Error(StatusCode::kInvalidArgument, "%s:%u:%u: not valid TOML: %s", source,
+                         static_cast<unsigned>(error.source().begin.line),
+                         static_cast<unsigned>(error.source().begin.column),
+                         std::string(error.description()).c_str());
+  }
+  const toml::table& root = parsed.table();
+  SKYLOC_TRY(CheckKeys(root, source, "top level", {"image", "lens", "mount"}));
+  for (const char* name : {"image", "lens", "mount"}) {
+    const toml::node* node = root.get(name);
+    if (node != nullptr && !node->is_table())
+      return Status::Error(StatusCode::kInvalidArgument, "%s:%u: '%s' must be a table: [%s]",
+                           source, static_cast<unsigned>(node->source().begin.line), name, name);
+  }
+  LensParams p;
+  const toml::table* image = root.get_as<toml::table>("image");
+  if (image == nullptr)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "%s: missing [image] with width and height (pixels)", source);
+  SKYLOC_TRY(CheckKeys(*image, source, "image", {"width", "height"}));
+  bool has_width = false, has_height = false;
+  SKYLOC_TRY(GetInteger(*image, source, "image", "width", 1, 65534, &p.width, &has_width));
+  SKYLOC_TRY(GetInteger(*image, source, "image", "height", 1, 65534, &p.height, &has_height));
+  if (!has_width || !has_height)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "%s: [image] needs both width and height (pixels)", source);
+
+  if (const toml::table* lens = root.get_as<toml::table>("lens"))
+    SKYLOC_TRY(ParseLens(*lens, source, base_dir, &p));
+
+  if (const toml::table* mount = root.get_as<toml::table>("mount")) {
+    SKYLOC_TRY(CheckKeys(*mount, source, "mount", {"roll_deg", "pitch_deg", "yaw_deg"}));
+    SKYLOC_TRY(GetNumber(*mount, source, "mount", "roll_deg", &p.roll_deg));
+    SKYLOC_TRY(GetNumber(*mount, source, "mount", "pitch_deg", &p.pitch_deg));
+    SKYLOC_TRY(GetNumber(*mount, source, "mount", "yaw_deg", &p.yaw_deg));
+    for (const char* key : {"roll_deg", "pitch_deg", "yaw_deg"}) {
+      const toml::node* node = mount->get(key);
+      if (node != nullptr && std::fabs(node->value<double>().value_or(0.0)) > 360.0)
+        return KeyError(At(source, "mount", key, *node), "is out of range: use -360..360 degrees");
+    }
+  }
+  dsp::Lens lens;
+  SKYLOC_TRY(InitLens(p, source, &lens));
+  return p;
+}
+
+Result<dsp::LensParams> LoadCameraFile(const char* path) {
+  std::FILE* f = std::fopen(path, "rb");
+  if (f == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot open camera file '%s'", path);
+  }
+  std::string text;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) {
+    text.append(buffer, n);
+    if (text.size() > (std::size_t{1} << 20)) {
+      std::fclose(f);
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "camera file '%s' is larger than 1 MiB: is it the right file?", path);
+    }
+  }
+  const bool read_error = std::ferror(f) != 0;
+  const int saved = errno;
+  std::fclose(f);
+  if (read_error)
+    return Status::FromErrno(saved, "cannot read camera file '%s'", path);
+  return ParseCameraFile(text, path, Directory(path).c_str());
+}
+
+Result<dsp::OCamCalibModel> LoadOCamCalibFile(const char* path) {
+  std::FILE* f = std::fopen(path, "r");
+  if (f == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot open OCamCalib file '%s'", path);
+  }
+  dsp::OCamCalibModel m;
+  // The toolbox writes five data lines in this order, each after a '#' comment.
+  enum Field { kSs, kInvpol, kCentre, kAffine, kSize, kDone };
+  const char* const kExpected[] = {"the ss polynomial: a count then that many coefficients",
+                                   "the invpol polynomial: a count then that many coefficients",
+                                   "the centre: row and column", "the affine parameters c d e",
+                                   "the image size: height width"};
+  int field = kSs;
+  char line[8192];
+  unsigned line_number = 0;
+  Status status;
+  while (field != kDone && std::fgets(line, sizeof line, f) != nullptr) {
+    ++line_number;
+    const char* p = line;
+    while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
+      ++p;
+    if (*p == '\0' || *p == '#')
+      continue;
+    double values[dsp::OCamCalibModel::kMaxTerms + 1];
+    int count = 0;
+    for (char* end = nullptr; count <= dsp::OCamCalibModel::kMaxTerms; ++count) {
+      const double v = std::strtod(p, &end);
+      if (end == p)
+        break;
+      values[count] = v;
+      p = end;
+    }
+    const auto bad = [&](const char* why) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "OCamCalib file '%s' line %u: expected %s (%s); re-export "
+                           "calib_results.txt from the toolbox",
+                           path, line_number, kExpected[field], why);
+    };
+    if (field == kSs || field == kInvpol) {
+      const int n = count > 0 ? static_cast<int>(values[0]) : -1;
+      if (count < 1 || values[0] != n || n < 1 || n > dsp::OCamCalibModel::kMaxTerms) {
+        status = bad("the count is missing or outside 1..32");
+        break;
+      }
+      if (count - 1 != n) {
+        status = bad("the count does not match the coefficients");
+        break;
+      }
+      auto& target = field == kSs ? m.ss : m.invpol;
+      for (int i = 0; i < n; ++i)
+        target[static_cast<std::size_t>(i)] = values[i + 1];
+      (field == kSs ? m.ss_count : m.invpol_count) = n;
+    } else if (field == kCentre) {
+      if (count != 2) {
+        status = bad("need 2 numbers");
+        break;
+      }
+      m.row_centre = values[0];
+      m.column_centre = values[1];
+    } else if (field == kAffine) {
+      if (count != 3) {
+        status = bad("need 3 numbers");
+        break;
+      }
+      m.c = values[0];
+      m.d = values[1];
+      m.e = values[2];
+    } else if (field == kSize) {
+      if (count != 2 || values[0] < 1 || values[1] < 1 || values[0] > 65534 || values[1] > 65534) {
+        status = bad("need 2 positive whole numbers");
+        break;
+      }
+      m.height = static_cast<int>(values[0]);
+      m.width = static_cast<int>(values[1]);
+    }
+    ++field;
+  }
+  std::fclose(f);
+  if (!status.ok())
+    return status;
+  // The image size line is optional (older toolbox versions do not write it).
+  if (field < kSize)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "OCamCalib file '%s' ends early: expected %s; re-export "
+                         "calib_results.txt from the toolbox",
+                         path, kExpected[field]);
+  return m;
+}
+
+}  // namespace skyloc::drivers

@@ -1,0 +1,212 @@
+#include "skyloc/drivers/camera_file.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+namespace skyloc::drivers {
+namespace {
+
+using ::testing::HasSubstr;
+
+Result<dsp::LensParams> Parse(const std::string& text) {
+  return ParseCameraFile(text, "cam.toml", ".");
+}
+
+std::string Message(const Result<dsp::LensParams>& r) {
+  EXPECT_FALSE(r.ok());
+  return r.ok() ? std::string() : std::string(r.status().message());
+}
+
+TEST(CameraFile, ShippedExampleLoads) {
+  auto r = LoadCameraFile(SKYLOC_SOURCE_DIR "/config/camera-equidistant-185.toml");
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->model, dsp::LensModel::kEquidistant);
+  EXPECT_EQ(r->width, 640);
+  EXPECT_EQ(r->height, 480);
+  EXPECT_EQ(r->fov_deg, 185.0);
+  EXPECT_EQ(r->centre_x, 319.5);
+  EXPECT_EQ(r->centre_y, 239.5);
+  EXPECT_EQ(r->radius_px, 240.0);
+}
+
+TEST(CameraFile, AllKeysOfKannalaBrandtAndMount) {
+  auto r = Parse(R"(
+[image]
+width = 1280
+height = 960
+[lens]
+model = "kannala_brandt"
+fx = 331
+fy = 331.5
+centre = [640.25, 481]
+k = [0.02, -0.004, 0.001, -0.0002]
+fov_deg = 190
+radius_px = 470
+[mount]
+roll_deg = 1.5
+pitch_deg = -2
+yaw_deg = 90
+)");
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->model, dsp::LensModel::kKannalaBrandt);
+  EXPECT_EQ(r->fx, 331.0);
+  EXPECT_EQ(r->fy, 331.5);
+  EXPECT_EQ(r->centre_x, 640.25);
+  EXPECT_EQ(r->k[1], -0.004);
+  EXPECT_EQ(r->k[3], -0.0002);
+  EXPECT_EQ(r->roll_deg, 1.5);
+  EXPECT_EQ(r->pitch_deg, -2.0);
+  EXPECT_EQ(r->yaw_deg, 90.0);
+}
+
+TEST(CameraFile, ErrorsNameTheFileTheKeyAndTheFix) {
+  const std::string image = "[image]\nwidth = 640\nheight = 480\n";
+  // Unknown key (a typo) with its line and the allowed keys.
+  std::string m = Message(Parse(image + "[lens]\nfov_dg = 185\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:5"));
+  EXPECT_THAT(m, HasSubstr("fov_dg"));
+  EXPECT_THAT(m, HasSubstr("fov_deg"));
+  // Unknown table.
+  EXPECT_THAT(Message(Parse(image + "[lenz]\n")), HasSubstr("'lenz'"));
+  // Out of range.
+  m = Message(Parse(image + "[lens]\nfov_deg = 400\n"));
+  EXPECT_THAT(m, HasSubstr("lens.fov_deg"));
+  EXPECT_THAT(m, HasSubstr("(0, 360]"));
+  EXPECT_THAT(Message(Parse(image + "[lens]\nradius_px = -1\n")), HasSubstr("lens.radius_px"));
+  EXPECT_THAT(Message(Parse("[image]\nwidth = 0\nheight = 480\n")), HasSubstr("image.width"));
+  EXPECT_THAT(Message(Parse(image + "[mount]\nyaw_deg = 1000\n")), HasSubstr("mount.yaw_deg"));
+  // Wrong types.
+  EXPECT_THAT(Message(Parse(image + "[lens]\nfov_deg = \"wide\"\n")),
+              HasSubstr("must be a number"));
+  EXPECT_THAT(Message(Parse("[image]\nwidth = 640.5\nheight = 480\n")), HasSubstr("image.width"));
+  EXPECT_THAT(Message(Parse(image + "[lens]\ncentre = [1]\n")), HasSubstr("lens.centre"));
+  // Model names and model-specific keys.
+  m = Message(Parse(image + "[lens]\nmodel = \"fisheye\"\n"));
+  EXPECT_THAT(m, HasSubstr("lens.model"));
+  EXPECT_THAT(m, HasSubstr("\"equisolid\""));
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"kannala_brandt\"\nfx = 300\n")),
+              HasSubstr("lens.fy"));
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"equidistant\"\nk = [0, 0, 0, 0]\n")),
+              HasSubstr("does not apply"));
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"equirectangular\"\nfov_deg = 180\n")),
+              HasSubstr("lens.fov_deg"));
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"ocamcalib\"\n")),
+              HasSubstr("ocamcalib_file"));
+  // Missing [image]; TOML syntax error with its line.
+  EXPECT_THAT(Message(Parse("[lens]\nmodel = \"equidistant\"\n")), HasSubstr("[image]"));
+  EXPECT_THAT(Message(Parse(image + "[lens\n")), HasSubstr("cam.toml:4"));
+  // Lens validation after parsing (Kannala-Brandt folding back).
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"kannala_brandt\"\nfx = 200\nfy = 200\n"
+                                    "k = [-1, 0, 0, 0]\n")),
+              HasSubstr("folds back"));
+}
+
+TEST(CameraFile, MissingFileIsNotFound) {
+  auto r = LoadCameraFile("/nonexistent/camera.toml");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kNotFound);
+  EXPECT_THAT(r.status().message(), HasSubstr("/nonexistent/camera.toml"));
+}
+
+// The layout the OCamCalib toolbox writes (values from a published 1024x1024 calibration).
+constexpr char kCalibResults[] =
+    R"(#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by cam2world
+
+5 -4.167604e+02 0.000000e+00 1.190213e-03 -1.534627e-06 3.137860e-09 
+
+#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used by world2cam
+
+12 562.102870 266.095519 -26.584752 56.736554 9.341520 6.790452 14.809291 -21.675851 -10.308973 24.528996 20.092843 4.259172 
+
+#center: "row" and "column", starting from 0 (C convention)
+
+497.570118 508.063716
+
+#affine parameters "c", "d", "e"
+
+0.997772 -0.011575 0.011638
+
+#image size: "height" and "width"
+
+1024 1024
+)";
+
+class OCamCalibFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char pattern[] = "/tmp/skyloc_camera_file_XXXXXX";
+    ASSERT_NE(mkdtemp(pattern), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { EXPECT_EQ(std::system(("rm -rf '" + dir_ + "'").c_str()), 0); }
+  void Write(const char* name, const std::string& text) {
+    std::ofstream(dir_ + "/" + name) << text;
+  }
+  std::string dir_;
+};
+
+TEST_F(OCamCalibFileTest, ToolboxFileLoadsRelativeToTheCameraFile) {
+  Write("calib_results.txt", kCalibResults);
+  Write("camera.toml",
+        "[image]\nwidth = 1024\nheight = 1024\n[lens]\nmodel = \"ocamcalib\"\n"
+        "ocamcalib_file = \"calib_results.txt\"\nradius_px = 500\n");
+  auto r = LoadCameraFile((dir_ + "/camera.toml").c_str());
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  const dsp::OCamCalibModel& o = r->ocam;
+  EXPECT_EQ(o.ss_count, 5);
+  EXPECT_EQ(o.ss[0], -4.167604e+02);
+  EXPECT_EQ(o.ss[4], 3.137860e-09);
+  EXPECT_EQ(o.invpol_count, 12);
+  EXPECT_EQ(o.invpol[11], 4.259172);
+  EXPECT_EQ(o.row_centre, 497.570118);
+  EXPECT_EQ(o.column_centre, 508.063716);
+  EXPECT_EQ(o.d, -0.011575);
+  EXPECT_EQ(o.height, 1024);
+  // The real calibration gives a usable lens: the centre pixel looks along the axis.
+  dsp::Lens lens;
+  ASSERT_TRUE(InitLens(*r, "camera.toml", &lens).ok());
+  Eigen::Vector3d ray;
+  ASSERT_TRUE(lens.PixelToCameraRay(o.column_centre, o.row_centre, &ray));
+  EXPECT_NEAR(ray(2), 1.0, 1e-12);
+}
+
+TEST_F(OCamCalibFileTest, BrokenFilesNameTheLineAndWhatWasExpected) {
+  std::string broken = kCalibResults;
+  broken.replace(broken.find("5 -4.1676"), 1, "6");  // count does not match
+  Write("bad.txt", broken);
+  auto r = LoadOCamCalibFile((dir_ + "/bad.txt").c_str());
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.status().message(), HasSubstr("bad.txt' line 3"));
+  EXPECT_THAT(r.status().message(), HasSubstr("ss polynomial"));
+
+  Write("short.txt",
+        std::string(kCalibResults).substr(0, std::string(kCalibResults).find("#center")));
+  r = LoadOCamCalibFile((dir_ + "/short.txt").c_str());
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.status().message(), HasSubstr("centre"));
+
+  Write("camera.toml",
+        "[image]\nwidth = 1024\nheight = 1024\n[lens]\nmodel = \"ocamcalib\"\n"
+        "ocamcalib_file = \"missing.txt\"\n");
+  auto c = LoadCameraFile((dir_ + "/camera.toml").c_str());
+  ASSERT_FALSE(c.ok());
+  EXPECT_THAT(c.status().message(), HasSubstr("lens.ocamcalib_file"));
+  EXPECT_THAT(c.status().message(), HasSubstr("missing.txt"));
+
+  // A calibration for another image size.
+  Write("calib_results.txt", kCalibResults);
+  Write("camera.toml",
+        "[image]\nwidth = 640\nheight = 480\n[lens]\nmodel = \"ocamcalib\"\n"
+        "ocamcalib_file = \"calib_results.txt\"\n");
+  c = LoadCameraFile((dir_ + "/camera.toml").c_str());
+  ASSERT_FALSE(c.ok());
+  EXPECT_THAT(c.status().message(), HasSubstr("image size"));
+}
+
+}  // namespace
+}  // namespace skyloc::drivers
