@@ -18,6 +18,7 @@ int RunDemo(std::span<char* const> args);
 int RunSimulate(std::span<char* const> args);
 int RunExperiment(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);
+int RunEval(std::span<char* const> args);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

@@ -13,6 +13,7 @@ constexpr Command kCommands[] = {
     {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
     {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
      RunDescribe},
+    {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
 };
 
 void PrintUsage(std::FILE* out) {

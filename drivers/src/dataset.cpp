@@ -12,28 +12,7 @@
 #include <system_error>
 #include <utility>
 
-// stb with static linkage so another file of the library may include it too without
-// duplicate symbols.
-#define STB_IMAGE_STATIC
-#define STB_IMAGE_IMPLEMENTATION
-#define STBI_ONLY_PNG
-#define STBI_ONLY_PNM
-#define STB_IMAGE_WRITE_STATIC
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wold-style-cast"
-#pragma GCC diagnostic ignored "-Wdouble-promotion"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wnull-dereference"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
-#pragma GCC diagnostic pop
+#include "skyloc/drivers/image_file.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -250,53 +229,6 @@ Status MakeDirs(const std::string& path) {
   return Status::Ok();
 }
 
-// Writes a binary PGM (P5) in one go.
-Status WritePgm(const std::string& path, const dsp::ImageView& image) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (f == nullptr) {
-    const int saved = errno;
-    return Status::FromErrno(saved, "cannot create %s", path.c_str());
-  }
-  bool ok = std::fprintf(f, "P5\n%d %d\n255\n", image.width, image.height) > 0;
-  const std::size_t w = static_cast<std::size_t>(image.width);
-  std::vector<std::uint8_t> row(w);
-  for (int y = 0; ok && y < image.height; ++y) {
-    const std::uint8_t* src = image.Row(y);
-    if (image.format == dsp::PixelFormat::kYuyv) {
-      for (std::size_t x = 0; x < w; ++x)
-        row[x] = src[2 * x];
-      ok = std::fwrite(row.data(), 1, w, f) == w;
-    } else {
-      ok = std::fwrite(src, 1, w, f) == w;
-    }
-  }
-  const int saved = errno;
-  if (std::fclose(f) != 0 || !ok)
-    return Status::FromErrno(saved, "cannot write %s", path.c_str());
-  return Status::Ok();
-}
-
-Status WritePng(const std::string& path, const dsp::ImageView& image) {
-  const std::size_t w = static_cast<std::size_t>(image.width);
-  std::vector<std::uint8_t> rgb(w * 3 * static_cast<std::size_t>(image.height));
-  for (int y = 0; y < image.height; ++y) {
-    const std::uint8_t* src = image.Row(y);
-    std::uint8_t* dst = rgb.data() + static_cast<std::size_t>(y) * w * 3;
-    for (std::size_t x = 0; x < w; ++x) {
-      const bool bgr = image.format == dsp::PixelFormat::kBgr24;
-      dst[3 * x + 0] = src[3 * x + (bgr ? 2 : 0)];
-      dst[3 * x + 1] = src[3 * x + 1];
-      dst[3 * x + 2] = src[3 * x + (bgr ? 0 : 2)];
-    }
-  }
-  if (stbi_write_png(path.c_str(), image.width, image.height, 3, rgb.data(), image.width * 3) ==
-      0) {
-    return Status::Error(StatusCode::kUnavailable, "cannot write %s (disk full or no permission?)",
-                         path.c_str());
-  }
-  return Status::Ok();
-}
-
 }  // namespace
 
 std::string Dataset::FramePath(std::size_t i) const {
@@ -410,11 +342,11 @@ Status DatasetWriter::Append(const dsp::ImageView& image, double timestamp_s,
                          dir_.c_str(), next_index_);
   }
   char name[32];
-  const bool png =
-      image.format == dsp::PixelFormat::kRgb24 || image.format == dsp::PixelFormat::kBgr24;
-  std::snprintf(name, sizeof name, "%06d.%s", next_index_, png ? "png" : "pgm");
+  std::snprintf(name, sizeof name, "%06d.png", next_index_);
   const std::string path = dir_ + "/frames/" + name;
-  SKYLOC_TRY(png ? WritePng(path, image) : WritePgm(path, image));
+  // SavePng writes a temporary file and renames it: the row below is only appended once
+  // the complete image is in place.
+  SKYLOC_TRY(SavePng(path.c_str(), image));
   return AppendRow(name, timestamp_s, pose);
 }
 
@@ -470,38 +402,13 @@ Status DatasetWriter::Close() {
 
 // ---- DatasetCamera ---------------------------------------------------------------------
 
-namespace {
-
-// Decodes one image file to grey into `out` (resized only when the size differs, which
-// DatasetCamera rejects after the first frame). PGM P5 8-bit is parsed here without
-// stb; PNG goes through stb_image (which allocates while decoding: replay is a laptop tool).
-Status LoadGrey(const std::string& path, std::vector<std::uint8_t>* out, int* width, int* height) {
-  int w = 0, h = 0, channels = 0;
-  stbi_uc* data = stbi_load(path.c_str(), &w, &h, &channels, 1);
-  if (data == nullptr) {
-    return Status::Error(StatusCode::kDataLoss, "cannot decode image %s: %s", path.c_str(),
-                         stbi_failure_reason());
-  }
-  const std::size_t bytes = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  if (out->size() != bytes)
-    out->resize(bytes);
-  std::memcpy(out->data(), data, bytes);
-  stbi_image_free(data);
-  *width = w;
-  *height = h;
-  return Status::Ok();
-}
-
-}  // namespace
-
 Status DatasetCamera::DoOpen() {
   std::snprintf(info_.name, sizeof info_.name, "dataset:%s", dir_.c_str());
   SKYLOC_TRY_ASSIGN(dataset_, ReadDataset(dir_));
-  int w = 0, h = 0;
-  SKYLOC_TRY(LoadGrey(dataset_.FramePath(0), &pixels_, &w, &h));
-  info_.width = w;
-  info_.height = h;
-  info_.format = dsp::PixelFormat::kGrey8;
+  SKYLOC_TRY_ASSIGN(current_, LoadImage(dataset_.FramePath(0).c_str()));
+  info_.width = current_.width();
+  info_.height = current_.height();
+  info_.format = current_.format();
   next_ = 0;
   return Status::Ok();
 }
@@ -517,17 +424,18 @@ Result<Frame> DatasetCamera::DoCapture(Nanoseconds /*timeout*/) {
                          dataset_.dir.c_str(), dataset_.frames.size());
   }
   const std::size_t i = next_++;
-  int w = 0, h = 0;
-  SKYLOC_TRY(LoadGrey(dataset_.FramePath(i), &pixels_, &w, &h));
-  if (w != info_.width || h != info_.height) {
-    return Status::Error(
-        StatusCode::kDataLoss, "dataset %s: frame %zu (%s) is %dx%d but the first frame is %dx%d",
-        dataset_.dir.c_str(), i, dataset_.frames[i].file.c_str(), w, h, info_.width, info_.height);
-  }
   const DatasetFrame& f = dataset_.frames[i];
+  SKYLOC_TRY_ASSIGN(current_, LoadImage(dataset_.FramePath(i).c_str()));
+  if (current_.width() != info_.width || current_.height() != info_.height ||
+      current_.format() != info_.format) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "dataset %s: frame %zu (%s) is %dx%d %s but the first frame is %dx%d %s",
+                         dataset_.dir.c_str(), i, f.file.c_str(), current_.width(),
+                         current_.height(), dsp::PixelFormatName(current_.format()), info_.width,
+                         info_.height, dsp::PixelFormatName(info_.format));
+  }
   Frame frame;
-  frame.image =
-      dsp::ImageView{pixels_.data(), w, h, static_cast<std::size_t>(w), dsp::PixelFormat::kGrey8};
+  frame.image = current_.view();
   frame.sequence = static_cast<std::uint64_t>(i);
   frame.timestamp = Nanoseconds(static_cast<std::int64_t>(std::llround(f.timestamp_s * 1e9)));
   frame.pose = f.pose;
@@ -538,8 +446,7 @@ void DatasetCamera::DoStop() {}
 
 void DatasetCamera::DoClose() {
   dataset_ = Dataset{};
-  pixels_.clear();
-  pixels_.shrink_to_fit();
+  current_ = OwnedImage{};
 }
 
 }  // namespace skyloc::drivers

@@ -1,8 +1,10 @@
 #include "skyloc/dsp/seqslam.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 
 namespace skyloc::dsp {
@@ -19,6 +21,8 @@ std::size_t Sz(int v) {
 int CountVelocities(const SeqSlamParams& p) {
   const double span =
       (static_cast<double>(p.v_max) - static_cast<double>(p.v_min)) / static_cast<double>(p.v_step);
+  if (!(span < kMaxVelocities))
+    return kMaxVelocities + 1;  // too many (or NaN): rejected, and no overflowing cast
   return static_cast<int>(std::floor(span + 1e-3)) + 1;
 }
 
@@ -94,6 +98,49 @@ void DifferenceColumn(std::span<const float> database, int dim, std::span<const 
   }
 }
 
+std::uint16_t ToBFloat16(float value) {
+  const std::uint32_t bits = std::bit_cast<std::uint32_t>(value);
+  if (std::isnan(value))
+    return static_cast<std::uint16_t>((bits >> 16) | 0x40u);  // stays a NaN
+  const std::uint32_t rounding = 0x7FFFu + ((bits >> 16) & 1u);
+  return static_cast<std::uint16_t>((bits + rounding) >> 16);
+}
+
+float FromBFloat16(std::uint16_t value) {
+  return std::bit_cast<float>(static_cast<std::uint32_t>(value) << 16);
+}
+
+void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
+                              std::span<const float> query, std::span<float> out) {
+  // The loop of DifferenceColumn with the conversion in front of each element: same lanes,
+  // same order, so the result equals DifferenceColumn over the converted database.
+  const std::size_t d = Sz(dim);
+  const float inv_dim = 1.0f / static_cast<float>(dim);
+  constexpr std::size_t kLanes = 8;
+  const std::size_t whole = d - d % kLanes;
+  const float* q = query.data();
+  for (std::size_t r = 0; r < out.size(); ++r) {
+    const std::uint16_t* row = database.data() + r * d;
+    float lane[kLanes] = {};
+    for (std::size_t i = 0; i < whole; i += kLanes) {
+      // Widen eight elements at once (shift into the high half), then reinterpret: the
+      // form the vectoriser turns into unpack + subtract + and-not.
+      std::uint32_t bits[kLanes];
+      for (std::size_t l = 0; l < kLanes; ++l)
+        bits[l] = static_cast<std::uint32_t>(row[i + l]) << 16;
+      float value[kLanes];
+      std::memcpy(value, bits, sizeof value);
+      for (std::size_t l = 0; l < kLanes; ++l)
+        lane[l] += std::fabs(value[l] - q[i + l]);
+    }
+    for (std::size_t i = whole; i < d; ++i)
+      lane[i - whole] += std::fabs(FromBFloat16(row[i]) - q[i]);
+    const float sum =
+        ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
+    out[r] = sum * inv_dim;
+  }
+}
+
 float EnhancementShift(int n, int contrast_window) {
   const int half = contrast_window / 2;
   const int m = std::min(n, 2 * half + 1);
@@ -104,7 +151,8 @@ float EnhancementShift(int n, int contrast_window) {
   return static_cast<float>(static_cast<double>(m - 1) / std::sqrt(static_cast<double>(m)));
 }
 
-void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out) {
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out,
+                   std::span<float> scratch) {
   const int n = static_cast<int>(d.size());
   if (n == 0)
     return;
@@ -112,38 +160,61 @@ void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<floa
   // DD(i,:) = (D(i,:) - mean(D(a:b,:))) ./ std(D(a:b,:)). The window slides by one row per
   // step, so its sums are kept running (in double: a few ulp of drift over 100k rows)
   // instead of recomputed: O(N) rather than O(N * R).
+  //
+  // Pass 1 (sequential): the window mean into out[] and its variance into scratch[]. The
+  // only loop-carried work is one add per running sum; the divisions by the window size
+  // use reciprocals that change only near the ends.
   const int half = contrast_window / 2;
   const float shift = EnhancementShift(n, contrast_window);
   double sum = 0.0, sum_sq = 0.0;
-  int lo = 0, hi = -1;  // current window rows [lo, hi]
+  int m = 0;
+  for (int r = 0; r <= std::min(n - 1, half); ++r) {
+    const double v = static_cast<double>(d[Sz(r)]);
+    sum += v;
+    sum_sq += v * v;
+    ++m;
+  }
+  int m_cached = -1;
+  double inv_m = 0.0, inv_m1 = 0.0;
   for (int i = 0; i < n; ++i) {
-    const int want_lo = std::max(0, i - half);
-    const int want_hi = std::min(n - 1, i + half);
-    while (hi < want_hi) {
-      ++hi;
-      const double v = static_cast<double>(d[Sz(hi)]);
-      sum += v;
-      sum_sq += v * v;
+    if (m != m_cached) {
+      m_cached = m;
+      inv_m = 1.0 / m;
+      inv_m1 = m > 1 ? 1.0 / (m - 1) : 0.0;
     }
-    while (lo < want_lo) {
-      const double v = static_cast<double>(d[Sz(lo)]);
-      sum -= v;
-      sum_sq -= v * v;
-      ++lo;
+    const double mean = sum * inv_m;
+    const double var = (sum_sq - sum * mean) * inv_m1;
+    // A window whose values are all equal has variance 0 but the running sums leave a
+    // rounding residue: anything below 1e-10 of the mean square counts as zero and the
+    // entry is "no contrast" (0), never NaN or Inf (note 5). A 1-row window has no std.
+    const double floor_var = 1e-10 * (sum_sq * inv_m) + 1e-30;
+    out[Sz(i)] = static_cast<float>(mean);
+    scratch[Sz(i)] = m > 1 && var > floor_var ? static_cast<float>(var) : 0.0f;
+    // Slide to row i + 1: row i + half + 1 enters, row i - half leaves.
+    double delta = 0.0, delta_sq = 0.0;
+    const int enter = i + half + 1, leave = i - half;
+    if (enter < n) {
+      const double v = static_cast<double>(d[Sz(enter)]);
+      delta += v;
+      delta_sq += v * v;
+      ++m;
     }
-    const int m = hi - lo + 1;
-    float z = 0.0f;
-    if (m > 1) {
-      const double mean = sum / m;
-      const double var = (sum_sq - sum * mean) / (m - 1);
-      // A window whose values are all equal has variance 0 but the running sums leave a
-      // rounding residue: anything below 1e-10 of the mean square counts as zero and the
-      // entry is "no contrast" (0), never NaN or Inf (note 5).
-      const double floor_var = 1e-10 * (sum_sq / m) + 1e-30;
-      if (var > floor_var)
-        z = static_cast<float>((static_cast<double>(d[Sz(i)]) - mean) / std::sqrt(var));
+    if (leave >= 0) {
+      const double v = static_cast<double>(d[Sz(leave)]);
+      delta -= v;
+      delta_sq -= v * v;
+      --m;
     }
-    out[Sz(i)] = z + shift;
+    sum += delta;
+    sum_sq += delta_sq;
+  }
+  // Pass 2 (independent per row, vectorises): z-score plus the shift (note 4). The
+  // reciprocal square root is taken of max(var, tiny) so no lane ever divides by zero.
+  for (std::size_t i = 0; i < Sz(n); ++i) {
+    const float var = scratch[i];
+    const float inv_std = 1.0f / std::sqrt(std::max(var, 1e-30f));
+    const float z = var > 0.0f ? (d[i] - out[i]) * inv_std : 0.0f;
+    out[i] = z + shift;
   }
 }
 
@@ -194,7 +265,18 @@ SeqSlamMatch TrajectorySearch::Search(std::span<const float* const> columns, int
         continue;
       const int count = s_end - b0;
       std::fill(acc, acc + count, 0.0f);
-      for (int j = 0; j < len; ++j) {
+      // Four columns per pass over the block: one load and store of the partial sums per
+      // four adds. The adds stay in the order j = 0, 1, 2, ... (no reassociation).
+      int j = 0;
+      for (; j + 4 <= len; j += 4) {
+        const float* c0 = columns[Sz(j)] + offset(k, j) + b0;
+        const float* c1 = columns[Sz(j + 1)] + offset(k, j + 1) + b0;
+        const float* c2 = columns[Sz(j + 2)] + offset(k, j + 2) + b0;
+        const float* c3 = columns[Sz(j + 3)] + offset(k, j + 3) + b0;
+        for (int i = 0; i < count; ++i)
+          acc[i] = (((acc[i] + c0[i]) + c1[i]) + c2[i]) + c3[i];
+      }
+      for (; j < len; ++j) {
         const float* col = columns[Sz(j)] + offset(k, j) + b0;
         for (int i = 0; i < count; ++i)
           acc[i] += col[i];
@@ -280,9 +362,10 @@ SeqSlamError EnhanceDifferenceMatrix(std::span<const float> d, int n_ref, int n_
     return SeqSlamError::kSizeMismatch;
   if (contrast_window < 0 || contrast_window > kMaxWindow)
     return SeqSlamError::kBadContrastWindow;
+  std::vector<float> scratch(Sz(n_ref));
   for (int q = 0; q < n_query; ++q) {
     EnhanceColumn(d.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), contrast_window,
-                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)));
+                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), scratch);
   }
   return SeqSlamError::kOk;
 }
@@ -335,7 +418,8 @@ SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const floa
 
 // ---- Streaming engine ------------------------------------------------------------------
 
-SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int capacity) {
+SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int capacity,
+                                    ReferenceStorage storage) {
   SeqSlamError e = search_.Init(params);
   if (e != SeqSlamError::kOk)
     return e;
@@ -347,7 +431,16 @@ SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int ca
   dim_ = dim;
   capacity_ = capacity;
   const std::size_t len = Sz(params.sequence_length);
-  database_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  storage_ = storage;
+  database_.clear();
+  database_.shrink_to_fit();
+  database_bf16_.clear();
+  database_bf16_.shrink_to_fit();
+  if (storage == ReferenceStorage::kFloat32) {
+    database_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  } else {
+    database_bf16_.assign(Sz(capacity) * Sz(dim), 0);
+  }
   ring_.assign(len * Sz(capacity), 0.0f);
   difference_.assign(Sz(capacity), 0.0f);
   scores_.assign(Sz(capacity), 0.0f);
@@ -364,7 +457,13 @@ SeqSlamError StreamingSeqSlam::AddReference(std::span<const float> descriptor) {
     return SeqSlamError::kSizeMismatch;
   if (size_ >= capacity_)
     return SeqSlamError::kDatabaseFull;
-  std::copy(descriptor.begin(), descriptor.end(), database_.data() + Sz(size_) * Sz(dim_));
+  const std::size_t at = Sz(size_) * Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    std::copy(descriptor.begin(), descriptor.end(), database_.data() + at);
+  } else {
+    for (std::size_t i = 0; i < descriptor.size(); ++i)
+      database_bf16_[at + i] = ToBFloat16(descriptor[i]);
+  }
   ++size_;
   ResetQueries();
   return SeqSlamError::kOk;
@@ -391,10 +490,17 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
   const std::size_t n = Sz(size_);
   const int len = params_.sequence_length;
   std::span<float> diff(difference_.data(), n);
-  DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
+  } else {
+    DifferenceColumnBFloat16(std::span<const std::uint16_t>(database_bf16_.data(), n * Sz(dim_)),
+                             dim_, query, diff);
+  }
   // Ring slots are `capacity` floats apart; only the first `size` of each are used.
   float* slot = ring_.data() + Sz(head_) * Sz(capacity_);
-  EnhanceColumn(diff, params_.contrast_window, std::span<float>(slot, n));
+  // scores_ is free until the search: the enhancement's scratch.
+  EnhanceColumn(diff, params_.contrast_window, std::span<float>(slot, n),
+                std::span<float>(scores_.data(), n));
   head_ = (head_ + 1) % len;
   count_ = std::min(count_ + 1, len);
   if (count_ < len)
@@ -406,13 +512,15 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
   return SeqSlamError::kOk;
 }
 
-std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int dim) {
-  return sizeof(float) * (Sz(dim) + Sz(params.sequence_length) + 2);
+std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int dim,
+                                                ReferenceStorage storage) {
+  const std::size_t element = storage == ReferenceStorage::kFloat32 ? 4 : 2;
+  return element * Sz(dim) + sizeof(float) * (Sz(params.sequence_length) + 2);
 }
 
 std::size_t StreamingSeqSlam::AllocatedBytes() const {
   return sizeof(float) * (database_.size() + ring_.size() + difference_.size() + scores_.size()) +
-         sizeof(const float*) * order_.size() +
+         sizeof(std::uint16_t) * database_bf16_.size() + sizeof(const float*) * order_.size() +
          sizeof(int) * Sz(search_.velocity_count() * search_.sequence_length()) +
          sizeof(float) * Sz(search_.velocity_count());
 }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -151,6 +152,8 @@ TEST(SeqSlamParams, Validation) {
   EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
   p.v_step = 0.001f;  // 401 velocities
   EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
+  p.v_step = 1e-30f;  // 4e29 velocities: must not overflow the count
+  EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
   p = SeqSlamParams{};
   p.v_min = std::nanf("");
   EXPECT_EQ(ValidateSeqSlamParams(p), SeqSlamError::kBadVelocity);
@@ -259,6 +262,56 @@ TEST(SeqSlamStreaming, EqualsBatchWithTrailingWindow) {
   }
 }
 
+TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
+  const PlantedRoute route = MakeRoute(150, 40, 20.0, 1.1, 0.3f, 17u);
+  SeqSlamParams p;
+  std::vector<float> rounded = route.reference;
+  for (float& x : rounded)
+    x = FromBFloat16(ToBFloat16(x));
+  std::vector<SeqSlamMatch> batch(40);
+  ASSERT_EQ(BatchSeqSlam(rounded, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
+            SeqSlamError::kOk);
+  StreamingSeqSlam s;
+  ASSERT_EQ(s.Init(p, route.dim, 150, ReferenceStorage::kBFloat16), SeqSlamError::kOk);
+  for (int r = 0; r < 150; ++r) {
+    ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
+                                 .subspan(static_cast<std::size_t>(r * route.dim), 16)),
+              SeqSlamError::kOk);
+  }
+  AllocationScope scope;
+  int correct = 0;
+  for (int t = 0; t < 40; ++t) {
+    SeqSlamMatch m;
+    ASSERT_EQ(
+        s.Step(std::span<const float>(route.query).subspan(static_cast<std::size_t>(t * 16), 16),
+               &m),
+        SeqSlamError::kOk);
+    const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
+    ASSERT_EQ(m.valid, b.valid);
+    EXPECT_EQ(m.reference, b.reference);
+    EXPECT_EQ(m.score, b.score);
+    EXPECT_EQ(m.uniqueness, b.uniqueness);
+    correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_EQ(correct, 31);  // the rounding costs nothing here
+  EXPECT_EQ(StreamingSeqSlam::BytesPerReference(p, 120, ReferenceStorage::kBFloat16),
+            2u * 120 + 4u * (10 + 2));
+}
+
+TEST(SeqSlamStreaming, BFloat16RoundsToNearestEven) {
+  EXPECT_EQ(ToBFloat16(1.0f), 0x3F80);
+  EXPECT_EQ(ToBFloat16(-2.0f), 0xC000);
+  // 1 + 2^-8 lies halfway between 1 and 1 + 2^-7: ties go to the even mantissa (1).
+  EXPECT_EQ(ToBFloat16(1.0f + 0x1p-8f), 0x3F80);
+  // 1 + 3 * 2^-8 lies halfway between 1 + 2^-7 (odd) and 1 + 2^-6 (even): rounds up.
+  EXPECT_EQ(ToBFloat16(1.0f + 3 * 0x1p-8f), 0x3F82);
+  EXPECT_EQ(ToBFloat16(1.0f + 0x1p-8f + 0x1p-12f), 0x3F81);  // above halfway
+  EXPECT_EQ(FromBFloat16(0x3F81), 1.0f + 0x1p-7f);
+  EXPECT_TRUE(std::isnan(FromBFloat16(ToBFloat16(std::nanf("")))));
+  EXPECT_TRUE(std::isinf(FromBFloat16(ToBFloat16(INFINITY))));
+}
+
 TEST(SeqSlamStreaming, SingleImageModeMatchesEveryFrame) {
   // Unrelated neighbouring references: single frames are distinctive on their own.
   const PlantedRoute route = MakeRoute(100, 30, 10.0, 1.0, 0.05f, 3u, /*smooth=*/false);
@@ -329,10 +382,126 @@ TEST(SeqSlamBatch, PlantedRouteFoundAtEveryVelocity) {
   }
 }
 
+// A second implementation, written straight from OpenSeqSLAM's MATLAB text with the
+// differences documented in seqslam.h: each window's mean and std recomputed from scratch
+// in double (no running sums), every trajectory summed in double, no blocking.
+std::vector<SeqSlamMatch> NaiveSeqSlam(const std::vector<float>& d, int n, int m,
+                                       const SeqSlamParams& p, SeqSlamWindow window) {
+  const int h = p.contrast_window / 2;
+  const int mm = std::min(n, 2 * h + 1);
+  const double shift = mm > 1 ? (mm - 1) / std::sqrt(static_cast<double>(mm)) : 0.0;
+  auto at = [&](int q, int r) {
+    return static_cast<double>(d[static_cast<std::size_t>(q * n + r)]);
+  };
+  std::vector<double> e(static_cast<std::size_t>(n * m));
+  for (int q = 0; q < m; ++q) {
+    for (int i = 0; i < n; ++i) {
+      const int a = std::max(0, i - h), b = std::min(n - 1, i + h), k = b - a + 1;
+      double mu = 0, sq = 0;
+      for (int r = a; r <= b; ++r) {
+        mu += at(q, r);
+        sq += at(q, r) * at(q, r);
+      }
+      mu /= k;
+      double var = 0;
+      for (int r = a; r <= b; ++r)
+        var += (at(q, r) - mu) * (at(q, r) - mu);
+      var = k > 1 ? var / (k - 1) : 0.0;
+      const double z = var > 1e-10 * sq / k ? (at(q, i) - mu) / std::sqrt(var) : 0.0;
+      e[static_cast<std::size_t>(q * n + i)] = z + shift;
+    }
+  }
+  std::vector<double> v;
+  for (int k = 0;; ++k) {
+    const double vk = static_cast<double>(p.v_min) + k * static_cast<double>(p.v_step);
+    if (vk > static_cast<double>(p.v_max) + 1e-6)
+      break;
+    v.push_back(vk);
+  }
+  const int ds = p.sequence_length;
+  auto off = [&](std::size_t k, int j) { return static_cast<int>(std::floor(j * v[k] + 1e-9)); };
+  std::vector<SeqSlamMatch> out(static_cast<std::size_t>(m));
+  for (int t = 0; t < m; ++t) {
+    const int first = window == SeqSlamWindow::kCentred ? t - ds / 2 : t - ds + 1;
+    if (first < 0 || first + ds > m)
+      continue;
+    std::vector<double> score(static_cast<std::size_t>(n), INFINITY);
+    std::vector<std::size_t> best_k(static_cast<std::size_t>(n), 0);
+    for (int s = 0; s < n; ++s) {
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        if (s + off(k, ds - 1) >= n)
+          continue;
+        double sum = 0;
+        for (int j = 0; j < ds; ++j)
+          sum += e[static_cast<std::size_t>((first + j) * n + s + off(k, j))];
+        if (sum < score[static_cast<std::size_t>(s)]) {
+          score[static_cast<std::size_t>(s)] = sum;
+          best_k[static_cast<std::size_t>(s)] = k;
+        }
+      }
+    }
+    const auto best = std::min_element(score.begin(), score.end());
+    if (std::isinf(*best))
+      continue;
+    const int bs = static_cast<int>(best - score.begin());
+    double second = INFINITY;
+    for (int s = 0; s < n; ++s) {
+      if (std::abs(s - bs) > p.uniqueness_window / 2)
+        second = std::min(second, score[static_cast<std::size_t>(s)]);
+    }
+    SeqSlamMatch& r = out[static_cast<std::size_t>(t)];
+    r.valid = true;
+    r.start = bs;
+    r.reference = bs + off(best_k[static_cast<std::size_t>(bs)], t - first);
+    r.score = static_cast<float>(*best);
+    r.uniqueness = std::isinf(second) || second <= 0 ? 1.0f : static_cast<float>(*best / second);
+  }
+  return out;
+}
+
+TEST(SeqSlamBatch, MatchesNaiveReference) {
+  // Random differences with a planted diagonal at 0.9 frames per frame and a flat band
+  // (zero std), both windows, several sequence lengths.
+  const int n = 90, m = 40;
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+  std::vector<float> d(static_cast<std::size_t>(n * m));
+  for (int q = 0; q < m; ++q) {
+    for (int r = 0; r < n; ++r) {
+      float x = uni(rng);
+      if (r == 10 + (q * 9) / 10)
+        x *= 0.3f;
+      if (r >= 40 && r < 52)
+        x = 0.5f;
+      d[static_cast<std::size_t>(q * n + r)] = x;
+    }
+  }
+  for (const int ds : {1, 4, 10, 11}) {
+    for (const SeqSlamWindow w : {SeqSlamWindow::kCentred, SeqSlamWindow::kTrailing}) {
+      SeqSlamParams p;
+      p.sequence_length = ds;
+      std::vector<SeqSlamMatch> fast(static_cast<std::size_t>(m));
+      ASSERT_EQ(SeqSlamFromDifferences(d, n, m, p, w, fast), SeqSlamError::kOk);
+      const std::vector<SeqSlamMatch> slow = NaiveSeqSlam(d, n, m, p, w);
+      for (int t = 0; t < m; ++t) {
+        const SeqSlamMatch& a = fast[static_cast<std::size_t>(t)];
+        const SeqSlamMatch& b = slow[static_cast<std::size_t>(t)];
+        ASSERT_EQ(a.valid, b.valid) << "ds " << ds << " t " << t;
+        if (!a.valid)
+          continue;
+        EXPECT_EQ(a.start, b.start) << "ds " << ds << " t " << t;
+        EXPECT_EQ(a.reference, b.reference) << "ds " << ds << " t " << t;
+        EXPECT_NEAR(a.score, b.score, 1e-4f * std::max(1.0f, b.score));
+        EXPECT_NEAR(a.uniqueness, b.uniqueness, 1e-4f);
+      }
+    }
+  }
+}
+
 TEST(SeqSlamEnhancement, ZeroVarianceGivesFiniteOutput) {
   // A constant column (all references equally far) and a database of identical frames.
-  std::vector<float> d(50, 3.0f), out(50);
-  EnhanceColumn(d, 10, out);
+  std::vector<float> d(50, 3.0f), out(50), scratch(50);
+  EnhanceColumn(d, 10, out, scratch);
   for (float x : out)
     EXPECT_FLOAT_EQ(x, EnhancementShift(50, 10));
   std::vector<float> same(20 * 8, 0.5f), query(8, 0.5f);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "skyloc/drivers/camera.h"
+#include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/image.h"
 #include "skyloc/platform/status.h"
 
@@ -65,8 +66,8 @@ class DatasetWriter {
   // overwritten. With `with_poses` every Append must carry a pose.
   Status Open(const std::string& dir, bool with_poses);
 
-  // Writes the image as frames/NNNNNN.pgm (kGrey8) or frames/NNNNNN.png (kRgb24, kBgr24;
-  // kYuyv is stored as its grey luminance in a .pgm) and appends its row, flushed.
+  // Writes the image as frames/NNNNNN.png (SavePng: grey stays grey, RGB/BGR as RGB,
+  // YUYV as its Y plane) and then appends its row, flushed.
   Status Append(const dsp::ImageView& image, double timestamp_s, const std::optional<Pose>& pose);
 
   // Appends a row for an image the caller already wrote into DIR/frames/ (its name).
@@ -88,8 +89,10 @@ class DatasetWriter {
 
 // Plays a dataset folder as a camera: Capture() returns the frames in order, each with
 // its pose when the dataset has poses, and kOutOfRange after the last one. Timestamps are
-// the dataset's timestamp_s (as nanoseconds since the start of the run). The images are
-// converted to kGrey8 (PNG colour images by luminance) so every frame has one format.
+// the dataset's timestamp_s (as nanoseconds since the start of the run). Frames come as
+// LoadImage gives them (kGrey8 or kRgb24); every frame must have the first one's size and
+// format (kDataLoss otherwise). Replay is a laptop tool: each Capture() decodes a file and
+// so allocates.
 class DatasetCamera final : public Camera {
  public:
   explicit DatasetCamera(std::string dir) : dir_(std::move(dir)) {}
@@ -106,7 +109,7 @@ class DatasetCamera final : public Camera {
   std::string dir_;
   Dataset dataset_;
   std::size_t next_ = 0;
-  std::vector<std::uint8_t> pixels_;  // the current frame, grey, sized once in Open()
+  OwnedImage current_;  // the frame Capture() returned last
 };
 
 }  // namespace skyloc::drivers

@@ -106,10 +106,21 @@ struct SeqSlamMatch {
 void DifferenceColumn(std::span<const float> database, int dim, std::span<const float> query,
                       std::span<float> out);
 
+// The same over a database stored as bfloat16 (ReferenceStorage::kBFloat16). Bit for bit
+// equal to DifferenceColumn over the database converted back with FromBFloat16.
+void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
+                              std::span<const float> query, std::span<float> out);
+
+// bfloat16: the upper 16 bits of an IEEE float (8 significant bits, the float's range).
+// ToBFloat16 rounds to nearest, ties to even; FromBFloat16 is exact.
+std::uint16_t ToBFloat16(float value);
+float FromBFloat16(std::uint16_t value);
+
 // Local contrast enhancement of one column of D: out[r] = (d[r] - mean) / std over rows
 // max(0, r - R/2) .. min(N - 1, r + R/2) (sample std, as MATLAB's std), plus the shift of
-// note 4 above; 0 + shift where the std is 0. O(N) with running sums.
-void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out);
+// note 4 above; 0 + shift where the std is 0. O(N) with running sums. scratch: >= N floats.
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out,
+                   std::span<float> scratch);
 
 // The constant added by EnhanceColumn for a database of n references (note 4).
 float EnhancementShift(int n, int contrast_window);
@@ -167,11 +178,20 @@ SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const floa
 
 // ---- Streaming engine (firmware) -------------------------------------------------------
 
+// How the streaming engine stores the route database. The difference column reads the
+// whole database every frame, so at large N its size is the step's cost.
+enum class ReferenceStorage : std::uint8_t {
+  kFloat32,   // exact: 4 bytes per element
+  kBFloat16,  // rounded to 8 significant bits (relative error <= 2^-9): half the memory and
+              // the memory traffic; far below the noise of any image descriptor
+};
+
 class StreamingSeqSlam {
  public:
   // Allocates everything (the only allocation): the database of `capacity` descriptors of
-  // `dim` floats, the ring of ds enhanced columns and the per-step scratch.
-  SeqSlamError Init(const SeqSlamParams& params, int dim, int capacity);
+  // `dim` elements, the ring of ds enhanced columns and the per-step scratch.
+  SeqSlamError Init(const SeqSlamParams& params, int dim, int capacity,
+                    ReferenceStorage storage = ReferenceStorage::kFloat32);
 
   // Appends a reference descriptor (the taught route, in order). Forgets the query
   // history: the ring's columns were computed against the smaller database.
@@ -187,12 +207,14 @@ class StreamingSeqSlam {
 
   int size() const { return size_; }
   int capacity() const { return capacity_; }
+  ReferenceStorage storage() const { return storage_; }
   int dim() const { return dim_; }
   int frames_in_window() const { return count_; }
 
   // Bytes Init allocates per reference frame: descriptor, ds ring entries, two scratch
   // floats (the difference column and the per-start scores).
-  static std::size_t BytesPerReference(const SeqSlamParams& params, int dim);
+  static std::size_t BytesPerReference(const SeqSlamParams& params, int dim,
+                                       ReferenceStorage storage = ReferenceStorage::kFloat32);
   std::size_t AllocatedBytes() const;
 
  private:
@@ -201,13 +223,15 @@ class StreamingSeqSlam {
   int dim_ = 0;
   int capacity_ = 0;
   int size_ = 0;
-  int head_ = 0;                     // ring slot the next column goes into
-  int count_ = 0;                    // columns in the ring (<= ds)
-  std::vector<float> database_;      // capacity x dim
-  std::vector<float> ring_;          // ds x capacity enhanced columns
-  std::vector<float> difference_;    // capacity
-  std::vector<float> scores_;        // capacity
-  std::vector<const float*> order_;  // ds column pointers, oldest first
+  int head_ = 0;   // ring slot the next column goes into
+  int count_ = 0;  // columns in the ring (<= ds)
+  ReferenceStorage storage_ = ReferenceStorage::kFloat32;
+  std::vector<float> database_;               // capacity x dim (kFloat32)
+  std::vector<std::uint16_t> database_bf16_;  // capacity x dim (kBFloat16)
+  std::vector<float> ring_;                   // ds x capacity enhanced columns
+  std::vector<float> difference_;             // capacity
+  std::vector<float> scores_;                 // capacity
+  std::vector<const float*> order_;           // ds column pointers, oldest first
 };
 
 }  // namespace skyloc::dsp

@@ -1,0 +1,785 @@
+// `skyloc eval`: place recognition of a query run against a reference run (two dataset
+// folders), with SeqSLAM over the sky descriptor and/or the vanilla (patch-normalised
+// greyscale) descriptor, at one or more sequence lengths. Writes matches.csv,
+// metrics.json, pr.svg and correspondence.svg into --out (docs/SEQSLAM.md, "Evaluation").
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include "commands.h"
+#include "skyloc/drivers/dataset.h"
+#include "skyloc/dsp/lens.h"
+#include "skyloc/dsp/place_metrics.h"
+#include "skyloc/dsp/seqslam.h"
+#include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/vanilla_descriptor.h"
+#include "skyloc/platform/status.h"
+
+namespace skyloc::app {
+namespace {
+
+constexpr const char* kUsage =
+    "usage: skyloc eval --reference DIR --query DIR --out DIR [options]\n"
+    "\n"
+    "Matches every query frame against the reference route with SeqSLAM and scores the\n"
+    "matches against the ground truth. DIRs are dataset folders (docs/DATASETS.md).\n"
+    "\n"
+    "  --method sky|vanilla   descriptor (repeat to compare; default: sky and vanilla)\n"
+    "  --ds N                 sequence length in frames (repeat; default: 1 10 20)\n"
+    "  --batch                OpenSeqSLAM's centred window (default)\n"
+    "  --streaming            the firmware's causal engine (trailing window)\n"
+    "  --gt FILE              ground truth CSV: query_index,reference_index (-1: off route)\n"
+    "  --tolerance-m X        ground truth from the datasets' poses: a match is correct when\n"
+    "                         the matched reference was recorded within X m of the query\n"
+    "  --frame-tolerance N    with --gt or pose-derived truth: correct within +-N frames\n"
+    "                         (default 5, as the paper)\n"
+    "  --lens MODEL           sky: lens model (equidistant, equisolid, ...; default\n"
+    "                         equidistant)\n"
+    "  --fov-deg X            sky: full field of view (default 185)\n"
+    "  --bands N              sky: spherical-harmonic bands (default 120)\n"
+    "\n"
+    "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
+    "reference recorded nearest to it, correct within --frame-tolerance frames.\n"
+    "Writes OUT/matches.csv, OUT/metrics.json, OUT/pr.svg, OUT/correspondence.svg.\n";
+
+enum class Method : std::uint8_t { kSky, kVanilla };
+
+const char* MethodName(Method m) {
+  return m == Method::kSky ? "sky" : "vanilla";
+}
+
+struct EvalOptions {
+  std::string reference;
+  std::string query;
+  std::string out;
+  std::string gt_file;
+  double tolerance_m = -1.0;  // < 0: not given
+  int frame_tolerance = 5;
+  std::vector<Method> methods;
+  std::vector<int> ds_list;
+  bool streaming = false;
+  dsp::LensModel lens = dsp::LensModel::kEquidistant;
+  double fov_deg = 185.0;
+  int bands = 120;
+};
+
+bool ParseIntArg(const char* s, int* out) {
+  const char* end = s + std::strlen(s);
+  auto [p, ec] = std::from_chars(s, end, *out);
+  return ec == std::errc() && p == end && end != s;
+}
+
+bool ParseDoubleArg(const char* s, double* out) {
+  const char* end = s + std::strlen(s);
+  auto [p, ec] = std::from_chars(s, end, *out);
+  return ec == std::errc() && p == end && end != s && std::isfinite(*out);
+}
+
+// Returns kExitOk, or kExitUsage after printing the problem.
+int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
+  // `what` holds one %s for `a`.
+  auto fail = [](std::string_view what, const char* a) {
+    const std::size_t at = what.find("%s");
+    std::string msg(what.substr(0, at));
+    if (at != std::string_view::npos)
+      msg.append(a).append(what.substr(at + 2));
+    std::fprintf(stderr, "skyloc eval: %s\nRun 'skyloc eval --help' for the options.\n",
+                 msg.c_str());
+    return kExitUsage;
+  };
+  bool batch = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string_view a = args[i];
+    auto value = [&]() -> const char* { return i + 1 < args.size() ? args[++i] : nullptr; };
+    if (a == "--help" || a == "-h") {
+      *help = true;
+      return kExitOk;
+    }
+    if (a == "--batch") {
+      batch = true;
+      continue;
+    }
+    if (a == "--streaming") {
+      o->streaming = true;
+      continue;
+    }
+    const char* v = value();
+    if (v == nullptr)
+      return fail("%s needs a value", args[i]);
+    if (a == "--reference") {
+      o->reference = v;
+    } else if (a == "--query") {
+      o->query = v;
+    } else if (a == "--out") {
+      o->out = v;
+    } else if (a == "--gt") {
+      o->gt_file = v;
+    } else if (a == "--tolerance-m") {
+      if (!ParseDoubleArg(v, &o->tolerance_m) || o->tolerance_m <= 0)
+        return fail("--tolerance-m '%s': give a distance in metres > 0", v);
+    } else if (a == "--frame-tolerance") {
+      if (!ParseIntArg(v, &o->frame_tolerance) || o->frame_tolerance < 0)
+        return fail("--frame-tolerance '%s': give a whole number of frames >= 0", v);
+    } else if (a == "--method") {
+      if (std::strcmp(v, "sky") == 0) {
+        o->methods.push_back(Method::kSky);
+      } else if (std::strcmp(v, "vanilla") == 0) {
+        o->methods.push_back(Method::kVanilla);
+      } else {
+        return fail("--method '%s': use sky or vanilla", v);
+      }
+    } else if (a == "--ds") {
+      int ds = 0;
+      if (!ParseIntArg(v, &ds) || ds < 1 || ds > dsp::kMaxSequenceLength)
+        return fail("--ds '%s': give a sequence length of 1..1000 frames", v);
+      o->ds_list.push_back(ds);
+    } else if (a == "--lens") {
+      if (!dsp::ParseLensModel(v, &o->lens))
+        return fail(
+            "--lens '%s': use equidistant, equisolid, kannala_brandt, ocamcalib or "
+            "equirectangular",
+            v);
+    } else if (a == "--fov-deg") {
+      if (!ParseDoubleArg(v, &o->fov_deg) || o->fov_deg <= 0 || o->fov_deg > 360)
+        return fail("--fov-deg '%s': give a field of view in (0, 360] degrees", v);
+    } else if (a == "--bands") {
+      if (!ParseIntArg(v, &o->bands) || o->bands < 1 || o->bands > 512)
+        return fail("--bands '%s': give 1..512", v);
+    } else {
+      return fail("unknown option '%s'", args[i]);
+    }
+  }
+  if (o->reference.empty() || o->query.empty() || o->out.empty())
+    return fail("%s", "--reference, --query and --out are required");
+  if (batch && o->streaming)
+    return fail("%s", "--batch and --streaming exclude each other");
+  if (!o->gt_file.empty() && o->tolerance_m > 0)
+    return fail("%s", "--gt and --tolerance-m exclude each other");
+  if (o->methods.empty())
+    o->methods = {Method::kSky, Method::kVanilla};
+  if (o->ds_list.empty())
+    o->ds_list = {1, 10, 20};
+  std::sort(o->methods.begin(), o->methods.end());
+  o->methods.erase(std::unique(o->methods.begin(), o->methods.end()), o->methods.end());
+  return kExitOk;
+}
+
+// ---- Descriptors -----------------------------------------------------------------------
+
+struct Descriptors {
+  int dim = 0;
+  int count = 0;
+  std::vector<float> values;  // count x dim
+  std::span<const float> all() const { return values; }
+};
+
+Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
+                                       const EvalOptions& o) {
+  drivers::DatasetCamera camera(dir);
+  SKYLOC_TRY(camera.Open());
+  SKYLOC_TRY(camera.Start());
+  Descriptors d;
+  dsp::SkyDescriptor sky;
+  if (method == Method::kSky) {
+    dsp::LensParams lp;
+    lp.model = o.lens;
+    lp.width = camera.info().width;
+    lp.height = camera.info().height;
+    lp.fov_deg = o.fov_deg;
+    dsp::Lens lens;
+    const dsp::LensError le = lens.Init(lp);
+    if (le != dsp::LensError::kOk) {
+      return Status::Error(StatusCode::kInvalidArgument, "lens for %s (%dx%d): %s", dir.c_str(),
+                           lp.width, lp.height, dsp::LensErrorMessage(le));
+    }
+    dsp::SkyDescriptorOptions so;
+    so.bands = o.bands;
+    const dsp::DescriptorError de = sky.Init(lens, so);
+    if (!de.ok()) {
+      return Status::Error(StatusCode::kInvalidArgument, "sky descriptor for %s: %s", dir.c_str(),
+                           de.message);
+    }
+    d.dim = o.bands;
+  } else {
+    d.dim = dsp::kVanillaDescriptorSize;
+  }
+  const std::size_t n = camera.dataset().frames.size();
+  d.values.resize(n * static_cast<std::size_t>(d.dim));
+  for (std::size_t i = 0; i < n; ++i) {
+    Result<drivers::Frame> frame = camera.Capture(Nanoseconds(0));
+    if (!frame.ok())
+      return frame.status();
+    std::span<float> out(d.values.data() + i * static_cast<std::size_t>(d.dim),
+                         static_cast<std::size_t>(d.dim));
+    if (method == Method::kSky) {
+      const dsp::DescriptorError de = sky.Compute(frame->image, out);
+      if (!de.ok()) {
+        return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
+                             camera.dataset().FramePath(i).c_str(), de.message);
+      }
+    } else {
+      const dsp::VanillaError ve = dsp::VanillaDescriptor(frame->image, out);
+      if (ve != dsp::VanillaError::kOk) {
+        return Status::Error(StatusCode::kDataLoss, "%s: %s", camera.dataset().FramePath(i).c_str(),
+                             dsp::VanillaErrorMessage(ve));
+      }
+    }
+  }
+  d.count = static_cast<int>(n);
+  camera.Close();
+  return d;
+}
+
+// ---- Ground truth ----------------------------------------------------------------------
+
+struct GroundTruth {
+  std::vector<int> reference;  // per query frame; -1: not on the reference route
+  bool by_distance = false;    // correctness by pose distance (--tolerance-m)
+  std::string description;
+};
+
+double Distance(const drivers::Pose& a, const drivers::Pose& b) {
+  return std::sqrt((a.x_m - b.x_m) * (a.x_m - b.x_m) + (a.y_m - b.y_m) * (a.y_m - b.y_m) +
+                   (a.z_m - b.z_m) * (a.z_m - b.z_m));
+}
+
+Status ReadGroundTruthCsv(const std::string& path, int n_query, int n_ref, GroundTruth* gt) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot open ground truth %s", path.c_str());
+  }
+  gt->reference.assign(static_cast<std::size_t>(n_query), -1);
+  std::vector<bool> seen(static_cast<std::size_t>(n_query), false);
+  char line[256];
+  int line_no = 0;
+  Status status;
+  while (status.ok() && std::fgets(line, sizeof line, f) != nullptr) {
+    ++line_no;
+    std::string_view s(line);
+    while (!s.empty() && (s.back() == '\n' || s.back() == '\r'))
+      s.remove_suffix(1);
+    if (line_no == 1) {
+      if (s != "query_index,reference_index") {
+        status = Status::Error(StatusCode::kInvalidArgument,
+                               "%s:1: header must be 'query_index,reference_index'", path.c_str());
+      }
+      continue;
+    }
+    if (s.empty())
+      continue;
+    const std::size_t comma = s.find(',');
+    int q = 0, r = 0;
+    auto parse = [](std::string_view t, int* v) {
+      auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), *v);
+      return ec == std::errc() && p == t.data() + t.size() && !t.empty();
+    };
+    if (comma == std::string_view::npos || !parse(s.substr(0, comma), &q) ||
+        !parse(s.substr(comma + 1), &r)) {
+      status = Status::Error(StatusCode::kInvalidArgument,
+                             "%s:%d: expected two integers 'query_index,reference_index'",
+                             path.c_str(), line_no);
+    } else if (q < 0 || q >= n_query) {
+      status = Status::Error(StatusCode::kInvalidArgument,
+                             "%s:%d: query_index %d outside the query run's 0..%d", path.c_str(),
+                             line_no, q, n_query - 1);
+    } else if (r < -1 || r >= n_ref) {
+      status =
+          Status::Error(StatusCode::kInvalidArgument, "%s:%d: reference_index %d outside -1..%d",
+                        path.c_str(), line_no, r, n_ref - 1);
+    } else if (seen[static_cast<std::size_t>(q)]) {
+      status = Status::Error(StatusCode::kInvalidArgument, "%s:%d: query_index %d given twice",
+                             path.c_str(), line_no, q);
+    } else {
+      seen[static_cast<std::size_t>(q)] = true;
+      gt->reference[static_cast<std::size_t>(q)] = r;
+    }
+  }
+  const bool read_error = std::ferror(f) != 0;
+  std::fclose(f);
+  SKYLOC_TRY(status);
+  if (read_error)
+    return Status::Error(StatusCode::kDataLoss, "cannot read %s", path.c_str());
+  if (line_no == 0)
+    return Status::Error(StatusCode::kInvalidArgument, "%s: empty file", path.c_str());
+  return Status::Ok();
+}
+
+Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset& ref,
+                                    const drivers::Dataset& query) {
+  GroundTruth gt;
+  const int n_query = static_cast<int>(query.frames.size());
+  const int n_ref = static_cast<int>(ref.frames.size());
+  if (!o.gt_file.empty()) {
+    SKYLOC_TRY(ReadGroundTruthCsv(o.gt_file, n_query, n_ref, &gt));
+    gt.description = "file " + o.gt_file;
+    return gt;
+  }
+  if (!ref.has_poses || !query.has_poses) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "no ground truth: %s has no poses in frames.csv; pass --gt FILE "
+                         "(query_index,reference_index)",
+                         ref.has_poses ? query.dir.c_str() : ref.dir.c_str());
+  }
+  gt.by_distance = o.tolerance_m > 0;
+  gt.reference.assign(static_cast<std::size_t>(n_query), -1);
+  for (int q = 0; q < n_query; ++q) {
+    double best = INFINITY;
+    int best_r = -1;
+    for (int r = 0; r < n_ref; ++r) {
+      const double dist = Distance(*query.frames[static_cast<std::size_t>(q)].pose,
+                                   *ref.frames[static_cast<std::size_t>(r)].pose);
+      if (dist < best) {
+        best = dist;
+        best_r = r;
+      }
+    }
+    // With a distance tolerance, a query farther than it from the whole route is off it.
+    if (gt.by_distance && best > o.tolerance_m)
+      best_r = -1;
+    gt.reference[static_cast<std::size_t>(q)] = best_r;
+  }
+  char text[96];
+  if (gt.by_distance) {
+    std::snprintf(text, sizeof text, "poses, correct within %.3g m", o.tolerance_m);
+  } else {
+    std::snprintf(text, sizeof text, "poses (nearest reference), correct within %d frames",
+                  o.frame_tolerance);
+  }
+  gt.description = text;
+  return gt;
+}
+
+// ---- Runs --------------------------------------------------------------------------------
+
+struct Run {
+  Method method = Method::kVanilla;
+  int ds = 0;
+  std::vector<dsp::SeqSlamMatch> matches;  // per query frame
+  std::vector<int> evaluated_queries;      // queries with a match, in order
+  std::vector<dsp::EvaluatedMatch> evaluated;
+  std::vector<dsp::PrPoint> curve;
+  dsp::PrSummary summary;
+  std::string label;
+};
+
+Status RunSeqSlam(const Descriptors& ref, const Descriptors& query, bool streaming, Run* run) {
+  dsp::SeqSlamParams p;
+  p.sequence_length = run->ds;
+  run->matches.assign(static_cast<std::size_t>(query.count), dsp::SeqSlamMatch{});
+  dsp::SeqSlamError e;
+  if (streaming) {
+    dsp::StreamingSeqSlam engine;
+    e = engine.Init(p, ref.dim, std::max(1, ref.count));
+    for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r) {
+      e = engine.AddReference(ref.all().subspan(static_cast<std::size_t>(r * ref.dim),
+                                                static_cast<std::size_t>(ref.dim)));
+    }
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
+      e = engine.Step(query.all().subspan(static_cast<std::size_t>(t * query.dim),
+                                          static_cast<std::size_t>(query.dim)),
+                      &run->matches[static_cast<std::size_t>(t)]);
+    }
+  } else {
+    e = dsp::BatchSeqSlam(ref.all(), query.all(), ref.dim, p, dsp::SeqSlamWindow::kCentred,
+                          run->matches);
+  }
+  if (e != dsp::SeqSlamError::kOk) {
+    return Status::Error(StatusCode::kInvalidArgument, "SeqSLAM (%s, ds %d): %s",
+                         MethodName(run->method), run->ds, dsp::SeqSlamErrorMessage(e));
+  }
+  return Status::Ok();
+}
+
+bool IsCorrect(const GroundTruth& gt, const EvalOptions& o, const drivers::Dataset& ref,
+               const drivers::Dataset& query, int q, int matched) {
+  const int truth = gt.reference[static_cast<std::size_t>(q)];
+  if (truth < 0 || matched < 0)
+    return false;
+  if (gt.by_distance) {
+    return Distance(*query.frames[static_cast<std::size_t>(q)].pose,
+                    *ref.frames[static_cast<std::size_t>(matched)].pose) <= o.tolerance_m;
+  }
+  return dsp::MatchWithinFrames(matched, truth, o.frame_tolerance);
+}
+
+void Score(const GroundTruth& gt, const EvalOptions& o, const drivers::Dataset& ref,
+           const drivers::Dataset& query, Run* run) {
+  for (std::size_t q = 0; q < run->matches.size(); ++q) {
+    const dsp::SeqSlamMatch& m = run->matches[q];
+    if (!m.valid)
+      continue;
+    dsp::EvaluatedMatch e;
+    e.uniqueness = m.uniqueness;
+    e.has_ground_truth = gt.reference[q] >= 0;
+    e.correct = IsCorrect(gt, o, ref, query, static_cast<int>(q), m.reference);
+    run->evaluated_queries.push_back(static_cast<int>(q));
+    run->evaluated.push_back(e);
+  }
+  std::vector<std::size_t> order(run->evaluated.size());
+  run->curve.resize(run->evaluated.size());
+  run->curve.resize(dsp::PrecisionRecallCurve(run->evaluated, order, run->curve));
+  run->summary = dsp::SummarisePrecisionRecall(run->evaluated, run->curve);
+  run->label = std::string(MethodName(run->method)) + " ds=" + std::to_string(run->ds);
+}
+
+// ---- Output files ------------------------------------------------------------------------
+
+class OutFile {
+ public:
+  Status Open(const std::string& path) {
+    path_ = path;
+    f_ = std::fopen(path.c_str(), "w");
+    if (f_ == nullptr) {
+      const int saved = errno;
+      return Status::FromErrno(saved, "cannot create %s", path.c_str());
+    }
+    return Status::Ok();
+  }
+  std::FILE* get() { return f_; }
+  Status Close() {
+    const bool error = std::ferror(f_) != 0;
+    const int closed = std::fclose(f_);
+    const int saved = errno;
+    f_ = nullptr;
+    if (error || closed != 0)
+      return Status::FromErrno(saved, "cannot write %s", path_.c_str());
+    return Status::Ok();
+  }
+  ~OutFile() {
+    if (f_ != nullptr)
+      std::fclose(f_);
+  }
+
+ private:
+  std::string path_;
+  std::FILE* f_ = nullptr;
+};
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string XmlEscape(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    switch (c) {
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+Status WriteMatchesCsv(const std::string& path, const std::vector<Run>& runs) {
+  OutFile f;
+  SKYLOC_TRY(f.Open(path));
+  std::fprintf(f.get(), "method,ds,query_index,reference_index,score,uniqueness,correct\n");
+  for (const Run& run : runs) {
+    for (std::size_t i = 0; i < run.evaluated_queries.size(); ++i) {
+      const int q = run.evaluated_queries[i];
+      const dsp::SeqSlamMatch& m = run.matches[static_cast<std::size_t>(q)];
+      std::fprintf(f.get(), "%s,%d,%d,%d,%.6g,%.6g,%d\n", MethodName(run.method), run.ds, q,
+                   m.reference, static_cast<double>(m.score), static_cast<double>(m.uniqueness),
+                   run.evaluated[i].correct ? 1 : 0);
+    }
+  }
+  return f.Close();
+}
+
+Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const GroundTruth& gt,
+                        const std::vector<Run>& runs, int n_ref, int n_query) {
+  OutFile f;
+  SKYLOC_TRY(f.Open(path));
+  std::FILE* out = f.get();
+  std::fprintf(out, "{\n  \"reference\": %s,\n  \"query\": %s,\n", JsonString(o.reference).c_str(),
+               JsonString(o.query).c_str());
+  std::fprintf(out, "  \"reference_frames\": %d,\n  \"query_frames\": %d,\n", n_ref, n_query);
+  std::fprintf(
+      out, "  \"engine\": %s,\n",
+      JsonString(o.streaming ? "streaming (trailing window)" : "batch (centred window)").c_str());
+  std::fprintf(out, "  \"ground_truth\": %s,\n  \"frame_tolerance\": %d,\n",
+               JsonString(gt.description).c_str(), o.frame_tolerance);
+  std::fprintf(out, "  \"runs\": [\n");
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Run& r = runs[i];
+    const dsp::PrSummary& s = r.summary;
+    std::fprintf(out,
+                 "    {\"method\": %s, \"ds\": %d, \"evaluated\": %d, \"with_ground_truth\": %d, "
+                 "\"correct\": %d,\n",
+                 JsonString(MethodName(r.method)).c_str(), r.ds, s.evaluated, s.with_ground_truth,
+                 s.correct);
+    std::fprintf(out,
+                 "     \"precision_at_100_recall\": %.6f, \"recall_at_100_precision\": %.6f, "
+                 "\"auc\": %.6f,\n",
+                 s.precision_at_full_recall, s.recall_at_full_precision, s.area_under_curve);
+    std::fprintf(out, "     \"curve\": [");
+    for (std::size_t k = 0; k < r.curve.size(); ++k) {
+      const dsp::PrPoint& p = r.curve[k];
+      std::fprintf(out, "%s{\"threshold\": %.6g, \"precision\": %.6f, \"recall\": %.6f}",
+                   k == 0 ? "" : ", ", static_cast<double>(p.threshold), p.precision, p.recall);
+    }
+    std::fprintf(out, "]}%s\n", i + 1 < runs.size() ? "," : "");
+  }
+  std::fprintf(out, "  ]\n}\n");
+  return f.Close();
+}
+
+constexpr const char* kPalette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                    "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+constexpr std::size_t kPaletteSize = sizeof kPalette / sizeof kPalette[0];
+
+// Precision (y) against recall (x), one step curve per run, legend with the AUC.
+Status WritePrSvg(const std::string& path, const std::vector<Run>& runs) {
+  OutFile f;
+  SKYLOC_TRY(f.Open(path));
+  std::FILE* out = f.get();
+  const double left = 70, top = 40, w = 460, h = 400;
+  const double legend_h = 22.0 * static_cast<double>(runs.size());
+  const double width = left + w + 260, height = top + h + 60 + legend_h;
+  auto sx = [&](double r) { return left + r * w; };
+  auto sy = [&](double p) { return top + (1.0 - p) * h; };
+  std::fprintf(out,
+               "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+               "font-family=\"sans-serif\" font-size=\"12\">\n",
+               width, height);
+  std::fprintf(out, "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n");
+  std::fprintf(out,
+               "<text x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">Precision - "
+               "recall (sweeping the uniqueness threshold)</text>\n",
+               left + w / 2);
+  for (int i = 0; i <= 5; ++i) {
+    const double v = i / 5.0;
+    std::fprintf(out,
+                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
+                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n",
+                 sx(v), sy(0), sx(v), sy(1), sx(0), sy(v), sx(1), sy(v));
+    std::fprintf(out,
+                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.1f</text>\n"
+                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.1f</text>\n",
+                 sx(v), sy(0) + 16, v, sx(0) - 6, sy(v) + 4, v);
+  }
+  std::fprintf(out,
+               "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
+               "stroke=\"black\"/>\n",
+               left, top, w, h);
+  std::fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">Recall</text>\n",
+               left + w / 2, top + h + 36);
+  std::fprintf(out,
+               "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 "
+               "%.1f)\">Precision</text>\n",
+               top + h / 2, top + h / 2);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Run& r = runs[i];
+    const char* colour = kPalette[i % kPaletteSize];
+    const char* dash =
+        r.ds == 1 ? " stroke-dasharray=\"6 3\"" : (r.ds >= 20 ? " stroke-dasharray=\"2 2\"" : "");
+    std::fprintf(out, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"2\"%s points=\"",
+                 colour, dash);
+    double prev_r = 0.0;
+    for (std::size_t k = 0; k < r.curve.size(); ++k) {
+      const dsp::PrPoint& p = r.curve[k];
+      if (k == 0)
+        std::fprintf(out, "%.1f,%.1f ", sx(0.0), sy(p.precision));
+      // Step: along the old recall at the new precision, as the AUC sums it.
+      std::fprintf(out, "%.1f,%.1f %.1f,%.1f ", sx(prev_r), sy(p.precision), sx(p.recall),
+                   sy(p.precision));
+      prev_r = p.recall;
+    }
+    std::fprintf(out, "\"/>\n");
+    const double ly = top + h + 56 + 22.0 * static_cast<double>(i);
+    std::fprintf(out,
+                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
+                 "stroke-width=\"2\"%s/>\n",
+                 left, ly - 4, left + 30, ly - 4, colour, dash);
+    std::fprintf(out,
+                 "<text x=\"%.1f\" y=\"%.1f\">%s: AUC %.3f, precision at 100%% recall %.3f, "
+                 "recall at 100%% precision %.3f</text>\n",
+                 left + 38, ly, XmlEscape(r.label).c_str(), r.summary.area_under_curve,
+                 r.summary.precision_at_full_recall, r.summary.recall_at_full_precision);
+  }
+  std::fprintf(out, "</svg>\n");
+  return f.Close();
+}
+
+// One panel per run: matched reference index against query index, green when correct,
+// red when not, over the ground truth (black), as the paper's Fig. 5a.
+Status WriteCorrespondenceSvg(const std::string& path, const std::vector<Run>& runs,
+                              const GroundTruth& gt, int n_ref, int n_query) {
+  OutFile f;
+  SKYLOC_TRY(f.Open(path));
+  std::FILE* out = f.get();
+  const int columns = static_cast<int>(std::min<std::size_t>(runs.size(), 3));
+  const int rows = static_cast<int>((runs.size() + 2) / 3);
+  const double pw = 330, ph = 300, ml = 60, mt = 40, mb = 50, mr = 20;
+  const double cell_w = ml + pw + mr, cell_h = mt + ph + mb;
+  std::fprintf(out,
+               "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+               "font-family=\"sans-serif\" font-size=\"12\">\n",
+               cell_w * columns, cell_h * rows + 30);
+  std::fprintf(out, "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n");
+  std::fprintf(out,
+               "<text x=\"10\" y=\"%.1f\">black: ground truth; green: correct match; red: "
+               "wrong match</text>\n",
+               cell_h * rows + 20);
+  const double qmax = std::max(1, n_query - 1), rmax = std::max(1, n_ref - 1);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Run& r = runs[i];
+    const double ox = cell_w * static_cast<double>(i % 3), oy = cell_h * static_cast<double>(i / 3);
+    const double left = ox + ml, top = oy + mt;
+    auto sx = [&](double q) { return left + q / qmax * pw; };
+    auto sy = [&](double ref) { return top + (1.0 - ref / rmax) * ph; };
+    std::fprintf(out,
+                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" font-size=\"14\">%s "
+                 "(%d of %d correct)</text>\n",
+                 left + pw / 2, top - 14, XmlEscape(r.label).c_str(), r.summary.correct,
+                 r.summary.evaluated);
+    std::fprintf(out,
+                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
+                 "stroke=\"black\"/>\n",
+                 left, top, pw, ph);
+    for (int k = 0; k <= 4; ++k) {
+      const double q = qmax * k / 4.0, ref = rmax * k / 4.0;
+      std::fprintf(out,
+                   "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.0f</text>\n"
+                   "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.0f</text>\n",
+                   sx(q), top + ph + 16, q, left - 6, sy(ref) + 4, ref);
+    }
+    std::fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">query frame</text>\n",
+                 left + pw / 2, top + ph + 36);
+    std::fprintf(out,
+                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 "
+                 "%.1f %.1f)\">reference frame</text>\n",
+                 ox + 16, top + ph / 2, ox + 16, top + ph / 2);
+    // Ground truth: polylines broken where the query is off the route.
+    bool open = false;
+    for (int q = 0; q < n_query; ++q) {
+      const int t = gt.reference[static_cast<std::size_t>(q)];
+      if (t < 0) {
+        if (open)
+          std::fprintf(out, "\"/>\n");
+        open = false;
+        continue;
+      }
+      if (!open)
+        std::fprintf(out,
+                     "<polyline fill=\"none\" stroke=\"black\" stroke-width=\"1.5\" points=\"");
+      open = true;
+      std::fprintf(out, "%.1f,%.1f ", sx(q), sy(t));
+    }
+    if (open)
+      std::fprintf(out, "\"/>\n");
+    for (std::size_t k = 0; k < r.evaluated_queries.size(); ++k) {
+      const int q = r.evaluated_queries[k];
+      const int m = r.matches[static_cast<std::size_t>(q)].reference;
+      std::fprintf(out, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.2\" fill=\"%s\"/>\n", sx(q), sy(m),
+                   r.evaluated[k].correct ? "#1a9e1a" : "#d62020");
+    }
+  }
+  std::fprintf(out, "</svg>\n");
+  return f.Close();
+}
+
+Status Evaluate(const EvalOptions& o) {
+  SKYLOC_TRY_ASSIGN(const drivers::Dataset ref, drivers::ReadDataset(o.reference));
+  SKYLOC_TRY_ASSIGN(const drivers::Dataset query, drivers::ReadDataset(o.query));
+  SKYLOC_TRY_ASSIGN(const GroundTruth gt, MakeGroundTruth(o, ref, query));
+  if (!ref.camera_toml.empty() || !query.camera_toml.empty()) {
+    std::fprintf(stderr,
+                 "skyloc eval: note: camera.toml is not read yet; the sky descriptor uses "
+                 "--lens/--fov-deg (defaults: equidistant, 185 degrees)\n");
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(o.out, ec);
+  if (ec) {
+    return Status::Error(StatusCode::kUnavailable, "cannot create output folder %s: %s",
+                         o.out.c_str(), ec.message().c_str());
+  }
+  std::vector<Run> runs;
+  const int n_ref = static_cast<int>(ref.frames.size());
+  const int n_query = static_cast<int>(query.frames.size());
+  for (const Method method : o.methods) {
+    std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
+                 n_ref, n_query);
+    SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o));
+    SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o));
+    for (const int ds : o.ds_list) {
+      Run run;
+      run.method = method;
+      run.ds = ds;
+      SKYLOC_TRY(RunSeqSlam(rd, qd, o.streaming, &run));
+      Score(gt, o, ref, query, &run);
+      runs.push_back(std::move(run));
+    }
+  }
+  SKYLOC_TRY(WriteMatchesCsv(o.out + "/matches.csv", runs));
+  SKYLOC_TRY(WriteMetricsJson(o.out + "/metrics.json", o, gt, runs, n_ref, n_query));
+  SKYLOC_TRY(WritePrSvg(o.out + "/pr.svg", runs));
+  SKYLOC_TRY(WriteCorrespondenceSvg(o.out + "/correspondence.svg", runs, gt, n_ref, n_query));
+
+  std::printf("%-10s %4s %9s %8s %13s %13s %7s\n", "method", "ds", "evaluated", "correct",
+              "P@100%recall", "R@100%prec", "AUC");
+  for (const Run& r : runs) {
+    std::printf("%-10s %4d %9d %8d %13.3f %13.3f %7.3f\n", MethodName(r.method), r.ds,
+                r.summary.evaluated, r.summary.correct, r.summary.precision_at_full_recall,
+                r.summary.recall_at_full_precision, r.summary.area_under_curve);
+  }
+  std::printf("ground truth: %s; %s engine; results in %s\n", gt.description.c_str(),
+              o.streaming ? "streaming" : "batch", o.out.c_str());
+  return Status::Ok();
+}
+
+}  // namespace
+
+int RunEval(std::span<char* const> args) {
+  EvalOptions options;
+  bool help = false;
+  const int rc = ParseArgs(args, &options, &help);
+  if (help) {
+    std::fputs(kUsage, stdout);
+    return kExitOk;
+  }
+  if (rc != kExitOk)
+    return rc;
+  const Status s = Evaluate(options);
+  if (!s.ok()) {
+    std::fprintf(stderr, "skyloc eval: %s\n", s.message());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace skyloc::app

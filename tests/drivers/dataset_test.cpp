@@ -1,0 +1,169 @@
+#include "skyloc/drivers/dataset.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace skyloc::drivers {
+namespace {
+
+std::string MakeTempDir() {
+  std::string tmpl = ::testing::TempDir() + "skyloc_dataset_XXXXXX";
+  std::vector<char> buf(tmpl.begin(), tmpl.end());
+  buf.push_back('\0');
+  const char* dir = ::mkdtemp(buf.data());
+  EXPECT_NE(dir, nullptr);
+  return dir != nullptr ? std::string(dir) : std::string();
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// A grey test image whose pixels encode the frame number.
+std::vector<std::uint8_t> Pixels(int frame) {
+  std::vector<std::uint8_t> px(8 * 6);
+  for (std::size_t i = 0; i < px.size(); ++i)
+    px[i] = static_cast<std::uint8_t>(frame * 10 + static_cast<int>(i));
+  return px;
+}
+
+TEST(Dataset, WriteThenReadWithPoses) {
+  const std::string dir = MakeTempDir() + "/run1";
+  DatasetWriter writer;
+  ASSERT_TRUE(writer.Open(dir, /*with_poses=*/true).ok());
+  for (int i = 0; i < 3; ++i) {
+    const std::vector<std::uint8_t> px = Pixels(i);
+    const Pose pose{1.5 * i, -2.0, 0.25, 1.0, -3.0, 0.1 * i};
+    const Status s =
+        writer.Append(dsp::ImageView{px.data(), 8, 6, 8, dsp::PixelFormat::kGrey8}, 0.1 * i, pose);
+    ASSERT_TRUE(s.ok()) << s.message();
+  }
+  EXPECT_EQ(writer.frames_written(), 3);
+  ASSERT_TRUE(writer.Close().ok());
+
+  Result<Dataset> ds = ReadDataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.status().message();
+  ASSERT_EQ(ds->frames.size(), 3u);
+  EXPECT_TRUE(ds->has_poses);
+  EXPECT_TRUE(ds->has_timestamps);
+  EXPECT_TRUE(ds->camera_toml.empty());
+  EXPECT_EQ(ds->frames[2].file, "000002.png");
+  EXPECT_DOUBLE_EQ(ds->frames[2].timestamp_s, 0.2);
+  ASSERT_TRUE(ds->frames[2].pose.has_value());
+  EXPECT_DOUBLE_EQ(ds->frames[2].pose->x_m, 3.0);  // %.17g round-trips exactly
+  EXPECT_DOUBLE_EQ(ds->frames[2].pose->yaw_deg, 0.1 * 2);
+  EXPECT_EQ(ds->FramePath(1), dir + "/frames/000001.png");
+
+  // The camera plays the frames in order with their poses, then reports the end.
+  DatasetCamera camera(dir);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  for (int i = 0; i < 3; ++i) {
+    Result<Frame> f = camera.Capture(Nanoseconds(0));
+    ASSERT_TRUE(f.ok()) << f.status().message();
+    EXPECT_EQ(f->sequence, static_cast<std::uint64_t>(i));
+    EXPECT_EQ(f->timestamp, Nanoseconds(100'000'000LL * i));
+    ASSERT_EQ(f->image.width, 8);
+    EXPECT_EQ(f->image.Row(0)[0], static_cast<std::uint8_t>(i * 10));
+    ASSERT_TRUE(f->pose.has_value());
+    EXPECT_DOUBLE_EQ(f->pose->x_m, 1.5 * i);
+  }
+  Result<Frame> end = camera.Capture(Nanoseconds(0));
+  ASSERT_FALSE(end.ok());
+  EXPECT_EQ(end.status().code(), StatusCode::kOutOfRange);
+  camera.Close();
+}
+
+TEST(Dataset, KilledWriterLeavesAValidPrefixAndIsNeverOverwritten) {
+  const std::string dir = MakeTempDir();
+  {
+    DatasetWriter writer;
+    ASSERT_TRUE(writer.Open(dir, false).ok());
+    const std::vector<std::uint8_t> px = Pixels(0);
+    for (int i = 0; i < 2; ++i) {
+      ASSERT_TRUE(
+          writer.Append(dsp::ImageView{px.data(), 8, 6, 8, dsp::PixelFormat::kGrey8}, i, {}).ok());
+    }
+    // Read while the writer is still open (as after a kill): both rows are on disk.
+    Result<Dataset> ds = ReadDataset(dir);
+    ASSERT_TRUE(ds.ok()) << ds.status().message();
+    EXPECT_EQ(ds->frames.size(), 2u);
+    EXPECT_FALSE(ds->has_poses);
+    // A pose on a dataset opened without poses is refused.
+    const Status s =
+        writer.Append(dsp::ImageView{px.data(), 8, 6, 8, dsp::PixelFormat::kGrey8}, 2.0, Pose{});
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  }
+  DatasetWriter again;
+  const Status s = again.Open(dir, false);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("already exists"), std::string::npos) << s.message();
+}
+
+struct BadCsv {
+  const char* name;
+  std::string csv;
+  const char* expect;  // in the message
+};
+
+TEST(Dataset, CsvErrorsNameFileAndLine) {
+  const std::string pose_header = "index,file,timestamp_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg\n";
+  const std::vector<BadCsv> cases = {
+      {"header", "idx,file,time\n0,a.png,0\n", "frames.csv:1: header must be"},
+      {"fields", "index,file,timestamp_s\n0,a.png\n", "frames.csv:2: expected 3 fields, got 2"},
+      {"index", "index,file,timestamp_s\n0,a.png,0\n2,b.png,1\n",
+       "frames.csv:3: index 2 out of order"},
+      {"index_text", "index,file,timestamp_s\nzero,a.png,0\n", "frames.csv:2: index 'zero'"},
+      {"timestamp", "index,file,timestamp_s\n0,a.png,0\n1,b.png,1.5s\n",
+       "frames.csv:3: timestamp_s '1.5s' is not a number"},
+      {"backwards", "index,file,timestamp_s\n0,a.png,2\n1,b.png,1\n",
+       "frames.csv:3: timestamp_s 1.000000 goes backwards"},
+      {"pose", pose_header + "0,a.png,0,1,2,3,4,five,6\n", "frames.csv:2: pitch_deg 'five'"},
+      {"missing_image", "index,file,timestamp_s\n0,a.png,0\n1,gone.png,1\n", "frames.csv:3: image"},
+      {"extension", "index,file,timestamp_s\n0,a.jpg,0\n", "frames.csv:2: file 'a.jpg'"},
+      {"blank_line", "index,file,timestamp_s\n0,a.png,0\n\n1,b.png,1\n",
+       "frames.csv:3: empty line"},
+      {"empty", "", "frames.csv: empty file"},
+      {"no_frames", "index,file,timestamp_s\n", "no frames after the header"},
+  };
+  for (const BadCsv& c : cases) {
+    const std::string dir = MakeTempDir();
+    ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
+    WriteText(dir + "/frames/a.png", "x");
+    WriteText(dir + "/frames/b.png", "x");
+    WriteText(dir + "/frames.csv", c.csv);
+    Result<Dataset> ds = ReadDataset(dir);
+    ASSERT_FALSE(ds.ok()) << c.name;
+    const std::string msg = ds.status().message();
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
+    EXPECT_NE(msg.find(dir), std::string::npos) << c.name << ": " << msg;
+  }
+}
+
+TEST(Dataset, FolderWithoutCsvIsListedByName) {
+  const std::string dir = MakeTempDir();
+  ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
+  for (const char* name : {"b.pgm", "a.png", "c.PNG", "notes.txt"})
+    WriteText(dir + "/frames/" + name, "x");
+  WriteText(dir + "/camera.toml", "model = \"equidistant\"\n");
+  Result<Dataset> ds = ReadDataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.status().message();
+  ASSERT_EQ(ds->frames.size(), 3u);
+  EXPECT_EQ(ds->frames[0].file, "a.png");
+  EXPECT_EQ(ds->frames[1].file, "b.pgm");
+  EXPECT_EQ(ds->frames[2].file, "c.PNG");
+  EXPECT_FALSE(ds->has_timestamps);
+  EXPECT_EQ(ds->camera_toml, dir + "/camera.toml");
+
+  Result<Dataset> missing = ReadDataset(dir + "/nope");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
+}
+
+}  // namespace
+}  // namespace skyloc::drivers
