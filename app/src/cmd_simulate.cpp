@@ -3,6 +3,7 @@
 // and the demo. docs/SIMULATOR.md describes the worlds, renderer and options.
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,8 +14,8 @@
 #include <vector>
 
 #include "commands.h"
+#include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
-#include "skyloc/drivers/image_file.h"
 #include "skyloc/sim/motion.h"
 #include "skyloc/sim/rendered_camera.h"
 #include "skyloc/sim/world.h"
@@ -26,7 +27,8 @@ constexpr const char* kUsage =
     "usage: skyloc simulate --world seville|city|forest|repetitive --out DIR [options]\n"
     "\n"
     "Renders a run of an upward fisheye camera through a simulated world and writes a\n"
-    "dataset folder: DIR/frames/NNNNNN.png, DIR/frames.csv (with poses), DIR/camera.toml.\n"
+    "dataset folder: DIR/frames/NNNNNN.png, DIR/frames.csv (with poses), DIR/camera.toml\n"
+    "(the lens, docs/CAMERA_FILE.md) and DIR/simulation.toml (how the run was made).\n"
     "With --mode both: DIR/uv/ and DIR/visible/, the same poses in both.\n"
     "\n"
     "world and route:\n"
@@ -50,7 +52,9 @@ constexpr const char* kUsage =
     "  --lighting NAME      dawn, noon (default) or overcast\n"
     "  --exposure EV        exposure offset in stops, added to the preset's\n"
     "  --no-flare           no lens flare\n"
-    "  --width W --height H image size (default 320x240); equidistant 185 degree lens\n"
+    "  --width W --height H image size (default 320x240) of the default lens: equidistant,\n"
+    "                       185 degrees, image circle filling the shorter side\n"
+    "  --camera FILE        a camera file (docs/CAMERA_FILE.md) instead: size, lens, mount\n"
     "  --mode M             uv (default), visible or both\n";
 
 struct Options {
@@ -67,6 +71,8 @@ struct Options {
   std::string lighting = "noon";
   bool flare = true;
   int width = 320, height = 240;
+  bool size_given = false;
+  std::string camera_file;
   std::string mode = "uv";
   std::string out;
 };
@@ -171,10 +177,14 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!ParseInt(v, 8, 8192, &n))
         return fail(flag, v, "pixels within 8..8192");
       o->width = static_cast<int>(n);
+      o->size_given = true;
     } else if (std::strcmp(flag, "--height") == 0) {
       if (!ParseInt(v, 8, 8192, &n))
         return fail(flag, v, "pixels within 8..8192");
       o->height = static_cast<int>(n);
+      o->size_given = true;
+    } else if (std::strcmp(flag, "--camera") == 0) {
+      o->camera_file = v;
     } else if (std::strcmp(flag, "--mode") == 0) {
       if (std::strcmp(v, "uv") != 0 && std::strcmp(v, "visible") != 0 &&
           std::strcmp(v, "both") != 0)
@@ -197,35 +207,79 @@ int ParseArgs(std::span<char* const> args, Options* o) {
     std::fprintf(stderr, "skyloc simulate: --out DIR is required\n");
     return kExitUsage;
   }
+  if (o->size_given && !o->camera_file.empty()) {
+    std::fprintf(stderr,
+                 "skyloc simulate: --width/--height and --camera both give the image "
+                 "size: use one (the camera file's [image] table)\n");
+    return kExitUsage;
+  }
   return kExitOk;
 }
 
-Status WriteCameraToml(const std::string& dir, const Options& o, const dsp::LensParams& lens,
-                       sim::Spectrum spectrum, const sim::Lighting& lighting) {
-  const std::string path = dir + "/camera.toml";
+Status WriteText(const std::string& path, const std::string& text) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr)
     return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  std::fprintf(f,
-               "# Written by skyloc simulate: the simulated camera's lens (docs/SIMULATOR.md).\n"
-               "[lens]\nmodel = \"%s\"\nwidth = %d\nheight = %d\nfov_deg = %.6f\n\n"
-               "[mount]\nroll_deg = 0.0\npitch_deg = 0.0\nyaw_deg = 0.0\n\n"
-               "[simulation]\nworld = \"%s\"\nseed = %llu\nrun = %llu\nroute = \"%s\"\n"
-               "spectrum = \"%s\"\nlighting = \"%s\"\nsun_azimuth_deg = %.6f\n"
-               "sun_elevation_deg = %.6f\ncloud_cover = %.6f\nexposure_ev = %.6f\n"
-               "flare = %s\ntilt_deg = %.6f\nzigzag_deg = %.6f\nbumps_deg = %.6f\n"
-               "yaw_offset_deg = %.6f\n",
-               dsp::LensModelName(lens.model), lens.width, lens.height, lens.fov_deg,
-               sim::WorldKindName(o.world), static_cast<unsigned long long>(o.seed),
-               static_cast<unsigned long long>(o.run),
-               o.route_file.empty() ? "(world)" : o.route_file.c_str(), sim::SpectrumName(spectrum),
-               o.lighting.c_str(), lighting.sun_azimuth_deg, lighting.sun_elevation_deg,
-               lighting.cloud_cover, lighting.exposure_ev, lighting.flare > 0 ? "true" : "false",
-               o.tilt, o.zigzag, o.bumps, o.yaw);
+  std::fwrite(text.data(), 1, text.size(), f);
   const bool failed = std::ferror(f) != 0;
   if (std::fclose(f) != 0 || failed)
     return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
   return Status::Ok();
+}
+
+Result<std::string> ReadText(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "r");
+  if (f == nullptr)
+    return Status::FromErrno(errno, "cannot read '%s'", path.c_str());
+  std::string text;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0)
+    text.append(buffer, n);
+  std::fclose(f);
+  return text;
+}
+
+// DIR/camera.toml in the camera-file format (docs/CAMERA_FILE.md): a copy of --camera, or
+// the default lens written out.
+Status WriteCameraFile(const std::string& dir, const Options& o, const dsp::Lens& lens) {
+  const std::string path = dir + "/camera.toml";
+  if (!o.camera_file.empty()) {
+    SKYLOC_TRY_ASSIGN(const std::string text, ReadText(o.camera_file));
+    return WriteText(path, "# Copied by skyloc simulate from " + o.camera_file + "\n" + text);
+  }
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "# Written by skyloc simulate: the simulated camera (docs/CAMERA_FILE.md).\n"
+                "[image]\nwidth = %d\nheight = %d\n\n"
+                "[lens]\nmodel = \"%s\"\nfov_deg = %.6f\ncentre = [%.6f, %.6f]\n"
+                "radius_px = %.6f\n\n[mount]\nroll_deg = 0.0\npitch_deg = 0.0\nyaw_deg = 0.0\n",
+                lens.params().width, lens.params().height, dsp::LensModelName(lens.params().model),
+                lens.params().fov_deg, lens.centre_x(), lens.centre_y(), lens.radius_px());
+  return WriteText(path, text);
+}
+
+// DIR/simulation.toml: how the run was made, to reproduce or explain it.
+Status WriteSimulationToml(const std::string& dir, const Options& o, sim::Spectrum spectrum,
+                           const sim::Lighting& lighting, const sim::MotionConfig& motion) {
+  char text[2048];
+  std::snprintf(
+      text, sizeof text,
+      "# Written by skyloc simulate (docs/SIMULATOR.md).\n[world]\nname = \"%s\"\nseed = "
+      "%llu\nroute = \"%s\"\n\n[run]\nseed = %llu\nspectrum = \"%s\"\nframe_spacing_m = "
+      "%.6f\nspeed_jitter = %.6f\ncamera_height_m = %.6f\nstart_m = %.6f\ntilt_deg = %.6f\n"
+      "zigzag_deg = %.6f\nzigzag_period_m = %.6f\nbumps_deg = %.6f\nyaw_offset_deg = %.6f\n"
+      "\n[lighting]\npreset = \"%s\"\nsun_azimuth_deg = %.6f\nsun_elevation_deg = %.6f\n"
+      "cloud_cover = %.6f\nsky_brightness = %.6f\nexposure_ev = %.6f\nnoise_sigma = %.6f\n"
+      "flare = %.6f\n",
+      sim::WorldKindName(o.world), static_cast<unsigned long long>(o.seed),
+      o.route_file.empty() ? "(the world's own)" : o.route_file.c_str(),
+      static_cast<unsigned long long>(o.run), sim::SpectrumName(spectrum), motion.frame_spacing_m,
+      motion.speed_jitter, motion.height_m, motion.start_m, motion.tilt_deg, motion.zigzag_deg,
+      motion.zigzag_period_m, motion.bumps_deg, motion.yaw_offset_deg, o.lighting.c_str(),
+      lighting.sun_azimuth_deg, lighting.sun_elevation_deg, lighting.cloud_cover,
+      lighting.sky_brightness, lighting.exposure_ev, lighting.noise_sigma, lighting.flare);
+  return WriteText(dir + "/simulation.toml", text);
 }
 
 // One output: a camera in one spectrum writing one dataset folder.
@@ -343,7 +397,15 @@ int RunSimulate(std::span<char* const> args) {
     add_output(o.mode == "uv" ? sim::Spectrum::kUv : sim::Spectrum::kVisible, o.out);
   }
   const std::span<Output> outputs(storage, count);
-  const dsp::LensParams lens = sim::DefaultSimLens(o.width, o.height);
+  dsp::LensParams lens = sim::DefaultSimLens(o.width, o.height);
+  if (!o.camera_file.empty()) {
+    Result<dsp::LensParams> loaded = drivers::LoadCameraFile(o.camera_file.c_str());
+    if (!loaded.ok())
+      return Fail(loaded.status());
+    lens = *loaded;
+    o.width = lens.width;
+    o.height = lens.height;
+  }
   for (Output& out : outputs) {
     if (Status s = out.writer.Open(out.dir, /*with_poses=*/true); !s.ok())
       return Fail(s);
@@ -356,7 +418,9 @@ int RunSimulate(std::span<char* const> args) {
       return Fail(s);
     if (Status s = out.camera->Start(); !s.ok())
       return Fail(s);
-    if (Status s = WriteCameraToml(out.dir, o, lens, out.spectrum, lighting); !s.ok())
+    if (Status s = WriteCameraFile(out.dir, o, out.camera->renderer().lens()); !s.ok())
+      return Fail(s);
+    if (Status s = WriteSimulationToml(out.dir, o, out.spectrum, lighting, motion); !s.ok())
       return Fail(s);
   }
 
@@ -367,19 +431,14 @@ int RunSimulate(std::span<char* const> args) {
   Progress progress(trajectory.size());
   const auto begin = std::chrono::steady_clock::now();
   double render_s = 0;
-  char file[32];
   for (std::size_t i = 0; i < trajectory.size(); ++i) {
-    std::snprintf(file, sizeof file, "%06zu.png", i);
     for (Output& out : outputs) {
       const auto t0 = std::chrono::steady_clock::now();
       Result<drivers::Frame> frame = out.camera->Capture(Nanoseconds{0});
       render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (!frame.ok())
         return Fail(frame.status());
-      const std::string path = out.dir + "/frames/" + file;
-      if (Status s = drivers::SavePng(path.c_str(), frame->image); !s.ok())
-        return Fail(s);
-      if (Status s = out.writer.AppendRow(file, trajectory[i].time_s, frame->pose); !s.ok())
+      if (Status s = out.writer.Append(frame->image, trajectory[i].time_s, frame->pose); !s.ok())
         return Fail(s);
     }
     progress.Update(

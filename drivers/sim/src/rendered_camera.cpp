@@ -9,7 +9,8 @@ RenderedCamera::RenderedCamera(const World* world, std::span<const TrajectoryPoi
     : world_(world), trajectory_(trajectory), config_(config) {}
 
 Status RenderedCamera::DoOpen() {
-  SKYLOC_TRY(renderer_.Init(world_, config_.lens).AddContext("simulated camera"));
+  if (Status s = renderer_.Init(world_, config_.lens); !s.ok())
+    return s.AddContext("simulated camera");
   const bool uv = config_.spectrum == Spectrum::kUv;
   const auto bytes = static_cast<std::size_t>(config_.lens.width) *
                      static_cast<std::size_t>(config_.lens.height) * (uv ? 1u : 3u);
