@@ -28,7 +28,8 @@ die() {
 HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest libgtest-dev
   libbenchmark-dev libeigen3-dev libtomlplusplus-dev libstb-dev libgpiod-dev gpiod
   libboost-math-dev
-  libcamera-dev)
+  libcamera-dev
+  clang-14 libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (tests/fuzz)
 CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static)
 CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static)
 # Optional target libraries from Debian multiarch. The archive's architectures are not
