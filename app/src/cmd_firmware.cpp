@@ -12,9 +12,11 @@ namespace skyloc::app {
 namespace {
 
 constexpr const char* kTeachUsage =
-    "usage: skyloc teach --route FILE.db [--config FILE] [--frames N] [--force] [SIM]\n"
+    "usage: skyloc teach --route FILE.db [--config FILE] [--dataset DIR] [--frames N]\n"
+    "                    [--force] [SIM]\n"
     "  Records the sky descriptors of a route into FILE.db until SIGINT/SIGTERM, the end\n"
-    "  of the camera's run or N frames; prints one JSON line per frame.\n"
+    "  of the camera's run or N frames; prints one JSON line per frame. --dataset: teach\n"
+    "  from a recorded dataset folder instead of the configured camera.\n"
     "  SIM (camera.kind = \"sim\" only): --tilt DEG --zigzag DEG --bumps DEG --yaw DEG\n"
     "  --lighting noon|dawn|overcast --run N (jitter, clouds, noise seed)\n";
 constexpr const char* kRepeatUsage =
@@ -92,6 +94,10 @@ int ParseModeArgs(const char* name, const char* usage, std::span<char* const> ar
         return kExitUsage;
       }
       ++i;
+    } else if (std::strcmp(a, "--dataset") == 0 && s->mode == LoopMode::kTeach) {
+      if (!need(a))
+        return kExitUsage;
+      s->dataset = args[++i];
     } else if (std::strcmp(a, "--force") == 0 && s->mode == LoopMode::kTeach) {
       s->force = true;
     } else if (replay && std::strcmp(a, "--pace") == 0) {

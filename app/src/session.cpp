@@ -85,7 +85,8 @@ struct CameraSource {
   std::unique_ptr<sim::World> world;
   std::vector<sim::TrajectoryPoint> trajectory;
   std::unique_ptr<drivers::Camera> camera;
-  std::size_t frames = 0;  // a finite source's length; 0 = endless
+  std::size_t frames = 0;   // a finite source's length; 0 = endless
+  std::string camera_file;  // a dataset's own camera.toml, if it has one
 };
 
 Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* source) {
@@ -141,6 +142,7 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
         args.dataset.empty() ? config.camera.dataset : args.dataset);
     SKYLOC_TRY(camera->Open());
     source->frames = camera->dataset().frames.size();
+    source->camera_file = camera->dataset().camera_toml;
     source->camera = std::move(camera);
     return Status::Ok();
   }
@@ -192,6 +194,9 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
       config.camera.kind == CameraKind::kDataset) {
     config.camera.width = info.width;  // a recorded or simulated source fixes the size
     config.camera.height = info.height;
+    // A dataset recorded with its camera file: use that lens unless the config names one.
+    if (config.camera.lens_file.empty() && !source.camera_file.empty())
+      config.camera.lens_file = source.camera_file;
   } else if (info.width != config.camera.width || info.height != config.camera.height) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "

@@ -99,6 +99,21 @@ expect_rc 0 "route recover" -- "${RUN[@]}" route recover "$WORK/kill.db"
 grep -q "recovered" "$WORK/out" || fail "route recover: $(cat "$WORK/out")"
 expect_rc 0 "repeat on the recovered route" -- "${RUN[@]}" repeat --route "$WORK/kill.db" --config "$CONFIG" --frames 20
 
+# 9. replay: teach from one simulated recording, replay another (other jitter, tilt, dawn).
+if "${RUN[@]}" simulate --world city --out "$WORK/ref" --frames 60 --width 96 --height 96 >/dev/null 2>&1 &&
+  "${RUN[@]}" simulate --world city --out "$WORK/qry" --frames 60 --width 96 --height 96 \
+    --run 2 --tilt 5 --lighting dawn >/dev/null 2>&1; then
+  expect_rc 0 "teach from a dataset" -- "${RUN[@]}" teach --route "$WORK/ds.db" --config "$CONFIG" --dataset "$WORK/ref"
+  expect_err "60 frames committed" "teach from a dataset"
+  expect_rc 0 "replay" -- "${RUN[@]}" replay "$WORK/qry" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
+  [ "$(wc -l <"$WORK/out")" -eq 60 ] || fail "replay printed $(wc -l <"$WORK/out") lines"
+  expect_err "precision at 100% recall" "replay evaluation"
+  expect_rc 1 "replay of a missing dataset" -- "${RUN[@]}" replay "$WORK/nothing" --route "$WORK/ds.db"
+  expect_err "nothing" "replay of a missing dataset"
+else
+  fail "skyloc simulate could not write the replay datasets"
+fi
+
 if [ $failures -ne 0 ]; then
   echo "$failures check(s) failed" >&2
   exit 1
