@@ -420,6 +420,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Int("height", &c.camera.height, 16, 8192);
     r.Double("fps", &c.camera.fps, 0.1, 1000.0);
     r.Int("frame_timeout_ms", &c.camera.frame_timeout_ms, 1, 60000);
+    r.Int("reconnect_timeout_ms", &c.camera.reconnect_timeout_ms, 0, 600000);
     if (error.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())
       r.Invalid("dataset", "must name the dataset folder when kind = \"dataset\"");
     r.Finish();

@@ -36,7 +36,8 @@ struct CameraConfig {
   int width = 640;
   int height = 480;
   double fps = 30.0;
-  int frame_timeout_ms = 1000;  // a Capture() waiting longer than this is a stall
+  int frame_timeout_ms = 1000;       // a Capture() waiting longer than this is a stall
+  int reconnect_timeout_ms = 30000;  // an unplugged camera may take this long to return
 
   bool operator==(const CameraConfig&) const = default;
 };

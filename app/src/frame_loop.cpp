@@ -58,6 +58,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
   LatencyTable& latency = pipeline.latency();
   LoopSummary s;
   int errors_in_a_row = 0;
+  Nanoseconds unavailable_since{-1};
   Nanoseconds first_timestamp{-1};
   Nanoseconds loop_start = clock.Now();
   std::uint64_t last_sequence = 0;
@@ -88,11 +89,23 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         ++s.capture_errors;
         continue;
       }
+      if (code == StatusCode::kUnavailable && options.reconnect_timeout.count() > 0) {
+        if (unavailable_since.count() < 0)
+          unavailable_since = t1;
+        if (t1 - unavailable_since < options.reconnect_timeout) {
+          ++s.capture_errors;
+          // A driver that reports the loss without waiting must not make this spin.
+          if (t1 - t0 < std::chrono::milliseconds(10))
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+          continue;
+        }
+      }
       *summary = s;
       Status fatal = captured.status();
       return fatal.AddContext("camera %s", camera.info().name);
     }
     errors_in_a_row = 0;
+    unavailable_since = Nanoseconds{-1};
     latency.Record(pipeline.stage_capture, t1 - t0);
     const drivers::Frame& frame = *captured;
 

@@ -64,6 +64,9 @@ struct LoopOptions {
   Nanoseconds capture_timeout = std::chrono::seconds(1);
   // Capture errors in a row (timeouts, corrupt frames) before the loop gives up.
   int max_consecutive_errors = 30;
+  // How long a camera may stay unavailable (unplugged; the V4L2 driver reopens it with
+  // backoff) before the loop gives up; 0: at once.
+  Nanoseconds reconnect_timeout = std::chrono::seconds(30);
 };
 
 struct LoopSummary {

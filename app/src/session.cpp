@@ -5,8 +5,17 @@
 #include <limits>
 #include <memory>
 
-#include "recording_status_output.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/simulated_status_output.h"
+#if SKYLOC_WITH_V4L2
+#include "skyloc/drivers/v4l2_camera.h"
+#endif
+#if SKYLOC_WITH_LIBCAMERA
+#include "skyloc/drivers/libcamera_camera.h"
+#endif
+#if SKYLOC_WITH_GPIOD
+#include "skyloc/drivers/gpio_status_output.h"
+#endif
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/platform/realtime.h"
 #include "skyloc/platform/signals.h"
@@ -96,6 +105,7 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
     o.height = config.camera.height;
     o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
     o.fps = config.camera.fps;
+    o.paced = true;  // a live run: frames come at the camera's rate
     o.step_m = run.spacing_m;
     o.speed_jitter = std::min(run.speed_jitter, 0.5);
     o.tilt_deg = run.tilt_deg;
@@ -150,29 +160,80 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
     case CameraKind::kSim:
       SKYLOC_TRY(MakeSimSource(config, args.sim, source));
       return source->camera->Open();
+    case CameraKind::kV4l2: {
+#if SKYLOC_WITH_V4L2
+      drivers::V4l2CameraConfig c;
+      std::snprintf(c.device, sizeof c.device, "%s", config.camera.device.c_str());
+      c.width = config.camera.width;
+      c.height = config.camera.height;
+      c.fps = config.camera.fps;
+      source->camera = std::make_unique<drivers::V4l2Camera>(c);
+      return source->camera->Open();
+#else
+      break;
+#endif
+    }
+    case CameraKind::kLibcamera: {
+#if SKYLOC_WITH_LIBCAMERA
+      drivers::LibcameraCameraConfig c;
+      std::snprintf(c.camera_id, sizeof c.camera_id, "%s",
+                    config.camera.device == "/dev/video0" ? "" : config.camera.device.c_str());
+      c.width = config.camera.width;
+      c.height = config.camera.height;
+      source->camera = std::make_unique<drivers::LibcameraCamera>(c);
+      return source->camera->Open();
+#else
+      break;
+#endif
+    }
     case CameraKind::kDataset:
-    case CameraKind::kV4l2:
-    case CameraKind::kLibcamera:
       break;
   }
   return Status::Error(StatusCode::kUnimplemented,
-                       "[camera] kind = \"%s\" is not built into this skyloc yet; use \"sim\" "
-                       "or \"dataset\"",
+                       "[camera] kind = \"%s\": this skyloc was built without that driver (its "
+                       "development package was missing at build time); use \"sim\" or "
+                       "\"dataset\", or rebuild",
                        CameraKindName(config.camera.kind));
 }
 
-Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config) {
+drivers::StatusLineMode LineMode(const Config& config) {
+  return config.status.encoding == StatusEncoding::kBlink ? drivers::StatusLineMode::kBlink
+                                                          : drivers::StatusLineMode::kLinePerState;
+}
+
+Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config,
+                                                                const Clock* clock) {
   switch (config.status.kind) {
     case StatusOutputKind::kNone:
       return std::unique_ptr<drivers::StatusOutput>();
-    case StatusOutputKind::kSim:
-      return std::unique_ptr<drivers::StatusOutput>(new RecordingStatusOutput());
-    case StatusOutputKind::kGpio:
+    case StatusOutputKind::kSim: {
+      drivers::SimulatedStatusOutputConfig c;
+      c.mode = LineMode(config);
+      return std::unique_ptr<drivers::StatusOutput>(
+          std::make_unique<drivers::SimulatedStatusOutput>(c, clock));
+    }
+    case StatusOutputKind::kGpio: {
+#if SKYLOC_WITH_GPIOD
+      drivers::GpioStatusOutputConfig c;
+      std::snprintf(c.chip, sizeof c.chip, "%s", config.status.chip.c_str());
+      c.mode = LineMode(config);
+      // Per state: LOST, SEARCHING, LOCALISED; blinking uses the LOCALISED line.
+      if (c.mode == drivers::StatusLineMode::kBlink) {
+        c.lines = {static_cast<unsigned>(config.status.line_localised), 0u, 0u};
+      } else {
+        c.lines = {static_cast<unsigned>(config.status.line_lost),
+                   static_cast<unsigned>(config.status.line_searching),
+                   static_cast<unsigned>(config.status.line_localised)};
+      }
+      return std::unique_ptr<drivers::StatusOutput>(std::make_unique<drivers::GpioStatusOutput>(c));
+#else
       break;
+#endif
+    }
   }
   return Status::Error(StatusCode::kUnimplemented,
-                       "[status] kind = \"gpio\" is not built into this skyloc yet; use \"sim\" "
-                       "or \"none\"");
+                       "[status] kind = \"gpio\": this skyloc was built without libgpiod "
+                       "(libgpiod-dev was missing at build time); use \"sim\" or \"none\"");
 }
 
 void PrintWarning(const char* label, const Status& s) {
@@ -233,7 +294,9 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     report->route_frames = route.size();
   }
 
-  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status, MakeStatusOutput(config));
+  MonotonicClock clock;
+  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status,
+                    MakeStatusOutput(config, &clock));
   if (status)
     SKYLOC_TRY(status->Open());
 
@@ -264,12 +327,25 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   LoopOptions loop;
   loop.mode = args.mode;
   loop.max_frames = args.max_frames;
+  // Teach stops when the route is as long as repeat can load.
+  const auto route_capacity = static_cast<std::uint64_t>(config.capacities.route_frames);
+  const bool capped =
+      args.mode == LoopMode::kTeach && (loop.max_frames == 0 || loop.max_frames > route_capacity);
+  if (capped)
+    loop.max_frames = route_capacity;
   loop.paced = args.paced;
   loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
+  loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
   const Status loop_status =
       RunFrameLoop(*camera, status.get(), pipeline,
                    args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop, &report->loop);
 
+  if (capped && report->loop.frames == route_capacity) {
+    std::fprintf(stderr,
+                 "%s: the route is full ([capacities] route_frames = %llu): raise it to "
+                 "teach a longer route\n",
+                 label, static_cast<unsigned long long>(route_capacity));
+  }
   // Shutdown, whatever happened in the loop: keep what was taught, lines to safe state.
   Status shutdown;
   if (args.mode == LoopMode::kTeach && writer.is_open()) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <thread>
 
 namespace skyloc::app {
 namespace {
@@ -73,6 +74,7 @@ Status StreetCamera::DoOpen() {
 }
 
 Status StreetCamera::DoStart() {
+  start_ = clock_.Now();
   next_ = 0;
   x_m_ = 0.0;
   rng_ = options_.seed ^ 0xabcdef;
@@ -123,6 +125,11 @@ Result<drivers::Frame> StreetCamera::DoCapture(Nanoseconds) {
   const double yaw = options_.zigzag_deg * kDeg * std::sin(phase);
   const double pitch = options_.tilt_deg * kDeg;
   Render(x_m_, yaw, pitch);
+  const Nanoseconds due =
+      start_ +
+      Nanoseconds(static_cast<std::int64_t>(static_cast<double>(next_) * 1e9 / options_.fps));
+  if (options_.paced && clock_.Now() < due)
+    std::this_thread::sleep_for(due - clock_.Now());
 
   drivers::Frame frame;
   frame.image = {pixels_.data(), options_.width, options_.height,

@@ -26,6 +26,7 @@ struct StreetCameraOptions {
   double brightness = 1.0;    // lighting: scales sky and ground levels
   std::uint64_t frames = 0;   // end of the run (Capture -> kOutOfRange); 0 = endless
   double fps = 30.0;          // timestamps advance by 1/fps
+  bool paced = false;         // deliver frames at fps in real time, as a camera does
 };
 
 class StreetCamera final : public drivers::Camera {
@@ -47,6 +48,8 @@ class StreetCamera final : public drivers::Camera {
   std::uint64_t next_ = 0;
   double x_m_ = 0.0;
   std::uint64_t rng_ = 0;
+  MonotonicClock clock_;
+  Nanoseconds start_{0};
 };
 
 }  // namespace skyloc::app

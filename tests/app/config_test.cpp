@@ -104,6 +104,7 @@ const BadCase kBadCases[] = {
     {"[camera]\nfps = nan\n", "[camera] fps"},
     {"[camera]\nfps = \"30\"\n", "[camera] fps"},
     {"[camera]\nframe_timeout_ms = 0\n", "[camera] frame_timeout_ms"},
+    {"[camera]\nreconnect_timeout_ms = -1\n", "[camera] reconnect_timeout_ms"},
     {"[camera]\nkind = \"dataset\"\n", "[camera] dataset", ":1:"},
     {"[camera]\nresolution = 3\n", "[camera] resolution"},
     {"[segmentation]\nmethod = \"kmeans\"\n", "[segmentation] method"},

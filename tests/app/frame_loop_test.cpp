@@ -293,15 +293,48 @@ TEST_F(FrameLoopFaults, AStalledCameraIsFatalAndNamed) {
   EXPECT_TRUE(status_.is_safe());
 }
 
-TEST_F(FrameLoopFaults, AVanishedCameraIsFatalAtOnce) {
+TEST_F(FrameLoopFaults, AVanishedCameraIsFatalWithoutReconnectTime) {
   FlakyCamera camera(7, 1000, StatusCode::kUnavailable);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  options.reconnect_timeout = Nanoseconds{0};
   LoopSummary summary;
-  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, {}, &summary);
+  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
   EXPECT_EQ(summary.frames, 7u);
   EXPECT_EQ(summary.capture_errors, 0u);
+  EXPECT_TRUE(status_.is_safe());
+}
+
+TEST_F(FrameLoopFaults, AnUnpluggedCameraThatComesBackIsFollowed) {
+  // Unavailable for 4 captures (the driver reopening it), then frames again.
+  FlakyCamera camera(20, 4, StatusCode::kUnavailable);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  options.max_frames = 20;
+  LoopSummary summary;
+  ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
+  EXPECT_FALSE(status_.is_safe());
+  options.max_frames = 5;
+  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(summary.frames, 5u);
+  EXPECT_EQ(summary.capture_errors, 4u);
+}
+
+TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
+  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  options.reconnect_timeout = std::chrono::milliseconds(200);
+  LoopSummary summary;
+  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable);
+  EXPECT_EQ(summary.frames, 3u);
+  EXPECT_GE(summary.capture_errors, 1u);
   EXPECT_TRUE(status_.is_safe());
 }
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "frame_loop.h"
-#include "recording_status_output.h"
+#include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/latency.h"
 #include "street_camera.h"
 
@@ -73,10 +73,10 @@ void BM_FrameToState(benchmark::State& state) {
     state.SkipWithError("fixture failed");
     return;
   }
-  RecordingStatusOutput status;
+  MonotonicClock clock;
+  drivers::SimulatedStatusOutput status({}, &clock);
   (void)status.Open();
   LatencyHistogram histogram;
-  MonotonicClock clock;
   std::uint64_t i = 0;
   for (auto _ : state) {
     drivers::Frame frame;

@@ -114,6 +114,12 @@ else
   fail "skyloc simulate could not write the replay datasets"
 fi
 
+# 10. teach stops when the route is full.
+sed 's/^route_frames = 5000/route_frames = 50/' "$CONFIG" >"$WORK/cap.toml"
+expect_rc 0 "teach up to the capacity" -- "${RUN[@]}" teach --route "$WORK/full.db" --config "$WORK/cap.toml" --frames 60
+expect_err "the route is full" "teach capacity"
+expect_err "50 frames committed" "teach capacity"
+
 if [ $failures -ne 0 ]; then
   echo "$failures check(s) failed" >&2
   exit 1

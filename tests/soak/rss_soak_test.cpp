@@ -5,8 +5,8 @@
 
 #include <cstdio>
 
+#include "../app/recording_status_output.h"
 #include "frame_loop.h"
-#include "recording_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/process_memory.h"
 #include "skyloc/platform/signals.h"

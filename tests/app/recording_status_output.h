@@ -1,7 +1,7 @@
-// A status output that only remembers what it was told: the state shown last, how often
-// the state changed and whether the lines are in the safe state. `[status] kind = "sim"`
-// uses it until the simulated GPIO of the drivers issue is wired in; tests use it to check
-// the shutdown path.
+// Test helper: a status output that only remembers what it was told (the state shown
+// last, how often it changed, whether the lines are in the safe state), so frame-loop
+// tests can check the shutdown and fault paths in one line. The product's simulated
+// output is drivers::SimulatedStatusOutput.
 #pragma once
 
 #include <cstdint>
