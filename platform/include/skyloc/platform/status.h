@@ -110,12 +110,12 @@ const Status& StatusOf(const Result<T>& r) {
 // The Status is copied inside the full expression: `SKYLOC_TRY(Call().AddContext(...))`
 // returns a reference into a temporary, and binding that to a reference would dangle
 // (AddressSanitizer found it through the route-database fuzz target).
-#define SKYLOC_TRY(expr)                                                                 \
-  do {                                                                                   \
+#define SKYLOC_TRY(expr)                                                                \
+  do {                                                                                  \
     if (const ::skyloc::Status skyloc_try_status_ = ::skyloc::internal::StatusOf(expr); \
-        !skyloc_try_status_.ok()) {                                                      \
-      return skyloc_try_status_;                                                         \
-    }                                                                                    \
+        !skyloc_try_status_.ok()) {                                                     \
+      return skyloc_try_status_;                                                        \
+    }                                                                                   \
   } while (false)
 
 // Declares or assigns `lhs` from a Result, or returns its Status on failure:
