@@ -271,13 +271,7 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
 
   RouteDbWriter writer;
   RouteFrames route;
-  if (args.mode == LoopMode::kTeach) {
-    Status s = writer.Create(args.route_path.c_str(), pipeline.route_settings(),
-                             static_cast<std::size_t>(config.route_db.flush_every), args.force);
-    if (s.code() == StatusCode::kFailedPrecondition)
-      s.AddContext("(pass --force to replace it)");
-    SKYLOC_TRY(s);
-  } else {
+  if (args.mode == LoopMode::kRepeat) {
     SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
                               static_cast<std::size_t>(pipeline.dim())));
     RouteDbLoadReport loaded;
@@ -297,8 +291,22 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   MonotonicClock clock;
   SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status,
                     MakeStatusOutput(config, &clock));
-  if (status)
-    SKYLOC_TRY(status->Open());
+  if (status) {
+    if (Status open = status->Open(); !open.ok()) {
+      return open.AddContext("[status] kind = \"%s\", chip = \"%s\"",
+                             StatusOutputKindName(config.status.kind), config.status.chip.c_str());
+    }
+  }
+  // The route database is created last, so a start-up failure leaves no empty route
+  // behind (and an existing one untouched).
+  if (args.mode == LoopMode::kTeach) {
+    Status created =
+        writer.Create(args.route_path.c_str(), pipeline.route_settings(),
+                      static_cast<std::size_t>(config.route_db.flush_every), args.force);
+    if (created.code() == StatusCode::kFailedPrecondition)
+      created.AddContext("(pass --force to replace it)");
+    SKYLOC_TRY(created);
+  }
 
   ResultRecorder recorder;
   // A finite run (a dataset, a simulated trajectory, --frames) keeps every result for the

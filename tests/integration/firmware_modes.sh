@@ -114,6 +114,14 @@ else
   fail "skyloc simulate could not write the replay datasets"
 fi
 
+# 10a. a start-up failure after the configuration (here: no such GPIO chip, or no libgpiod
+# in this build) is one error naming [status], and teach leaves no route file behind.
+cp "$CONFIG" "$WORK/gpio.toml"
+printf '[status]\nkind = "gpio"\nchip = "gpiochip99"\n' >>"$WORK/gpio.toml"
+expect_rc 1 "teach with a missing GPIO chip" -- "${RUN[@]}" teach --route "$WORK/gpio.db" --config "$WORK/gpio.toml" --frames 5
+expect_err "gpio" "teach with a missing GPIO chip"
+[ ! -e "$WORK/gpio.db" ] || fail "a failed start-up left $WORK/gpio.db behind"
+
 # 10. teach stops when the route is full.
 sed 's/^route_frames = 5000/route_frames = 50/' "$CONFIG" >"$WORK/cap.toml"
 expect_rc 0 "teach up to the capacity" -- "${RUN[@]}" teach --route "$WORK/full.db" --config "$WORK/cap.toml" --frames 60
