@@ -29,7 +29,8 @@ die() {
 HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest libgtest-dev
   libbenchmark-dev libeigen3-dev libtomlplusplus-dev libstb-dev libgpiod-dev gpiod
   libboost-math-dev
-  libcamera-dev)
+  libcamera-dev
+  clang-14 libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (tests/fuzz)
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one

@@ -1,0 +1,116 @@
+// The paper's experiments on simulated runs (issue 5 part 5): render runs through a world,
+// describe every frame twice — SeqSLAM (sky): UV image -> Otsu -> SH amplitude spectrum;
+// SeqSLAM (vanilla): visible image -> grey 64x32 patch-normalised — and score a reference
+// run against a query run with the same SeqSLAM and precision-recall code as `skyloc eval`.
+//
+// Ground truth from positions: a query frame's true reference frame is the reference frame
+// nearest to it (x, y); a match is correct within `tolerance_frames` of that frame (the
+// paper: 5), and a query frame farther than `max_offset_m` from every reference frame has
+// no ground truth. Start-up/offline work: everything here allocates.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "skyloc/dsp/place_metrics.h"
+#include "skyloc/dsp/seqslam.h"
+#include "skyloc/platform/status.h"
+#include "skyloc/sim/motion.h"
+#include "skyloc/sim/renderer.h"
+#include "skyloc/sim/world.h"
+
+namespace skyloc::sim {
+
+struct ExperimentOptions {
+  int width = 320;
+  int height = 240;
+  int bands = 120;         // SH bands of the sky descriptor (the paper: 120)
+  double spacing_m = 1.0;  // frame spacing along the route
+  double camera_height_m = 1.0;
+  int max_frames = 0;  // 0: the whole route
+  std::uint64_t world_seed = 1;
+  dsp::SeqSlamParams seqslam;  // OpenSeqSLAM defaults: ds 10, v 0.8..1.2, R 10
+  int tolerance_frames = 5;
+  double max_offset_m = 3.0;  // farther than this from the reference route: no truth
+};
+
+// One simulated run: its trajectory and the descriptors of every frame.
+struct RunDescriptors {
+  std::string label;
+  std::vector<TrajectoryPoint> trajectory;
+  std::vector<float> sky;      // frames x bands
+  std::vector<float> vanilla;  // frames x dsp::kVanillaDescriptorSize
+  double mean_sky_fraction = 0;
+};
+
+struct RunSpec {
+  std::string label;
+  MotionConfig motion;  // spacing, height and max_frames are overridden by the options
+  Lighting lighting;
+};
+
+// Renders the run (UV and visible) and describes every frame.
+Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
+                   const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out);
+
+struct MethodScore {
+  dsp::PrSummary summary;
+  std::vector<dsp::PrPoint> curve;
+  std::vector<int> matched;  // per query frame: matched reference (-1: no match)
+  std::vector<int> truth;    // per query frame: true reference (-1: none)
+};
+
+// SeqSLAM (batch, centred window) of `query` against `reference` with descriptors
+// `sky` (use_sky) or `vanilla`, then precision-recall against the position ground truth.
+Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
+                 const ExperimentOptions& options, MethodScore* out);
+
+// ---- The experiments -------------------------------------------------------------------
+
+// Tilt (the paper's City experiment): runs at alpha = -30..30 (and a second 0), paired
+// alpha1 ~ -alpha2 so the tilt differences are 0, 10, ..., 60 degrees.
+struct TiltRow {
+  double tilt_difference_deg = 0;
+  double reference_tilt_deg = 0;
+  double query_tilt_deg = 0;
+  MethodScore sky, vanilla;
+};
+
+// Progress: called before each run is rendered (may be null).
+using ProgressFn = void (*)(const char* what, void* context);
+
+Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> differences_deg,
+                         std::vector<TiltRow>* rows, ProgressFn progress = nullptr,
+                         void* context = nullptr);
+
+// Manoeuvre (BMX Track and Disposal Site): a smooth reference run at noon against a query
+// run at dawn with zig-zag and bumps; scored at several sequence lengths.
+struct ManoeuvreRow {
+  WorldKind world = WorldKind::kForest;
+  int sequence_length = 10;
+  MethodScore sky, vanilla;
+};
+
+Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
+                              std::vector<ManoeuvreRow>* rows, ProgressFn progress = nullptr,
+                              void* context = nullptr);
+
+// Ants (Seville habitat): one ant's route as the reference, other routes of the same ant
+// and of other ants as queries, at each camera height (ant ~0.01 m, small robot ~0.1 m).
+struct AntsRow {
+  std::string query;  // route name, e.g. "ant1_route2"
+  bool same_ant = false;
+  double camera_height_m = 0;
+  double truth_fraction = 0;  // query frames within max_offset_m of the reference route
+  MethodScore sky, vanilla;
+};
+
+inline constexpr const char* kAntsReferenceRoute = "ant1_route1";
+
+Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
+                         std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
+                         ProgressFn progress = nullptr, void* context = nullptr);
+
+}  // namespace skyloc::sim

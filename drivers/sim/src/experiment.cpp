@@ -1,0 +1,268 @@
+#include "skyloc/sim/experiment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/vanilla_descriptor.h"
+
+namespace skyloc::sim {
+
+Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
+                   const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
+  MotionConfig motion = spec.motion;
+  motion.frame_spacing_m = options.spacing_m;
+  motion.height_m = options.camera_height_m;
+  motion.max_frames = options.max_frames;
+  out->label = spec.label;
+  SKYLOC_TRY(BuildTrajectory(route, closed, motion, &out->trajectory));
+  Renderer renderer;
+  SKYLOC_TRY(renderer.Init(&world, DefaultSimLens(options.width, options.height)));
+  dsp::SkyDescriptor sky;
+  dsp::SkyDescriptorOptions sky_options;
+  sky_options.bands = options.bands;
+  sky_options.grid = dsp::DefaultShGridConfig(options.bands);
+  if (const dsp::DescriptorError e = sky.Init(renderer.lens(), sky_options); !e.ok())
+    return Status::Error(StatusCode::kInvalidArgument, "sky descriptor: %s", e.message);
+  const auto w = static_cast<std::size_t>(options.width);
+  const auto h = static_cast<std::size_t>(options.height);
+  std::vector<std::uint8_t> uv(w * h), visible(w * h * 3);
+  const dsp::MutableImageView uv_view{uv.data(), options.width, options.height, w,
+                                      dsp::PixelFormat::kGrey8};
+  const dsp::MutableImageView visible_view{visible.data(), options.width, options.height, w * 3,
+                                           dsp::PixelFormat::kRgb24};
+  const std::size_t n = out->trajectory.size();
+  const auto bands = static_cast<std::size_t>(options.bands);
+  out->sky.assign(n * bands, 0.0f);
+  out->vanilla.assign(n * dsp::kVanillaDescriptorSize, 0.0f);
+  double sky_fraction = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const drivers::Pose& pose = out->trajectory[i].pose;
+    SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kUv, i, uv_view));
+    SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kVisible, i, visible_view));
+    dsp::SegmentationResult segmentation;
+    if (const dsp::DescriptorError e = sky.Compute(
+            uv_view, std::span<float>(out->sky).subspan(i * bands, bands), &segmentation);
+        !e.ok())
+      return Status::Error(StatusCode::kInternal, "sky descriptor of frame %zu: %s", i, e.message);
+    sky_fraction += segmentation.sky_fraction;
+    if (const dsp::VanillaError e = dsp::VanillaDescriptor(
+            visible_view,
+            std::span<float>(out->vanilla)
+                .subspan(i * dsp::kVanillaDescriptorSize, dsp::kVanillaDescriptorSize));
+        e != dsp::VanillaError::kOk)
+      return Status::Error(StatusCode::kInternal, "vanilla descriptor of frame %zu: %s", i,
+                           dsp::VanillaErrorMessage(e));
+  }
+  out->mean_sky_fraction = n > 0 ? sky_fraction / static_cast<double>(n) : 0;
+  return Status::Ok();
+}
+
+Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
+                 const ExperimentOptions& options, MethodScore* out) {
+  const int dim = use_sky ? options.bands : dsp::kVanillaDescriptorSize;
+  const auto n_ref = static_cast<int>(reference.trajectory.size());
+  const auto n_query = static_cast<int>(query.trajectory.size());
+  std::vector<dsp::SeqSlamMatch> matches(static_cast<std::size_t>(n_query));
+  const dsp::SeqSlamError e = dsp::BatchSeqSlam(
+      use_sky ? reference.sky : reference.vanilla, use_sky ? query.sky : query.vanilla, dim,
+      options.seqslam, dsp::SeqSlamWindow::kCentred, matches);
+  if (e != dsp::SeqSlamError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "SeqSLAM: %s", dsp::SeqSlamErrorMessage(e));
+  out->matched.assign(static_cast<std::size_t>(n_query), -1);
+  out->truth.assign(static_cast<std::size_t>(n_query), -1);
+  std::vector<dsp::EvaluatedMatch> evaluated;
+  for (int q = 0; q < n_query; ++q) {
+    const drivers::Pose& p = query.trajectory[static_cast<std::size_t>(q)].pose;
+    double best = 1e300;
+    int truth = -1;
+    for (int r = 0; r < n_ref; ++r) {
+      const drivers::Pose& rp = reference.trajectory[static_cast<std::size_t>(r)].pose;
+      const double d = std::hypot(rp.x_m - p.x_m, rp.y_m - p.y_m);
+      if (d < best) {
+        best = d;
+        truth = r;
+      }
+    }
+    if (best > options.max_offset_m)
+      truth = -1;
+    out->truth[static_cast<std::size_t>(q)] = truth;
+    const dsp::SeqSlamMatch& m = matches[static_cast<std::size_t>(q)];
+    if (!m.valid)
+      continue;
+    out->matched[static_cast<std::size_t>(q)] = m.reference;
+    dsp::EvaluatedMatch em;
+    em.uniqueness = m.uniqueness;
+    em.has_ground_truth = truth >= 0;
+    em.correct = dsp::MatchWithinFrames(m.reference, truth, options.tolerance_frames);
+    evaluated.push_back(em);
+  }
+  std::vector<std::size_t> order(evaluated.size());
+  out->curve.assign(evaluated.size(), dsp::PrPoint{});
+  const std::size_t points = dsp::PrecisionRecallCurve(evaluated, order, out->curve);
+  out->curve.resize(points);
+  out->summary = dsp::SummarisePrecisionRecall(evaluated, out->curve);
+  return Status::Ok();
+}
+
+namespace {
+
+void Report(ProgressFn progress, void* context, const char* what) {
+  if (progress != nullptr)
+    progress(what, context);
+}
+
+}  // namespace
+
+Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> differences_deg,
+                         std::vector<TiltRow>* rows, ProgressFn progress, void* context) {
+  World world;
+  SKYLOC_TRY(MakeProceduralWorld(WorldKind::kCity, options.world_seed, &world));
+  // Runs by tilt; index 7 is the second alpha = 0 run.
+  std::vector<RunDescriptors> runs(8);
+  std::vector<bool> done(8, false);
+  auto run_index = [](int alpha, bool second) { return second ? 7 : (alpha + 30) / 10; };
+  auto get = [&](int alpha, bool second, RunDescriptors** run) -> Status {
+    const int i = run_index(alpha, second);
+    if (!done[static_cast<std::size_t>(i)]) {
+      RunSpec spec;
+      char label[64];
+      std::snprintf(label, sizeof label, "city tilt %+d%s", alpha, second ? " (second run)" : "");
+      spec.label = label;
+      Report(progress, context, label);
+      spec.motion.tilt_deg = alpha;
+      spec.motion.seed = static_cast<std::uint64_t>(100 + i);
+      // The paper's runs: the same place at about the same time of day (3 pm).
+      LightingPreset("noon", static_cast<std::uint64_t>(200 + i), &spec.lighting);
+      SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, spec, options,
+                             &runs[static_cast<std::size_t>(i)]));
+      done[static_cast<std::size_t>(i)] = true;
+    }
+    *run = &runs[static_cast<std::size_t>(i)];
+    return Status::Ok();
+  };
+  rows->clear();
+  for (const int difference : differences_deg) {
+    if (difference < 0 || difference > 60 || difference % 10 != 0) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "tilt difference %d: expected 0, 10, ..., 60 degrees", difference);
+    }
+    // alpha1 ~ -alpha2: 0 -> (0, 0'), 10 -> (10, 0), 20 -> (10, -10), 30 -> (20, -10), ...
+    const int alpha1 = (difference / 2 + 9) / 10 * 10;
+    const int alpha2 = alpha1 - difference;
+    RunDescriptors* reference = nullptr;
+    RunDescriptors* query = nullptr;
+    SKYLOC_TRY(get(alpha1, false, &reference));
+    SKYLOC_TRY(get(alpha2, difference == 0, &query));
+    TiltRow row;
+    row.tilt_difference_deg = difference;
+    row.reference_tilt_deg = alpha1;
+    row.query_tilt_deg = alpha2;
+    SKYLOC_TRY(ScoreRuns(*reference, *query, true, options, &row.sky));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, false, options, &row.vanilla));
+    rows->push_back(std::move(row));
+  }
+  return Status::Ok();
+}
+
+Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
+                              std::vector<ManoeuvreRow>* rows, ProgressFn progress, void* context) {
+  rows->clear();
+  for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
+    World world;
+    SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
+    RunSpec reference_spec;
+    reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
+    reference_spec.motion.seed = 301;
+    LightingPreset("noon", 401, &reference_spec.lighting);
+    RunSpec query_spec;
+    query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
+    query_spec.motion.seed = 302;
+    query_spec.motion.zigzag_deg = 20;
+    query_spec.motion.zigzag_period_m = 12;
+    query_spec.motion.bumps_deg = 15;
+    LightingPreset("dawn", 402, &query_spec.lighting);
+    RunDescriptors reference, query;
+    Report(progress, context, reference_spec.label.c_str());
+    SKYLOC_TRY(
+        DescribeRun(world, world.route, world.route_closed, reference_spec, options, &reference));
+    Report(progress, context, query_spec.label.c_str());
+    SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, options, &query));
+    for (const int ds : ds_values) {
+      ExperimentOptions o = options;
+      o.seqslam.sequence_length = ds;
+      ManoeuvreRow row;
+      row.world = kind;
+      row.sequence_length = ds;
+      SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
+      rows->push_back(std::move(row));
+    }
+  }
+  return Status::Ok();
+}
+
+Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
+                         std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
+                         ProgressFn progress, void* context) {
+  World world;
+  SKYLOC_TRY(LoadSevilleWorld((seville_dir + "/world5000_triangles.csv").c_str(), &world));
+  struct Query {
+    const char* name;
+    bool same_ant;
+  };
+  static constexpr Query kQueries[] = {
+      {"ant1_route2", true},  {"ant1_route3", true},  {"ant1_route4", true},
+      {"ant1_route5", true},  {"ant2_route1", false}, {"ant3_route1", false},
+      {"ant4_route1", false}, {"ant7_route1", false},
+  };
+  auto load = [&](const char* name, std::vector<Point2>* route) {
+    return LoadRouteCsv((seville_dir + "/routes/" + name + ".csv").c_str(), route);
+  };
+  std::vector<Point2> reference_route;
+  SKYLOC_TRY(load(kAntsReferenceRoute, &reference_route));
+  rows->clear();
+  for (const double height : camera_heights_m) {
+    ExperimentOptions o = options;
+    o.camera_height_m = height;
+    RunSpec reference_spec;
+    char label[96];
+    std::snprintf(label, sizeof label, "%s at %.2f m", kAntsReferenceRoute, height);
+    reference_spec.label = label;
+    reference_spec.motion.seed = 501;
+    LightingPreset("noon", 601, &reference_spec.lighting);
+    RunDescriptors reference;
+    Report(progress, context, label);
+    SKYLOC_TRY(DescribeRun(world, reference_route, false, reference_spec, o, &reference));
+    std::uint64_t k = 0;
+    for (const Query& q : kQueries) {
+      ++k;
+      std::vector<Point2> route;
+      SKYLOC_TRY(load(q.name, &route));
+      RunSpec spec;
+      std::snprintf(label, sizeof label, "%s at %.2f m", q.name, height);
+      spec.label = label;
+      spec.motion.seed = 510 + k;
+      LightingPreset("noon", 610 + k, &spec.lighting);
+      RunDescriptors query;
+      Report(progress, context, label);
+      SKYLOC_TRY(DescribeRun(world, route, false, spec, o, &query));
+      AntsRow row;
+      row.query = q.name;
+      row.same_ant = q.same_ant;
+      row.camera_height_m = height;
+      SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
+      const auto with_truth =
+          std::count_if(row.sky.truth.begin(), row.sky.truth.end(), [](int t) { return t >= 0; });
+      row.truth_fraction = row.sky.truth.empty() ? 0
+                                                 : static_cast<double>(with_truth) /
+                                                       static_cast<double>(row.sky.truth.size());
+      rows->push_back(std::move(row));
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace skyloc::sim
