@@ -27,6 +27,7 @@ die() {
 # Debian packages, by build kind.
 HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest libgtest-dev
   libbenchmark-dev libeigen3-dev libtomlplusplus-dev libstb-dev libgpiod-dev gpiod
+  libboost-math-dev
   libcamera-dev)
 CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static)
 CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static)

@@ -9,12 +9,15 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
 
 #include "commands.h"
+#include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/place_metrics.h"
@@ -41,9 +44,11 @@ constexpr const char* kUsage =
     "                         the matched reference was recorded within X m of the query\n"
     "  --frame-tolerance N    with --gt or pose-derived truth: correct within +-N frames\n"
     "                         (default 5, as the paper)\n"
-    "  --lens MODEL           sky: lens model (equidistant, equisolid, ...; default\n"
-    "                         equidistant)\n"
-    "  --fov-deg X            sky: full field of view (default 185)\n"
+    "  --camera FILE.toml     sky: the camera file (docs/CAMERA_FILE.md) for both runs;\n"
+    "                         otherwise each dataset's camera.toml, otherwise an\n"
+    "                         equidistant 185-degree lens filling the short image side\n"
+    "                         (equirectangular for 2:1 images), as skyloc describe\n"
+    "  --lens MODEL, --fov DEG  sky: override the lens model / field of view\n"
     "  --bands N              sky: spherical-harmonic bands (default 120)\n"
     "\n"
     "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
@@ -66,8 +71,9 @@ struct EvalOptions {
   std::vector<Method> methods;
   std::vector<int> ds_list;
   bool streaming = false;
-  dsp::LensModel lens = dsp::LensModel::kEquidistant;
-  double fov_deg = 185.0;
+  std::string camera;  // --camera FILE
+  std::optional<dsp::LensModel> lens;
+  std::optional<double> fov_deg;
   int bands = 120;
 };
 
@@ -141,15 +147,22 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
       if (!ParseIntArg(v, &ds) || ds < 1 || ds > dsp::kMaxSequenceLength)
         return fail("--ds '%s': give a sequence length of 1..1000 frames", v);
       o->ds_list.push_back(ds);
+    } else if (a == "--camera") {
+      o->camera = v;
     } else if (a == "--lens") {
-      if (!dsp::ParseLensModel(v, &o->lens))
+      dsp::LensModel model;
+      if (!dsp::ParseLensModel(v, &model) || model == dsp::LensModel::kKannalaBrandt ||
+          model == dsp::LensModel::kOCamCalib)
         return fail(
-            "--lens '%s': use equidistant, equisolid, kannala_brandt, ocamcalib or "
-            "equirectangular",
+            "--lens '%s': use equidistant, equisolid or equirectangular (other models "
+            "need a camera file)",
             v);
-    } else if (a == "--fov-deg") {
-      if (!ParseDoubleArg(v, &o->fov_deg) || o->fov_deg <= 0 || o->fov_deg > 360)
-        return fail("--fov-deg '%s': give a field of view in (0, 360] degrees", v);
+      o->lens = model;
+    } else if (a == "--fov") {
+      double fov = 0;
+      if (!ParseDoubleArg(v, &fov) || fov <= 0 || fov > 360)
+        return fail("--fov '%s': give a field of view in (0, 360] degrees", v);
+      o->fov_deg = fov;
     } else if (a == "--bands") {
       if (!ParseIntArg(v, &o->bands) || o->bands < 1 || o->bands > 512)
         return fail("--bands '%s': give 1..512", v);
@@ -189,17 +202,37 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
   Descriptors d;
   dsp::SkyDescriptor sky;
   if (method == Method::kSky) {
+    // The lens: --camera, else the dataset's camera.toml, else describe's default for a
+    // square-ish image (equidistant, 185 degrees); --lens/--fov override any of them.
     dsp::LensParams lp;
-    lp.model = o.lens;
-    lp.width = camera.info().width;
-    lp.height = camera.info().height;
-    lp.fov_deg = o.fov_deg;
-    dsp::Lens lens;
-    const dsp::LensError le = lens.Init(lp);
-    if (le != dsp::LensError::kOk) {
-      return Status::Error(StatusCode::kInvalidArgument, "lens for %s (%dx%d): %s", dir.c_str(),
-                           lp.width, lp.height, dsp::LensErrorMessage(le));
+    std::string source = "default lens (equidistant 185 degrees)";
+    const std::string& file = !o.camera.empty() ? o.camera : camera.dataset().camera_toml;
+    if (!file.empty()) {
+      SKYLOC_TRY_ASSIGN(lp, drivers::LoadCameraFile(file.c_str()));
+      source = file;
+      if (lp.width != camera.info().width || lp.height != camera.info().height) {
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "dataset %s has %dx%d frames but camera file %s describes %dx%d: "
+                             "pass the camera file made for this camera with --camera",
+                             dir.c_str(), camera.info().width, camera.info().height, file.c_str(),
+                             lp.width, lp.height);
+      }
+    } else {
+      // As `skyloc describe` guesses: a 2:1 image is a panorama, anything else a fisheye.
+      lp.width = camera.info().width;
+      lp.height = camera.info().height;
+      const double aspect = static_cast<double>(lp.width) / lp.height;
+      if (std::fabs(aspect - 2.0) < 0.05) {
+        lp.model = dsp::LensModel::kEquirectangular;
+        source = "default lens (equirectangular: a 2:1 image)";
+      }
     }
+    if (o.lens)
+      lp.model = *o.lens;
+    if (o.fov_deg)
+      lp.fov_deg = *o.fov_deg;
+    dsp::Lens lens;
+    SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens));
     dsp::SkyDescriptorOptions so;
     so.bands = o.bands;
     const dsp::DescriptorError de = sky.Init(lens, so);
@@ -246,9 +279,8 @@ struct GroundTruth {
   std::string description;
 };
 
-double Distance(const drivers::Pose& a, const drivers::Pose& b) {
-  return std::sqrt((a.x_m - b.x_m) * (a.x_m - b.x_m) + (a.y_m - b.y_m) * (a.y_m - b.y_m) +
-                   (a.z_m - b.z_m) * (a.z_m - b.z_m));
+dsp::Position3 PositionOf(const drivers::DatasetFrame& frame) {
+  return {frame.pose->x_m, frame.pose->y_m, frame.pose->z_m};
 }
 
 Status ReadGroundTruthCsv(const std::string& path, int n_query, int n_ref, GroundTruth* gt) {
@@ -331,22 +363,15 @@ Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset
   }
   gt.by_distance = o.tolerance_m > 0;
   gt.reference.assign(static_cast<std::size_t>(n_query), -1);
-  for (int q = 0; q < n_query; ++q) {
-    double best = INFINITY;
-    int best_r = -1;
-    for (int r = 0; r < n_ref; ++r) {
-      const double dist = Distance(*query.frames[static_cast<std::size_t>(q)].pose,
-                                   *ref.frames[static_cast<std::size_t>(r)].pose);
-      if (dist < best) {
-        best = dist;
-        best_r = r;
-      }
-    }
-    // With a distance tolerance, a query farther than it from the whole route is off it.
-    if (gt.by_distance && best > o.tolerance_m)
-      best_r = -1;
-    gt.reference[static_cast<std::size_t>(q)] = best_r;
-  }
+  std::vector<dsp::Position3> ref_xyz, query_xyz;
+  for (const drivers::DatasetFrame& f : ref.frames)
+    ref_xyz.push_back(PositionOf(f));
+  for (const drivers::DatasetFrame& f : query.frames)
+    query_xyz.push_back(PositionOf(f));
+  // With a distance tolerance, a query farther than it from the whole route is off it.
+  dsp::GroundTruthFromPositions(
+      ref_xyz, query_xyz, gt.by_distance ? o.tolerance_m : std::numeric_limits<double>::infinity(),
+      gt.reference);
   char text[96];
   if (gt.by_distance) {
     std::snprintf(text, sizeof text, "poses, correct within %.3g m", o.tolerance_m);
@@ -405,8 +430,9 @@ bool IsCorrect(const GroundTruth& gt, const EvalOptions& o, const drivers::Datas
   if (truth < 0 || matched < 0)
     return false;
   if (gt.by_distance) {
-    return Distance(*query.frames[static_cast<std::size_t>(q)].pose,
-                    *ref.frames[static_cast<std::size_t>(matched)].pose) <= o.tolerance_m;
+    return dsp::PositionDistance(PositionOf(query.frames[static_cast<std::size_t>(q)]),
+                                 PositionOf(ref.frames[static_cast<std::size_t>(matched)])) <=
+           o.tolerance_m;
   }
   return dsp::MatchWithinFrames(matched, truth, o.frame_tolerance);
 }
@@ -717,11 +743,6 @@ Status Evaluate(const EvalOptions& o) {
   SKYLOC_TRY_ASSIGN(const drivers::Dataset ref, drivers::ReadDataset(o.reference));
   SKYLOC_TRY_ASSIGN(const drivers::Dataset query, drivers::ReadDataset(o.query));
   SKYLOC_TRY_ASSIGN(const GroundTruth gt, MakeGroundTruth(o, ref, query));
-  if (!ref.camera_toml.empty() || !query.camera_toml.empty()) {
-    std::fprintf(stderr,
-                 "skyloc eval: note: camera.toml is not read yet; the sky descriptor uses "
-                 "--lens/--fov-deg (defaults: equidistant, 185 degrees)\n");
-  }
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
   if (ec) {

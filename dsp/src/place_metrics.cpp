@@ -1,9 +1,34 @@
 #include "skyloc/dsp/place_metrics.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace skyloc::dsp {
+
+double PositionDistance(const Position3& a, const Position3& b) {
+  const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+void GroundTruthFromPositions(std::span<const Position3> reference,
+                              std::span<const Position3> query, double max_distance_m,
+                              std::span<int> truth) {
+  const std::size_t n = std::min(query.size(), truth.size());
+  for (std::size_t q = 0; q < n; ++q) {
+    double best = std::numeric_limits<double>::infinity();
+    int best_r = -1;
+    for (std::size_t r = 0; r < reference.size(); ++r) {
+      const double d = PositionDistance(query[q], reference[r]);
+      if (d < best) {  // the first of equally near references
+        best = d;
+        best_r = static_cast<int>(r);
+      }
+    }
+    truth[q] = best <= max_distance_m ? best_r : -1;
+  }
+}
 
 std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,
                                  std::span<std::size_t> order, std::span<PrPoint> curve) {

@@ -19,6 +19,9 @@ const char* ShErrorMessage(ShError error) {
     case ShError::kTableTooLarge:
       return "the naive SH projector's table (bands^2 x samples floats) exceeds 256 MB; use "
              "fewer bands or samples, or the fast projector";
+    case ShError::kLongitudesNotPowerOfTwo:
+      return "the SH grid's longitudes per ring must be a power of two (e.g. 128, 256, 512) for "
+             "the ring FFT";
     case ShError::kNotInitialised:
       return "the SH grid or projector was used before a successful Init()";
     case ShError::kSizeMismatch:
@@ -32,6 +35,8 @@ ShError ValidateShGridConfig(const ShGridConfig& config) {
     return ShError::kRingsOutOfRange;
   if (config.longitudes < 4 || config.longitudes > kMaxShLongitudes)
     return ShError::kLongitudesOutOfRange;
+  if ((config.longitudes & (config.longitudes - 1)) != 0)
+    return ShError::kLongitudesNotPowerOfTwo;
   return ShError::kOk;
 }
 
@@ -48,7 +53,7 @@ ShGridConfig DefaultShGridConfig(int bands) {
 }
 
 ShGridConfig PaperShGridConfig() {
-  return ShGridConfig{.rings = 20, .longitudes = 100, .coverage = ShCoverage::kUpperHemisphere};
+  return ShGridConfig{.rings = 16, .longitudes = 128, .coverage = ShCoverage::kUpperHemisphere};
 }
 
 bool ShGridResolvesBands(const ShGridConfig& config, int bands) {

@@ -71,6 +71,18 @@ TEST_F(ImageFileTest, BgrIsWrittenAsRgb) {
   }
 }
 
+TEST_F(ImageFileTest, YuyvIsWrittenAsItsLumaPlane) {
+  OwnedImage image = Gradient(6, 2, dsp::PixelFormat::kYuyv);
+  ASSERT_TRUE(SavePng(Path("y.png").c_str(), image.view()).ok());
+  auto loaded = LoadImage(Path("y.png").c_str());
+  ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+  ASSERT_EQ(loaded->format(), dsp::PixelFormat::kGrey8);
+  ASSERT_EQ(loaded->width(), 6);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 6; ++x)
+      EXPECT_EQ(loaded->view().Row(y)[x], image.view().Row(y)[2 * x]);
+}
+
 TEST_F(ImageFileTest, SaveReplacesInPlaceAndLeavesNoTemporaryFiles) {
   OwnedImage image = Gradient(8, 8, dsp::PixelFormat::kGrey8);
   ASSERT_TRUE(SavePng(Path("a.png").c_str(), image.view()).ok());

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <vector>
 
 namespace skyloc::dsp {
@@ -67,6 +69,23 @@ TEST(PlaceMetrics, FrameTolerance) {
   EXPECT_FALSE(MatchWithinFrames(16, 10, 5));
   EXPECT_FALSE(MatchWithinFrames(3, 10, 5));
   EXPECT_FALSE(MatchWithinFrames(0, -1, 5));  // no ground truth
+}
+
+TEST(PlaceMetrics, GroundTruthFromPositions) {
+  // Reference route along x at 1 m spacing; queries 0.4 m to the side.
+  const std::vector<Position3> ref = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
+  const std::vector<Position3> query = {
+      {2.2, 0.4, 0},  // nearest reference 2 (0.447 m)
+      {0.9, 0.4, 0},  // nearest 1 (0.412 m)
+      {3.0, 5.0, 0},  // nearest 3 but 5 m away: off the route with a 1 m tolerance
+      {1.5, 0.0, 0},  // exactly between 1 and 2: the first
+  };
+  std::vector<int> truth(4);
+  GroundTruthFromPositions(ref, query, 1.0, truth);
+  EXPECT_EQ(truth, (std::vector<int>{2, 1, -1, 1}));
+  GroundTruthFromPositions(ref, query, std::numeric_limits<double>::infinity(), truth);
+  EXPECT_EQ(truth[2], 3);
+  EXPECT_DOUBLE_EQ(PositionDistance({0, 0, 0}, {2, 3, 6}), 7.0);
 }
 
 }  // namespace

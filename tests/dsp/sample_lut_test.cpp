@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -147,32 +148,43 @@ TEST(SampleLut, FootprintAveragesAndOutsideTheViewIsGround) {
   EXPECT_LT(lut.visible_fraction(), 0.75);
 }
 
-TEST(SampleLut, DirectThresholdingEqualsSamplingTheMask) {
+TEST(SampleLut, DirectThresholdingEqualsSamplingTheMaskInEveryFormat) {
+  const Lens lens = MakeLens(LensModel::kEquidistant, 320, 240, 5.0);
+  ShGrid grid;
+  ASSERT_EQ(grid.Init(DefaultShGridConfig(48)), ShError::kOk);
+  // Noisy bytes, so many pixels sit near the threshold; each format reads them differently.
+  std::vector<std::uint8_t> bytes(320 * 240 * 3);
+  std::uint32_t state = 12345;
+  for (auto& b : bytes) {
+    state = state * 1664525u + 1013904223u;
+    b = static_cast<std::uint8_t>(state >> 24);
+  }
+  const ImageView images[] = {{bytes.data(), 320, 240, 320 * 3, PixelFormat::kRgb24},
+                              {bytes.data(), 320, 240, 320 * 3, PixelFormat::kBgr24},
+                              {bytes.data(), 320, 240, 320 * 2, PixelFormat::kYuyv},
+                              {bytes.data(), 320, 240, 320, PixelFormat::kGrey8}};
   for (int footprint : {1, 3}) {
-    const Lens lens = MakeLens(LensModel::kEquidistant, 320, 240, 5.0);
-    ShGrid grid;
-    ASSERT_EQ(grid.Init(DefaultShGridConfig(48)), ShError::kOk);
     SampleLut lut;
     ASSERT_EQ(lut.Init(lens, grid, SampleLutOptions{footprint}), SampleLutError::kOk);
-    // A noisy RGB frame, so many pixels sit near the threshold.
-    std::vector<std::uint8_t> rgb(320 * 240 * 3);
-    std::uint32_t state = 12345;
-    for (auto& b : rgb) {
-      state = state * 1664525u + 1013904223u;
-      b = static_cast<std::uint8_t>(state >> 24);
+    for (const ImageView& image : images) {
+      SkySegmenter seg;
+      ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
+      std::vector<std::uint8_t> mask(320 * 240);
+      SegmentationResult r;
+      ASSERT_EQ(seg.Segment(image, {mask.data(), 320, 240, 320, PixelFormat::kGrey8}, &r),
+                SegmentationError::kOk);
+      std::vector<float> direct(lut.size()), via_mask(lut.size());
+      ASSERT_EQ(lut.SampleImage(image, r.threshold, direct), SampleLutError::kOk);
+      ASSERT_EQ(lut.SampleMask({mask.data(), 320, 240, 320, PixelFormat::kGrey8}, via_mask),
+                SampleLutError::kOk);
+      EXPECT_EQ(direct, via_mask) << "footprint " << footprint << " "
+                                  << PixelFormatName(image.format);
+      // Not trivially all-ground or all-sky.
+      const auto sky =
+          std::count_if(direct.begin(), direct.end(), [](float v) { return v >= 0.5f; });
+      EXPECT_GT(sky, static_cast<std::ptrdiff_t>(direct.size() / 10));
+      EXPECT_LT(sky, static_cast<std::ptrdiff_t>(direct.size() * 9 / 10));
     }
-    const ImageView image{rgb.data(), 320, 240, 320 * 3, PixelFormat::kRgb24};
-    SkySegmenter seg;
-    ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
-    std::vector<std::uint8_t> mask(320 * 240);
-    SegmentationResult r;
-    ASSERT_EQ(seg.Segment(image, {mask.data(), 320, 240, 320, PixelFormat::kGrey8}, &r),
-              SegmentationError::kOk);
-    std::vector<float> direct(lut.size()), via_mask(lut.size());
-    ASSERT_EQ(lut.SampleImage(image, r.threshold, direct), SampleLutError::kOk);
-    ASSERT_EQ(lut.SampleMask({mask.data(), 320, 240, 320, PixelFormat::kGrey8}, via_mask),
-              SampleLutError::kOk);
-    EXPECT_EQ(direct, via_mask) << "footprint " << footprint;
   }
 }
 

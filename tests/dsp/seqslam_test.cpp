@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -309,7 +310,7 @@ TEST(SeqSlamStreaming, BFloat16RoundsToNearestEven) {
   EXPECT_EQ(ToBFloat16(1.0f + 0x1p-8f + 0x1p-12f), 0x3F81);  // above halfway
   EXPECT_EQ(FromBFloat16(0x3F81), 1.0f + 0x1p-7f);
   EXPECT_TRUE(std::isnan(FromBFloat16(ToBFloat16(std::nanf("")))));
-  EXPECT_TRUE(std::isinf(FromBFloat16(ToBFloat16(INFINITY))));
+  EXPECT_TRUE(std::isinf(FromBFloat16(ToBFloat16(std::numeric_limits<float>::infinity()))));
 }
 
 TEST(SeqSlamStreaming, SingleImageModeMatchesEveryFrame) {
@@ -425,7 +426,7 @@ std::vector<SeqSlamMatch> NaiveSeqSlam(const std::vector<float>& d, int n, int m
     const int first = window == SeqSlamWindow::kCentred ? t - ds / 2 : t - ds + 1;
     if (first < 0 || first + ds > m)
       continue;
-    std::vector<double> score(static_cast<std::size_t>(n), INFINITY);
+    std::vector<double> score(static_cast<std::size_t>(n), std::numeric_limits<double>::infinity());
     std::vector<std::size_t> best_k(static_cast<std::size_t>(n), 0);
     for (int s = 0; s < n; ++s) {
       for (std::size_t k = 0; k < v.size(); ++k) {
@@ -444,7 +445,7 @@ std::vector<SeqSlamMatch> NaiveSeqSlam(const std::vector<float>& d, int n, int m
     if (std::isinf(*best))
       continue;
     const int bs = static_cast<int>(best - score.begin());
-    double second = INFINITY;
+    double second = std::numeric_limits<double>::infinity();
     for (int s = 0; s < n; ++s) {
       if (std::abs(s - bs) > p.uniqueness_window / 2)
         second = std::min(second, score[static_cast<std::size_t>(s)]);

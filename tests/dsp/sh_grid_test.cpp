@@ -96,9 +96,9 @@ TEST(ShGrid, DefaultGridResolvesItsBandsAndThePaperGridDoesNot) {
     EXPECT_TRUE(ShGridResolvesBands(DefaultShGridConfig(bands), bands)) << bands;
 
   const ShGridConfig paper = PaperShGridConfig();
-  EXPECT_EQ(paper.rings * paper.longitudes, 2000);
-  EXPECT_TRUE(ShGridResolvesBands(paper, 40));
-  EXPECT_FALSE(ShGridResolvesBands(paper, 41));
+  EXPECT_EQ(paper.rings * paper.longitudes, 2048);
+  EXPECT_TRUE(ShGridResolvesBands(paper, 32));
+  EXPECT_FALSE(ShGridResolvesBands(paper, 33));
   EXPECT_FALSE(ShGridResolvesBands(paper, 120));
 }
 
@@ -110,6 +110,7 @@ TEST(ShGrid, InvalidConfigsAreErrorsWithMessages) {
   EXPECT_EQ(grid.Init({.rings = 8, .longitudes = 3}), ShError::kLongitudesOutOfRange);
   EXPECT_EQ(grid.Init({.rings = 8, .longitudes = kMaxShLongitudes + 1}),
             ShError::kLongitudesOutOfRange);
+  EXPECT_EQ(grid.Init({.rings = 8, .longitudes = 100}), ShError::kLongitudesNotPowerOfTwo);
   EXPECT_NE(std::string(ShErrorMessage(ShError::kRingsOutOfRange)).find("ring"), std::string::npos);
 }
 

@@ -38,7 +38,7 @@ TEST(RealSphericalHarmonics, MatchBoostInTheRealBasisUpToL120) {
   constexpr int kBands = 121;
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> theta_dist(0.0, kPi), phi_dist(0.0, 2 * kPi);
-  for (int trial = 0; trial < 6; ++trial) {
+  for (int trial = 0; trial < 3; ++trial) {
     const double theta = theta_dist(rng), phi = phi_dist(rng);
     const std::vector<double> y = RealSh(kBands, theta, phi);
     for (int l = 0; l < kBands; ++l) {
@@ -74,11 +74,11 @@ TEST(RealSphericalHarmonics, IndexLayoutAndLowOrderFormulas) {
 }
 
 // Orthonormality, directly: the full-sphere grid's quadrature Σ_s w_s y_k(s) y_k'(s) is the
-// identity for every pair k, k' with l, l' < L (all L^4 pairs, double precision).
+// identity for every pair k, k' with l, l' < 14 (all L^4 pairs, double precision).
 TEST(RealSphericalHarmonics, FullSphereQuadratureIsOrthonormalAllPairs) {
-  constexpr int kBands = 24;
+  constexpr int kBands = 14;
   const ShGrid grid =
-      MakeGrid({.rings = kBands, .longitudes = 2 * kBands, .coverage = ShCoverage::kFullSphere});
+      MakeGrid({.rings = kBands, .longitudes = 32, .coverage = ShCoverage::kFullSphere});
   const auto n = static_cast<Eigen::Index>(grid.sample_count());
   const auto k = static_cast<Eigen::Index>(ShCoefficientCount(kBands));
   Eigen::MatrixXd y(k, n);
@@ -106,39 +106,44 @@ TEST(RealSphericalHarmonics, FullSphereQuadratureIsOrthonormalAtL120) {
     p.emplace_back(LegendreTriangleSize(kBands));
     ASSERT_TRUE(NormalisedLegendre(kBands, r.cos_theta, r.sin_theta, p.back()));
   }
-  const double ring_sum_to_integral = grid.longitudes() / (2 * kPi);  // undo the 2π/n factor
+  // Latitude: for each m, Σ_i (w_i·n/2π)·P̄_lm(x_i)·P̄_l'm(x_i) must be δ_ll'/(2π) (the ring
+  // weight without its 2π/n longitude factor). Plain loops: fast in Debug builds too.
+  const double ring_sum_to_integral = grid.longitudes() / (2 * kPi);
+  const auto rings = static_cast<std::size_t>(grid.ring_count());
+  std::vector<double> pm(rings * kBands);  // row l: the rings' scaled P̄_lm
   double worst = 0;
   for (int m = 0; m < kBands; ++m) {
+    for (int l = m; l < kBands; ++l)
+      for (std::size_t i = 0; i < rings; ++i)
+        pm[static_cast<std::size_t>(l) * rings + i] =
+            std::sqrt(grid.rings()[i].weight * ring_sum_to_integral) * p[i][LegendreIndex(l, m)];
     for (int l = m; l < kBands; ++l) {
       for (int l2 = l; l2 < kBands; ++l2) {
+        const double* a = &pm[static_cast<std::size_t>(l) * rings];
+        const double* b = &pm[static_cast<std::size_t>(l2) * rings];
         double sum = 0;
-        for (std::size_t i = 0; i < p.size(); ++i)
-          sum += grid.rings()[i].weight * ring_sum_to_integral * p[i][LegendreIndex(l, m)] *
-                 p[i][LegendreIndex(l2, m)];
-        worst = std::max(worst, std::fabs(sum * 2 * kPi - (l == l2 ? 1.0 : 0.0)));
+        for (std::size_t i = 0; i < rings; ++i)
+          sum += a[i] * b[i];
+        worst = std::max(worst, std::fabs(2 * kPi * sum - (l == l2 ? 1.0 : 0.0)));
       }
     }
   }
   EXPECT_LT(worst, 1e-12);
-  worst = 0;
+  // Longitude: rows cos(mφ_j) and sin(mφ_j) for m < L; the sums of their products over the
+  // n points, times 2π/n, must be π·δ (2π for the cos m = 0 row, sin 0 is identically 0).
   const int n = grid.longitudes();
-  for (int m = 0; m < kBands; ++m) {
-    for (int m2 = 0; m2 < kBands; ++m2) {
-      double cc = 0, ss = 0, cs = 0;
-      for (int j = 0; j < n; ++j) {
-        const double phi = grid.phi(j);
-        cc += std::cos(m * phi) * std::cos(m2 * phi);
-        ss += std::sin(m * phi) * std::sin(m2 * phi);
-        cs += std::cos(m * phi) * std::sin(m2 * phi);
-      }
-      const double scale = 2 * kPi / n;
-      const double cc_expected = m == m2 ? (m == 0 ? 2 * kPi : kPi) : 0.0;
-      const double ss_expected = (m == m2 && m > 0) ? kPi : 0.0;
-      worst = std::max({worst, std::fabs(cc * scale - cc_expected),
-                        std::fabs(ss * scale - ss_expected), std::fabs(cs * scale)});
+  Eigen::MatrixXd trig(2 * kBands - 1, n);
+  for (int j = 0; j < n; ++j) {
+    for (int m = 0; m < kBands; ++m) {
+      trig(m, j) = std::cos(m * grid.phi(j));
+      if (m > 0)
+        trig(kBands + m - 1, j) = std::sin(m * grid.phi(j));
     }
   }
-  EXPECT_LT(worst, 1e-12);
+  Eigen::MatrixXd expected = kPi * Eigen::MatrixXd::Identity(2 * kBands - 1, 2 * kBands - 1);
+  expected(0, 0) = 2 * kPi;
+  const Eigen::MatrixXd sums = (2 * kPi / n) * trig * trig.transpose();
+  EXPECT_LT((sums - expected).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 // --- Fast projection against the naive reference ----------------------------------------
@@ -159,42 +164,54 @@ Eigen::Vector3d Unit(double theta, double phi) {
 std::vector<float> SampleSky(const ShGrid& grid, const std::vector<Cap>& sky,
                              const std::vector<Cap>& obstacles, const Eigen::Matrix3d& rotation,
                              bool hemisphere) {
+  // (Rᵀd)·c = d·(Rc): rotate the caps once instead of every direction.
+  struct RotatedCap {
+    double x, y, z, cos_radius;
+  };
+  auto rotate = [&](const std::vector<Cap>& caps) {
+    std::vector<RotatedCap> out;
+    for (const Cap& c : caps) {
+      const Eigen::Vector3d r = rotation * c.centre;
+      out.push_back({r.x(), r.y(), r.z(), std::cos(c.radius)});
+    }
+    return out;
+  };
+  const std::vector<RotatedCap> sky_caps = rotate(sky), obstacle_caps = rotate(obstacles);
   std::vector<float> f(grid.sample_count());
   for (std::size_t s = 0; s < f.size(); ++s) {
     const ShDirection d = grid.direction(s);
-    if (hemisphere && d.z <= 0) {
-      f[s] = 0;
-      continue;
-    }
-    const Eigen::Vector3d world = rotation.transpose() * Eigen::Vector3d(d.x, d.y, d.z);
     bool in = false;
-    for (const Cap& c : sky)
-      in = in || world.dot(c.centre) >= std::cos(c.radius);
-    for (const Cap& c : obstacles)
-      in = in && world.dot(c.centre) < std::cos(c.radius);
-    f[s] = in ? 1.0f : 0.0f;
+    for (const RotatedCap& c : sky_caps)
+      in = in || d.x * c.x + d.y * c.y + d.z * c.z >= c.cos_radius;
+    for (const RotatedCap& c : obstacle_caps)
+      in = in && d.x * c.x + d.y * c.y + d.z * c.z < c.cos_radius;
+    f[s] = (in && !(hemisphere && d.z <= 0)) ? 1.0f : 0.0f;
   }
   return f;
 }
 
-void ExpectFastEqualsNaive(const ShGridConfig& config, int bands, const std::vector<float>& f,
-                           const char* what) {
+// Both projectors on one grid; every mask must give the same coefficients.
+void ExpectFastEqualsNaive(const ShGridConfig& config, int bands,
+                           const std::vector<std::pair<std::string, std::vector<float>>>& masks) {
   const ShGrid grid = MakeGrid(config);
   ShProjector fast;
   ShNaiveProjector naive;
   ASSERT_EQ(fast.Init(grid, bands), ShError::kOk);
   ASSERT_EQ(naive.Init(grid, bands), ShError::kOk);
   std::vector<float> a(ShCoefficientCount(bands)), b(a.size());
-  ASSERT_EQ(fast.Project(f, a), ShError::kOk);
-  ASSERT_EQ(naive.Project(f, b), ShError::kOk);
-  float largest = 0, worst = 0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    largest = std::max(largest, std::fabs(b[k]));
-    worst = std::max(worst, std::fabs(a[k] - b[k]));
+  for (const auto& [what, f] : masks) {
+    ASSERT_EQ(fast.Project(f, a), ShError::kOk);
+    ASSERT_EQ(naive.Project(f, b), ShError::kOk);
+    float largest = 0, worst = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      largest = std::max(largest, std::fabs(b[k]));
+      worst = std::max(worst, std::fabs(a[k] - b[k]));
+    }
+    ASSERT_GT(largest, 0.0f) << what;
+    // 1e-5 relative to the largest coefficient (float tables and FFT; typically ~1e-7).
+    EXPECT_LT(worst, 1e-5f * largest) << config.rings << "x" << config.longitudes << " L=" << bands
+                                      << " " << what << ": worst " << worst << " of " << largest;
   }
-  ASSERT_GT(largest, 0.0f) << what;
-  // 1e-5 relative to the largest coefficient (float tables and FFT; typically ~1e-7).
-  EXPECT_LT(worst, 1e-5f * largest) << what << ": worst " << worst << " of " << largest;
 }
 
 std::vector<float> RandomMask(const ShGridConfig& config, unsigned seed) {
@@ -228,18 +245,17 @@ std::vector<float> StructuredMask(const ShGridConfig& config, int kind) {
 TEST(ShProjector, EqualsNaiveOnRandomAndStructuredMasks) {
   const std::vector<std::pair<ShGridConfig, int>> cases = {
       {DefaultShGridConfig(32), 32},
-      {PaperShGridConfig(), 40},
-      {PaperShGridConfig(), 64},  // m > 50 folds past Nyquist (aliased, identically in both)
-      {{.rings = 6, .longitudes = 12}, 30},  // m wraps around the FFT length twice
-      {{.rings = 24, .longitudes = 60, .coverage = ShCoverage::kFullSphere}, 30},
+      {PaperShGridConfig(), 32},
+      {{.rings = 8, .longitudes = 32}, 24},  // m > 16 folds past Nyquist (aliased in both)
+      {{.rings = 5, .longitudes = 16}, 40},  // m wraps around the FFT length twice
+      {{.rings = 25, .longitudes = 64, .coverage = ShCoverage::kFullSphere}, 30},
   };
   for (const auto& [config, bands] : cases) {
-    const std::string name = std::to_string(config.rings) + "x" +
-                             std::to_string(config.longitudes) + " L=" + std::to_string(bands);
-    ExpectFastEqualsNaive(config, bands, RandomMask(config, 5), (name + " random").c_str());
-    for (int kind = 0; kind < 3; ++kind)
-      ExpectFastEqualsNaive(config, bands, StructuredMask(config, kind),
-                            (name + " structured " + std::to_string(kind)).c_str());
+    ExpectFastEqualsNaive(config, bands,
+                          {{"random", RandomMask(config, 5)},
+                           {"tilted cap", StructuredMask(config, 0)},
+                           {"longitude stripes", StructuredMask(config, 1)},
+                           {"latitude stripes", StructuredMask(config, 2)}});
   }
 }
 
@@ -257,8 +273,7 @@ TEST(ShProjector, ProjectingABasisFunctionOnTheFullSphereGivesItsUnitVector) {
     legendre.emplace_back(LegendreTriangleSize(kBands));
     ASSERT_TRUE(NormalisedLegendre(kBands, r.cos_theta, r.sin_theta, legendre.back()));
   }
-  for (const auto& [l, m] :
-       {std::pair{0, 0}, {1, 1}, {1, -1}, {7, -3}, {60, 59}, {119, -119}, {119, 0}, {90, 45}}) {
+  for (const auto& [l, m] : {std::pair{0, 0}, {1, -1}, {60, 59}, {119, -119}, {90, 45}}) {
     // y_lm from eq. (1) directly: √2·P̄_l|m|·cos(mφ) or sin(|m|φ).
     for (std::size_t s = 0; s < f.size(); ++s) {
       const ShDirection d = grid.direction(s);

@@ -9,6 +9,10 @@ endif()
 if(MODE STREQUAL "streaming")
   # Ground truth from the CSV file; the firmware's causal engine.
   set(args --gt ${WORK}/gt.csv --streaming --method vanilla --method sky --bands 16)
+elseif(MODE STREQUAL "distance")
+  # Correct when the matched reference was recorded within 1.6 m of the query (the query
+  # runs 0.5 m beside the reference, frames 1 m apart: +-1 frame).
+  set(args --tolerance-m 1.6 --method vanilla)
 else()
   # Ground truth from the recorded poses (nearest reference, +-5 frames).
   set(args --batch --method vanilla)
@@ -55,6 +59,10 @@ endif()
 file(STRINGS ${WORK}/out/matches.csv header LIMIT_COUNT 1)
 if(NOT header STREQUAL "method,ds,query_index,reference_index,score,uniqueness,correct")
   message(FATAL_ERROR "matches.csv header: ${header}")
+endif()
+string(JSON truth GET "${json}" ground_truth)
+if(MODE STREQUAL "distance" AND NOT truth MATCHES "within 1.6 m")
+  message(FATAL_ERROR "metrics.json ground_truth is '${truth}', expected the distance rule")
 endif()
 file(READ ${WORK}/out/correspondence.svg svg)
 if(NOT svg MATCHES "vanilla ds=10" OR NOT svg MATCHES "#1a9e1a")

@@ -49,6 +49,19 @@ int Write(const std::string& dir, const std::vector<Wave>& wall, bool query, uns
   }
   if (s.ok())
     s = writer.Close();
+  // The camera file `skyloc eval --method sky` reads for this dataset (docs/CAMERA_FILE.md).
+  if (s.ok()) {
+    std::FILE* cam = std::fopen((dir + "/camera.toml").c_str(), "w");
+    if (cam == nullptr ||
+        std::fprintf(cam,
+                     "[image]\nwidth = %d\nheight = %d\n\n[lens]\n"
+                     "model = \"equidistant\"\nfov_deg = 185.0\n",
+                     kWidth, kHeight) < 0 ||
+        std::fclose(cam) != 0) {
+      std::fprintf(stderr, "make_eval_datasets: cannot write %s/camera.toml\n", dir.c_str());
+      return 1;
+    }
+  }
   if (!s.ok()) {
     std::fprintf(stderr, "make_eval_datasets: %s\n", s.message());
     return 1;

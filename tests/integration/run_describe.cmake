@@ -1,8 +1,9 @@
-# Runs 'skyloc describe' (CMD with ARGS, a |-separated list), checks its exit code (EXPECT_RC), that
+# Runs 'skyloc describe' (CMD with ARGS; ARGS and EMULATOR are |-separated lists), checks its exit code (EXPECT_RC), that
 # stdout matches EXPECT_STDOUT and stderr EXPECT_STDERR (regexes, optional), that stdout has
 # EXPECT_LINES lines (optional), and optionally hands stdout (saved to OUT) to
 # FIXTURE CHECK_MODE OUT CHECK_BOUND (describe_fixture compare/differ).
 string(REPLACE "|" ";" ARGS "${ARGS}")
+string(REPLACE "|" ";" EMULATOR "${EMULATOR}")
 execute_process(COMMAND ${EMULATOR} ${CMD} ${ARGS}
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL EXPECT_RC)

@@ -51,6 +51,20 @@ inline bool MatchWithinFrames(int matched, int truth, int tolerance_frames) {
   return truth >= 0 && (d < 0 ? -d : d) <= tolerance_frames;
 }
 
+// A recorded camera position, metres, in one fixed frame per pair of runs.
+struct Position3 {
+  double x = 0, y = 0, z = 0;
+};
+
+double PositionDistance(const Position3& a, const Position3& b);
+
+// Ground truth from poses: truth[q] = the reference recorded nearest to query q, or -1 when
+// even that one is farther than max_distance_m (off the route; pass infinity for no limit).
+// O(queries x references). truth.size() must equal query.size().
+void GroundTruthFromPositions(std::span<const Position3> reference,
+                              std::span<const Position3> query, double max_distance_m,
+                              std::span<int> truth);
+
 // Fills `curve` (needs matches.size() points at most) from the strictest threshold to the
 // loosest and returns the number of points written. `order` is scratch of matches.size()
 // indices. Allocates nothing.

@@ -24,12 +24,13 @@ namespace skyloc::dsp {
 // with ShErrorMessage()).
 enum class ShError : std::uint8_t {
   kOk,
-  kRingsOutOfRange,       // ShGridConfig::rings outside [1, kMaxShRings]
-  kLongitudesOutOfRange,  // ShGridConfig::longitudes outside [4, kMaxShLongitudes]
-  kBandsOutOfRange,       // bands outside [1, kMaxShBands]
-  kTableTooLarge,         // the naive projector's Y table would exceed its memory cap
-  kNotInitialised,        // Init() was not called or failed
-  kSizeMismatch,          // a span's size does not match the grid or the band count
+  kRingsOutOfRange,          // ShGridConfig::rings outside [1, kMaxShRings]
+  kLongitudesOutOfRange,     // ShGridConfig::longitudes outside [4, kMaxShLongitudes]
+  kLongitudesNotPowerOfTwo,  // the ring FFT needs a power of two (64, 128, 256, ...)
+  kBandsOutOfRange,          // bands outside [1, kMaxShBands]
+  kTableTooLarge,            // the naive projector's Y table would exceed its memory cap
+  kNotInitialised,           // Init() was not called or failed
+  kSizeMismatch,             // a span's size does not match the grid or the band count
 };
 
 // A fixed English sentence naming the problem and the fix, e.g. for a Status message.
@@ -45,8 +46,8 @@ enum class ShCoverage : std::uint8_t {
 };
 
 struct ShGridConfig {
-  int rings = 60;  // rings sampled (upper hemisphere: half the Gauss–Legendre nodes)
-  int longitudes = 256;
+  int rings = 60;        // rings sampled (upper hemisphere: half the Gauss–Legendre nodes)
+  int longitudes = 256;  // per ring; a power of two (the ring FFT's length)
   ShCoverage coverage = ShCoverage::kUpperHemisphere;
 };
 
@@ -59,10 +60,13 @@ ShError ValidateShGridConfig(const ShGridConfig& config);
 // `bands` is clamped to [1, kMaxShBands].
 ShGridConfig DefaultShGridConfig(int bands);
 
-// The paper's sampling (Stone et al. 2016: 2000 points on the upper hemisphere, 120 bands):
-// 20 upper rings of a 40-node rule × 100 longitudes = 2000 samples. It resolves bands up to
-// about 40 only (exact for l + l' < 80 and m + m' < 100); with 120 bands everything above
-// ~band 40 aliases. Kept to compare against the paper, never the default.
+// The paper's sampling density (Stone et al. 2016: 2000 points on the upper hemisphere, 120
+// bands), laid out on our rings: 16 upper rings of a 32-node rule × 128 longitudes = 2048
+// samples (ring spacing ~5.6°, 2.8° along the horizon). It resolves bands up to 32 only
+// (exact for l + l' < 64 and m + m' < 128); with 120 bands everything above ~band 32-40
+// aliases (the paper's own 2000 points cannot resolve more than ~band 40 however they are
+// laid out: a band-L function has L² degrees of freedom). Kept to compare against the
+// paper, never the default.
 ShGridConfig PaperShGridConfig();
 
 // True when the grid integrates Y_lm·Y_l'm' exactly for all l, l' < bands (no aliasing).

@@ -14,13 +14,12 @@
 // Coefficients of bands l = 0..L-1 are stored flat, L² of them, at k = l² + l + m.
 #pragma once
 
-#include <complex>
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <span>
 #include <vector>
 
+#include "skyloc/dsp/ring_fft.h"
 #include "skyloc/dsp/sh_grid.h"
 
 namespace skyloc::dsp {
@@ -39,21 +38,16 @@ constexpr std::size_t ShIndex(int l, int m) {
 bool RealSphericalHarmonics(int bands, double cos_theta, double sin_theta, double phi,
                             std::span<double> legendre_scratch, std::span<double> out);
 
-// The fast projection c_lm = Σ_samples w·f·y_lm: one real FFT per ring (Eigen's bundled
-// kissfft) gives Σ_j f_ij·cos(mφ_j) and Σ_j f_ij·sin(mφ_j); for each m a small product of a
-// precomputed float table P̄_lm(cos θ_i) (rings × l, zero-padded, rings whose values are
-// below 1e-9 skipped) with the weighted ring spectra gives all l at once. Cost
-// O(rings·longitudes·log longitudes + rings·L²), against the naive O(samples·L²).
-// On grids with fewer than 2L-1 longitudes the m > longitudes/2 terms alias exactly as the
-// naive sum does (the FFT bin m mod longitudes, conjugated past Nyquist).
+// The fast projection c_lm = Σ_samples w·f·y_lm: a real FFT of every ring (RingFft, eight
+// rings per SIMD pass) gives w_i·Σ_j f_ij·cos(mφ_j) and w_i·Σ_j f_ij·sin(mφ_j); for each m a
+// small product of a precomputed float table √2·P̄_lm(cos θ_i) (rings × l, zero-padded;
+// rings whose values are all below 1e-9 skipped) with those ring sums gives all l at once,
+// accumulated in registers. Cost O(rings·longitudes·log longitudes + rings·L²), against the
+// naive O(samples·L²). On grids with fewer than 2L-1 longitudes the m > longitudes/2 terms
+// alias exactly as the naive sum does (FFT bin m mod longitudes, conjugated past Nyquist).
 class ShProjector {
  public:
-  ShProjector();
-  ~ShProjector();
-  ShProjector(const ShProjector&) = delete;
-  ShProjector& operator=(const ShProjector&) = delete;
-
-  // Builds the Legendre table for the grid's rings and pre-plans the FFT (allocates; call at
+  // Builds the Legendre table for the grid's rings and the FFT tables (allocates; call at
   // start-up). The grid must stay alive only during Init.
   ShError Init(const ShGrid& grid, int bands);
 
@@ -68,7 +62,6 @@ class ShProjector {
   ShError Project(std::span<const float> samples, std::span<float> coeffs);
 
  private:
-  struct Fft;  // Eigen::FFT<float> with its plans, kept out of this header
   // A run of 8 or 16 consecutive l of one m: the unit of the Legendre sum, accumulated in
   // registers over the rings where the table is not negligible.
   struct MBlock {
@@ -84,15 +77,13 @@ class ShProjector {
   int bands_ = 0;
   int rings_ = 0;
   int longitudes_ = 0;
-  std::unique_ptr<Fft> fft_;
+  RingFft fft_;                  // scales ring i by its quadrature weight
   std::vector<float> table_;     // per m: rings × padded(L - m) values, √2 folded in for m > 0
   std::vector<MBlock> blocks_;   // in m order, then l order
   std::vector<int> bin_;         // FFT bin of each m (m mod longitudes, folded)
   std::vector<float> bin_sign_;  // -1 where the fold conjugates (sin terms change sign)
-  std::vector<float> ring_weight_;
-  std::vector<std::complex<float>> spectra_;  // rings × (longitudes/2 + 1)
-  std::vector<float> weighted_cos_;           // rings: w_i · Σ_j f cos(mφ_j) for the current m
-  std::vector<float> weighted_sin_;           // rings: w_i · Σ_j f sin(mφ_j)
+  std::vector<float> cos_sums_;  // bins × rings: w_i · Σ_j f cos(kφ_j)
+  std::vector<float> sin_sums_;  // bins × rings: w_i · Σ_j f sin(kφ_j)
 };
 
 // The reference: the paper's O(samples · L²) method, a table Y[k][s] = y_k(direction s)
