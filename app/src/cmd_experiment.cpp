@@ -124,6 +124,7 @@ struct Row {
   const sim::MethodScore* vanilla;
 };
 
+// printf into a std::string; for short pieces (at most 511 characters).
 std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
 std::string Format(const char* format, ...) {
   char buffer[512];
@@ -227,16 +228,23 @@ std::string CorrespondenceSvg(const std::vector<Row>& rows, int tolerance_frames
                kW * static_cast<double>(q) / static_cast<double>(std::max<std::size_t>(n_query, 1));
       };
       auto py = [&](int r) { return y0 + kH - kH * r / n_ref; };
+      // One path per colour, each point a zero-length segment with a round cap: a few
+      // bytes a point, so the plot of a whole experiment stays small.
+      std::string truth, correct, wrong;
       for (std::size_t q = 0; q < n_query; ++q) {
         if (m.truth[q] >= 0)
-          s += Format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"0.8\" fill=\"#bbbbbb\"/>", px(q),
-                      py(m.truth[q]));
+          truth += Format("M%.1f %.1fh0", px(q), py(m.truth[q]));
         if (m.matched[q] >= 0) {
-          const bool correct = dsp::MatchWithinFrames(m.matched[q], m.truth[q], tolerance_frames);
-          s += Format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"1.3\" fill=\"%s\"/>", px(q),
-                      py(m.matched[q]), correct ? "#2ca02c" : "#d62728");
+          const bool ok = dsp::MatchWithinFrames(m.matched[q], m.truth[q], tolerance_frames);
+          (ok ? correct : wrong) += Format("M%.1f %.1fh0", px(q), py(m.matched[q]));
         }
       }
+      s += "<path d=\"" + truth +
+           "\" stroke=\"#bbbbbb\" stroke-width=\"1.6\" stroke-linecap=\"round\"/>\n";
+      s += "<path d=\"" + correct +
+           "\" stroke=\"#2ca02c\" stroke-width=\"2.6\" stroke-linecap=\"round\"/>\n";
+      s += "<path d=\"" + wrong +
+           "\" stroke=\"#d62728\" stroke-width=\"2.6\" stroke-linecap=\"round\"/>\n";
       s += "\n";
     }
   }
