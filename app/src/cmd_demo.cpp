@@ -1,97 +1,165 @@
-// The demo. Until the pipeline exists it describes generated fisheye sky images: a street
-// canyon seen from below, drawn at several headings, so the output shows that the Otsu
-// threshold, the sky fraction and the SH amplitude spectrum do not depend on the heading,
-// while a different street (walls closer together) gives a clearly different descriptor.
-#include <cmath>
-#include <cstdint>
+// The demo: what skyloc does, end to end, on the simulated camera. Teach a route through a
+// procedural world, then drive it again tilted, zig-zagging and in different light, with a
+// live progress line; end with precision/recall and the per-stage latency table. It runs
+// the same session code as `skyloc teach` and `skyloc repeat`.
+#include <unistd.h>
+
 #include <cstdio>
-#include <numbers>
-#include <vector>
+#include <cstdlib>
+#include <cstring>
+#include <string>
 
 #include "commands.h"
-#include "skyloc/dsp/image.h"
-#include "skyloc/dsp/lens.h"
-#include "skyloc/dsp/sky_descriptor.h"
+#include "session.h"
 
 namespace skyloc::app {
 namespace {
 
-// Equidistant 185-degree fisheye filling the image circle. Two building walls at
-// |x| = half_width m, 10 m high, camera 1.5 m up: a ray is blocked when it meets a wall
-// below its top.
-std::uint8_t StreetCanyonPixel(int x, int y, int size, double heading, double half_width) {
-  const double c = (size - 1) / 2.0;
-  const double dx = x - c, dy = y - c;
-  const double r = std::hypot(dx, dy) / (size / 2.0);
-  const double theta = r * (185.0 / 2.0) * std::numbers::pi / 180.0;  // from the zenith
-  if (r > 1.0)
-    return 8;  // outside the lens
-  const double azimuth = std::atan2(dy, dx) + heading;
-  const double across = std::fabs(std::sin(theta) * std::cos(azimuth));  // ray's x slope
-  const double up = std::cos(theta);
-  const bool building = across > 1e-9 && up > 0 ? (8.5 * across / half_width) > up : up <= 0;
-  return building ? 40 : 220;
-}
+constexpr const char* kUsage =
+    "usage: skyloc demo [--world city|forest|repetitive] [--quick]\n"
+    "  Teaches a route in a simulated world, repeats it with tilt, zig-zag and dawn light,\n"
+    "  and prints precision/recall and the latency of every stage. --quick: a short run\n"
+    "  on small frames (the test suite's).\n";
 
-void Draw(std::vector<std::uint8_t>& pixels, int size, double heading, double half_width) {
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x)
-      pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(size) +
-             static_cast<std::size_t>(x)] = StreetCanyonPixel(x, y, size, heading, half_width);
-}
+// One line that rewrites itself on a terminal, or a line every 50 frames otherwise.
+class ProgressLine final : public FrameSink {
+ public:
+  explicit ProgressLine(const char* what) : what_(what), tty_(::isatty(STDOUT_FILENO) != 0) {}
+  void OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t route_frames) override {
+    ++frames_;
+    if (!tty_ && frames_ % 50 != 0)
+      return;
+    if (mode == LoopMode::kTeach) {
+      std::printf("%s  %-6s frame %5llu  recorded %5llu  sky %4.0f %%  %5lld us%s",
+                  tty_ ? "\r" : "", what_, static_cast<unsigned long long>(r.frame),
+                  static_cast<unsigned long long>(route_frames),
+                  100.0 * static_cast<double>(r.sky_fraction),
+                  static_cast<long long>(r.latency.count() / 1000), tty_ ? "   " : "\n");
+    } else {
+      char match[24] = "-";
+      if (r.matched)
+        std::snprintf(match, sizeof match, "%lld", static_cast<long long>(r.best_index));
+      std::printf("%s  %-6s frame %5llu  %-9s  confidence %.2f  route frame %5s  %5lld us%s",
+                  tty_ ? "\r" : "", what_, static_cast<unsigned long long>(r.frame),
+                  dsp::TrackStateName(r.state), static_cast<double>(r.confidence), match,
+                  static_cast<long long>(r.latency.count() / 1000), tty_ ? "   " : "\n");
+    }
+    std::fflush(stdout);
+  }
+  void Finish() {
+    if (tty_)
+      std::printf("\n");
+    std::fflush(stdout);
+  }
+
+ private:
+  const char* what_;
+  bool tty_;
+  std::uint64_t frames_ = 0;
+};
 
 }  // namespace
 
 int RunDemo(std::span<char* const> args) {
-  if (!args.empty()) {
-    std::fprintf(stderr, "skyloc demo: takes no arguments\n");
+  std::string world = "city";
+  bool quick = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (std::strcmp(args[i], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(args[i], "--world") == 0 && i + 1 < args.size()) {
+      world = args[++i];
+    } else if (std::strcmp(args[i], "--help") == 0 || std::strcmp(args[i], "-h") == 0) {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    } else {
+      std::fprintf(stderr, "skyloc demo: unknown argument '%s'\n%s", args[i], kUsage);
+      return kExitUsage;
+    }
+  }
+  if (world != "city" && world != "forest" && world != "repetitive") {
+    std::fprintf(stderr, "skyloc demo: --world is city, forest or repetitive\n");
     return kExitUsage;
   }
-  constexpr int kSize = 480;
-  constexpr int kBands = 32;
-  dsp::LensParams params;
-  params.width = kSize;
-  params.height = kSize;
-  params.fov_deg = 185.0;
-  dsp::Lens lens;
-  dsp::SkyDescriptor descriptor;
-  dsp::SkyDescriptorOptions options;
-  options.bands = kBands;
-  options.grid = dsp::DefaultShGridConfig(2 * kBands);  // oversampled: the mask has hard edges
-  if (lens.Init(params) != dsp::LensError::kOk || !descriptor.Init(lens, options).ok()) {
-    std::fprintf(stderr, "skyloc demo: internal error building the descriptor\n");
-    return kExitFailure;
-  }
-  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(kSize) * kSize);
-  const dsp::ImageView image{pixels.data(), kSize, kSize, kSize, dsp::PixelFormat::kGrey8};
-  std::vector<float> reference(kBands), amplitudes(kBands);
-  dsp::SegmentationResult seg;
 
-  std::printf(
-      "skyloc demo: street canyon (walls 4 m away) seen by a 185-degree fisheye, %dx%d,"
-      " %d SH bands\n",
-      kSize, kSize, kBands);
-  std::printf("%12s %10s %14s %13s %s %14s\n", "heading_deg", "threshold", "separability",
-              "sky_fraction", "    a_0     a_1     a_2     a_3", "L1_to_heading_0");
-  for (int heading_deg = 0; heading_deg < 180; heading_deg += 30) {
-    Draw(pixels, kSize, heading_deg * std::numbers::pi / 180.0, 4.0);
-    if (!descriptor.Compute(image, amplitudes, &seg).ok())
-      return kExitFailure;
-    if (heading_deg == 0)
-      reference = amplitudes;
-    std::printf("%12d %10d %14.3f %13.4f  %6.3f  %6.3f  %6.3f  %6.3f %14.4f\n", heading_deg,
-                seg.threshold, seg.separability, seg.sky_fraction,
-                static_cast<double>(amplitudes[0]), static_cast<double>(amplitudes[1]),
-                static_cast<double>(amplitudes[2]), static_cast<double>(amplitudes[3]),
-                static_cast<double>(dsp::DescriptorDistance(reference, amplitudes)));
-  }
-  Draw(pixels, kSize, 0.0, 2.5);
-  if (!descriptor.Compute(image, amplitudes, &seg).ok())
+  char dir[] = "/tmp/skyloc_demo_XXXXXX";
+  if (::mkdtemp(dir) == nullptr) {
+    std::perror("skyloc demo: cannot create a directory in /tmp");
     return kExitFailure;
-  std::printf("a different place (walls 2.5 m away): sky_fraction %.4f, L1 to the first: %.4f\n",
-              seg.sky_fraction,
-              static_cast<double>(dsp::DescriptorDistance(reference, amplitudes)));
-  return kExitOk;
+  }
+  const std::string config_path = std::string(dir) + "/skyloc.toml";
+  const std::string route_path = std::string(dir) + "/route.db";
+  // The demo's configuration, written out so the run is what `skyloc teach --config`
+  // would do with it.
+  if (std::FILE* f = std::fopen(config_path.c_str(), "w")) {
+    std::fprintf(f, "[camera]\nkind = \"sim\"\nsim_world = \"%s\"\nwidth = %d\nheight = %d\n",
+                 world.c_str(), quick ? 96 : 320, quick ? 96 : 240);
+    std::fprintf(f, "[descriptor]\nbands = %d\n", quick ? 24 : 64);
+    std::fclose(f);
+  } else {
+    std::perror("skyloc demo: cannot write the configuration");
+    return kExitFailure;
+  }
+
+  std::printf("skyloc demo: %s world, upward 185-degree fisheye, %s frames\n", world.c_str(),
+              quick ? "96x96" : "320x240");
+  std::printf("1. teach: drive the route once at noon and record its sky descriptors\n");
+  SessionArgs teach;
+  teach.mode = LoopMode::kTeach;
+  teach.route_path = route_path;
+  teach.config_path = config_path;
+  teach.json = nullptr;
+  teach.label = "teach";
+  teach.max_frames = quick ? 80 : 0;
+  ProgressLine teach_progress("teach");
+  teach.extra_sink = &teach_progress;
+  SessionReport taught;
+  const int teach_rc = RunSession(teach, &taught);
+  teach_progress.Finish();
+
+  int rc = teach_rc;
+  SessionReport repeated;
+  if (teach_rc == 0) {
+    std::printf(
+        "\n2. repeat: drive it again tilted 10 deg, zig-zagging +-20 deg, at dawn, "
+        "with other speed jitter, clouds and noise\n");
+    SessionArgs repeat;
+    repeat.mode = LoopMode::kRepeat;
+    repeat.route_path = route_path;
+    repeat.config_path = config_path;
+    repeat.json = nullptr;
+    repeat.label = "repeat";
+    repeat.max_frames = quick ? 80 : 0;
+    repeat.sim.tilt_deg = 10;
+    repeat.sim.zigzag_deg = 20;
+    repeat.sim.lighting = "dawn";
+    repeat.sim.run_seed = 2;
+    repeat.tolerance_m = 2.0;
+    ProgressLine repeat_progress("repeat");
+    repeat.extra_sink = &repeat_progress;
+    rc = RunSession(repeat, &repeated);
+    repeat_progress.Finish();
+  }
+  if (rc == 0) {
+    std::printf("\n3. result: %llu route frames taught, %llu frames repeated\n",
+                static_cast<unsigned long long>(taught.route_frames),
+                static_cast<unsigned long long>(repeated.loop.frames));
+    if (repeated.evaluated) {
+      std::printf(
+          "   precision at 100%% recall %.2f, recall at 100%% precision %.2f (matched "
+          "route frame within 2 m)\n",
+          repeated.precision_at_full_recall, repeated.recall_at_full_precision);
+      std::printf("   LOCALISED %llu of %llu frames, %llu of them correct\n",
+                  static_cast<unsigned long long>(repeated.localised_frames),
+                  static_cast<unsigned long long>(repeated.loop.frames),
+                  static_cast<unsigned long long>(repeated.localised_correct));
+    }
+    std::printf("   the per-stage latency tables are above (stderr); files in %s are removed\n",
+                dir);
+  }
+  std::remove(route_path.c_str());
+  std::remove(config_path.c_str());
+  ::rmdir(dir);
+  return rc == 0 ? kExitOk : kExitFailure;
 }
 
 }  // namespace skyloc::app

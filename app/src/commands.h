@@ -15,10 +15,14 @@ struct Command {
 };
 
 int RunDemo(std::span<char* const> args);
+int RunTeach(std::span<char* const> args);
+int RunRepeat(std::span<char* const> args);
+int RunReplay(std::span<char* const> args);
+int RunRoute(std::span<char* const> args);
+int RunEval(std::span<char* const> args);
+int RunDescribe(std::span<char* const> args);
 int RunSimulate(std::span<char* const> args);
 int RunExperiment(std::span<char* const> args);
-int RunDescribe(std::span<char* const> args);
-int RunEval(std::span<char* const> args);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

@@ -9,11 +9,15 @@ namespace {
 
 constexpr Command kCommands[] = {
     {"demo", "localise on the simulated camera and print what happened", RunDemo},
-    {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
-    {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
+    {"teach", "record a route's sky descriptors into a route database", RunTeach},
+    {"repeat", "localise live against a taught route (one JSON line per frame)", RunRepeat},
+    {"replay", "run a recorded dataset through the repeat pipeline", RunReplay},
+    {"route", "inspect or recover a route database file", RunRoute},
+    {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
     {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
      RunDescribe},
-    {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
+    {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
+    {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -8,7 +8,9 @@
 namespace skyloc {
 namespace {
 
-void FormatInto(char* buffer, std::size_t capacity, const char* format, std::va_list args) {
+// The attribute tells clang the va_list carries printf arguments (else -Wformat-nonliteral).
+__attribute__((format(printf, 3, 0))) void FormatInto(char* buffer, std::size_t capacity,
+                                                      const char* format, std::va_list args) {
   const int written = std::vsnprintf(buffer, capacity, format, args);
   if (written >= 0 && static_cast<std::size_t>(written) >= capacity && capacity > 4) {
     std::memcpy(buffer + capacity - 4, "...", 4);

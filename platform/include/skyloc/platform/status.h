@@ -107,12 +107,15 @@ const Status& StatusOf(const Result<T>& r) {
 #define SKYLOC_INTERNAL_CONCAT(a, b) SKYLOC_INTERNAL_CONCAT2(a, b)
 
 // Returns the Status from the enclosing function if `expr` (a Status or Result) failed.
-#define SKYLOC_TRY(expr)                                       \
-  do {                                                         \
-    const auto& skyloc_try_result_ = (expr);                   \
-    if (!skyloc_try_result_.ok()) {                            \
-      return ::skyloc::internal::StatusOf(skyloc_try_result_); \
-    }                                                          \
+// The Status is copied inside the full expression: `SKYLOC_TRY(Call().AddContext(...))`
+// returns a reference into a temporary, and binding that to a reference would dangle
+// (AddressSanitizer found it through the route-database fuzz target).
+#define SKYLOC_TRY(expr)                                                                \
+  do {                                                                                  \
+    if (const ::skyloc::Status skyloc_try_status_ = ::skyloc::internal::StatusOf(expr); \
+        !skyloc_try_status_.ok()) {                                                     \
+      return skyloc_try_status_;                                                        \
+    }                                                                                   \
   } while (false)
 
 // Declares or assigns `lhs` from a Result, or returns its Status on failure:

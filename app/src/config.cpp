@@ -1,0 +1,534 @@
+#include "config.h"
+
+#include <toml++/toml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "skyloc/dsp/sh_grid.h"
+
+namespace skyloc::app {
+namespace {
+
+template <typename E>
+struct EnumName {
+  const char* name;
+  E value;
+};
+
+constexpr EnumName<CameraKind> kCameraKinds[] = {{"sim", CameraKind::kSim},
+                                                 {"v4l2", CameraKind::kV4l2},
+                                                 {"libcamera", CameraKind::kLibcamera},
+                                                 {"dataset", CameraKind::kDataset}};
+constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
+    {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
+constexpr EnumName<GridPreset> kGridPresets[] = {
+    {"auto", GridPreset::kAuto}, {"paper", GridPreset::kPaper}, {"custom", GridPreset::kCustom}};
+constexpr EnumName<Normalisation> kNormalisations[] = {{"none", Normalisation::kNone},
+                                                       {"divide_by_a0", Normalisation::kDivideByA0},
+                                                       {"unit_l2", Normalisation::kUnitL2}};
+constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
+                                                             {"sim", StatusOutputKind::kSim},
+                                                             {"gpio", StatusOutputKind::kGpio}};
+constexpr EnumName<StatusEncoding> kStatusEncodings[] = {{"per-state", StatusEncoding::kPerState},
+                                                         {"blink", StatusEncoding::kBlink}};
+
+template <typename E, std::size_t N>
+const char* NameOf(const EnumName<E> (&names)[N], E value) {
+  for (const auto& n : names)
+    if (n.value == value)
+      return n.name;
+  return "?";
+}
+
+template <typename E, std::size_t N>
+std::string Choices(const EnumName<E> (&names)[N]) {
+  std::string s;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (i > 0)
+      s += i + 1 == N ? " or " : ", ";
+    s += '"';
+    s += names[i].name;
+    s += '"';
+  }
+  return s;
+}
+
+// Reads the keys of one [section], remembering which it consumed so that anything left
+// over is reported as unknown. The first error wins; later reads are no-ops.
+class SectionReader {
+ public:
+  SectionReader(const toml::table* table, const char* section, std::string_view source,
+                Status* error)
+      : table_(table), section_(section), source_(source), error_(error) {}
+
+  void Int(const char* key, int* out, std::int64_t lo, std::int64_t hi) {
+    std::int64_t v = *out;
+    Int64(key, &v, lo, hi);
+    *out = static_cast<int>(v);
+  }
+  void Int64(const char* key, std::int64_t* out, std::int64_t lo, std::int64_t hi) {
+    const toml::node* node = Find(key);
+    if (node == nullptr)
+      return;
+    const auto* value = node->as_integer();
+    if (value == nullptr) {
+      Fail(node, key, "must be an integer in %lld..%lld (default %lld)", Ll(lo), Ll(hi), Ll(*out));
+      return;
+    }
+    const std::int64_t v = value->get();
+    if (v < lo || v > hi) {
+      Fail(node, key, "= %lld is out of range: must be %lld..%lld (default %lld)", Ll(v), Ll(lo),
+           Ll(hi), Ll(*out));
+      return;
+    }
+    *out = v;
+  }
+  void Double(const char* key, double* out, double lo, double hi) {
+    const toml::node* node = Find(key);
+    if (node == nullptr)
+      return;
+    double v = 0;
+    if (const auto* f = node->as_floating_point()) {
+      v = f->get();
+    } else if (const auto* i = node->as_integer()) {
+      v = static_cast<double>(i->get());
+    } else {
+      Fail(node, key, "must be a number in %g..%g (default %g)", lo, hi, *out);
+      return;
+    }
+    if (!std::isfinite(v) || v < lo || v > hi) {
+      Fail(node, key, "= %g is out of range: must be %g..%g (default %g)", v, lo, hi, *out);
+      return;
+    }
+    *out = v;
+  }
+  void Bool(const char* key, bool* out) {
+    const toml::node* node = Find(key);
+    if (node == nullptr)
+      return;
+    const auto* value = node->as_boolean();
+    if (value == nullptr) {
+      Fail(node, key, "must be true or false (default %s)", *out ? "true" : "false");
+      return;
+    }
+    *out = value->get();
+  }
+  void String(const char* key, std::string* out, bool allow_empty) {
+    const toml::node* node = Find(key);
+    if (node == nullptr)
+      return;
+    const auto* value = node->as_string();
+    if (value == nullptr) {
+      Fail(node, key, "must be a string (default \"%s\")", out->c_str());
+      return;
+    }
+    if (!allow_empty && value->get().empty()) {
+      Fail(node, key, "must not be empty (default \"%s\")", out->c_str());
+      return;
+    }
+    *out = value->get();
+  }
+  template <typename E, std::size_t N>
+  void Enum(const char* key, E* out, const EnumName<E> (&names)[N]) {
+    const toml::node* node = Find(key);
+    if (node == nullptr)
+      return;
+    const auto* value = node->as_string();
+    if (value != nullptr) {
+      for (const auto& n : names) {
+        if (value->get() == n.name) {
+          *out = n.value;
+          return;
+        }
+      }
+    }
+    Fail(node, key, "must be one of %s (default \"%s\")", Choices(names).c_str(),
+         NameOf(names, *out));
+  }
+  void OneOf(const char* key, std::string* out, std::initializer_list<const char*> allowed) {
+    const toml::node* node = Find(key);
+    if (node == nullptr)
+      return;
+    const auto* value = node->as_string();
+    if (value != nullptr) {
+      for (const char* a : allowed) {
+        if (value->get() == a) {
+          *out = a;
+          return;
+        }
+      }
+    }
+    std::string choices;
+    for (const char* a : allowed) {
+      choices += choices.empty() ? "\"" : ", \"";
+      choices += a;
+      choices += '"';
+    }
+    Fail(node, key, "must be one of %s (default \"%s\")", choices.c_str(), out->c_str());
+  }
+
+  // An error about a combination of keys, reported at `key`.
+  void Invalid(const char* key, const char* message) {
+    // The key may be missing (its default is what clashes): then point at the section.
+    const toml::node* node = table_ == nullptr ? nullptr : table_->get(key);
+    Fail(node != nullptr ? node : table_, key, "%s", message);
+  }
+
+  // Reports the first key nobody asked for.
+  void Finish() {
+    if (table_ == nullptr || !error_->ok())
+      return;
+    for (auto&& [k, node] : *table_) {
+      bool known = false;
+      for (std::size_t i = 0; i < known_count_; ++i)
+        known = known || k.str() == known_[i];
+      if (!known) {
+        std::string name(k.str());
+        Fail(&node, name.c_str(),
+             "is not a known key of [%s]: check the spelling against "
+             "config/skyloc.toml",
+             section_);
+        return;
+      }
+    }
+  }
+
+ private:
+  static long long Ll(std::int64_t v) { return static_cast<long long>(v); }
+
+  const toml::node* Find(const char* key) {
+    if (known_count_ < kMaxKeys)
+      known_[known_count_++] = key;
+    if (table_ == nullptr || !error_->ok())
+      return nullptr;
+    return table_->get(key);
+  }
+
+  void Fail(const toml::node* node, const char* key, const char* format, ...)
+      __attribute__((format(printf, 4, 5))) {
+    if (!error_->ok())
+      return;
+    char detail[160];
+    va_list args;
+    va_start(args, format);
+    std::vsnprintf(detail, sizeof detail, format, args);
+    va_end(args);
+    const int line = node != nullptr ? static_cast<int>(node->source().begin.line) : 0;
+    const std::string source(source_);
+    if (line > 0) {
+      *error_ = Status::Error(StatusCode::kInvalidArgument, "%s:%d: [%s] %s %s", source.c_str(),
+                              line, section_, key, detail);
+    } else {
+      *error_ = Status::Error(StatusCode::kInvalidArgument, "%s: [%s] %s %s", source.c_str(),
+                              section_, key, detail);
+    }
+  }
+
+  static constexpr std::size_t kMaxKeys = 16;
+  const toml::table* table_;
+  const char* section_;
+  std::string_view source_;
+  Status* error_;
+  const char* known_[kMaxKeys] = {};
+  std::size_t known_count_ = 0;
+};
+
+void ResolveGrid(DescriptorConfig* d) {
+  switch (d->grid) {
+    case GridPreset::kAuto: {
+      const dsp::ShGridConfig g = dsp::DefaultShGridConfig(d->bands);
+      d->rings = g.rings;
+      d->longitudes = g.longitudes;
+      break;
+    }
+    case GridPreset::kPaper: {
+      const dsp::ShGridConfig g = dsp::PaperShGridConfig();
+      d->bands = 120;
+      d->rings = g.rings;
+      d->longitudes = g.longitudes;
+      break;
+    }
+    case GridPreset::kCustom:
+      break;
+  }
+}
+
+// toml++ 3.3.0 (Debian 12) reaches __builtin_unreachable() for many non-ASCII characters
+// where it looks for whitespace (is_non_ascii_horizontal_whitespace: U+00A1..U+0499 and
+// others), which is undefined behaviour on a garbled or mistyped file; the config fuzz
+// target found it. skyloc's keys and unquoted values are ASCII anyway, so non-ASCII text is
+// accepted only inside strings and comments, where the parser does not make that check.
+// Returns the 1-based line and column of the first offending byte, or line 0.
+struct TextPosition {
+  int line = 0;
+  int column = 0;
+};
+TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
+  enum class Mode { kCode, kComment, kBasic, kLiteral, kMultiBasic, kMultiLiteral };
+  Mode mode = Mode::kCode;
+  int line = 1, column = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    ++column;
+    const auto starts = [&](const char* s) { return text.substr(i).starts_with(s); };
+    switch (mode) {
+      case Mode::kCode:
+        if (static_cast<unsigned char>(c) >= 0x80)
+          return {line, column};
+        if (c == '#') {
+          mode = Mode::kComment;
+        } else if (starts("\"\"\"")) {
+          mode = Mode::kMultiBasic;
+          i += 2;
+          column += 2;
+        } else if (starts("'''")) {
+          mode = Mode::kMultiLiteral;
+          i += 2;
+          column += 2;
+        } else if (c == '"') {
+          mode = Mode::kBasic;
+        } else if (c == '\'') {
+          mode = Mode::kLiteral;
+        }
+        break;
+      case Mode::kComment:
+        if (c == '\n')
+          mode = Mode::kCode;
+        break;
+      case Mode::kBasic:
+      case Mode::kMultiBasic:
+        if (c == '\\') {
+          ++i;  // the escaped character cannot end the string
+          ++column;
+          if (i < text.size() && text[i] == '\n') {
+            ++line;
+            column = 0;
+          }
+          continue;
+        }
+        if (mode == Mode::kBasic && (c == '"' || c == '\n')) {
+          mode = Mode::kCode;
+        } else if (mode == Mode::kMultiBasic && starts("\"\"\"")) {
+          mode = Mode::kCode;
+          i += 2;
+          column += 2;
+        }
+        break;
+      case Mode::kLiteral:
+        if (c == '\'' || c == '\n')
+          mode = Mode::kCode;
+        break;
+      case Mode::kMultiLiteral:
+        if (starts("'''")) {
+          mode = Mode::kCode;
+          i += 2;
+          column += 2;
+        }
+        break;
+    }
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+const char* CameraKindName(CameraKind kind) {
+  return NameOf(kCameraKinds, kind);
+}
+const char* SegmentationMethodName(SegmentationMethod method) {
+  return NameOf(kSegmentationMethods, method);
+}
+const char* GridPresetName(GridPreset preset) {
+  return NameOf(kGridPresets, preset);
+}
+const char* NormalisationName(Normalisation normalisation) {
+  return NameOf(kNormalisations, normalisation);
+}
+const char* StatusOutputKindName(StatusOutputKind kind) {
+  return NameOf(kStatusOutputKinds, kind);
+}
+const char* StatusEncodingName(StatusEncoding encoding) {
+  return NameOf(kStatusEncodings, encoding);
+}
+
+Config DefaultConfig() {
+  Config c;
+  ResolveGrid(&c.descriptor);
+  return c;
+}
+
+Result<Config> ParseConfig(std::string_view text, std::string_view source_name) {
+  const std::string source(source_name);
+  if (const TextPosition p = FirstNonAsciiOutsideStrings(text); p.line > 0) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "%s:%d:%d: a non-ASCII character outside a string or comment: keys "
+                         "and unquoted values are ASCII",
+                         source.c_str(), p.line, p.column);
+  }
+  toml::parse_result parsed = toml::parse(text, source_name);
+  if (!parsed) {
+    const toml::parse_error& e = parsed.error();
+    const std::string description(e.description());
+    return Status::Error(StatusCode::kInvalidArgument, "%s:%u:%u: not valid TOML: %s",
+                         source.c_str(), e.source().begin.line, e.source().begin.column,
+                         description.c_str());
+  }
+  const toml::table& root = parsed.table();
+  Config c;
+  Status error;
+
+  constexpr const char* kSections[] = {"camera",  "segmentation", "descriptor",
+                                       "seqslam", "capacities",   "state",
+                                       "status",  "realtime",     "route_db"};
+  for (auto&& [k, node] : root) {
+    bool known = false;
+    for (const char* s : kSections)
+      known = known || k.str() == s;
+    const std::string name(k.str());
+    if (!known) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%u: [%s] is not a known section (known: camera, segmentation, "
+                           "descriptor, seqslam, capacities, state, status, realtime, route_db)",
+                           source.c_str(), node.source().begin.line, name.c_str());
+    }
+    if (!node.is_table()) {
+      return Status::Error(StatusCode::kInvalidArgument, "%s:%u: %s must be a table [%s]",
+                           source.c_str(), node.source().begin.line, name.c_str(), name.c_str());
+    }
+  }
+  auto section = [&](const char* name) { return root.get_as<toml::table>(name); };
+
+  {
+    SectionReader r(section("camera"), "camera", source_name, &error);
+    r.Enum("kind", &c.camera.kind, kCameraKinds);
+    r.String("device", &c.camera.device, false);
+    r.String("dataset", &c.camera.dataset, true);
+    r.String("lens_file", &c.camera.lens_file, true);
+    r.OneOf("sim_world", &c.camera.sim_world, {"city", "forest", "repetitive", "street"});
+    r.Int64("sim_seed", &c.camera.sim_seed, 0, INT64_MAX);
+    r.Int("width", &c.camera.width, 16, 8192);
+    r.Int("height", &c.camera.height, 16, 8192);
+    r.Double("fps", &c.camera.fps, 0.1, 1000.0);
+    r.Int("frame_timeout_ms", &c.camera.frame_timeout_ms, 1, 60000);
+    r.Int("reconnect_timeout_ms", &c.camera.reconnect_timeout_ms, 0, 600000);
+    if (error.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())
+      r.Invalid("dataset", "must name the dataset folder when kind = \"dataset\"");
+    r.Finish();
+  }
+  {
+    SectionReader r(section("segmentation"), "segmentation", source_name, &error);
+    r.Enum("method", &c.segmentation.method, kSegmentationMethods);
+    r.Int("threshold", &c.segmentation.threshold, 0, 254);
+    r.Finish();
+  }
+  {
+    SectionReader r(section("descriptor"), "descriptor", source_name, &error);
+    r.Int("bands", &c.descriptor.bands, 1, 256);
+    r.Enum("grid", &c.descriptor.grid, kGridPresets);
+    r.Int("rings", &c.descriptor.rings, 0, 1024);
+    r.Int("longitudes", &c.descriptor.longitudes, 0, 4096);
+    r.Enum("normalisation", &c.descriptor.normalisation, kNormalisations);
+    if (error.ok() && c.descriptor.grid == GridPreset::kCustom) {
+      if (c.descriptor.rings < 1)
+        r.Invalid("rings", "must be 1..1024 when grid = \"custom\"");
+      else if (c.descriptor.longitudes < 4)
+        r.Invalid("longitudes", "must be 4..4096 when grid = \"custom\"");
+    } else if (error.ok() && (c.descriptor.rings != 0 || c.descriptor.longitudes != 0)) {
+      r.Invalid(c.descriptor.rings != 0 ? "rings" : "longitudes",
+                "is only used with grid = \"custom\"; remove it or set grid = \"custom\"");
+    }
+    const toml::table* t = section("descriptor");
+    if (error.ok() && c.descriptor.grid == GridPreset::kPaper && t != nullptr &&
+        t->contains("bands") && c.descriptor.bands != 120)
+      r.Invalid("bands", "must be 120 (or left out) with grid = \"paper\"");
+    ResolveGrid(&c.descriptor);
+    r.Finish();
+  }
+  {
+    SectionReader r(section("seqslam"), "seqslam", source_name, &error);
+    r.Int("ds", &c.seqslam.ds, 1, 100);
+    r.Double("vmin", &c.seqslam.vmin, 0.1, 10.0);
+    r.Double("vmax", &c.seqslam.vmax, 0.1, 10.0);
+    r.Double("vstep", &c.seqslam.vstep, 0.01, 10.0);
+    r.Int("rwindow", &c.seqslam.rwindow, 0, 1000);
+    r.Int("contrast_r", &c.seqslam.contrast_r, 0, 1000);
+    if (error.ok() && c.seqslam.vmax < c.seqslam.vmin)
+      r.Invalid("vmax", "must not be smaller than vmin");
+    r.Finish();
+  }
+  {
+    SectionReader r(section("capacities"), "capacities", source_name, &error);
+    r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
+    r.Finish();
+  }
+  {
+    SectionReader r(section("state"), "state", source_name, &error);
+    r.Double("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
+    r.Double("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
+    r.Double("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
+    r.Int("confirm_frames", &c.state.confirm_frames, 1, 1000);
+    r.Int("drop_frames", &c.state.drop_frames, 1, 1000);
+    r.Int("lost_frames", &c.state.lost_frames, 1, 10000);
+    r.Double("index_tolerance", &c.state.index_tolerance, 0.0, 10000.0);
+    if (error.ok() && c.state.stay_confidence > c.state.enter_confidence)
+      r.Invalid("stay_confidence", "must not be above enter_confidence (hysteresis)");
+    r.Finish();
+  }
+  {
+    SectionReader r(section("status"), "status", source_name, &error);
+    r.Enum("kind", &c.status.kind, kStatusOutputKinds);
+    r.String("chip", &c.status.chip, false);
+    r.Int("line_lost", &c.status.line_lost, 0, 511);
+    r.Int("line_searching", &c.status.line_searching, 0, 511);
+    r.Int("line_localised", &c.status.line_localised, 0, 511);
+    r.Enum("encoding", &c.status.encoding, kStatusEncodings);
+    if (error.ok() && c.status.encoding == StatusEncoding::kPerState) {
+      if (c.status.line_localised == c.status.line_lost ||
+          c.status.line_localised == c.status.line_searching)
+        r.Invalid("line_localised", "must differ from line_lost and line_searching");
+      else if (c.status.line_searching == c.status.line_lost)
+        r.Invalid("line_searching", "must differ from line_lost");
+    }
+    r.Finish();
+  }
+  {
+    SectionReader r(section("realtime"), "realtime", source_name, &error);
+    r.Int("sched_fifo_priority", &c.realtime.sched_fifo_priority, 0, 99);
+    r.Bool("mlockall", &c.realtime.mlockall);
+    r.Int("cpu_affinity", &c.realtime.cpu_affinity, -1, 1023);
+    r.Finish();
+  }
+  {
+    SectionReader r(section("route_db"), "route_db", source_name, &error);
+    r.Int("flush_every", &c.route_db.flush_every, 1, 100000);
+    r.Finish();
+  }
+  if (!error.ok())
+    return error;
+  return c;
+}
+
+Result<Config> LoadConfigFile(const char* path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    return Status::FromErrno(errno,
+                             "cannot read config %s (use --config FILE, or copy "
+                             "config/skyloc.toml there)",
+                             path);
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseConfig(text.str(), path);
+}
+
+}  // namespace skyloc::app

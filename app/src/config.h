@@ -1,0 +1,142 @@
+// The firmware configuration: config/skyloc.toml parsed into a plain struct once at
+// start-up. Every key has a default (the struct's initialisers, which the file documents)
+// and a range; an unknown key, a wrong type or an out-of-range value is an error naming
+// the key and, where the parser knows it, file:line. Nothing here runs per frame.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "skyloc/platform/status.h"
+
+namespace skyloc::app {
+
+enum class CameraKind : std::uint8_t { kSim, kV4l2, kLibcamera, kDataset };
+enum class SegmentationMethod : std::uint8_t { kOtsu, kFixed };
+enum class GridPreset : std::uint8_t { kAuto, kPaper, kCustom };
+enum class Normalisation : std::uint8_t { kNone, kDivideByA0, kUnitL2 };
+enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
+enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
+
+const char* CameraKindName(CameraKind kind);
+const char* SegmentationMethodName(SegmentationMethod method);
+const char* GridPresetName(GridPreset preset);
+const char* NormalisationName(Normalisation normalisation);
+const char* StatusOutputKindName(StatusOutputKind kind);
+const char* StatusEncodingName(StatusEncoding encoding);
+
+struct CameraConfig {
+  CameraKind kind = CameraKind::kSim;
+  std::string device = "/dev/video0";  // v4l2: path or "driver:card"; libcamera: camera id
+  std::string dataset;                 // kind = dataset: the dataset folder
+  std::string lens_file;               // camera/lens TOML; empty: 185-degree equidistant
+  std::string sim_world = "city";      // kind = sim: city | forest | repetitive
+  std::int64_t sim_seed = 1;
+  int width = 640;
+  int height = 480;
+  double fps = 30.0;
+  int frame_timeout_ms = 1000;       // a Capture() waiting longer than this is a stall
+  int reconnect_timeout_ms = 30000;  // an unplugged camera may take this long to return
+
+  bool operator==(const CameraConfig&) const = default;
+};
+
+struct SegmentationConfig {
+  SegmentationMethod method = SegmentationMethod::kOtsu;
+  int threshold = 128;  // method = fixed: pixels brighter than this are sky
+
+  bool operator==(const SegmentationConfig&) const = default;
+};
+
+struct DescriptorConfig {
+  int bands = 64;  // L: amplitudes a_0..a_{L-1}
+  GridPreset grid = GridPreset::kAuto;
+  // Resolved by the parser from dsp/sh_grid.h: auto = DefaultShGridConfig(bands), the
+  // unaliased grid; paper = PaperShGridConfig() (2000 points, 120 bands).
+  int rings = 0;
+  int longitudes = 0;
+  // There is no distance key: streaming SeqSLAM compares descriptors by mean absolute
+  // difference (L1), as OpenSeqSLAM does.
+  Normalisation normalisation = Normalisation::kNone;
+
+  bool operator==(const DescriptorConfig&) const = default;
+};
+
+struct SeqSlamConfig {
+  int ds = 10;
+  double vmin = 0.8;
+  double vmax = 1.2;
+  double vstep = 0.1;
+  int rwindow = 10;
+  int contrast_r = 10;
+
+  bool operator==(const SeqSlamConfig&) const = default;
+};
+
+struct CapacityConfig {
+  int route_frames = 10000;  // the largest route teach records and repeat loads
+
+  bool operator==(const CapacityConfig&) const = default;
+};
+
+struct StateMachineConfig {
+  double enter_confidence = 0.1;  // a frame is "good" at or above this confidence
+  double stay_confidence = 0.05;  // once localised, frames at or above this keep it
+  double max_uniqueness = 0.95;   // best/second-best score ratio; above it the match is ambiguous
+  int confirm_frames = 5;         // consecutive good, consistent frames to become LOCALISED
+  int drop_frames = 5;            // consecutive misses to fall from LOCALISED to SEARCHING
+  int lost_frames = 10;           // consecutive misses to fall from SEARCHING to LOST
+  double index_tolerance = 2.0;   // route frames of slack around the velocity band
+
+  bool operator==(const StateMachineConfig&) const = default;
+};
+
+struct StatusConfig {
+  StatusOutputKind kind = StatusOutputKind::kSim;
+  std::string chip = "gpiochip0";
+  int line_lost = 17;
+  int line_searching = 27;
+  int line_localised = 22;
+  StatusEncoding encoding = StatusEncoding::kPerState;
+
+  bool operator==(const StatusConfig&) const = default;
+};
+
+struct RealtimeConfig {
+  int sched_fifo_priority = 0;  // 0 = normal scheduling
+  bool mlockall = false;
+  int cpu_affinity = -1;  // -1 = any CPU
+
+  bool operator==(const RealtimeConfig&) const = default;
+};
+
+struct RouteDbConfig {
+  int flush_every = 50;  // frames per chunk: at most this many are lost on a crash
+
+  bool operator==(const RouteDbConfig&) const = default;
+};
+
+struct Config {
+  CameraConfig camera;
+  SegmentationConfig segmentation;
+  DescriptorConfig descriptor;
+  SeqSlamConfig seqslam;
+  CapacityConfig capacities;
+  StateMachineConfig state;
+  StatusConfig status;
+  RealtimeConfig realtime;
+  RouteDbConfig route_db;
+
+  bool operator==(const Config&) const = default;
+};
+
+// The defaults, with the derived fields (descriptor grid) resolved.
+Config DefaultConfig();
+
+// Parses TOML text; `source_name` names it in messages (usually the path).
+Result<Config> ParseConfig(std::string_view text, std::string_view source_name);
+// Reads and parses a file. A missing file is kNotFound naming the path.
+Result<Config> LoadConfigFile(const char* path);
+
+}  // namespace skyloc::app

@@ -1,0 +1,174 @@
+#include "frame_loop.h"
+
+#include <thread>
+
+#include "skyloc/platform/signals.h"
+
+namespace skyloc::app {
+
+drivers::LocalisationState ToStatusState(dsp::TrackState state) {
+  switch (state) {
+    case dsp::TrackState::kLost:
+      return drivers::LocalisationState::kLost;
+    case dsp::TrackState::kSearching:
+      return drivers::LocalisationState::kSearching;
+    case dsp::TrackState::kLocalised:
+      return drivers::LocalisationState::kLocalised;
+  }
+  return drivers::LocalisationState::kLost;
+}
+
+void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t route_frames) {
+  char line[320];
+  const double t = static_cast<double>(r.timestamp.count()) * 1e-9;
+  const long long latency_us = static_cast<long long>(r.latency.count() / 1000);
+  int n;
+  if (mode == LoopMode::kTeach) {
+    n = std::snprintf(line, sizeof line,
+                      "{\"frame\":%llu,\"timestamp\":%.6f,\"route_frames\":%llu,\"threshold\":%d,"
+                      "\"sky_fraction\":%.4f,\"latency_us\":%lld}\n",
+                      static_cast<unsigned long long>(r.frame), t,
+                      static_cast<unsigned long long>(route_frames), r.threshold,
+                      static_cast<double>(r.sky_fraction), latency_us);
+  } else {
+    char index[24] = "null";
+    if (r.matched)
+      std::snprintf(index, sizeof index, "%lld", static_cast<long long>(r.best_index));
+    n = std::snprintf(line, sizeof line,
+                      "{\"frame\":%llu,\"timestamp\":%.6f,\"best_index\":%s,\"uniqueness\":%.4f,"
+                      "\"confidence\":%.4f,\"state\":\"%s\",\"latency_us\":%lld}\n",
+                      static_cast<unsigned long long>(r.frame), t, index,
+                      static_cast<double>(r.uniqueness), static_cast<double>(r.confidence),
+                      dsp::TrackStateName(r.state), latency_us);
+  }
+  if (n > 0 &&
+      std::fwrite(line, 1, static_cast<std::size_t>(n), out_) != static_cast<std::size_t>(n))
+    failed_ = true;
+  // One line per frame must reach a pipe reader promptly.
+  if (std::fflush(out_) != 0)
+    failed_ = true;
+}
+
+Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
+                    RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
+                    LoopSummary* summary) {
+  if (options.mode == LoopMode::kTeach && route == nullptr)
+    return Status::Error(StatusCode::kInternal, "teach without a route database");
+  MonotonicClock clock;
+  LatencyTable& latency = pipeline.latency();
+  LoopSummary s;
+  int errors_in_a_row = 0;
+  Nanoseconds unavailable_since{-1};
+  Nanoseconds first_timestamp{-1};
+  Nanoseconds loop_start = clock.Now();
+  std::uint64_t last_sequence = 0;
+  bool have_sequence = false;
+
+  while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
+    if (TakeReportRequest())
+      latency.Print(stderr);
+    const Nanoseconds t0 = clock.Now();
+    Result<drivers::Frame> captured = camera.Capture(options.capture_timeout);
+    const Nanoseconds t1 = clock.Now();
+    if (!captured.ok()) {
+      const StatusCode code = captured.status().code();
+      if (code == StatusCode::kOutOfRange) {
+        s.end_of_source = true;
+        break;
+      }
+      // A signal interrupted the wait: the loop condition sees the flag.
+      if (StopRequested())
+        break;
+      // No frame means no localisation: the lines go to the safe state until frames flow
+      // again, and the SeqSLAM sequence starts over (it needs consecutive frames).
+      if (status != nullptr)
+        (void)status->SafeState();
+      pipeline.ResetTracking();
+      if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
+          ++errors_in_a_row < options.max_consecutive_errors) {
+        ++s.capture_errors;
+        continue;
+      }
+      if (code == StatusCode::kUnavailable && options.reconnect_timeout.count() > 0) {
+        if (unavailable_since.count() < 0)
+          unavailable_since = t1;
+        if (t1 - unavailable_since < options.reconnect_timeout) {
+          ++s.capture_errors;
+          // A driver that reports the loss without waiting must not make this spin.
+          if (t1 - t0 < std::chrono::milliseconds(10))
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+          continue;
+        }
+      }
+      *summary = s;
+      Status fatal = captured.status();
+      return fatal.AddContext("camera %s", camera.info().name);
+    }
+    errors_in_a_row = 0;
+    unavailable_since = Nanoseconds{-1};
+    latency.Record(pipeline.stage_capture, t1 - t0);
+    const drivers::Frame& frame = *captured;
+
+    if (options.paced) {
+      if (first_timestamp.count() < 0) {
+        first_timestamp = frame.timestamp;
+        loop_start = t1;
+      }
+      const Nanoseconds due = loop_start + (frame.timestamp - first_timestamp);
+      const Nanoseconds now = clock.Now();
+      if (due > now)
+        std::this_thread::sleep_for(due - now);
+    }
+    // A jump in the sequence numbers (dropped frames) is fine for SeqSLAM's velocity
+    // band up to a point; a long gap breaks the sequence: start it again.
+    if (have_sequence && frame.sequence > last_sequence + 10)
+      pipeline.ResetTracking();
+    last_sequence = frame.sequence;
+    have_sequence = true;
+
+    FrameResult result;
+    result.frame = frame.sequence;
+    result.timestamp = frame.timestamp;
+    if (options.mode == LoopMode::kTeach) {
+      SKYLOC_TRY(pipeline.Describe(frame.image, &result));
+      RouteFrameMeta meta;
+      meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
+      if (frame.pose) {
+        meta.has_pose = true;
+        meta.pose = {frame.pose->x_m,      frame.pose->y_m,       frame.pose->z_m,
+                     frame.pose->roll_deg, frame.pose->pitch_deg, frame.pose->yaw_deg};
+      }
+      {
+        StageTimer timer(latency, pipeline.stage_output, clock);
+        SKYLOC_TRY(route->Append(meta, pipeline.descriptor()));
+      }
+    } else {
+      Status st = pipeline.Localise(frame, &result);
+      if (!st.ok()) {
+        // A frame the descriptor rejects (wrong size from a misbehaving driver) is
+        // skipped like a corrupt capture; the next frame may be fine.
+        if (++errors_in_a_row >= options.max_consecutive_errors) {
+          *summary = s;
+          return st;
+        }
+        ++s.capture_errors;
+        continue;
+      }
+      StageTimer timer(latency, pipeline.stage_output, clock);
+      if (status != nullptr)
+        SKYLOC_TRY(status->Show(ToStatusState(result.state), result.confidence, clock.Now()));
+    }
+    const Nanoseconds done = clock.Now();
+    result.latency = done - t1;
+    latency.Record(pipeline.stage_total, done - t1);
+    ++s.state_frames[static_cast<int>(result.state)];
+    ++s.frames;
+    if (sink != nullptr)
+      sink->OnFrame(options.mode, result, route != nullptr ? route->frames_appended() : 0);
+  }
+  s.stopped = StopRequested();
+  *summary = s;
+  return Status::Ok();
+}
+
+}  // namespace skyloc::app

@@ -1,0 +1,89 @@
+// The frame loop shared by teach, repeat, replay and the demo: capture -> pipeline ->
+// status output -> sink, once per frame, until a signal, the end of the source or a
+// fatal error. Everything it touches was allocated before it starts; the loop itself
+// allocates nothing (tests/app/frame_loop_test.cpp arms the allocation counter around it).
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+
+#include "pipeline.h"
+#include "skyloc/drivers/camera.h"
+#include "skyloc/drivers/status_output.h"
+#include "skyloc/platform/route_db.h"
+
+namespace skyloc::app {
+
+enum class LoopMode : std::uint8_t { kTeach, kRepeat };
+
+// Receives every frame's result. Implementations must not allocate.
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  // `route_frames`: teach only, frames recorded so far.
+  virtual void OnFrame(LoopMode mode, const FrameResult& result, std::uint64_t route_frames) = 0;
+};
+
+// One JSON object per line on `out`:
+//   repeat: {"frame":12,"timestamp":0.4,"best_index":10,"uniqueness":0.41,
+//            "confidence":0.59,"state":"SEARCHING","latency_us":812}
+//   teach:  {"frame":12,"timestamp":0.4,"route_frames":13,"threshold":97,
+//            "sky_fraction":0.41,"latency_us":650}
+// best_index is null until SeqSLAM has ds frames. Formatted into a fixed buffer.
+class JsonLinesSink final : public FrameSink {
+ public:
+  explicit JsonLinesSink(std::FILE* out) : out_(out) {}
+  void OnFrame(LoopMode mode, const FrameResult& result, std::uint64_t route_frames) override;
+  bool write_failed() const { return failed_; }
+
+ private:
+  std::FILE* out_;
+  bool failed_ = false;
+};
+
+// Fans one frame out to two sinks (JSON and a progress line, say).
+class TeeSink final : public FrameSink {
+ public:
+  TeeSink(FrameSink* a, FrameSink* b) : a_(a), b_(b) {}
+  void OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t n) override {
+    if (a_ != nullptr)
+      a_->OnFrame(mode, r, n);
+    if (b_ != nullptr)
+      b_->OnFrame(mode, r, n);
+  }
+
+ private:
+  FrameSink* a_;
+  FrameSink* b_;
+};
+
+struct LoopOptions {
+  LoopMode mode = LoopMode::kRepeat;
+  std::uint64_t max_frames = 0;  // 0: until a signal or the end of the source
+  bool paced = false;            // sleep so frames are processed at their timestamps' pace
+  Nanoseconds capture_timeout = std::chrono::seconds(1);
+  // Capture errors in a row (timeouts, corrupt frames) before the loop gives up.
+  int max_consecutive_errors = 30;
+  // How long a camera may stay unavailable (unplugged; the V4L2 driver reopens it with
+  // backoff) before the loop gives up; 0: at once.
+  Nanoseconds reconnect_timeout = std::chrono::seconds(30);
+};
+
+struct LoopSummary {
+  std::uint64_t frames = 0;            // frames through the pipeline
+  std::uint64_t capture_errors = 0;    // timeouts and corrupt frames skipped
+  std::uint64_t state_frames[3] = {};  // frames shown as LOST, SEARCHING, LOCALISED
+  bool end_of_source = false;          // a finite source (dataset) ran out
+  bool stopped = false;                // SIGINT/SIGTERM or RequestStop()
+};
+
+// Runs until stopped. `status` and `sink` may be null; `route` is required for teach.
+// A fatal error (the camera gone for good, the route database unwritable) is returned;
+// the caller then flushes what it has and drives the status lines to the safe state.
+Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
+                    RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
+                    LoopSummary* summary);
+
+drivers::LocalisationState ToStatusState(dsp::TrackState state);
+
+}  // namespace skyloc::app

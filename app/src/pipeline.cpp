@@ -1,0 +1,201 @@
+#include "pipeline.h"
+
+#include <cstring>
+
+#include "skyloc/drivers/camera_file.h"
+
+namespace skyloc::app {
+namespace {
+
+dsp::AmplitudeNormalisation ToDsp(Normalisation n) {
+  switch (n) {
+    case Normalisation::kNone:
+      return dsp::AmplitudeNormalisation::kNone;
+    case Normalisation::kDivideByA0:
+      return dsp::AmplitudeNormalisation::kDivideByA0;
+    case Normalisation::kUnitL2:
+      return dsp::AmplitudeNormalisation::kUnitL2;
+  }
+  return dsp::AmplitudeNormalisation::kNone;
+}
+
+void HashBytes(std::uint64_t* h, const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) {
+    *h ^= p[i];
+    *h *= 0x100000001b3ull;  // FNV-1a 64
+  }
+}
+template <typename T>
+void Hash(std::uint64_t* h, const T& v) {
+  HashBytes(h, &v, sizeof v);
+}
+
+}  // namespace
+
+Result<dsp::LensParams> LensFromConfig(const Config& config) {
+  if (!config.camera.lens_file.empty()) {
+    Result<dsp::LensParams> p = drivers::LoadCameraFile(config.camera.lens_file.c_str());
+    if (!p.ok())
+      return p;
+    if (p->width != config.camera.width || p->height != config.camera.height) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "camera file %s is for %dx%d images but [camera] width x height is "
+                           "%dx%d: make them agree",
+                           config.camera.lens_file.c_str(), p->width, p->height,
+                           config.camera.width, config.camera.height);
+    }
+    return p;
+  }
+  dsp::LensParams p;
+  p.model = dsp::LensModel::kEquidistant;
+  p.width = config.camera.width;
+  p.height = config.camera.height;
+  p.fov_deg = 185.0;
+  return p;
+}
+
+std::uint64_t LensHash(const dsp::LensParams& p) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  Hash(&h, p.model);
+  Hash(&h, p.width);
+  Hash(&h, p.height);
+  for (double v : {p.centre_x, p.centre_y, p.radius_px, p.fov_deg, p.fx, p.fy, p.k[0], p.k[1],
+                   p.k[2], p.k[3], p.roll_deg, p.pitch_deg, p.yaw_deg})
+    Hash(&h, v);
+  if (p.model == dsp::LensModel::kOCamCalib) {
+    HashBytes(&h, p.ocam.ss.data(), sizeof p.ocam.ss);
+    HashBytes(&h, p.ocam.invpol.data(), sizeof p.ocam.invpol);
+    for (double v : {p.ocam.row_centre, p.ocam.column_centre, p.ocam.c, p.ocam.d, p.ocam.e})
+      Hash(&h, v);
+  }
+  return h;
+}
+
+Status Pipeline::Init(const Config& config) {
+  SKYLOC_TRY_ASSIGN(const dsp::LensParams lens_params, LensFromConfig(config));
+  if (const dsp::LensError e = lens_.Init(lens_params); e != dsp::LensError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "lens: %s", dsp::LensErrorMessage(e));
+
+  dsp::SkyDescriptorOptions options;
+  options.bands = config.descriptor.bands;
+  options.grid.rings = config.descriptor.rings;
+  options.grid.longitudes = config.descriptor.longitudes;
+  options.segmentation.fixed_threshold =
+      config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold : -1;
+  options.normalisation = ToDsp(config.descriptor.normalisation);
+  if (const dsp::DescriptorError e = descriptor_.Init(lens_, options); !e.ok())
+    return Status::Error(StatusCode::kInvalidArgument, "[descriptor]: %s", e.message);
+  SKYLOC_TRY(amplitudes_.Allocate(static_cast<std::size_t>(descriptor_.bands())));
+
+  dsp::SeqSlamParams seq;
+  seq.sequence_length = config.seqslam.ds;
+  seq.v_min = static_cast<float>(config.seqslam.vmin);
+  seq.v_max = static_cast<float>(config.seqslam.vmax);
+  seq.v_step = static_cast<float>(config.seqslam.vstep);
+  seq.uniqueness_window = config.seqslam.rwindow;
+  seq.contrast_window = config.seqslam.contrast_r;
+  if (const dsp::SeqSlamError e =
+          seqslam_.Init(seq, descriptor_.bands(), config.capacities.route_frames);
+      e != dsp::SeqSlamError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[seqslam]: %s",
+                         dsp::SeqSlamErrorMessage(e));
+
+  dsp::StateMachineParams sm;
+  sm.enter_confidence = static_cast<float>(config.state.enter_confidence);
+  sm.stay_confidence = static_cast<float>(config.state.stay_confidence);
+  sm.max_uniqueness = static_cast<float>(config.state.max_uniqueness);
+  sm.confirm_frames = config.state.confirm_frames;
+  sm.drop_frames = config.state.drop_frames;
+  sm.lost_frames = config.state.lost_frames;
+  sm.vmin = config.seqslam.vmin;
+  sm.vmax = config.seqslam.vmax;
+  sm.index_tolerance = config.state.index_tolerance;
+  if (state_.Init(sm) != dsp::StateMachineError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[state]: inconsistent thresholds");
+
+  route_settings_ = {};
+  route_settings_.descriptor_kind = kDescriptorSkyShAmplitudes;
+  route_settings_.bands = static_cast<std::uint32_t>(descriptor_.bands());
+  route_settings_.rings = static_cast<std::uint32_t>(config.descriptor.rings);
+  route_settings_.longitudes = static_cast<std::uint32_t>(config.descriptor.longitudes);
+  route_settings_.dim = static_cast<std::uint32_t>(descriptor_.bands());
+  route_settings_.normalisation = static_cast<std::uint32_t>(config.descriptor.normalisation);
+  route_settings_.lens_hash = LensHash(lens_params);
+
+  latency_ = LatencyTable();
+  stage_capture = latency_.AddStage("capture");
+  stage_descriptor = latency_.AddStage("descriptor");
+  stage_seqslam = latency_.AddStage("seqslam");
+  stage_output = latency_.AddStage("output");
+  stage_total = latency_.AddStage("total");
+  return Status::Ok();
+}
+
+Status Pipeline::SetRoute(const RouteFrames& route) {
+  if (route.dim() != static_cast<std::size_t>(dim())) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "route has %zu-value descriptors, the "
+                         "pipeline %d",
+                         route.dim(), dim());
+  }
+  seqslam_.ClearReferences();
+  for (std::size_t i = 0; i < route.size(); ++i) {
+    if (const dsp::SeqSlamError e = seqslam_.AddReference(route.descriptor(i));
+        e != dsp::SeqSlamError::kOk)
+      return Status::Error(StatusCode::kResourceExhausted, "route frame %zu: %s", i,
+                           dsp::SeqSlamErrorMessage(e));
+  }
+  ResetTracking();
+  return Status::Ok();
+}
+
+void Pipeline::ResetTracking() {
+  seqslam_.ResetQueries();
+  state_.Reset();
+}
+
+Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result) {
+  StageTimer timer(latency_, stage_descriptor, clock_);
+  dsp::SegmentationResult segmentation;
+  if (const dsp::DescriptorError e = descriptor_.Compute(image, amplitudes_.span(), &segmentation);
+      !e.ok()) {
+    return Status::Error(StatusCode::kDataLoss, "frame %llu (%dx%d %s): %s",
+                         static_cast<unsigned long long>(result->frame), image.width, image.height,
+                         dsp::PixelFormatName(image.format), e.message);
+  }
+  result->threshold = segmentation.threshold;
+  result->sky_fraction = static_cast<float>(segmentation.sky_fraction);
+  return Status::Ok();
+}
+
+Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result) {
+  result->frame = frame.sequence;
+  result->timestamp = frame.timestamp;
+  result->has_pose = frame.pose.has_value();
+  if (frame.pose)
+    result->pose = *frame.pose;
+  SKYLOC_TRY(Describe(frame.image, result));
+  dsp::SeqSlamMatch match;
+  {
+    StageTimer timer(latency_, stage_seqslam, clock_);
+    if (const dsp::SeqSlamError e = seqslam_.Step(amplitudes_.span(), &match);
+        e != dsp::SeqSlamError::kOk)
+      return Status::Error(StatusCode::kFailedPrecondition, "seqslam: %s",
+                           dsp::SeqSlamErrorMessage(e));
+  }
+  result->matched = match.valid;
+  result->best_index = match.valid ? match.reference : -1;
+  result->score = match.score;
+  result->uniqueness = match.valid ? match.uniqueness : 1.0f;
+  result->confidence = match.valid ? match.confidence : 0.0f;
+  dsp::MatchObservation obs;
+  obs.frame = frame.sequence;
+  obs.index = result->best_index;
+  obs.uniqueness = result->uniqueness;
+  obs.confidence = result->confidence;
+  result->state = state_.Update(obs);
+  return Status::Ok();
+}
+
+}  // namespace skyloc::app

@@ -1,0 +1,91 @@
+// The per-frame pipeline of the firmware, built once from the configuration:
+//   frame -> sky descriptor (segment, sample, SH, amplitudes) -> streaming SeqSLAM ->
+//   LOST/SEARCHING/LOCALISED.
+// Init() is the start-up: the lens, the sampling table, the SH tables, the SeqSLAM route
+// database at [capacities] route_frames, the ring of the last ds columns. After it,
+// Describe() and Localise() allocate nothing (tests/app/frame_loop_test.cpp proves it).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "config.h"
+#include "skyloc/drivers/camera.h"
+#include "skyloc/dsp/lens.h"
+#include "skyloc/dsp/localisation_state.h"
+#include "skyloc/dsp/seqslam.h"
+#include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/platform/fixed_array.h"
+#include "skyloc/platform/latency.h"
+#include "skyloc/platform/route_db.h"
+
+namespace skyloc::app {
+
+// What one frame produced. Teach fills the descriptor part only.
+struct FrameResult {
+  std::uint64_t frame = 0;  // the camera's sequence number
+  Nanoseconds timestamp{0};
+  int threshold = 0;  // the segmentation threshold
+  float sky_fraction = 0;
+  bool matched = false;  // SeqSLAM had ds frames and a trajectory fitted the route
+  std::int64_t best_index = -1;
+  float score = 0;
+  float uniqueness = 1;
+  float confidence = 0;
+  dsp::TrackState state = dsp::TrackState::kLost;
+  Nanoseconds latency{0};  // from the frame leaving Capture() to the state being shown
+  bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
+  drivers::Pose pose;
+};
+
+// The descriptor kinds a route database records (RouteDbSettings::descriptor_kind).
+inline constexpr std::uint32_t kDescriptorSkyShAmplitudes = 1;
+
+// The lens the configuration describes: the lens file's, or a 185-degree equidistant
+// fisheye filling the image circle of a camera.width x camera.height frame.
+Result<dsp::LensParams> LensFromConfig(const Config& config);
+// A hash of everything in the lens parameters that changes which pixel a sample reads.
+std::uint64_t LensHash(const dsp::LensParams& lens);
+
+class Pipeline {
+ public:
+  // Latency stages, in the order the table prints them.
+  int stage_capture = -1, stage_descriptor = -1, stage_seqslam = -1, stage_output = -1,
+      stage_total = -1;
+
+  Status Init(const Config& config);
+
+  const RouteDbSettings& route_settings() const { return route_settings_; }
+  int dim() const { return descriptor_.bands(); }
+  int width() const { return lens_.params().width; }
+  int height() const { return lens_.params().height; }
+
+  // Replaces the route SeqSLAM matches against (start-up, after loading the database).
+  Status SetRoute(const RouteFrames& route);
+  std::size_t route_size() const { return static_cast<std::size_t>(seqslam_.size()); }
+
+  // The descriptor of one frame into descriptor(). Allocates nothing.
+  Status Describe(const dsp::ImageView& image, FrameResult* result);
+  std::span<const float> descriptor() const { return amplitudes_.span(); }
+
+  // Describe + SeqSLAM step + state machine. Allocates nothing.
+  Status Localise(const drivers::Frame& frame, FrameResult* result);
+  // Forgets the query history (a gap in the frames) and the localisation state.
+  void ResetTracking();
+
+  LatencyTable& latency() { return latency_; }
+  const LatencyTable& latency() const { return latency_; }
+
+ private:
+  dsp::Lens lens_;
+  dsp::SkyDescriptor descriptor_;
+  dsp::StreamingSeqSlam seqslam_;
+  dsp::LocalisationStateMachine state_;
+  FixedArray<float> amplitudes_;
+  RouteDbSettings route_settings_;
+  LatencyTable latency_;
+  MonotonicClock clock_;
+  std::uint64_t matched_frames_ = 0;
+};
+
+}  // namespace skyloc::app

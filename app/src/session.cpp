@@ -1,0 +1,424 @@
+#include "session.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/simulated_status_output.h"
+#if SKYLOC_WITH_V4L2
+#include "skyloc/drivers/v4l2_camera.h"
+#endif
+#if SKYLOC_WITH_LIBCAMERA
+#include "skyloc/drivers/libcamera_camera.h"
+#endif
+#if SKYLOC_WITH_GPIOD
+#include "skyloc/drivers/gpio_status_output.h"
+#endif
+#include "skyloc/dsp/place_metrics.h"
+#include "skyloc/platform/realtime.h"
+#include "skyloc/platform/signals.h"
+#include "skyloc/sim/motion.h"
+#include "skyloc/sim/rendered_camera.h"
+#include "skyloc/sim/world.h"
+#include "street_camera.h"
+
+namespace skyloc::app {
+namespace {
+
+// Keeps every frame's result (replay and the demo evaluate them at the end). Storage is
+// allocated before the loop; a full recorder drops further frames and counts them.
+class ResultRecorder final : public FrameSink {
+ public:
+  Status Allocate(std::size_t capacity) { return results_.Allocate(capacity); }
+  void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
+    if (size_ < results_.size())
+      results_[size_++] = r;
+    else
+      ++dropped_;
+  }
+  std::span<const FrameResult> results() const { return {results_.data(), size_}; }
+
+ private:
+  FixedArray<FrameResult> results_;
+  std::size_t size_ = 0;
+  std::uint64_t dropped_ = 0;
+};
+
+double Distance(const RouteFrameMeta& route, const drivers::Pose& pose) {
+  return std::hypot(route.pose[0] - pose.x_m, route.pose[1] - pose.y_m);
+}
+
+// Precision/recall of the recorded matches, with ground truth from the poses: a query
+// frame's truth is the nearest route frame, if within the tolerance (else it is off the
+// route); a match is correct when the matched route frame is within the tolerance.
+void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, double tolerance,
+              SessionReport* report) {
+  std::vector<dsp::EvaluatedMatch> matches;  // after the loop: allocation is fine here
+  for (const FrameResult& r : results) {
+    if (!r.has_pose)
+      return;  // no ground truth
+    bool on_route = false;
+    for (std::size_t i = 0; i < route.size() && !on_route; ++i)
+      on_route = route.meta(i).has_pose && Distance(route.meta(i), r.pose) <= tolerance;
+    const bool correct =
+        r.matched && r.best_index >= 0 && static_cast<std::size_t>(r.best_index) < route.size() &&
+        route.meta(static_cast<std::size_t>(r.best_index)).has_pose &&
+        Distance(route.meta(static_cast<std::size_t>(r.best_index)), r.pose) <= tolerance;
+    if (r.state == dsp::TrackState::kLocalised) {
+      ++report->localised_frames;
+      report->localised_correct += correct ? 1 : 0;
+    }
+    if (!r.matched)
+      continue;
+    matches.push_back({r.uniqueness, on_route, correct});
+  }
+  if (matches.empty())
+    return;
+  std::vector<std::size_t> order(matches.size());
+  std::vector<dsp::PrPoint> curve(matches.size());
+  const std::size_t points = dsp::PrecisionRecallCurve(matches, order, curve);
+  const dsp::PrSummary pr =
+      dsp::SummarisePrecisionRecall(matches, std::span<const dsp::PrPoint>(curve.data(), points));
+  report->evaluated = true;
+  report->precision_at_full_recall = pr.precision_at_full_recall;
+  report->recall_at_full_precision = pr.recall_at_full_precision;
+  report->area_under_curve = pr.area_under_curve;
+  report->evaluated_matches = pr.evaluated;
+  report->correct_matches = pr.correct;
+}
+
+// The frame source and what it needs to stay alive (a simulated world and trajectory).
+struct CameraSource {
+  std::unique_ptr<sim::World> world;
+  std::vector<sim::TrajectoryPoint> trajectory;
+  std::unique_ptr<drivers::Camera> camera;
+  std::size_t frames = 0;   // a finite source's length; 0 = endless
+  std::string camera_file;  // a dataset's own camera.toml, if it has one
+};
+
+Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* source) {
+  if (config.camera.sim_world == "street") {
+    StreetCameraOptions o;
+    o.width = config.camera.width;
+    o.height = config.camera.height;
+    o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
+    o.fps = config.camera.fps;
+    o.paced = true;  // a live run: frames come at the camera's rate
+    o.step_m = run.spacing_m;
+    o.speed_jitter = std::min(run.speed_jitter, 0.5);
+    o.tilt_deg = run.tilt_deg;
+    o.zigzag_deg = run.zigzag_deg;
+    o.brightness = run.lighting == "dawn" ? 0.6 : run.lighting == "overcast" ? 0.8 : 1.0;
+    source->camera = std::make_unique<StreetCamera>(o);
+    return Status::Ok();
+  }
+  sim::WorldKind kind{};
+  if (!sim::ParseWorldKind(config.camera.sim_world.c_str(), &kind))
+    return Status::Error(StatusCode::kInvalidArgument, "[camera] sim_world \"%s\" is unknown",
+                         config.camera.sim_world.c_str());
+  source->world = std::make_unique<sim::World>();
+  SKYLOC_TRY(sim::MakeProceduralWorld(kind, static_cast<std::uint64_t>(config.camera.sim_seed),
+                                      source->world.get()));
+  sim::MotionConfig motion;
+  motion.frame_spacing_m = run.spacing_m;
+  motion.speed_jitter = run.speed_jitter;
+  motion.height_m = run.camera_height_m;
+  motion.tilt_deg = run.tilt_deg;
+  motion.zigzag_deg = run.zigzag_deg;
+  motion.bumps_deg = run.bumps_deg;
+  motion.yaw_offset_deg = run.yaw_deg;
+  motion.frame_period_s = 1.0 / config.camera.fps;
+  motion.seed = run.run_seed;
+  SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
+                                  &source->trajectory));
+  sim::RenderedCameraConfig camera;
+  SKYLOC_TRY_ASSIGN(camera.lens, LensFromConfig(config));
+  if (!sim::LightingPreset(run.lighting.c_str(), run.run_seed, &camera.lighting))
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "lighting \"%s\" is not dawn, noon or "
+                         "overcast",
+                         run.lighting.c_str());
+  source->camera =
+      std::make_unique<sim::RenderedCamera>(source->world.get(), source->trajectory, camera);
+  source->frames = source->trajectory.size();
+  return Status::Ok();
+}
+
+Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* source) {
+  if (!args.dataset.empty() || config.camera.kind == CameraKind::kDataset) {
+    auto camera = std::make_unique<drivers::DatasetCamera>(
+        args.dataset.empty() ? config.camera.dataset : args.dataset);
+    SKYLOC_TRY(camera->Open());
+    source->frames = camera->dataset().frames.size();
+    source->camera_file = camera->dataset().camera_toml;
+    source->camera = std::move(camera);
+    return Status::Ok();
+  }
+  switch (config.camera.kind) {
+    case CameraKind::kSim:
+      SKYLOC_TRY(MakeSimSource(config, args.sim, source));
+      return source->camera->Open();
+    case CameraKind::kV4l2: {
+#if SKYLOC_WITH_V4L2
+      drivers::V4l2CameraConfig c;
+      std::snprintf(c.device, sizeof c.device, "%s", config.camera.device.c_str());
+      c.width = config.camera.width;
+      c.height = config.camera.height;
+      c.fps = config.camera.fps;
+      source->camera = std::make_unique<drivers::V4l2Camera>(c);
+      return source->camera->Open();
+#else
+      break;
+#endif
+    }
+    case CameraKind::kLibcamera: {
+#if SKYLOC_WITH_LIBCAMERA
+      drivers::LibcameraCameraConfig c;
+      std::snprintf(c.camera_id, sizeof c.camera_id, "%s",
+                    config.camera.device == "/dev/video0" ? "" : config.camera.device.c_str());
+      c.width = config.camera.width;
+      c.height = config.camera.height;
+      source->camera = std::make_unique<drivers::LibcameraCamera>(c);
+      return source->camera->Open();
+#else
+      break;
+#endif
+    }
+    case CameraKind::kDataset:
+      break;
+  }
+  return Status::Error(StatusCode::kUnimplemented,
+                       "[camera] kind = \"%s\": this skyloc was built without that driver (its "
+                       "development package was missing at build time); use \"sim\" or "
+                       "\"dataset\", or rebuild",
+                       CameraKindName(config.camera.kind));
+}
+
+drivers::StatusLineMode LineMode(const Config& config) {
+  return config.status.encoding == StatusEncoding::kBlink ? drivers::StatusLineMode::kBlink
+                                                          : drivers::StatusLineMode::kLinePerState;
+}
+
+Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config,
+                                                                const Clock* clock) {
+  switch (config.status.kind) {
+    case StatusOutputKind::kNone:
+      return std::unique_ptr<drivers::StatusOutput>();
+    case StatusOutputKind::kSim: {
+      drivers::SimulatedStatusOutputConfig c;
+      c.mode = LineMode(config);
+      return std::unique_ptr<drivers::StatusOutput>(
+          std::make_unique<drivers::SimulatedStatusOutput>(c, clock));
+    }
+    case StatusOutputKind::kGpio: {
+#if SKYLOC_WITH_GPIOD
+      drivers::GpioStatusOutputConfig c;
+      std::snprintf(c.chip, sizeof c.chip, "%s", config.status.chip.c_str());
+      c.mode = LineMode(config);
+      // Per state: LOST, SEARCHING, LOCALISED; blinking uses the LOCALISED line.
+      if (c.mode == drivers::StatusLineMode::kBlink) {
+        c.lines = {static_cast<unsigned>(config.status.line_localised), 0u, 0u};
+      } else {
+        c.lines = {static_cast<unsigned>(config.status.line_lost),
+                   static_cast<unsigned>(config.status.line_searching),
+                   static_cast<unsigned>(config.status.line_localised)};
+      }
+      return std::unique_ptr<drivers::StatusOutput>(std::make_unique<drivers::GpioStatusOutput>(c));
+#else
+      break;
+#endif
+    }
+  }
+  return Status::Error(StatusCode::kUnimplemented,
+                       "[status] kind = \"gpio\": this skyloc was built without libgpiod "
+                       "(libgpiod-dev was missing at build time); use \"sim\" or \"none\"");
+}
+
+void PrintWarning(const char* label, const Status& s) {
+  if (!s.ok())
+    std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
+}
+
+// Everything after the configuration is read. Errors return; RunSession prints them.
+Status Run(const SessionArgs& args, Config config, SessionReport* report) {
+  const char* label = args.label;
+  SKYLOC_TRY(InstallSignalHandlers());
+
+  // The camera first: its real frame size is what the pipeline is built for.
+  CameraSource source;
+  SKYLOC_TRY(MakeCamera(config, args, &source));
+  drivers::Camera* camera = source.camera.get();
+  const drivers::CameraInfo& info = camera->info();
+  if (config.camera.kind == CameraKind::kSim || !args.dataset.empty() ||
+      config.camera.kind == CameraKind::kDataset) {
+    config.camera.width = info.width;  // a recorded or simulated source fixes the size
+    config.camera.height = info.height;
+    // A dataset recorded with its camera file: use that lens unless the config names one.
+    if (config.camera.lens_file.empty() && !source.camera_file.empty())
+      config.camera.lens_file = source.camera_file;
+  } else if (info.width != config.camera.width || info.height != config.camera.height) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
+                         "height to what the camera supports",
+                         info.name, info.width, info.height, config.camera.width,
+                         config.camera.height);
+  }
+
+  Pipeline pipeline;
+  SKYLOC_TRY(pipeline.Init(config));
+
+  RouteDbWriter writer;
+  RouteFrames route;
+  if (args.mode == LoopMode::kRepeat) {
+    SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
+                              static_cast<std::size_t>(pipeline.dim())));
+    RouteDbLoadReport loaded;
+    const RouteDbSettings want = pipeline.route_settings();
+    SKYLOC_TRY(
+        LoadRouteDb(args.route_path.c_str(), &want, RouteDbLoadPolicy::kStrict, &route, &loaded));
+    if (route.size() == 0) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "route %s has no frames: teach it "
+                           "again",
+                           args.route_path.c_str());
+    }
+    SKYLOC_TRY(pipeline.SetRoute(route));
+    report->route_frames = route.size();
+  }
+
+  MonotonicClock clock;
+  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status,
+                    MakeStatusOutput(config, &clock));
+  if (status) {
+    if (Status open = status->Open(); !open.ok()) {
+      return open.AddContext("[status] kind = \"%s\", chip = \"%s\"",
+                             StatusOutputKindName(config.status.kind), config.status.chip.c_str());
+    }
+  }
+  // The route database is created last, so a start-up failure leaves no empty route
+  // behind (and an existing one untouched).
+  if (args.mode == LoopMode::kTeach) {
+    Status created =
+        writer.Create(args.route_path.c_str(), pipeline.route_settings(),
+                      static_cast<std::size_t>(config.route_db.flush_every), args.force);
+    if (created.code() == StatusCode::kFailedPrecondition)
+      created.AddContext("(pass --force to replace it)");
+    SKYLOC_TRY(created);
+  }
+
+  ResultRecorder recorder;
+  // A finite run (a dataset, a simulated trajectory, --frames) keeps every result for the
+  // evaluation at the end; it needs poses, which those sources have.
+  std::size_t run_frames = source.frames;
+  if (args.max_frames > 0 && (run_frames == 0 || args.max_frames < run_frames))
+    run_frames = static_cast<std::size_t>(args.max_frames);
+  const bool evaluate = args.mode == LoopMode::kRepeat && run_frames > 0;
+  if (evaluate)
+    SKYLOC_TRY(recorder.Allocate(run_frames));
+  JsonLinesSink json(args.json);
+  TeeSink outer(args.json != nullptr ? &json : nullptr, args.extra_sink);
+  TeeSink sink(&outer, evaluate ? &recorder : nullptr);
+
+  // Real-time setup last: mlockall(MCL_FUTURE) then covers nothing new.
+  RealtimeOptions rt;
+  rt.sched_fifo_priority = config.realtime.sched_fifo_priority;
+  rt.lock_memory = config.realtime.mlockall;
+  rt.cpu = config.realtime.cpu_affinity;
+  const RealtimeReport rt_report = ApplyRealtime(rt);
+  PrintWarning(label, rt_report.scheduling);
+  PrintWarning(label, rt_report.memory_lock);
+  PrintWarning(label, rt_report.affinity);
+
+  SKYLOC_TRY(camera->Start());
+  LoopOptions loop;
+  loop.mode = args.mode;
+  loop.max_frames = args.max_frames;
+  // Teach stops when the route is as long as repeat can load.
+  const auto route_capacity = static_cast<std::uint64_t>(config.capacities.route_frames);
+  const bool capped =
+      args.mode == LoopMode::kTeach && (loop.max_frames == 0 || loop.max_frames > route_capacity);
+  if (capped)
+    loop.max_frames = route_capacity;
+  loop.paced = args.paced;
+  loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
+  loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
+  const Status loop_status =
+      RunFrameLoop(*camera, status.get(), pipeline,
+                   args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop, &report->loop);
+
+  if (capped && report->loop.frames == route_capacity) {
+    std::fprintf(stderr,
+                 "%s: the route is full ([capacities] route_frames = %llu): raise it to "
+                 "teach a longer route\n",
+                 label, static_cast<unsigned long long>(route_capacity));
+  }
+  // Shutdown, whatever happened in the loop: keep what was taught, lines to safe state.
+  Status shutdown;
+  if (args.mode == LoopMode::kTeach && writer.is_open()) {
+    shutdown = writer.Commit();
+    report->route_frames = writer.frames_durable();
+    if (shutdown.ok()) {
+      std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
+                   static_cast<unsigned long long>(writer.frames_durable()));
+    }
+  }
+  if (status) {
+    PrintWarning(label, status->SafeState());
+    status->Close();
+  }
+  camera->Stop();
+  camera->Close();
+  pipeline.latency().Print(stderr);
+  if (json.write_failed())
+    std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", label);
+  if (evaluate)
+    Evaluate(recorder.results(), route, args.tolerance_m, report);
+  SKYLOC_TRY(loop_status);
+  return shutdown;
+}
+
+}  // namespace
+
+int RunSession(const SessionArgs& args, SessionReport* report) {
+  SessionReport local;
+  if (report == nullptr)
+    report = &local;
+  Config config = DefaultConfig();
+  if (!args.config_path.empty()) {
+    Result<Config> loaded = LoadConfigFile(args.config_path.c_str());
+    if (!loaded.ok()) {
+      std::fprintf(stderr, "%s: %s\n", args.label, loaded.status().message());
+      return 1;
+    }
+    config = *loaded;
+  }
+  const Status s = Run(args, config, report);
+  if (!s.ok()) {
+    std::fprintf(stderr, "%s: %s\n", args.label, s.message());
+    return 1;
+  }
+  std::fprintf(stderr,
+               "%s: %llu frames (%llu LOST, %llu SEARCHING, %llu LOCALISED), %llu capture "
+               "errors%s\n",
+               args.label, static_cast<unsigned long long>(report->loop.frames),
+               static_cast<unsigned long long>(report->loop.state_frames[0]),
+               static_cast<unsigned long long>(report->loop.state_frames[1]),
+               static_cast<unsigned long long>(report->loop.state_frames[2]),
+               static_cast<unsigned long long>(report->loop.capture_errors),
+               report->loop.stopped ? ", stopped by signal" : "");
+  if (report->evaluated) {
+    std::fprintf(stderr,
+                 "%s: precision at 100%% recall %.3f, recall at 100%% precision %.3f, AUC %.3f "
+                 "(%d matches, %d correct within %.1f m); LOCALISED frames correct: %llu of "
+                 "%llu\n",
+                 args.label, report->precision_at_full_recall, report->recall_at_full_precision,
+                 report->area_under_curve, report->evaluated_matches, report->correct_matches,
+                 args.tolerance_m, static_cast<unsigned long long>(report->localised_correct),
+                 static_cast<unsigned long long>(report->localised_frames));
+  }
+  return 0;
+}
+
+}  // namespace skyloc::app

@@ -1,0 +1,106 @@
+// A camera through libcamera (Raspberry Pi CSI cameras, UVC, vimc). Built when
+// SKYLOC_WITH_LIBCAMERA. Written against Debian 12's libcamera 0.0.3; the API notes
+// in docs/DRIVERS.md list what changed in later versions.
+//
+// Open():  starts a CameraManager, picks the camera by id (or the first), acquires it,
+//          configures one stream (Viewfinder, or Raw) in the first format skyloc reads
+//          (R8, YUYV, RGB888/BGR888), allocates the buffers with a FrameBufferAllocator,
+//          mmaps every dmabuf plane once and creates one Request per buffer.
+// Start(): camera->start(), queues every request.
+// Capture(): requeues the request handed out last time (Request::ReuseBuffers), waits on
+//          an eventfd (poll with the timeout) for a completed request, which libcamera's
+//          thread put into a fixed-size SPSC queue (the callback does nothing else:
+//          no allocation, no lock, no work on libcamera's thread).
+// Stop():  sets `stopping` first so nothing is queued any more (queuing while the camera
+//          stops crashed libcamera in the VM study), camera->stop() (cancels pending
+//          requests, which still come through the queue), then drains the queue.
+// Unplug:  libcamera's `disconnected` signal makes Capture() return kUnavailable from
+//          then on; unlike the V4L2 driver this one does not reopen by itself (Close()
+//          and Open() again once the camera is back).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "skyloc/drivers/camera.h"
+#include "skyloc/drivers/mapped_buffer.h"
+#include "skyloc/drivers/spsc_queue.h"
+#include "skyloc/platform/status.h"
+#include "skyloc/platform/unique_fd.h"
+
+namespace libcamera {
+class Camera;
+class CameraConfiguration;
+class CameraManager;
+class FrameBufferAllocator;
+class Request;
+class Stream;
+}  // namespace libcamera
+
+namespace skyloc::drivers {
+
+struct LibcameraCameraConfig {
+  char camera_id[128] = "";  // as `cam -l` prints it; empty or "first": the first camera
+  int width = 640;
+  int height = 480;
+  bool raw = false;                // StreamRole::Raw instead of Viewfinder
+  std::uint32_t buffer_count = 4;  // 1..kMaxRequests (the pipeline may raise its minimum)
+  std::int32_t exposure_us = 0;    // > 0: manual exposure (AeEnable off), if supported
+};
+
+class LibcameraCamera final : public Camera {
+ public:
+  static constexpr std::size_t kMaxRequests = 8;
+
+  explicit LibcameraCamera(const LibcameraCameraConfig& config);
+  ~LibcameraCamera() override;
+
+  // Completed requests that did not fit the queue (cannot happen while the queue holds
+  // every request; counted so a test can prove it).
+  std::uint64_t queue_overflows() const { return overflows_.load(std::memory_order_relaxed); }
+
+ private:
+  Status DoOpen() override;
+  Status DoStart() override;
+  Result<Frame> DoCapture(Nanoseconds timeout) override;
+  void DoStop() override;
+  void DoClose() override;
+
+  Status Configure();
+  Status QueueRequest(libcamera::Request* request);
+  // libcamera's thread: hands the request over, nothing else.
+  void OnRequestCompleted(libcamera::Request* request);
+  // libcamera's thread: the camera was unplugged. Flags it and wakes Capture().
+  void OnDisconnected();
+
+  LibcameraCameraConfig config_;
+  std::unique_ptr<libcamera::CameraManager> manager_;
+  std::shared_ptr<libcamera::Camera> camera_;
+  std::unique_ptr<libcamera::CameraConfiguration> configuration_;
+  std::unique_ptr<libcamera::FrameBufferAllocator> allocator_;
+  libcamera::Stream* stream_ = nullptr;
+  std::array<std::unique_ptr<libcamera::Request>, kMaxRequests> requests_;
+  std::array<MappedBuffer, kMaxRequests> mappings_;
+  std::array<std::size_t, kMaxRequests> plane_offsets_{};
+  std::size_t request_count_ = 0;
+  std::size_t stride_ = 0;
+  std::size_t frame_bytes_ = 0;
+  bool acquired_ = false;
+  bool started_ = false;
+
+  UniqueFd completed_fd_;  // eventfd: counts requests pushed into completed_
+  SpscQueue<libcamera::Request*, 16> completed_;
+  std::atomic<bool> stopping_{false};
+  std::atomic<bool> disconnected_{false};
+  std::atomic<std::uint64_t> overflows_{0};
+  libcamera::Request* held_ = nullptr;  // the request whose buffer the last Frame shows
+  // libcamera numbers frames from 0 again after each start(); ours keep increasing.
+  std::uint64_t sequence_base_ = 0;
+  std::uint64_t next_sequence_ = 0;
+  bool have_sequence_ = false;
+};
+
+}  // namespace skyloc::drivers

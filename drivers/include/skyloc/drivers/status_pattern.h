@@ -1,0 +1,64 @@
+// The one place that decides which status lines are lit: a pure function of
+// (state, confidence, time). GpioStatusOutput and SimulatedStatusOutput both call it,
+// so the simulated twin shows exactly what the robot's LEDs show.
+//
+// Two modes (chosen in the configuration):
+//   kLinePerState  three lines: LOST, SEARCHING, LOCALISED; exactly the current one is on.
+//   kBlink         one line whose blink pattern encodes state and confidence:
+//                    LOST       a 100 ms flash every 2 s      (alive, but lost)
+//                    SEARCHING  1 Hz, 50 % duty
+//                    LOCALISED  2 Hz at confidence 0 up to 10 Hz at confidence 1, 50 % duty
+//                  Blinking is phase-locked to the monotonic clock (time modulo the
+//                  period), so the pattern needs no state and restarts cleanly.
+// The safe state, in both modes, is every line off (inactive).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "skyloc/drivers/status_output.h"
+#include "skyloc/platform/clock.h"
+#include "skyloc/platform/status.h"
+
+namespace skyloc::drivers {
+
+enum class StatusLineMode : std::uint8_t { kLinePerState, kBlink };
+
+struct StatusLines {
+  static constexpr std::size_t kMaxLines = 3;
+  std::array<bool, kMaxLines> level{};  // logical level: true = indicator on
+  std::size_t count = 0;                // lines in use: 3 (per state) or 1 (blink)
+
+  bool operator==(const StatusLines&) const = default;
+};
+
+class StatusPattern {
+ public:
+  explicit StatusPattern(StatusLineMode mode) : mode_(mode) {}
+
+  StatusLineMode mode() const { return mode_; }
+  std::size_t line_count() const { return mode_ == StatusLineMode::kBlink ? 1 : 3; }
+
+  // The line levels for `state` at `now`. `confidence` is clamped to [0, 1].
+  StatusLines Levels(LocalisationState state, float confidence, Nanoseconds now) const;
+  // Every line off.
+  StatusLines Safe() const;
+
+  // The blink period and on-time of the single line in kBlink mode (exposed for tests
+  // and for docs/DRIVERS.md).
+  struct Blink {
+    Nanoseconds period;
+    Nanoseconds on_time;
+  };
+  static Blink BlinkFor(LocalisationState state, float confidence);
+
+ private:
+  StatusLineMode mode_;
+};
+
+// Parses "per-state" / "blink" (configuration files, test environment).
+Result<StatusLineMode> ParseStatusLineMode(const char* text);
+const char* StatusLineModeName(StatusLineMode mode);
+
+}  // namespace skyloc::drivers

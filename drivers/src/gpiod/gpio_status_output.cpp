@@ -1,0 +1,182 @@
+#include "skyloc/drivers/gpio_status_output.h"
+
+#include <gpiod.h>
+
+#include <cerrno>
+#include <cstdio>
+
+namespace skyloc::drivers {
+namespace {
+
+constexpr const char* kConsumer = "skyloc";
+
+}  // namespace
+
+GpioStatusOutput::GpioStatusOutput(const GpioStatusOutputConfig& config)
+    : config_(config), pattern_(config.mode), levels_(pattern_.Safe()) {
+  config_.chip[sizeof(config_.chip) - 1] = '\0';
+}
+
+GpioStatusOutput::~GpioStatusOutput() {
+  // Last resort: whatever happened, the lines end off.
+  GpioStatusOutput::Close();
+}
+
+Status GpioStatusOutput::Open() {
+  if (chip_ != nullptr) {
+    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: already open",
+                         config_.chip);
+  }
+  errno = 0;
+  chip_ = ::gpiod_chip_open_lookup(config_.chip);
+  if (chip_ == nullptr) {
+    const int saved = errno != 0 ? errno : ENOENT;
+    return Status::FromErrno(saved,
+                             "GPIO chip '%s' cannot be opened (list chips with gpiodetect; set "
+                             "status.gpio.chip in the configuration)",
+                             config_.chip);
+  }
+  std::snprintf(chip_name_, sizeof(chip_name_), "%s", ::gpiod_chip_name(chip_));
+
+  const std::size_t count = pattern_.line_count();
+  gpiod_line_bulk bulk;
+  gpiod_line_bulk_init(&bulk);
+  int initial[StatusLines::kMaxLines] = {0, 0, 0};  // requested already in the safe state
+  for (std::size_t i = 0; i < count; ++i) {
+    lines_[i] = ::gpiod_chip_get_line(chip_, config_.lines[i]);
+    if (lines_[i] == nullptr) {
+      const int saved = errno;
+      const Status s =
+          Status::FromErrno(saved, "GPIO chip %s has no line %u (it has %u lines)", config_.chip,
+                            config_.lines[i], ::gpiod_chip_num_lines(chip_));
+      lines_.fill(nullptr);  // none requested yet: nothing to drive or release
+      Close();
+      return s;
+    }
+    gpiod_line_bulk_add(&bulk, lines_[i]);
+  }
+  const int flags = config_.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
+  if (::gpiod_line_request_bulk_output_flags(&bulk, kConsumer, flags, initial) != 0) {
+    const int saved = errno;
+    const Status s = Status::FromErrno(
+        saved,
+        "GPIO chip %s: cannot request status lines %u,%u,%u as outputs (in use? see gpioinfo)",
+        config_.chip, config_.lines[0], count > 1 ? config_.lines[1] : config_.lines[0],
+        count > 2 ? config_.lines[2] : config_.lines[0]);
+    lines_.fill(nullptr);
+    Close();
+    return s;
+  }
+  levels_ = pattern_.Safe();
+
+  if (config_.button_line >= 0) {
+    button_ = ::gpiod_chip_get_line(chip_, static_cast<unsigned>(config_.button_line));
+    const int bflags = config_.button_active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
+    if (button_ == nullptr ||
+        ::gpiod_line_request_both_edges_events_flags(button_, kConsumer, bflags) != 0) {
+      const int saved = errno;
+      button_ = nullptr;
+      Close();
+      return Status::FromErrno(saved, "GPIO chip %s: cannot request button line %d for edge events",
+                               config_.chip, config_.button_line);
+    }
+    button_fd_ = ::gpiod_line_event_get_fd(button_);
+  }
+  return Status::Ok();
+}
+
+Status GpioStatusOutput::Write(const StatusLines& lines) {
+  if (lines == levels_)
+    return Status::Ok();
+  gpiod_line_bulk bulk;
+  gpiod_line_bulk_init(&bulk);
+  int values[StatusLines::kMaxLines] = {};
+  for (std::size_t i = 0; i < lines.count; ++i) {
+    gpiod_line_bulk_add(&bulk, lines_[i]);
+    values[i] = lines.level[i] ? 1 : 0;
+  }
+  if (::gpiod_line_set_value_bulk(&bulk, values) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "GPIO chip %s: setting the status lines", config_.chip);
+  }
+  levels_ = lines;
+  return Status::Ok();
+}
+
+Status GpioStatusOutput::Show(LocalisationState state, float confidence, Nanoseconds now) {
+  if (chip_ == nullptr || lines_[0] == nullptr) {
+    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: Show() before Open()",
+                         config_.chip);
+  }
+  return Write(pattern_.Levels(state, confidence, now));
+}
+
+Status GpioStatusOutput::SafeState() {
+  if (chip_ == nullptr || lines_[0] == nullptr)
+    return Status::Ok();
+  // Force the write even if we believe the lines are off already.
+  levels_.level.fill(true);
+  return Write(pattern_.Safe());
+}
+
+void GpioStatusOutput::Close() {
+  if (chip_ == nullptr)
+    return;
+  (void)SafeState();
+  for (gpiod_line*& line : lines_) {
+    if (line != nullptr)
+      ::gpiod_line_release(line);
+    line = nullptr;
+  }
+  if (button_ != nullptr)
+    ::gpiod_line_release(button_);
+  button_ = nullptr;
+  button_fd_ = -1;
+  ::gpiod_chip_close(chip_);
+  chip_ = nullptr;
+  chip_name_[0] = '\0';
+  levels_ = pattern_.Safe();
+}
+
+Result<bool> GpioStatusOutput::ButtonPressed() const {
+  if (button_ == nullptr) {
+    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: no button line open",
+                         config_.chip);
+  }
+  const int value = ::gpiod_line_get_value(button_);
+  if (value < 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "GPIO chip %s: reading button line %d", config_.chip,
+                             config_.button_line);
+  }
+  return value == 1;
+}
+
+Result<ButtonEvent> GpioStatusOutput::ReadButtonEvent() {
+  if (button_ == nullptr) {
+    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: no button line open",
+                         config_.chip);
+  }
+  const timespec no_wait{0, 0};
+  const int ready = ::gpiod_line_event_wait(button_, &no_wait);
+  if (ready < 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "GPIO chip %s: waiting for button events", config_.chip);
+  }
+  if (ready == 0) {
+    return Status::Error(StatusCode::kDeadlineExceeded, "GPIO chip %s: no button edge pending",
+                         config_.chip);
+  }
+  gpiod_line_event event{};
+  if (::gpiod_line_event_read(button_, &event) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "GPIO chip %s: reading a button event", config_.chip);
+  }
+  ButtonEvent out;
+  out.pressed = event.event_type == GPIOD_LINE_EVENT_RISING_EDGE;
+  out.timestamp = Nanoseconds(static_cast<std::int64_t>(event.ts.tv_sec) * 1'000'000'000 +
+                              static_cast<std::int64_t>(event.ts.tv_nsec));
+  return out;
+}
+
+}  // namespace skyloc::drivers

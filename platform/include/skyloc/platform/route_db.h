@@ -1,0 +1,147 @@
+// The route database file: what `skyloc teach` records and `skyloc repeat` loads.
+// Format and crash guarantees: docs/ROUTE_DB.md. In short: a versioned header with the
+// descriptor settings, then chunks of frame records, each with a CRC32, then a commit
+// record. Teach creates the file atomically (temp file + fsync + rename) and appends one
+// chunk per flush followed by fdatasync, so a crash loses at most the frames since the
+// last flush, and the loader finds every flushed frame intact.
+//
+// This layer knows the settings only as numbers to compare; app/ gives them meaning.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "skyloc/platform/fixed_array.h"
+#include "skyloc/platform/status.h"
+#include "skyloc/platform/unique_fd.h"
+
+namespace skyloc {
+
+// What produced the descriptors; a route loads only into a pipeline with equal settings.
+struct RouteDbSettings {
+  std::uint32_t descriptor_kind = 0;
+  std::uint32_t bands = 0;
+  std::uint32_t rings = 0;
+  std::uint32_t longitudes = 0;
+  std::uint32_t dim = 0;  // floats per descriptor
+  std::uint32_t normalisation = 0;
+  std::uint64_t lens_hash = 0;  // of the lens parameters the sampling table was built from
+
+  bool operator==(const RouteDbSettings&) const = default;
+};
+
+struct RouteFrameMeta {
+  std::uint64_t timestamp_ns = 0;
+  bool has_pose = false;
+  // x, y, z (m), roll, pitch, yaw (deg): drivers::Pose's fields, when the camera knew them.
+  std::array<double, 6> pose{};
+};
+
+inline constexpr std::uint32_t kRouteDbVersion = 1;
+inline constexpr std::size_t kRouteDbHeaderBytes = 64;
+inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
+inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
+constexpr std::size_t RouteDbRecordBytes(std::size_t dim) {
+  return kRouteDbRecordFixedBytes + 4 * dim;
+}
+
+// The frames of a route in memory, at a capacity fixed at start-up.
+class RouteFrames {
+ public:
+  Status Allocate(std::size_t capacity, std::size_t dim);
+  void Clear() { size_ = 0; }
+  // False when full.
+  [[nodiscard]] bool Append(const RouteFrameMeta& meta, std::span<const float> descriptor);
+  // Adds a frame and returns its descriptor storage to fill in; empty when full.
+  [[nodiscard]] std::span<float> Emplace(const RouteFrameMeta& meta);
+
+  std::size_t size() const { return size_; }
+  std::size_t capacity() const { return meta_.size(); }
+  std::size_t dim() const { return dim_; }
+  std::span<const float> descriptor(std::size_t i) const {
+    return {descriptors_.data() + i * dim_, dim_};
+  }
+  const RouteFrameMeta& meta(std::size_t i) const { return meta_[i]; }
+
+ private:
+  FixedArray<float> descriptors_;
+  FixedArray<RouteFrameMeta> meta_;
+  std::size_t dim_ = 0;
+  std::size_t size_ = 0;
+};
+
+enum class RouteDbLoadPolicy : std::uint8_t {
+  // The file must end with its commit record and every chunk must verify.
+  kStrict,
+  // A file without a commit record (teach was interrupted) loads every intact chunk; a
+  // damaged or incomplete tail is dropped and reported. Damage followed by an intact
+  // chunk is still an error: that is corruption, not an interrupted write.
+  kRecoverInterrupted,
+};
+
+struct RouteDbLoadReport {
+  RouteDbSettings settings;  // as stored in the file
+  std::size_t frames = 0;
+  std::size_t chunks = 0;  // intact frame chunks
+  bool committed = false;
+  std::size_t valid_bytes = 0;    // the intact prefix (header + chunks [+ commit])
+  std::size_t dropped_bytes = 0;  // kRecoverInterrupted: bytes of the torn tail
+};
+
+// Parses a whole file's bytes (the loader and the fuzz target share this). `expected`
+// (may be null: accept what the file says) must equal the stored settings. On success
+// `out` holds the frames; on error the Status names the chunk and its byte offset.
+Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report);
+
+// Reads and parses `path`. Start-up only (reads the file into a temporary buffer).
+Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoadPolicy policy,
+                   RouteFrames* out, RouteDbLoadReport* report);
+
+// Makes an interrupted file loadable strictly again: keeps the intact chunks, cuts the
+// torn tail and appends the commit record. Fails (changing nothing) if the file is
+// corrupt in a way recovery must not hide.
+Status RecoverRouteDb(const char* path, RouteDbLoadReport* report);
+
+// Writes a route database during teach. Append() copies into a chunk buffer allocated by
+// Create(); every `flush_every` frames the chunk is written with one write() and made
+// durable with fdatasync(). Append() allocates nothing.
+class RouteDbWriter {
+ public:
+  RouteDbWriter() = default;
+  ~RouteDbWriter();  // Closes without committing: the file stays recoverable.
+  RouteDbWriter(const RouteDbWriter&) = delete;
+  RouteDbWriter& operator=(const RouteDbWriter&) = delete;
+
+  // Creates `path` atomically (path.tmp, fsync, rename, fsync of the directory). An
+  // existing file is kept and reported unless `overwrite`.
+  Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
+                bool overwrite);
+  Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor);
+  // Writes the buffered frames as one chunk and waits until they are on the disk.
+  Status Flush();
+  // Flush, append the commit record, sync, close. After this the writer is closed.
+  Status Commit();
+
+  bool is_open() const { return fd_.is_valid(); }
+  std::uint64_t frames_appended() const { return appended_; }
+  // Frames known to be on the disk.
+  std::uint64_t frames_durable() const { return durable_; }
+
+ private:
+  Status WriteChunk(std::uint32_t type, std::uint64_t first, std::uint32_t count,
+                    std::size_t payload_bytes);
+
+  UniqueFd fd_;
+  char path_[256] = {};
+  RouteDbSettings settings_;
+  FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
+  std::size_t flush_every_ = 0;
+  std::size_t pending_ = 0;
+  std::uint64_t appended_ = 0;
+  std::uint64_t durable_ = 0;
+};
+
+}  // namespace skyloc

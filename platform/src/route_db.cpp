@@ -1,0 +1,525 @@
+#include "skyloc/platform/route_db.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "skyloc/platform/crc32.h"
+
+namespace skyloc {
+
+// The file is little-endian; every target skyloc builds for is too. A big-endian port
+// would add byte swaps in Put/Get below.
+static_assert(std::endian::native == std::endian::little, "route_db.cpp assumes little-endian");
+
+namespace {
+
+constexpr char kMagic[8] = {'S', 'K', 'Y', 'L', 'O', 'C', 'R', 'T'};
+constexpr std::uint32_t kChunkMagic = 0x4B4E4843u;  // "CHNK"
+constexpr std::uint32_t kChunkFrames = 1;
+constexpr std::uint32_t kChunkCommit = 2;
+constexpr std::uint32_t kMaxDim = 1u << 16;
+constexpr std::uint32_t kHasPose = 1u;
+
+template <typename T>
+void Put(std::uint8_t* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+template <typename T>
+T Get(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+std::uint32_t CrcOf(const std::uint8_t* p, std::size_t n) {
+  return Crc32(std::span<const std::uint8_t>(p, n));
+}
+
+// The fuzz target (tests/fuzz/route_db_fuzz.cpp) is built with this defined, so random
+// mutations are not all stopped by the checksums and reach the parsing behind them.
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+constexpr bool kVerifyChecksums = false;
+#else
+constexpr bool kVerifyChecksums = true;
+#endif
+bool CrcMatches(std::uint32_t stored, const std::uint8_t* p, std::size_t n) {
+  return !kVerifyChecksums || stored == CrcOf(p, n);
+}
+
+void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
+  std::memset(h, 0, kRouteDbHeaderBytes);
+  std::memcpy(h, kMagic, sizeof kMagic);
+  Put<std::uint32_t>(h + 8, kRouteDbVersion);
+  Put<std::uint32_t>(h + 12, static_cast<std::uint32_t>(kRouteDbHeaderBytes));
+  Put<std::uint32_t>(h + 16, s.descriptor_kind);
+  Put<std::uint32_t>(h + 20, s.bands);
+  Put<std::uint32_t>(h + 24, s.rings);
+  Put<std::uint32_t>(h + 28, s.longitudes);
+  Put<std::uint32_t>(h + 32, s.dim);
+  Put<std::uint32_t>(h + 36, s.normalisation);
+  Put<std::uint64_t>(h + 40, s.lens_hash);
+  Put<std::uint32_t>(h + 48, static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim)));
+  Put<std::uint32_t>(h + 60, CrcOf(h, 60));
+}
+
+void EncodeChunkHeader(std::uint32_t type, std::uint64_t first, std::uint32_t count,
+                       std::uint32_t payload_bytes, std::uint32_t payload_crc, std::uint8_t* h) {
+  Put<std::uint32_t>(h + 0, kChunkMagic);
+  Put<std::uint32_t>(h + 4, type);
+  Put<std::uint64_t>(h + 8, first);
+  Put<std::uint32_t>(h + 16, count);
+  Put<std::uint32_t>(h + 20, payload_bytes);
+  Put<std::uint32_t>(h + 24, payload_crc);
+  Put<std::uint32_t>(h + 28, CrcOf(h, 28));
+}
+
+bool ChunkHeaderIntact(const std::uint8_t* h) {
+  return Get<std::uint32_t>(h) == kChunkMagic && CrcMatches(Get<std::uint32_t>(h + 28), h, 28);
+}
+
+Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
+  struct Field {
+    const char* name;
+    std::uint64_t in_file, wanted;
+  };
+  const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind},
+                          {"bands", file.bands, want.bands},
+                          {"rings", file.rings, want.rings},
+                          {"longitudes", file.longitudes, want.longitudes},
+                          {"descriptor size", file.dim, want.dim},
+                          {"normalisation", file.normalisation, want.normalisation},
+                          {"lens hash", file.lens_hash, want.lens_hash}};
+  for (const Field& f : fields) {
+    if (f.in_file != f.wanted) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "taught with %s = %llu but this configuration has %llu: run with "
+                           "the configuration it was taught with, or teach again",
+                           f.name, static_cast<unsigned long long>(f.in_file),
+                           static_cast<unsigned long long>(f.wanted));
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// RouteFrames
+
+Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim) {
+  SKYLOC_TRY(descriptors_.Allocate(capacity * dim));
+  SKYLOC_TRY(meta_.Allocate(capacity));
+  dim_ = dim;
+  size_ = 0;
+  return Status::Ok();
+}
+
+bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> descriptor) {
+  if (descriptor.size() != dim_)
+    return false;
+  const std::span<float> slot = Emplace(meta);
+  if (slot.empty())
+    return false;
+  std::memcpy(slot.data(), descriptor.data(), slot.size_bytes());
+  return true;
+}
+
+std::span<float> RouteFrames::Emplace(const RouteFrameMeta& meta) {
+  if (size_ >= meta_.size())
+    return {};
+  meta_[size_] = meta;
+  return {descriptors_.data() + size_++ * dim_, dim_};
+}
+
+// ---------------------------------------------------------------------------------------
+// Loading
+
+Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report) {
+  RouteDbLoadReport r;
+  const std::size_t size = bytes.size();
+  const std::uint8_t* b = bytes.data();
+  if (size < kRouteDbHeaderBytes) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu bytes, shorter than the %zu-byte header: truncated, or not a "
+                         "route database",
+                         size, kRouteDbHeaderBytes);
+  }
+  if (std::memcmp(b, kMagic, sizeof kMagic) != 0)
+    return Status::Error(StatusCode::kInvalidArgument, "not a skyloc route database (no magic)");
+  const std::uint32_t version = Get<std::uint32_t>(b + 8);
+  if (version != kRouteDbVersion) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "route database version %u; this skyloc reads version %u: teach the "
+                         "route again",
+                         version, kRouteDbVersion);
+  }
+  if (!CrcMatches(Get<std::uint32_t>(b + 60), b, 60) ||
+      Get<std::uint32_t>(b + 12) != kRouteDbHeaderBytes) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "header (offset 0): checksum mismatch, the file "
+                         "is corrupt");
+  }
+  RouteDbSettings& s = r.settings;
+  s.descriptor_kind = Get<std::uint32_t>(b + 16);
+  s.bands = Get<std::uint32_t>(b + 20);
+  s.rings = Get<std::uint32_t>(b + 24);
+  s.longitudes = Get<std::uint32_t>(b + 28);
+  s.dim = Get<std::uint32_t>(b + 32);
+  s.normalisation = Get<std::uint32_t>(b + 36);
+  s.lens_hash = Get<std::uint64_t>(b + 40);
+  if (s.dim == 0 || s.dim > kMaxDim || Get<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim)) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "header (offset 0): descriptor size %u is "
+                         "invalid",
+                         s.dim);
+  }
+  if (expected != nullptr)
+    SKYLOC_TRY(CheckSettings(s, *expected));
+  if (out != nullptr) {
+    if (out->dim() != s.dim) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "descriptor size %u, but memory was set up for %zu", s.dim, out->dim());
+    }
+    out->Clear();
+  }
+  const std::size_t record_bytes = RouteDbRecordBytes(s.dim);
+
+  std::size_t offset = kRouteDbHeaderBytes;
+  std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
+  Status problem;
+  while (offset < size) {
+    ++chunk;
+    const std::size_t left = size - offset;
+    const std::uint8_t* h = b + offset;
+    if (left < kRouteDbChunkHeaderBytes) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: truncated header "
+                              "(%zu of %zu bytes)",
+                              chunk, offset, left, kRouteDbChunkHeaderBytes);
+      break;
+    }
+    if (!ChunkHeaderIntact(h)) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: header checksum mismatch", chunk, offset);
+      break;
+    }
+    const std::uint32_t type = Get<std::uint32_t>(h + 4);
+    const std::uint64_t first = Get<std::uint64_t>(h + 8);
+    const std::uint32_t count = Get<std::uint32_t>(h + 16);
+    const std::uint32_t payload_bytes = Get<std::uint32_t>(h + 20);
+    const std::uint32_t payload_crc = Get<std::uint32_t>(h + 24);
+    if (first != r.frames) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: starts at frame "
+                              "%llu, expected %zu",
+                              chunk, offset, static_cast<unsigned long long>(first), r.frames);
+      break;
+    }
+    if (type == kChunkCommit) {
+      if (count != 0 || payload_bytes != 0) {
+        problem = Status::Error(StatusCode::kDataLoss,
+                                "chunk %zu at offset %zu: malformed commit record", chunk, offset);
+        break;
+      }
+      offset += kRouteDbChunkHeaderBytes;
+      if (offset != size) {
+        problem = Status::Error(StatusCode::kDataLoss,
+                                "%zu unexpected bytes after the commit "
+                                "record at offset %zu",
+                                size - offset, offset);
+        break;
+      }
+      r.committed = true;
+      break;
+    }
+    if (type != kChunkFrames || count == 0 ||
+        static_cast<std::uint64_t>(payload_bytes) != std::uint64_t{count} * record_bytes) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: malformed (type %u, %u frames, %u bytes)",
+                              chunk, offset, type, count, payload_bytes);
+      break;
+    }
+    if (left - kRouteDbChunkHeaderBytes < payload_bytes) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: truncated (%zu of "
+                              "%u payload bytes)",
+                              chunk, offset, left - kRouteDbChunkHeaderBytes, payload_bytes);
+      break;
+    }
+    const std::uint8_t* payload = h + kRouteDbChunkHeaderBytes;
+    if (!CrcMatches(payload_crc, payload, payload_bytes)) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: checksum mismatch "
+                              "(frames %zu..%zu)",
+                              chunk, offset, r.frames, r.frames + count - 1);
+      break;
+    }
+    if (out != nullptr) {
+      if (out->size() + count > out->capacity()) {
+        return Status::Error(StatusCode::kResourceExhausted,
+                             "the route has more than %zu frames (chunk %zu): raise [capacities] "
+                             "route_frames",
+                             out->capacity(), chunk);
+      }
+      for (std::uint32_t i = 0; i < count; ++i) {
+        const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
+        RouteFrameMeta meta;
+        meta.timestamp_ns = Get<std::uint64_t>(rec);
+        meta.has_pose = (Get<std::uint32_t>(rec + 8) & kHasPose) != 0;
+        std::memcpy(meta.pose.data(), rec + 16, sizeof meta.pose);
+        // Copied byte-wise: the input need not be aligned for float.
+        const std::span<float> slot = out->Emplace(meta);
+        if (slot.size() == s.dim)
+          std::memcpy(slot.data(), rec + kRouteDbRecordFixedBytes, slot.size_bytes());
+        else
+          return Status::Error(StatusCode::kInternal, "route frames rejected a record");
+      }
+    }
+    r.frames += count;
+    ++r.chunks;
+    offset += kRouteDbChunkHeaderBytes + payload_bytes;
+    r.valid_bytes = offset;
+  }
+  if (r.valid_bytes == 0)
+    r.valid_bytes = kRouteDbHeaderBytes;
+  if (r.committed)
+    r.valid_bytes = size;
+
+  if (!problem.ok()) {
+    if (policy == RouteDbLoadPolicy::kStrict)
+      return problem;
+    // Recovery accepts damage only at the tail: if an intact chunk header follows, the
+    // damage is in the middle of the route and dropping it would hide it.
+    for (std::size_t o = offset + 4; o + kRouteDbChunkHeaderBytes <= size; o += 4) {
+      if (ChunkHeaderIntact(b + o)) {
+        problem.AddContext(
+            "an intact chunk follows at offset %zu, so this is corruption, "
+            "not an interrupted teach;",
+            o);
+        return problem;
+      }
+    }
+    r.dropped_bytes = size - r.valid_bytes;
+  } else if (!r.committed && policy == RouteDbLoadPolicy::kStrict) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "no commit record after chunk %zu (offset %zu): teach was interrupted "
+                         "or the file truncated; 'skyloc route recover' keeps its %zu frames",
+                         r.chunks, r.valid_bytes, r.frames);
+  }
+  if (report != nullptr)
+    *report = r;
+  return Status::Ok();
+}
+
+namespace {
+
+Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
+  UniqueFd fd(::open(path, O_RDONLY | O_CLOEXEC));
+  if (!fd.is_valid())
+    return Status::FromErrno(errno, "cannot open %s", path);
+  struct stat st {};
+  if (::fstat(fd.get(), &st) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", path);
+  bytes->resize(static_cast<std::size_t>(st.st_size));
+  std::size_t done = 0;
+  while (done < bytes->size()) {
+    const ssize_t n = ::read(fd.get(), bytes->data() + done, bytes->size() - done);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n < 0)
+      return Status::FromErrno(errno, "cannot read %s", path);
+    if (n == 0)
+      break;
+    done += static_cast<std::size_t>(n);
+  }
+  bytes->resize(done);
+  return Status::Ok();
+}
+
+Status WriteAll(int fd, const std::uint8_t* p, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR)
+      continue;
+    if (w < 0)
+      return Status::FromErrno(errno, "write failed");
+    p += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return Status::Ok();
+}
+
+Status SyncDirectoryOf(const char* path) {
+  char dir[256];
+  std::snprintf(dir, sizeof dir, "%s", path);
+  char* slash = std::strrchr(dir, '/');
+  if (slash == nullptr) {
+    std::snprintf(dir, sizeof dir, ".");
+  } else if (slash == dir) {
+    dir[1] = '\0';
+  } else {
+    *slash = '\0';
+  }
+  UniqueFd fd(::open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (!fd.is_valid() || ::fsync(fd.get()) != 0)
+    return Status::FromErrno(errno, "cannot sync directory %s", dir);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoadPolicy policy,
+                   RouteFrames* out, RouteDbLoadReport* report) {
+  std::vector<std::uint8_t> bytes;
+  SKYLOC_TRY(ReadWholeFile(path, &bytes));
+  Status s = ParseRouteDb(bytes, expected, policy, out, report);
+  if (!s.ok())
+    s.AddContext("route database %s", path);
+  return s;
+}
+
+Status RecoverRouteDb(const char* path, RouteDbLoadReport* report) {
+  std::vector<std::uint8_t> bytes;
+  SKYLOC_TRY(ReadWholeFile(path, &bytes));
+  RouteDbLoadReport r;
+  Status s = ParseRouteDb(bytes, nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &r);
+  if (!s.ok())
+    return s.AddContext("route database %s", path);
+  if (!r.committed) {
+    UniqueFd fd(::open(path, O_WRONLY | O_CLOEXEC));
+    if (!fd.is_valid())
+      return Status::FromErrno(errno, "cannot open %s for writing", path);
+    if (::ftruncate(fd.get(), static_cast<off_t>(r.valid_bytes)) != 0 ||
+        ::lseek(fd.get(), 0, SEEK_END) < 0)
+      return Status::FromErrno(errno, "cannot cut the torn tail of %s", path);
+    std::uint8_t commit[kRouteDbChunkHeaderBytes];
+    EncodeChunkHeader(kChunkCommit, r.frames, 0, 0, Crc32({}), commit);
+    // Not SKYLOC_TRY(x.AddContext()): that binds a reference to a destroyed temporary.
+    if (Status w = WriteAll(fd.get(), commit, sizeof commit); !w.ok())
+      return w.AddContext("%s", path);
+    if (::fdatasync(fd.get()) != 0)
+      return Status::FromErrno(errno, "cannot sync %s", path);
+  }
+  if (report != nullptr)
+    *report = r;
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------
+// Writing
+
+RouteDbWriter::~RouteDbWriter() = default;
+
+Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
+                             std::size_t flush_every, bool overwrite) {
+  if (settings.dim == 0 || settings.dim > kMaxDim) {
+    return Status::Error(StatusCode::kInvalidArgument, "descriptor size %u is not 1..%u",
+                         settings.dim, kMaxDim);
+  }
+  if (flush_every == 0 || flush_every > (1u << 20))
+    return Status::Error(StatusCode::kInvalidArgument, "flush_every %zu is invalid", flush_every);
+  if (std::strlen(path) + 5 >= sizeof path_)
+    return Status::Error(StatusCode::kInvalidArgument, "path too long: %s", path);
+  if (!overwrite && ::access(path, F_OK) == 0) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "%s already exists: not replacing a taught route", path);
+  }
+  const std::size_t record_bytes = RouteDbRecordBytes(settings.dim);
+  SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
+
+  char tmp[sizeof path_ + 8];
+  std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  UniqueFd fd(::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  if (!fd.is_valid())
+    return Status::FromErrno(errno, "cannot create %s", tmp);
+  std::uint8_t header[kRouteDbHeaderBytes];
+  EncodeHeader(settings, header);
+  if (Status w = WriteAll(fd.get(), header, sizeof header); !w.ok())
+    return w.AddContext("%s", tmp);
+  if (::fsync(fd.get()) != 0)
+    return Status::FromErrno(errno, "cannot sync %s", tmp);
+  if (::rename(tmp, path) != 0) {
+    const int e = errno;
+    ::unlink(tmp);
+    return Status::FromErrno(e, "cannot rename %s to %s", tmp, path);
+  }
+  SKYLOC_TRY(SyncDirectoryOf(path));
+
+  fd_ = std::move(fd);
+  std::snprintf(path_, sizeof path_, "%s", path);
+  settings_ = settings;
+  flush_every_ = flush_every;
+  pending_ = 0;
+  appended_ = 0;
+  durable_ = 0;
+  return Status::Ok();
+}
+
+Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> descriptor) {
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  if (descriptor.size() != settings_.dim) {
+    return Status::Error(StatusCode::kInvalidArgument, "descriptor has %zu values, expected %u",
+                         descriptor.size(), settings_.dim);
+  }
+  std::uint8_t* rec =
+      chunk_.data() + kRouteDbChunkHeaderBytes + pending_ * RouteDbRecordBytes(settings_.dim);
+  std::memset(rec, 0, kRouteDbRecordFixedBytes);
+  Put<std::uint64_t>(rec, meta.timestamp_ns);
+  Put<std::uint32_t>(rec + 8, meta.has_pose ? kHasPose : 0u);
+  std::memcpy(rec + 16, meta.pose.data(), sizeof meta.pose);
+  std::memcpy(rec + kRouteDbRecordFixedBytes, descriptor.data(), descriptor.size_bytes());
+  ++pending_;
+  ++appended_;
+  if (pending_ == flush_every_)
+    return Flush();
+  return Status::Ok();
+}
+
+Status RouteDbWriter::WriteChunk(std::uint32_t type, std::uint64_t first, std::uint32_t count,
+                                 std::size_t payload_bytes) {
+  std::uint8_t* h = chunk_.data();
+  const std::uint32_t crc = Crc32({h + kRouteDbChunkHeaderBytes, payload_bytes});
+  EncodeChunkHeader(type, first, count, static_cast<std::uint32_t>(payload_bytes), crc, h);
+  const off_t before = ::lseek(fd_.get(), 0, SEEK_CUR);
+  Status s = WriteAll(fd_.get(), h, kRouteDbChunkHeaderBytes + payload_bytes);
+  if (s.ok() && ::fdatasync(fd_.get()) != 0)
+    s = Status::FromErrno(errno, "fdatasync failed");
+  if (!s.ok()) {
+    // Cut a partly written chunk off again, so that a later retry appends after intact
+    // data (a torn chunk in the middle would make the file unloadable).
+    if (before >= 0 && ::ftruncate(fd_.get(), before) == 0)
+      (void)::lseek(fd_.get(), before, SEEK_SET);
+    return s.AddContext("route database %s", path_);
+  }
+  return Status::Ok();
+}
+
+Status RouteDbWriter::Flush() {
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  if (pending_ == 0)
+    return Status::Ok();
+  SKYLOC_TRY(WriteChunk(kChunkFrames, durable_, static_cast<std::uint32_t>(pending_),
+                        pending_ * RouteDbRecordBytes(settings_.dim)));
+  durable_ += pending_;
+  pending_ = 0;
+  return Status::Ok();
+}
+
+Status RouteDbWriter::Commit() {
+  SKYLOC_TRY(Flush());
+  SKYLOC_TRY(WriteChunk(kChunkCommit, durable_, 0, 0));
+  fd_.reset();
+  return Status::Ok();
+}
+
+}  // namespace skyloc

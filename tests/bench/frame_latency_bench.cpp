@@ -1,0 +1,111 @@
+// End-to-end frame latency of the firmware pipeline: a 640x480 UV frame in (already
+// captured), the state out (sky descriptor -> streaming SeqSLAM over a 10,000-frame route
+// -> state machine -> status output). Target: <= 1 ms p99 on one core. The p50/p99/max
+// counters come from the same LatencyHistogram the firmware prints. The reference in the
+// same run is one read of the frame (the memory traffic no pipeline can avoid).
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+#include "frame_loop.h"
+#include "skyloc/drivers/simulated_status_output.h"
+#include "skyloc/platform/latency.h"
+#include "street_camera.h"
+
+namespace {
+
+using namespace skyloc;
+using namespace skyloc::app;
+
+constexpr int kWidth = 640, kHeight = 480, kFrames = 32, kRouteFrames = 10000;
+
+struct Fixture {
+  Pipeline pipeline;
+  std::vector<std::vector<std::uint8_t>> images;
+  bool ok = false;
+
+  Fixture() {
+    Config config = DefaultConfig();
+    config.capacities.route_frames = kRouteFrames;
+    if (!pipeline.Init(config).ok())
+      return;
+    StreetCameraOptions o;
+    o.width = kWidth;
+    o.height = kHeight;
+    o.seed = 5;
+    o.frames = kFrames;
+    StreetCamera camera(o);
+    if (!camera.Open().ok() || !camera.Start().ok())
+      return;
+    RouteFrames route;
+    if (!route.Allocate(kRouteFrames, static_cast<std::size_t>(pipeline.dim())).ok())
+      return;
+    std::vector<std::vector<float>> descriptors;
+    for (int i = 0; i < kFrames; ++i) {
+      Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1));
+      if (!f.ok())
+        return;
+      images.emplace_back(f->image.data, f->image.data + kWidth * kHeight);
+      FrameResult r;
+      if (!pipeline.Describe(f->image, &r).ok())
+        return;
+      descriptors.emplace_back(pipeline.descriptor().begin(), pipeline.descriptor().end());
+    }
+    // A 10,000-frame route: the street's descriptors, each repeated with a small offset so
+    // no two are equal (SeqSLAM's cost does not depend on the values).
+    for (int i = 0; i < kRouteFrames; ++i) {
+      std::vector<float> d = descriptors[static_cast<std::size_t>(i % kFrames)];
+      for (float& v : d)
+        v += 1e-4f * static_cast<float>(i / kFrames);
+      if (!route.Append({}, d))
+        return;
+    }
+    ok = pipeline.SetRoute(route).ok();
+  }
+};
+
+void BM_FrameToState(benchmark::State& state) {
+  static Fixture fixture;
+  if (!fixture.ok) {
+    state.SkipWithError("fixture failed");
+    return;
+  }
+  MonotonicClock clock;
+  drivers::SimulatedStatusOutput status({}, &clock);
+  (void)status.Open();
+  LatencyHistogram histogram;
+  std::uint64_t i = 0;
+  for (auto _ : state) {
+    drivers::Frame frame;
+    const std::vector<std::uint8_t>& image = fixture.images[i % kFrames];
+    frame.image = {image.data(), kWidth, kHeight, static_cast<std::size_t>(kWidth),
+                   dsp::PixelFormat::kGrey8};
+    frame.sequence = i++;
+    const Nanoseconds t0 = clock.Now();
+    FrameResult r;
+    (void)fixture.pipeline.Localise(frame, &r);
+    (void)status.Show(ToStatusState(r.state), r.confidence, clock.Now());
+    histogram.Record(clock.Now() - t0);
+    benchmark::DoNotOptimize(r);
+  }
+  auto us = [](Nanoseconds d) { return static_cast<double>(d.count()) / 1000.0; };
+  state.counters["p50_us"] = us(histogram.Percentile(50));
+  state.counters["p99_us"] = us(histogram.Percentile(99));
+  state.counters["max_us"] = us(histogram.max());
+}
+BENCHMARK(BM_FrameToState)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+// Reference: reading every byte of one frame.
+void BM_ReadFrame(benchmark::State& state) {
+  std::vector<std::uint8_t> image(static_cast<std::size_t>(kWidth) * kHeight, 7);
+  for (auto _ : state) {
+    const unsigned sum = std::accumulate(image.begin(), image.end(), 0u);
+    benchmark::DoNotOptimize(sum);
+  }
+}
+BENCHMARK(BM_ReadFrame)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

@@ -1,0 +1,56 @@
+# Shared helpers for the guest scenarios (sourced; busybox sh).
+# shellcheck disable=SC1091 # written by /init in the guest
+. /run/hil.env
+failures=0
+ok() { echo "  ok   $*"; }
+bad() {
+  echo "  FAIL $*"
+  failures=$((failures + 1))
+}
+# check DESCRIPTION COMMAND...: runs the command, its output indented, and counts a failure.
+check() {
+  desc=$1
+  shift
+  if out=$("$@" 2>&1); then ok "$desc"; else
+    bad "$desc: '$*' exited $?"
+    echo "$out" | tail -n 15 | sed 's/^/       | /'
+  fi
+}
+# expect_eq DESCRIPTION ACTUAL EXPECTED
+expect_eq() {
+  if [ "$2" = "$3" ]; then ok "$1 ($2)"; else bad "$1: got '$2', expected '$3'"; fi
+}
+# expect_node -c|-d PATH DESCRIPTION
+expect_node() {
+  if [ -n "$2" ] && test "$1" "$2"; then ok "$3 $2"; else bad "$3 missing ('$2')"; fi
+}
+file_size() { wc -c <"$1" | tr -d ' '; }
+have() { command -v "$1" >/dev/null 2>&1; }
+# Exit status of a scenario: 0 when every check passed.
+finish_scenario() {
+  if [ "$failures" -eq 0 ]; then
+    echo "  all checks passed"
+    exit 0
+  fi
+  echo "  $failures check(s) failed"
+  exit 1
+}
+
+# vimc's "RGB/YUV Capture" pipeline (Sensor A -> Debayer A -> Scaler -> capture) set to
+# RGB24 WxH. Every enabled link is validated at STREAMON (EPIPE otherwise), including
+# Sensor A -> Raw Capture 0, so that node gets the matching Bayer format too. The links
+# are reset first: libcamera's vimc pipeline handler routes Sensor B -> Debayer B ->
+# Scaler instead, and leaves the graph that way.
+vimc_configure_rgb() { # WIDTH HEIGHT
+  w=$1
+  h=$2
+  media-ctl -d "$HIL_VIMC_MEDIA" -r &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -l '"Debayer A":1->"Scaler":0[1]' &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Sensor A\":0[fmt:SRGGB8_1X8/${w}x${h}]" &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Debayer A\":0[fmt:SRGGB8_1X8/${w}x${h}]" &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Debayer A\":1[fmt:RGB888_1X24/${w}x${h}]" &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Scaler\":0[fmt:RGB888_1X24/${w}x${h}]" &&
+    media-ctl -d "$HIL_VIMC_MEDIA" -V "\"Scaler\":1[fmt:RGB888_1X24/${w}x${h}]" &&
+    v4l2-ctl -d "$HIL_VIMC_RAW0" -v "width=$w,height=$h,pixelformat=RGGB" &&
+    v4l2-ctl -d "$HIL_VIMC_RGB" -v "width=$w,height=$h,pixelformat=RGB3"
+}

@@ -1,0 +1,205 @@
+#!/usr/bin/env bash
+# run.sh: boots the HIL VM (QEMU, TCG) with real kernel test drivers and runs scenarios.
+#
+#   run.sh --arch amd64|arm64 --tests a,b [--bin FILE]... [--name NAME] [--log FILE]
+#          [--timeout SECONDS] [--cache DIR]
+#
+# --tests   scenarios from tests/hil/guest/<name>.sh, run in order inside the VM
+# --bin     a program copied to /hil/bin in the guest, with the shared libraries it needs
+#           (resolved from its ELF NEEDED entries; arm64 ones from the cross sysroot)
+# --log     where the guest console goes (default build/hil-logs/NAME.log)
+#
+# Needs tests/hil/setup.sh ARCH to have run (CTest: the hil.setup fixture). Exit status:
+# the guest's HIL-RESULT rc (0 passed, 77 skipped); 77 with the reason when the set-up
+# was skipped; 2 when the guest printed no result (panic, hang, timeout), with the last
+# console lines shown.
+set -euo pipefail
+
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+ROOT="$(cd "$HERE/../.." && pwd)"
+SKIP=77
+ARCH=
+TESTS=
+NAME=
+LOG=
+TIMEOUT=300
+CACHE=${SKYLOC_HIL_CACHE:-$ROOT/build/hil-cache}
+BINS=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --arch) ARCH=$2 ;;
+    --tests) TESTS=$2 ;;
+    --bin) BINS+=("$2") ;;
+    --name) NAME=$2 ;;
+    --log) LOG=$2 ;;
+    --timeout) TIMEOUT=$2 ;;
+    --cache) CACHE=$2 ;;
+    *)
+      sed -n '2,16p' "$0" >&2
+      exit 2
+      ;;
+  esac
+  shift 2
+done
+if [ -z "$ARCH" ] || [ -z "$TESTS" ]; then
+  sed -n '2,16p' "$0" >&2
+  exit 2
+fi
+NAME=${NAME:-hil.$ARCH.${TESTS//,/+}}
+LOG=${LOG:-$ROOT/build/hil-logs/$NAME.log}
+STATE="$CACHE/$ARCH"
+
+if [ -f "$STATE/skipped" ]; then
+  echo "HIL SKIPPED: set-up for $ARCH did not run: $(cat "$STATE/skipped")"
+  exit $SKIP
+fi
+if [ ! -f "$STATE/ready.env" ]; then
+  echo "HIL SKIPPED: no VM image for $ARCH in $CACHE: run tests/hil/setup.sh $ARCH (ctest runs it as hil.setup.$ARCH)"
+  exit $SKIP
+fi
+# shellcheck disable=SC1091
+. "$STATE/ready.env"
+
+case "$ARCH" in
+  amd64)
+    QEMU=qemu-system-x86_64
+    # -M pc with the ELF vmlinux: QEMU enters it through the PVH note (no firmware, no
+    # decompressor). TCG: this machine has no usable hardware virtualisation.
+    MACHINE=(-M pc -cpu max)
+    CONSOLE=ttyS0
+    LIBDIRS=(/lib/x86_64-linux-gnu /usr/lib/x86_64-linux-gnu /lib64 /usr/lib /lib)
+    READELF=readelf
+    ;;
+  arm64)
+    QEMU=qemu-system-aarch64
+    # cortex-a53: -cpu max emulates pointer authentication, which makes TCG 4x slower.
+    MACHINE=(-M virt -cpu cortex-a53)
+    CONSOLE=ttyAMA0
+    # Debian's arm64 libraries (the set-up's sysroot) first: they are what a board runs;
+    # then the cross toolchain's and multiarch ones for what the sysroot lacks.
+    LIBDIRS=("$HIL_GUEST_SYSROOT/lib/aarch64-linux-gnu" "$HIL_GUEST_SYSROOT/usr/lib/aarch64-linux-gnu"
+      /usr/aarch64-linux-gnu/lib /usr/lib/aarch64-linux-gnu /lib/aarch64-linux-gnu)
+    READELF=aarch64-linux-gnu-readelf
+    command -v "$READELF" >/dev/null || READELF=readelf
+    ;;
+  *)
+    echo "run.sh: unknown --arch $ARCH" >&2
+    exit 2
+    ;;
+esac
+command -v "$QEMU" >/dev/null || {
+  echo "HIL SKIPPED: $QEMU is not installed (./skyloc.sh deps host)"
+  exit $SKIP
+}
+
+# ---------------------------------------------------------------------------------------
+# The per-run overlay: /init, the scenarios, the programs and their libraries. The kernel
+# unpacks every cpio archive in the initrd in turn, so it is simply appended to the base.
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/skyloc-hil.XXXXXX")
+trap 'rm -rf "$WORK"' EXIT
+OV="$WORK/overlay"
+mkdir -p "$OV/hil/bin" "$OV/hil/lib" "$OV/hil/tests"
+cp "$HERE/init" "$OV/init"
+chmod 755 "$OV/init"
+cp "$HERE"/guest/*.sh "$OV/hil/tests/"
+
+declare -A copied=()
+find_lib() {
+  local d
+  for d in "$@" "${LIBDIRS[@]}"; do
+    [ -e "$d/$soname" ] && printf '%s\n' "$d/$soname" && return 0
+  done
+  return 1
+}
+# Copies FILE's shared libraries (transitively) to /hil/lib and its loader to the path
+# its PT_INTERP names. readelf rather than ldd, so that cross-built programs resolve too.
+add_libs() {
+  local file=$1 interp soname lib runpath=()
+  interp=$("$READELF" -lW "$file" 2>/dev/null | sed -n 's/.*Requesting program interpreter: \(.*\)]/\1/p')
+  if [ -n "$interp" ] && [ -z "${copied[$interp]:-}" ]; then
+    copied[$interp]=1
+    local real=$interp
+    [ "$ARCH" = arm64 ] && real=$HIL_GUEST_SYSROOT$interp
+    mkdir -p "$OV$(dirname "$interp")"
+    cp -L "$real" "$OV$interp"
+  fi
+  while read -r d; do
+    runpath+=("${d//\$ORIGIN/$(dirname "$file")}")
+  done < <("$READELF" -dW "$file" 2>/dev/null | sed -n 's/.*(R\(UN\)\{0,1\}PATH).*\[\(.*\)\]/\2/p' | tr ':' '\n')
+  for soname in $("$READELF" -dW "$file" 2>/dev/null | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
+    [ -n "${copied[$soname]:-}" ] && continue
+    copied[$soname]=1
+    lib=$(find_lib "${runpath[@]}") || {
+      echo "run.sh: $soname (needed by $file) not found in ${LIBDIRS[*]}" >&2
+      exit 1
+    }
+    cp -L "$lib" "$OV/hil/lib/$soname"
+    add_libs "$lib"
+  done
+}
+add_program() { # host path [guest dir]
+  local dest=${2:-/hil/bin}
+  mkdir -p "$OV$dest"
+  cp -L "$1" "$OV$dest/"
+  add_libs "$1"
+}
+
+for b in "${BINS[@]}"; do
+  [ -f "$b" ] || {
+    echo "run.sh: --bin $b does not exist (build it first)" >&2
+    exit 1
+  }
+  add_program "$b"
+done
+# Debian's own tools for the baseline checks and for setting up vimc's media graph:
+# v4l-utils and libgpiod's tools (for arm64 from the set-up's arm64 sysroot), and on
+# amd64 libcamera's cam.
+TOOLS=(v4l2-ctl media-ctl gpiodetect gpioinfo gpioget gpioset)
+if [ "$ARCH" = arm64 ]; then
+  for p in "${TOOLS[@]}"; do add_program "$HIL_GUEST_SYSROOT/usr/bin/$p"; done
+else
+  for p in "${TOOLS[@]}" cam; do add_program "$(command -v "$p")"; done
+  # libcamera loads its IPA modules and their data from fixed paths.
+  LCDIR=/usr/lib/x86_64-linux-gnu/libcamera
+  for f in "$LCDIR"/ipa_vimc.so "$LCDIR"/vimc_ipa_proxy; do add_program "$f" "$LCDIR"; done
+  cp "$LCDIR/ipa_vimc.so.sign" "$OV$LCDIR/"
+  mkdir -p "$OV/usr/share/libcamera/ipa"
+  cp -r /usr/share/libcamera/ipa/vimc "$OV/usr/share/libcamera/ipa/"
+fi
+
+(cd "$OV" && find . | LC_ALL=C sort | cpio -o -H newc --quiet -R 0:0) >"$WORK/overlay.cpio"
+# An uncompressed archive after a compressed one must start on a 4-byte boundary; the
+# kernel skips the zero padding.
+base_size=$(stat -c %s "$HIL_BASE_INITRD")
+{
+  cat "$HIL_BASE_INITRD"
+  head -c $(((4 - base_size % 4) % 4)) /dev/zero
+  cat "$WORK/overlay.cpio"
+} >"$WORK/initrd"
+
+# ---------------------------------------------------------------------------------------
+mkdir -p "$(dirname "$LOG")"
+APPEND="console=$CONSOLE quiet loglevel=4 panic=-1 rdinit=/init hil.tests=$TESTS"
+# shellcheck disable=SC2054 # the commas are QEMU's option syntax
+CMD=("$QEMU" -accel tcg,thread=multi "${MACHINE[@]}" -m 1024 -smp 1 -nodefaults -no-user-config
+  -display none -serial stdio -monitor none -no-reboot
+  -kernel "$HIL_KERNEL" -initrd "$WORK/initrd" -append "$APPEND")
+echo "run.sh: ${CMD[*]}" >"$LOG"
+echo "run.sh: console log: $LOG"
+start=$(date +%s.%N)
+rc=0
+# panic=-1 with -no-reboot makes QEMU exit on a kernel panic; timeout catches a hang.
+timeout --foreground -k 5 "$TIMEOUT" "${CMD[@]}" </dev/null 2>&1 | tr -d '\r' | tee -a "$LOG" || rc=$?
+elapsed=$(echo "$(date +%s.%N) - $start" | bc)
+printf 'run.sh: %s: guest ran %.1f s\n' "$NAME" "$elapsed" | tee -a "$LOG"
+
+result=$(sed -n 's/^HIL-RESULT: rc=\([0-9]*\).*/\1/p' "$LOG" | tail -1)
+if [ -z "$result" ]; then
+  echo "run.sh: the guest printed no HIL-RESULT (kernel panic, hang or timeout after ${TIMEOUT} s; qemu status $rc). Last console lines:"
+  tail -n 40 "$LOG" | sed 's/^/  | /'
+  exit 2
+fi
+if [ "$result" = "$SKIP" ]; then
+  echo "HIL SKIPPED: a scenario in the guest skipped (PENDING lines say why; see $LOG)"
+fi
+exit "$result"

@@ -1,0 +1,135 @@
+#!/usr/bin/env bash
+# Whole-command tests of the firmware modes, run as a user runs them:
+#   firmware_modes.sh SKYLOC SMALL_CONFIG [EMULATOR...]
+# teach/repeat on the simulated camera, refusals with clear errors, SIGTERM (clean
+# shutdown, route committed), SIGUSR1 (latency table), kill -9 during teach + recovery.
+set -u
+SKYLOC=$1
+CONFIG=$2
+shift 2
+RUN=("$@" "$SKYLOC")
+WORK=$(mktemp -d /tmp/skyloc_modes_XXXXXX)
+trap 'rm -rf "$WORK"' EXIT
+failures=0
+fail() {
+  echo "FAIL: $*" >&2
+  failures=$((failures + 1))
+}
+expect_rc() {  # expect_rc WANT DESCRIPTION -- command...
+  local want=$1 what=$2
+  shift 3
+  "$@" >"$WORK/out" 2>"$WORK/err"
+  local rc=$?
+  [ "$rc" -eq "$want" ] || fail "$what: exit $rc, expected $want; stderr: $(cat "$WORK/err")"
+}
+expect_err() {  # expect_err PATTERN DESCRIPTION
+  grep -q -- "$1" "$WORK/err" || fail "$2: stderr lacks '$1': $(cat "$WORK/err")"
+}
+
+DB=$WORK/route.db
+# 1. teach a bounded run, then inspect it.
+expect_rc 0 "teach" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 150
+[ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "teach printed $(wc -l <"$WORK/out") JSON lines, expected 150"
+grep -q '"route_frames":150' "$WORK/out" || fail "teach JSON lacks route_frames 150"
+expect_err "150 frames committed" "teach summary"
+expect_rc 0 "route info" -- "${RUN[@]}" route info "$DB"
+grep -q "150 frames in 15 chunks, committed" "$WORK/out" || fail "route info: $(cat "$WORK/out")"
+
+# 2. a taught route is never replaced silently.
+expect_rc 1 "teach over an existing route" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 5
+expect_err "already exists" "teach over an existing route"
+expect_err "--force" "teach over an existing route"
+
+# 3. repeat the same street: one JSON line per frame with every key; it localises.
+expect_rc 0 "repeat" -- "${RUN[@]}" repeat --route "$DB" --config "$CONFIG" --frames 150
+[ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "repeat printed $(wc -l <"$WORK/out") lines"
+for key in frame timestamp best_index uniqueness confidence state latency_us; do
+  [ "$(grep -c "\"$key\":" "$WORK/out")" -eq 150 ] || fail "repeat: key $key missing on some lines"
+done
+grep -q '"state":"LOCALISED"' "$WORK/out" || fail "repeat never localised"
+expect_err "p99_us" "repeat latency table at exit"
+expect_err "precision at 100% recall" "repeat evaluation"
+
+# 4. settings that differ from the taught ones are refused, naming the setting.
+sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
+expect_rc 1 "repeat with other bands" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/other.toml" --frames 5
+expect_err "taught with bands = 24 but this configuration has 16" "settings mismatch"
+
+# 5. a bad configuration value: one error naming file:line and key.
+printf '[seqslam]\nds = 0\n' >"$WORK/bad.toml"
+expect_rc 1 "bad config" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/bad.toml"
+expect_err "bad.toml:2: \[seqslam\] ds" "bad config"
+expect_rc 2 "missing --route" -- "${RUN[@]}" repeat --config "$CONFIG"
+
+# 6. SIGTERM during an endless teach: exit 0, every frame so far committed.
+"${RUN[@]}" teach --route "$WORK/term.db" --config "$CONFIG" >"$WORK/term.out" 2>"$WORK/term.err" &
+pid=$!
+sleep 1.5
+kill -TERM $pid
+wait $pid
+rc=$?
+[ $rc -eq 0 ] || fail "teach after SIGTERM exited $rc: $(cat "$WORK/term.err")"
+grep -q "stopped by signal" "$WORK/term.err" || fail "teach did not report the signal"
+"${RUN[@]}" route info "$WORK/term.db" >"$WORK/out" 2>&1 || fail "route info after SIGTERM: $(cat "$WORK/out")"
+grep -q "committed" "$WORK/out" && ! grep -q "NOT committed" "$WORK/out" || fail "SIGTERM teach not committed: $(cat "$WORK/out")"
+lines=$(wc -l <"$WORK/term.out")
+grep -q "$lines frames in" "$WORK/out" || fail "SIGTERM teach printed $lines lines but $(cat "$WORK/out")"
+
+# 7. SIGUSR1 prints the latency table and the run goes on.
+"${RUN[@]}" repeat --route "$DB" --config "$CONFIG" >/dev/null 2>"$WORK/usr1.err" &
+pid=$!
+sleep 1
+kill -USR1 $pid
+sleep 0.5
+kill -0 $pid 2>/dev/null || fail "repeat died on SIGUSR1"
+kill -TERM $pid
+wait $pid || fail "repeat after SIGTERM exited non-zero"
+[ "$(grep -c p99_us "$WORK/usr1.err")" -ge 2 ] || fail "SIGUSR1 table missing: $(cat "$WORK/usr1.err")"
+
+# 8. kill -9 during teach: the file is refused as interrupted, recovered, then usable.
+"${RUN[@]}" teach --route "$WORK/kill.db" --config "$CONFIG" >/dev/null 2>&1 &
+pid=$!
+sleep 1.5
+kill -KILL $pid
+wait $pid 2>/dev/null
+expect_rc 1 "repeat on an interrupted route" -- "${RUN[@]}" repeat --route "$WORK/kill.db" --config "$CONFIG" --frames 5
+expect_err "no commit record" "interrupted route"
+expect_err "skyloc route recover" "interrupted route"
+expect_rc 0 "route recover" -- "${RUN[@]}" route recover "$WORK/kill.db"
+grep -q "recovered" "$WORK/out" || fail "route recover: $(cat "$WORK/out")"
+expect_rc 0 "repeat on the recovered route" -- "${RUN[@]}" repeat --route "$WORK/kill.db" --config "$CONFIG" --frames 20
+
+# 9. replay: teach from one simulated recording, replay another (other jitter, tilt, dawn).
+if "${RUN[@]}" simulate --world city --out "$WORK/ref" --frames 60 --width 96 --height 96 >/dev/null 2>&1 &&
+  "${RUN[@]}" simulate --world city --out "$WORK/qry" --frames 60 --width 96 --height 96 \
+    --run 2 --tilt 5 --lighting dawn >/dev/null 2>&1; then
+  expect_rc 0 "teach from a dataset" -- "${RUN[@]}" teach --route "$WORK/ds.db" --config "$CONFIG" --dataset "$WORK/ref"
+  expect_err "60 frames committed" "teach from a dataset"
+  expect_rc 0 "replay" -- "${RUN[@]}" replay "$WORK/qry" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
+  [ "$(wc -l <"$WORK/out")" -eq 60 ] || fail "replay printed $(wc -l <"$WORK/out") lines"
+  expect_err "precision at 100% recall" "replay evaluation"
+  expect_rc 1 "replay of a missing dataset" -- "${RUN[@]}" replay "$WORK/nothing" --route "$WORK/ds.db"
+  expect_err "nothing" "replay of a missing dataset"
+else
+  fail "skyloc simulate could not write the replay datasets"
+fi
+
+# 10a. a start-up failure after the configuration (here: no such GPIO chip, or no libgpiod
+# in this build) is one error naming [status], and teach leaves no route file behind.
+cp "$CONFIG" "$WORK/gpio.toml"
+printf '[status]\nkind = "gpio"\nchip = "gpiochip99"\n' >>"$WORK/gpio.toml"
+expect_rc 1 "teach with a missing GPIO chip" -- "${RUN[@]}" teach --route "$WORK/gpio.db" --config "$WORK/gpio.toml" --frames 5
+expect_err "gpio" "teach with a missing GPIO chip"
+[ ! -e "$WORK/gpio.db" ] || fail "a failed start-up left $WORK/gpio.db behind"
+
+# 10. teach stops when the route is full.
+sed 's/^route_frames = 5000/route_frames = 50/' "$CONFIG" >"$WORK/cap.toml"
+expect_rc 0 "teach up to the capacity" -- "${RUN[@]}" teach --route "$WORK/full.db" --config "$WORK/cap.toml" --frames 60
+expect_err "the route is full" "teach capacity"
+expect_err "50 frames committed" "teach capacity"
+
+if [ $failures -ne 0 ]; then
+  echo "$failures check(s) failed" >&2
+  exit 1
+fi
+echo "firmware modes: all checks passed"

@@ -1,0 +1,333 @@
+// The route database: round trip, rejection of every kind of damage with the chunk named,
+// settings checks, and crash safety (a child killed with SIGKILL while teaching).
+#include "skyloc/platform/route_db.h"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace skyloc {
+namespace {
+
+constexpr std::uint32_t kDim = 5;
+
+RouteDbSettings Settings() {
+  RouteDbSettings s;
+  s.descriptor_kind = 1;
+  s.bands = kDim;
+  s.rings = 3;
+  s.longitudes = 16;
+  s.dim = kDim;
+  s.normalisation = 0;
+  s.lens_hash = 0x1234567890abcdefull;
+  return s;
+}
+
+// Frame i's content: every value depends on i, so a misplaced record is noticed.
+void FrameContent(std::size_t i, RouteFrameMeta* meta, float* descriptor) {
+  meta->timestamp_ns = 1000000ull * i + 7;
+  meta->has_pose = i % 3 != 0;
+  for (std::size_t k = 0; k < 6; ++k)
+    meta->pose[k] = meta->has_pose ? static_cast<double>(i) * 0.5 + static_cast<double>(k) : 0.0;
+  for (std::size_t k = 0; k < kDim; ++k)
+    descriptor[k] = static_cast<float>(i) + 0.25f * static_cast<float>(k);
+}
+
+void ExpectFrames(const RouteFrames& frames, std::size_t n) {
+  ASSERT_EQ(frames.size(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    RouteFrameMeta want;
+    float d[kDim];
+    FrameContent(i, &want, d);
+    ASSERT_EQ(frames.meta(i).timestamp_ns, want.timestamp_ns) << i;
+    ASSERT_EQ(frames.meta(i).has_pose, want.has_pose) << i;
+    ASSERT_EQ(frames.meta(i).pose, want.pose) << i;
+    for (std::size_t k = 0; k < kDim; ++k)
+      ASSERT_EQ(frames.descriptor(i)[k], d[k]) << i << "," << k;
+  }
+}
+
+class RouteDbTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/skyloc_route_db_XXXXXX";
+    ASSERT_NE(::mkdtemp(tmpl), nullptr);
+    dir_ = tmpl;
+    path_ = dir_ + "/route.db";
+    ASSERT_TRUE(frames_.Allocate(10000, kDim).ok());
+  }
+  void TearDown() override {
+    std::remove(path_.c_str());
+    std::remove((path_ + ".tmp").c_str());
+    ::rmdir(dir_.c_str());
+  }
+
+  // Writes n frames, flushing every `flush_every`, and commits if asked.
+  void Teach(std::size_t n, std::size_t flush_every, bool commit) {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), flush_every, true).ok());
+    for (std::size_t i = 0; i < n; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      ASSERT_TRUE(w.Append(meta, d).ok());
+    }
+    if (commit) {
+      ASSERT_TRUE(w.Commit().ok());
+    } else {
+      ASSERT_TRUE(w.Flush().ok());
+    }
+  }
+
+  std::vector<std::uint8_t> Bytes() const {
+    std::ifstream in(path_, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+
+  Status Parse(const std::vector<std::uint8_t>& bytes,
+               RouteDbLoadPolicy policy = RouteDbLoadPolicy::kStrict,
+               RouteDbLoadReport* report = nullptr) {
+    const RouteDbSettings want = Settings();
+    return ParseRouteDb(bytes, &want, policy, &frames_, report);
+  }
+
+  std::string dir_, path_;
+  RouteFrames frames_;
+};
+
+// Independent of the loader: where chunk k (1-based) starts in a route of n frames
+// written with flush_every f (every frame chunk holds f frames but the last; the commit
+// record is the chunk after them).
+std::size_t ChunkOffset(std::size_t k, std::size_t f, std::size_t n) {
+  std::size_t offset = kRouteDbHeaderBytes;
+  for (std::size_t j = 1; j < k; ++j) {
+    const std::size_t frames = std::min(f, n - (j - 1) * f);
+    offset += kRouteDbChunkHeaderBytes + frames * RouteDbRecordBytes(kDim);
+  }
+  return offset;
+}
+
+TEST_F(RouteDbTest, RoundTrip) {
+  Teach(137, 10, true);
+  RouteDbLoadReport report;
+  const RouteDbSettings want = Settings();
+  Status s = LoadRouteDb(path_.c_str(), &want, RouteDbLoadPolicy::kStrict, &frames_, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_TRUE(report.committed);
+  EXPECT_EQ(report.frames, 137u);
+  EXPECT_EQ(report.chunks, 14u);
+  EXPECT_EQ(report.settings, Settings());
+  ExpectFrames(frames_, 137);
+  // The size follows from the format alone.
+  EXPECT_EQ(Bytes().size(),
+            kRouteDbHeaderBytes + 15 * kRouteDbChunkHeaderBytes + 137 * RouteDbRecordBytes(kDim));
+}
+
+TEST_F(RouteDbTest, EmptyCommittedRouteLoads) {
+  Teach(0, 10, true);
+  EXPECT_TRUE(Parse(Bytes()).ok());
+  EXPECT_EQ(frames_.size(), 0u);
+}
+
+TEST_F(RouteDbTest, RefusesToReplaceATaughtRoute) {
+  Teach(3, 10, true);
+  RouteDbWriter w;
+  Status s = w.Create(path_.c_str(), Settings(), 10, false);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("already exists"), std::string::npos);
+  EXPECT_TRUE(Parse(Bytes()).ok());
+  EXPECT_EQ(frames_.size(), 3u);
+}
+
+TEST_F(RouteDbTest, UncommittedFileNeedsRecovery) {
+  Teach(25, 10, false);
+  Status strict = Parse(Bytes());
+  ASSERT_FALSE(strict.ok());
+  EXPECT_NE(std::string(strict.message()).find("no commit record"), std::string::npos)
+      << strict.message();
+  EXPECT_NE(std::string(strict.message()).find("skyloc route recover"), std::string::npos);
+  RouteDbLoadReport report;
+  ASSERT_TRUE(Parse(Bytes(), RouteDbLoadPolicy::kRecoverInterrupted, &report).ok());
+  EXPECT_FALSE(report.committed);
+  ExpectFrames(frames_, 25);
+
+  ASSERT_TRUE(RecoverRouteDb(path_.c_str(), &report).ok());
+  Status after = Parse(Bytes());
+  ASSERT_TRUE(after.ok()) << after.message();
+  ExpectFrames(frames_, 25);
+}
+
+TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
+  Teach(5, 10, true);
+  RouteDbSettings other = Settings();
+  other.bands = 7;
+  Status s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("bands = 5"), std::string::npos) << s.message();
+  other = Settings();
+  other.lens_hash = 1;
+  s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_NE(std::string(s.message()).find("lens hash"), std::string::npos) << s.message();
+}
+
+TEST_F(RouteDbTest, CapacityExceededIsReported) {
+  Teach(30, 10, true);
+  RouteFrames small;
+  ASSERT_TRUE(small.Allocate(25, kDim).ok());
+  const RouteDbSettings want = Settings();
+  Status s = ParseRouteDb(Bytes(), &want, RouteDbLoadPolicy::kStrict, &small, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(std::string(s.message()).find("route_frames"), std::string::npos) << s.message();
+}
+
+TEST_F(RouteDbTest, NotARouteDatabase) {
+  std::vector<std::uint8_t> text(200, 'x');
+  EXPECT_EQ(Parse(text).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(Parse({}).code(), StatusCode::kDataLoss);
+}
+
+// Every truncation of a committed file is rejected, naming the chunk the cut falls in.
+TEST_F(RouteDbTest, EveryTruncationIsRejectedNamingTheChunk) {
+  constexpr std::size_t kFlush = 4;
+  Teach(10, kFlush, true);  // chunks: 4, 4, 2 frames, then the commit record (chunk 4)
+  const std::vector<std::uint8_t> full = Bytes();
+  for (std::size_t len = 0; len < full.size(); ++len) {
+    const std::vector<std::uint8_t> cut(full.begin(), full.begin() + static_cast<long>(len));
+    Status s = Parse(cut);
+    ASSERT_FALSE(s.ok()) << "loaded a file cut to " << len << " bytes";
+    const std::string m = s.message();
+    if (len < kRouteDbHeaderBytes) {
+      EXPECT_NE(m.find("header"), std::string::npos) << len << ": " << m;
+      continue;
+    }
+    std::size_t k = 1;
+    while (k < 4 && ChunkOffset(k + 1, kFlush, 10) <= len)
+      ++k;
+    if (len == ChunkOffset(k, kFlush, 10) || (k == 4 && len == ChunkOffset(4, kFlush, 10))) {
+      // A cut exactly between chunks: the file ends cleanly but is not committed.
+      EXPECT_NE(m.find("no commit record after chunk " + std::to_string(k - 1)), std::string::npos)
+          << len << ": " << m;
+    } else {
+      EXPECT_NE(m.find("chunk " + std::to_string(k) + " at offset " +
+                       std::to_string(ChunkOffset(k, kFlush, 10))),
+                std::string::npos)
+          << len << ": " << m;
+    }
+  }
+}
+
+// Every single-bit flip anywhere is rejected, naming the header or the damaged chunk.
+TEST_F(RouteDbTest, EveryBitFlipIsRejectedNamingTheChunk) {
+  constexpr std::size_t kFlush = 4;
+  Teach(10, kFlush, true);
+  const std::vector<std::uint8_t> good = Bytes();
+  std::mt19937 rng(7);
+  for (std::size_t byte = 0; byte < good.size(); ++byte) {
+    std::vector<std::uint8_t> bad = good;
+    bad[byte] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+    Status s = Parse(bad);
+    ASSERT_FALSE(s.ok()) << "loaded a file with byte " << byte << " flipped";
+    const std::string m = s.message();
+    if (byte < kRouteDbHeaderBytes) {
+      EXPECT_TRUE(m.find("header") != std::string::npos || m.find("magic") != std::string::npos ||
+                  m.find("version") != std::string::npos)
+          << byte << ": " << m;
+      continue;
+    }
+    std::size_t k = 1;
+    while (k < 4 && ChunkOffset(k + 1, kFlush, 10) <= byte)
+      ++k;
+    EXPECT_NE(m.find("chunk " + std::to_string(k) + " at offset " +
+                     std::to_string(ChunkOffset(k, kFlush, 10))),
+              std::string::npos)
+        << byte << ": " << m;
+    // Recovery must not hide damage followed by intact data. Only a damaged commit record
+    // (the tail) may be dropped, and then every frame is there and the drop is reported.
+    RouteDbLoadReport report;
+    const bool recovered = Parse(bad, RouteDbLoadPolicy::kRecoverInterrupted, &report).ok();
+    if (k < 4) {
+      EXPECT_FALSE(recovered) << byte;
+    } else {
+      ASSERT_TRUE(recovered) << byte;
+      EXPECT_FALSE(report.committed);
+      EXPECT_EQ(report.dropped_bytes, kRouteDbChunkHeaderBytes);
+      ExpectFrames(frames_, 10);
+    }
+  }
+}
+
+// The writer is killed with SIGKILL at a random moment while teaching, 20 times. The child
+// reports through a pipe how many frames each completed Flush() made durable; after the
+// kill the file must load (recovering the interrupted tail) with at least those frames,
+// every one intact.
+TEST_F(RouteDbTest, SurvivesKillDuringTeach) {
+  std::mt19937 rng(20261121);
+  for (int round = 0; round < 20; ++round) {
+    std::remove(path_.c_str());
+    const std::size_t flush_every = 1 + rng() % 16;
+    const auto kill_after_us = static_cast<useconds_t>(rng() % 30000);
+    int fds[2];
+    ASSERT_EQ(::pipe(fds), 0);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      ::close(fds[0]);
+      RouteDbWriter w;
+      if (!w.Create(path_.c_str(), Settings(), flush_every, true).ok())
+        ::_exit(3);
+      for (std::size_t i = 0; i < 2000000; ++i) {
+        RouteFrameMeta meta;
+        float d[kDim];
+        FrameContent(i, &meta, d);
+        const std::uint64_t before = w.frames_durable();
+        if (!w.Append(meta, d).ok())
+          ::_exit(4);
+        const std::uint64_t durable = w.frames_durable();
+        if (durable != before && ::write(fds[1], &durable, sizeof durable) != sizeof durable)
+          ::_exit(5);
+      }
+      ::_exit(0);
+    }
+    ::close(fds[1]);
+    ::usleep(kill_after_us);
+    ASSERT_EQ(::kill(child, SIGKILL), 0);
+    int wstatus = 0;
+    ASSERT_EQ(::waitpid(child, &wstatus, 0), child);
+    ASSERT_TRUE(WIFSIGNALED(wstatus)) << "the child ended by itself (status " << wstatus << ")";
+    std::uint64_t last_flushed = 0, v = 0;
+    while (::read(fds[0], &v, sizeof v) == static_cast<ssize_t>(sizeof v))
+      last_flushed = v;
+    ::close(fds[0]);
+
+    if (::access(path_.c_str(), F_OK) != 0) {
+      // Killed before the atomic rename: there is no file, and nothing was flushed.
+      EXPECT_EQ(last_flushed, 0u) << "round " << round;
+      continue;
+    }
+    RouteDbLoadReport report;
+    Status s = Parse(Bytes(), RouteDbLoadPolicy::kRecoverInterrupted, &report);
+    ASSERT_TRUE(s.ok()) << "round " << round << ": " << s.message();
+    EXPECT_GE(frames_.size(), last_flushed) << "round " << round;
+    EXPECT_EQ(frames_.size() % flush_every, 0u) << "only whole chunks are kept";
+    ExpectFrames(frames_, frames_.size());
+    RecordProperty(
+        "round_" + std::to_string(round),
+        std::to_string(last_flushed) + " flushed, " + std::to_string(frames_.size()) + " loaded");
+  }
+}
+
+}  // namespace
+}  // namespace skyloc
