@@ -1,8 +1,10 @@
 // `skyloc experiment NAME --out DIR`: the paper's experiments on simulated runs (issue 5,
 // docs/RESULTS.md). Each writes DIR/results.md (a markdown table and the command that
-// made it), DIR/metrics.json and precision-recall plots DIR/pr_sky.svg, DIR/pr_vanilla.svg.
+// made it), DIR/metrics.json, precision-recall plots DIR/pr_sky.svg and DIR/pr_vanilla.svg,
+// and frame correspondences DIR/correspondence.svg.
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdarg>
@@ -122,6 +124,7 @@ struct Row {
   const sim::MethodScore* vanilla;
 };
 
+// printf into a std::string; for short pieces (at most 511 characters).
 std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
 std::string Format(const char* format, ...) {
   char buffer[512];
@@ -193,6 +196,61 @@ std::string PrPlotSvg(const char* title, const std::vector<Row>& rows, bool sky)
   return s + "</svg>\n";
 }
 
+// Frame correspondences (the paper's Figs. 5a, 8, 9): for every row, vanilla (left) and
+// sky (right); x = query frame, y = matched reference frame; grey = ground truth, green =
+// correct match, red = wrong.
+std::string CorrespondenceSvg(const std::vector<Row>& rows, int tolerance_frames) {
+  constexpr double kW = 220, kH = 160, kPad = 40;
+  const double width = 2 * (kW + kPad) + kPad;
+  const double height = static_cast<double>(rows.size()) * (kH + kPad) + kPad;
+  std::string s = Format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+      "font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"%.0f\" height=\"%.0f\" "
+      "fill=\"white\"/>\n",
+      width, height, width, height);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    for (int column = 0; column < 2; ++column) {
+      const sim::MethodScore& m = column == 0 ? *rows[i].vanilla : *rows[i].sky;
+      const double x0 = kPad + column * (kW + kPad);
+      const double y0 = kPad / 2 + static_cast<double>(i) * (kH + kPad) + 12;
+      const std::size_t n_query = m.truth.size();
+      int n_ref = 1;
+      for (std::size_t q = 0; q < n_query; ++q)
+        n_ref = std::max({n_ref, m.truth[q] + 1, m.matched[q] + 1});
+      s += Format("<text x=\"%g\" y=\"%g\">%s: %s</text>\n", x0, y0 - 4,
+                  column == 0 ? "vanilla" : "sky", rows[i].label.c_str());
+      s += Format(
+          "<rect x=\"%g\" y=\"%g\" width=\"%g\" height=\"%g\" fill=\"none\" "
+          "stroke=\"black\"/>\n",
+          x0, y0, kW, kH);
+      auto px = [&](std::size_t q) {
+        return x0 +
+               kW * static_cast<double>(q) / static_cast<double>(std::max<std::size_t>(n_query, 1));
+      };
+      auto py = [&](int r) { return y0 + kH - kH * r / n_ref; };
+      // One path per colour, each point a zero-length segment with a round cap: a few
+      // bytes a point, so the plot of a whole experiment stays small.
+      std::string truth, correct, wrong;
+      for (std::size_t q = 0; q < n_query; ++q) {
+        if (m.truth[q] >= 0)
+          truth += Format("M%.1f %.1fh0", px(q), py(m.truth[q]));
+        if (m.matched[q] >= 0) {
+          const bool ok = dsp::MatchWithinFrames(m.matched[q], m.truth[q], tolerance_frames);
+          (ok ? correct : wrong) += Format("M%.1f %.1fh0", px(q), py(m.matched[q]));
+        }
+      }
+      s += "<path d=\"" + truth +
+           "\" stroke=\"#bbbbbb\" stroke-width=\"1.6\" stroke-linecap=\"round\"/>\n";
+      s += "<path d=\"" + correct +
+           "\" stroke=\"#2ca02c\" stroke-width=\"2.6\" stroke-linecap=\"round\"/>\n";
+      s += "<path d=\"" + wrong +
+           "\" stroke=\"#d62728\" stroke-width=\"2.6\" stroke-linecap=\"round\"/>\n";
+      s += "\n";
+    }
+  }
+  return s + "</svg>\n";
+}
+
 Status WriteOutputs(const Options& o, const std::string& command, const std::string& header,
                     const std::string& separator, const std::vector<Row>& rows,
                     const std::string& notes) {
@@ -216,13 +274,15 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
   }
   md +=
       "\nP@R100: precision at 100 % recall (every match accepted); R@P100: recall at 100 % "
-      "precision. Plots: pr_sky.svg, pr_vanilla.svg.\n\n" +
+      "precision. Plots: pr_sky.svg, pr_vanilla.svg, correspondence.svg.\n\n" +
       notes;
   json += "  ]\n}\n";
   SKYLOC_TRY(WriteFile(o.out + "/results.md", md));
   SKYLOC_TRY(WriteFile(o.out + "/metrics.json", json));
   SKYLOC_TRY(WriteFile(o.out + "/pr_sky.svg", PrPlotSvg("SeqSLAM (sky)", rows, true)));
   SKYLOC_TRY(WriteFile(o.out + "/pr_vanilla.svg", PrPlotSvg("SeqSLAM (vanilla)", rows, false)));
+  SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg",
+                       CorrespondenceSvg(rows, o.experiment.tolerance_frames)));
   return Status::Ok();
 }
 
@@ -323,7 +383,7 @@ int RunExperiment(std::span<char* const> args) {
   }
   std::printf(
       "skyloc experiment %s: wrote %s/results.md, metrics.json, pr_sky.svg, "
-      "pr_vanilla.svg\n",
+      "pr_vanilla.svg, correspondence.svg\n",
       o.name.c_str(), o.out.c_str());
   return kExitOk;
 }

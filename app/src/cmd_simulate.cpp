@@ -50,6 +50,8 @@ constexpr const char* kUsage =
     "  --yaw DEG            constant heading offset of the camera\n"
     "appearance and camera:\n"
     "  --lighting NAME      dawn, noon (default) or overcast\n"
+    "  --sun AZ,EL          sun azimuth (counter-clockwise from east) and elevation, degrees\n"
+    "  --clouds F           cloud cover 0 (clear) .. 1 (overcast)\n"
     "  --exposure EV        exposure offset in stops, added to the preset's\n"
     "  --no-flare           no lens flare\n"
     "  --width W --height H image size (default 320x240) of the default lens: equidistant,\n"
@@ -67,6 +69,7 @@ struct Options {
   std::optional<double> spacing, camera_height;
   double jitter = 0.2, start = 0, tilt = 0, zigzag = 0, zigzag_period = 20, bumps = 0, yaw = 0;
   double exposure = 0;
+  std::optional<double> sun_azimuth, sun_elevation, clouds;
   int frames = 0;
   std::string lighting = "noon";
   bool flare = true;
@@ -169,6 +172,21 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!sim::LightingPreset(v, 0, &probe))
         return fail(flag, v, "dawn, noon or overcast");
       o->lighting = v;
+    } else if (std::strcmp(flag, "--sun") == 0) {
+      char* end = nullptr;
+      const double az = std::strtod(v, &end);
+      if (end == v || *end != ',')
+        return fail(flag, v, "AZ,EL in degrees, e.g. 120,35");
+      const char* el_text = end + 1;
+      const double el = std::strtod(el_text, &end);
+      if (end == el_text || *end != '\0' || !std::isfinite(az) || !(el >= -90 && el <= 90))
+        return fail(flag, v, "AZ,EL in degrees with EL within -90..90");
+      o->sun_azimuth = az;
+      o->sun_elevation = el;
+    } else if (std::strcmp(flag, "--clouds") == 0) {
+      if (!ParseDouble(v, &d) || d < 0 || d > 1)
+        return fail(flag, v, "a cloud cover within 0..1");
+      o->clouds = d;
     } else if (std::strcmp(flag, "--exposure") == 0) {
       if (!ParseDouble(v, &d) || std::fabs(d) > 8)
         return fail(flag, v, "stops within -8..8");
@@ -380,6 +398,12 @@ int RunSimulate(std::span<char* const> args) {
   sim::Lighting lighting;
   sim::LightingPreset(o.lighting.c_str(), o.run, &lighting);
   lighting.exposure_ev += o.exposure;
+  if (o.sun_azimuth)
+    lighting.sun_azimuth_deg = *o.sun_azimuth;
+  if (o.sun_elevation)
+    lighting.sun_elevation_deg = *o.sun_elevation;
+  if (o.clouds)
+    lighting.cloud_cover = *o.clouds;
   if (!o.flare)
     lighting.flare = 0;
 

@@ -7,7 +7,7 @@ execute_process(COMMAND ${EMULATOR} ${CMD} experiment tilt --frames 20 --width 4
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "experiment failed (${rc}):\n${out}\n${err}")
 endif()
-foreach(f results.md metrics.json pr_sky.svg pr_vanilla.svg)
+foreach(f results.md metrics.json pr_sky.svg pr_vanilla.svg correspondence.svg)
   if(NOT EXISTS ${dir}/${f})
     message(FATAL_ERROR "missing ${dir}/${f}")
   endif()

@@ -38,11 +38,11 @@ Ray RandomRay(Rng& rng) {
 
 TEST(Bvh, ClosestHitEqualsBruteForceOnRandomRays) {
   Rng rng(42);
-  const std::vector<Triangle> triangles = RandomTriangles(rng, 3000);
+  const std::vector<Triangle> triangles = RandomTriangles(rng, 2000);
   Bvh bvh;
   ASSERT_TRUE(bvh.Build(triangles).ok());
   int hits = 0;
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < 5000; ++i) {
     const Ray ray = RandomRay(rng);
     const float t_max = rng.Uniform() < 0.3 ? static_cast<float>(rng.Uniform(0, 20)) : kInfinity;
     const Hit expected = ClosestHitBruteForce(triangles, ray, 1e-4f, t_max);
@@ -56,8 +56,8 @@ TEST(Bvh, ClosestHitEqualsBruteForceOnRandomRays) {
         << "ray " << i;
   }
   // The test means something only if both outcomes are common.
-  EXPECT_GT(hits, 2000);
-  EXPECT_LT(hits, 18000);
+  EXPECT_GT(hits, 500);
+  EXPECT_LT(hits, 4500);
 }
 
 TEST(Bvh, MatchesBruteForceInAProceduralWorld) {

@@ -10,10 +10,10 @@ namespace {
 // precision, and is more often right, than SeqSLAM on the images themselves.
 TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
   ExperimentOptions options;
-  options.width = 96;
-  options.height = 72;
-  options.bands = 20;
-  options.spacing_m = 4.0;  // ~125 frames a lap
+  options.width = 80;
+  options.height = 60;
+  options.bands = 16;
+  options.spacing_m = 5.0;  // ~100 frames a lap
   options.max_offset_m = 6.0;
   const int differences[] = {0, 40};
   std::vector<TiltRow> rows;

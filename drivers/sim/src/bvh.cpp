@@ -177,7 +177,13 @@ Hit Bvh::ClosestHit(const Ray& ray, float t_min, float t_max) const {
   if (nodes_.empty())
     return Hit{};
   const Vec3 inv = Inverse(ray.direction);
-  std::array<std::uint32_t, kMaxDepth> stack;
+  // Deferred subtrees with their entry distance, so a pop can skip one that now lies
+  // behind the closest hit without testing its box again.
+  struct Deferred {
+    std::uint32_t node;
+    float t_entry;
+  };
+  std::array<Deferred, kMaxDepth> stack;
   int top = 0;
   std::uint32_t node = 0;
   if (IntersectBox(nodes_[0].box, ray.origin, inv, t_min, best.t) == kInfinity)
@@ -194,26 +200,26 @@ Hit Bvh::ClosestHit(const Ray& ray, float t_min, float t_max) const {
       }
     } else {
       std::uint32_t near = node + 1, far = n.offset;
-      if (ray.direction[static_cast<int>(n.axis)] < 0)
+      float t_near = IntersectBox(nodes_[near].box, ray.origin, inv, t_min, best.t);
+      float t_far = IntersectBox(nodes_[far].box, ray.origin, inv, t_min, best.t);
+      // Visit the child the ray enters first.
+      if (t_far < t_near) {
         std::swap(near, far);
-      const float t_near = IntersectBox(nodes_[near].box, ray.origin, inv, t_min, best.t);
-      const float t_far = IntersectBox(nodes_[far].box, ray.origin, inv, t_min, best.t);
+        std::swap(t_near, t_far);
+      }
       if (t_near != kInfinity) {
         if (t_far != kInfinity)
-          stack[static_cast<std::size_t>(top++)] = far;
+          stack[static_cast<std::size_t>(top++)] = {far, t_far};
         node = near;
-        continue;
-      }
-      if (t_far != kInfinity) {
-        node = far;
         continue;
       }
     }
     // Pop the next subtree still in front of the closest hit found so far.
     bool found = false;
     while (top > 0) {
-      node = stack[static_cast<std::size_t>(--top)];
-      if (IntersectBox(nodes_[node].box, ray.origin, inv, t_min, best.t) != kInfinity) {
+      const Deferred d = stack[static_cast<std::size_t>(--top)];
+      if (d.t_entry < best.t) {
+        node = d.node;
         found = true;
         break;
       }

@@ -62,7 +62,6 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
                  const ExperimentOptions& options, MethodScore* out) {
   const int dim = use_sky ? options.bands : dsp::kVanillaDescriptorSize;
-  const auto n_ref = static_cast<int>(reference.trajectory.size());
   const auto n_query = static_cast<int>(query.trajectory.size());
   std::vector<dsp::SeqSlamMatch> matches(static_cast<std::size_t>(n_query));
   const dsp::SeqSlamError e = dsp::BatchSeqSlam(
@@ -70,32 +69,27 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, b
       options.seqslam, dsp::SeqSlamWindow::kCentred, matches);
   if (e != dsp::SeqSlamError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "SeqSLAM: %s", dsp::SeqSlamErrorMessage(e));
-  out->matched.assign(static_cast<std::size_t>(n_query), -1);
+  // Ground truth from the poses, the same rule as `skyloc eval`.
+  auto positions = [](const RunDescriptors& run) {
+    std::vector<dsp::Position3> p;
+    for (const TrajectoryPoint& t : run.trajectory)
+      p.push_back({t.pose.x_m, t.pose.y_m, t.pose.z_m});
+    return p;
+  };
   out->truth.assign(static_cast<std::size_t>(n_query), -1);
+  dsp::GroundTruthFromPositions(positions(reference), positions(query), options.max_offset_m,
+                                out->truth);
+  out->matched.assign(static_cast<std::size_t>(n_query), -1);
   std::vector<dsp::EvaluatedMatch> evaluated;
-  for (int q = 0; q < n_query; ++q) {
-    const drivers::Pose& p = query.trajectory[static_cast<std::size_t>(q)].pose;
-    double best = 1e300;
-    int truth = -1;
-    for (int r = 0; r < n_ref; ++r) {
-      const drivers::Pose& rp = reference.trajectory[static_cast<std::size_t>(r)].pose;
-      const double d = std::hypot(rp.x_m - p.x_m, rp.y_m - p.y_m);
-      if (d < best) {
-        best = d;
-        truth = r;
-      }
-    }
-    if (best > options.max_offset_m)
-      truth = -1;
-    out->truth[static_cast<std::size_t>(q)] = truth;
-    const dsp::SeqSlamMatch& m = matches[static_cast<std::size_t>(q)];
+  for (std::size_t q = 0; q < static_cast<std::size_t>(n_query); ++q) {
+    const dsp::SeqSlamMatch& m = matches[q];
     if (!m.valid)
       continue;
-    out->matched[static_cast<std::size_t>(q)] = m.reference;
+    out->matched[q] = m.reference;
     dsp::EvaluatedMatch em;
     em.uniqueness = m.uniqueness;
-    em.has_ground_truth = truth >= 0;
-    em.correct = dsp::MatchWithinFrames(m.reference, truth, options.tolerance_frames);
+    em.has_ground_truth = out->truth[q] >= 0;
+    em.correct = dsp::MatchWithinFrames(m.reference, out->truth[q], options.tolerance_frames);
     evaluated.push_back(em);
   }
   std::vector<std::size_t> order(evaluated.size());

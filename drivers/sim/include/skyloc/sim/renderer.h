@@ -1,6 +1,6 @@
 // Upward fisheye views of a World from a 6-DoF pose, in UV or visible light.
 //
-// Camera conventions (docs/SIMULATOR.md has the figure):
+// Camera conventions (also in docs/SIMULATOR.md):
 //   body frame  x forward, y left, z up; pose yaw about z (counter-clockwise from world +x,
 //               the ant-route MATLAB convention), pitch positive = nose up, roll positive =
 //               right side down; R_world_body = Rz(yaw) * Ry(-pitch) * Rx(roll).
