@@ -27,14 +27,14 @@ std::uint64_t NextRandom(std::uint64_t* state) {
   return z ^ (z >> 31);
 }
 
-float DescriptorDistance(const Surf1dFeature& a, const Surf1dFeature& b) {
+float SquaredDistance(const Surf1dFeature& a, const Surf1dFeature& b) {
   float sum = 0.0f;
   for (int i = 0; i < kSurf1dDescriptorSize; ++i) {
     const float d =
         a.descriptor[static_cast<std::size_t>(i)] - b.descriptor[static_cast<std::size_t>(i)];
     sum += d * d;
   }
-  return std::sqrt(sum);
+  return sum;
 }
 
 }  // namespace
@@ -82,25 +82,22 @@ Surf1dError Surf1d::Init(int n, const Surf1dOptions& options) {
   n_ = n;
   dropped_ = 0;
   lobes_ = std::move(lobes);
-  integral_.assign(static_cast<std::size_t>(n) + 1, 0.0);
+  const int max_lobe = lobes_.back();
+  const long max_step = std::max(1L, std::lround(0.4 * max_lobe));
+  pad_ = std::max<long>((3 * max_lobe + 1) / 2 + 1, (kDescriptorHalfSamples + 1) * max_step + 1);
+  integral_.assign(static_cast<std::size_t>(n + 2 * pad_) + 1, 0.0);
+  for (int k = -kDescriptorHalfSamples; k <= kDescriptorHalfSamples; ++k) {
+    const double kk = static_cast<double>(k);
+    weights_[static_cast<std::size_t>(k + kDescriptorHalfSamples)] =
+        std::exp(-kk * kk / (2.0 * kDescriptorSigmaSamples * kDescriptorSigmaSamples));
+  }
   responses_.assign(lobes_.size() * static_cast<std::size_t>(n), 0.0f);
   return Surf1dError::kOk;
 }
 
 double Surf1d::BoxSum(long a, long b) const {
-  const long n = n_;
-  const double total = integral_[static_cast<std::size_t>(n)];
-  // Prefix sum of the periodic signal at any integer x.
-  const auto prefix = [&](long x) {
-    long q = x / n;
-    long r = x % n;
-    if (r < 0) {
-      r += n;
-      --q;
-    }
-    return static_cast<double>(q) * total + integral_[static_cast<std::size_t>(r)];
-  };
-  return prefix(b) - prefix(a);
+  return integral_[static_cast<std::size_t>(b + pad_)] -
+         integral_[static_cast<std::size_t>(a + pad_)];
 }
 
 void Surf1d::Describe(int position, int lobe, Surf1dFeature* feature) const {
@@ -133,10 +130,16 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
     return Surf1dError::kSizeMismatch;
   dropped_ = 0;
 
+  // The integral of the periodic signal over [-pad, n + pad): every box the filters and
+  // descriptors read is then two look-ups, with no wrap-around arithmetic.
   double running = 0.0;
-  for (std::size_t i = 0; i < strip.size(); ++i) {
-    running += static_cast<double>(strip[i]);
-    integral_[i + 1] = running;
+  const long n = n_;
+  long source = ((-pad_ % n) + n) % n;
+  for (std::size_t i = 1; i < integral_.size(); ++i) {
+    running += static_cast<double>(strip[static_cast<std::size_t>(source)]);
+    integral_[i] = running;
+    if (++source == n)
+      source = 0;
   }
 
   const int layers = static_cast<int>(lobes_.size());
@@ -152,8 +155,13 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
     }
   }
 
-  const auto magnitude = [&](int layer, int x) {
-    return std::abs(Response(layer, ((x % n_) + n_) % n_));
+  const auto magnitude = [&](int layer, int x) {  // x within [-1, n]
+    if (x < 0) {
+      x += n_;
+    } else if (x >= n_) {
+      x -= n_;
+    }
+    return std::abs(Response(layer, x));
   };
   int written = 0;
   for (int li = 0; li < layers; ++li) {
@@ -216,7 +224,7 @@ Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& 
   options_ = options;
   capacity_ = max_features;
   const auto cap = static_cast<std::size_t>(max_features);
-  pairs_.assign(cap, Pair{0, 0, 0.0f});
+  pairs_.assign(cap, Pair{0.0, 0.0, 0.0f});
   inlier_.assign(cap, 0);
   best_inlier_.assign(cap, 0);
   return Surf1dError::kOk;
@@ -242,7 +250,7 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     for (std::size_t s = 0; s < stored.size(); ++s) {
       if (stored[s].laplacian_sign != test[t].laplacian_sign)
         continue;
-      const float d = DescriptorDistance(stored[s], test[t]);
+      const float d = SquaredDistance(stored[s], test[t]);  // squared until the end
       if (d < best) {
         second = best;
         best = d;
@@ -251,10 +259,11 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
         second = d;
       }
     }
-    if (!std::isfinite(second) || !(best < options_.ratio * second))
+    if (!std::isfinite(second) || !(best < options_.ratio * options_.ratio * second))
       continue;
-    pairs_[static_cast<std::size_t>(matches++)] = {static_cast<std::int32_t>(best_index),
-                                                   static_cast<std::int32_t>(t), best};
+    best = std::sqrt(best);
+    pairs_[static_cast<std::size_t>(matches++)] = {static_cast<double>(stored[best_index].position),
+                                                   static_cast<double>(test[t].position), best};
     result->score += 1.0 / static_cast<double>(std::max(best, options_.min_distance));
   }
   result->matches = matches;
@@ -262,14 +271,8 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     return Surf1dError::kOk;
 
   const double nd = n;
-  const auto xs = [&](int m) {
-    return static_cast<double>(
-        stored[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(m)].stored)].position);
-  };
-  const auto xt = [&](int m) {
-    return static_cast<double>(
-        test[static_cast<std::size_t>(pairs_[static_cast<std::size_t>(m)].test)].position);
-  };
+  const auto xs = [&](int m) { return pairs_[static_cast<std::size_t>(m)].x_stored; };
+  const auto xt = [&](int m) { return pairs_[static_cast<std::size_t>(m)].x_test; };
   const auto count = static_cast<std::uint64_t>(matches);
   std::uint64_t state = options_.seed;
   int best_inliers = 0;

@@ -95,7 +95,7 @@ class Surf1d {
   int dropped() const { return dropped_; }
 
  private:
-  // Sum of the circular signal over columns [a, b) (a <= b, any integers).
+  // Sum of the circular signal over columns [a, b), -pad_ <= a <= b <= n + pad_.
   double BoxSum(long a, long b) const;
   void Describe(int position, int lobe, Surf1dFeature* feature) const;
 
@@ -103,8 +103,11 @@ class Surf1d {
   int n_ = 0;
   int dropped_ = 0;
   std::vector<int> lobes_;
-  std::vector<double> integral_;  // integral_[i] = sum of strip[0..i), n + 1 values
-  std::vector<float> responses_;  // layers x n
+  long pad_ = 0;  // columns of wrap-around on either side: the widest filter or descriptor
+  // integral_[i] = sum of the periodic strip over columns [-pad_, i - pad_).
+  std::vector<double> integral_;
+  std::array<double, 15> weights_{};  // descriptor Gaussian, per sample
+  std::vector<float> responses_;      // layers x n
 };
 
 struct LandmarkMatchOptions {
@@ -141,8 +144,8 @@ class LandmarkMatcher {
 
  private:
   struct Pair {
-    std::int32_t stored;
-    std::int32_t test;
+    double x_stored;  // positions, columns
+    double x_test;
     float distance;
   };
 
