@@ -106,8 +106,7 @@ void Surf1d::Describe(int position, int lobe, Surf1dFeature* feature) const {
   for (int k = -kDescriptorHalfSamples; k <= kDescriptorHalfSamples; ++k) {
     const long p = position + k * step;
     const double dx = (BoxSum(p, p + step) - BoxSum(p - step, p)) / static_cast<double>(step);
-    const double kk = static_cast<double>(k);
-    const double w = std::exp(-kk * kk / (2.0 * kDescriptorSigmaSamples * kDescriptorSigmaSamples));
+    const double w = weights_[static_cast<std::size_t>(k + kDescriptorHalfSamples)];
     const auto sub = static_cast<std::size_t>((k + kDescriptorHalfSamples) / kSamplesPerSubregion);
     v[2 * sub] += w * dx;
     v[2 * sub + 1] += w * std::abs(dx);

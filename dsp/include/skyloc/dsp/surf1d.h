@@ -126,7 +126,7 @@ struct LandmarkMatch {
   int inliers = 0;
   double ransac_score = 0.0;  // sum of 1 / distance over the inliers (NN with RANSAC)
   double scale = 1.0;         // b_s
-  double displacement = 0.0;  // b_d, columns, wrapped to [-n/2, n/2)
+  double displacement = 0.0;  // b_d, columns, wrapped to [-n/2, n/2]
   // Circular mean of x_test - x_stored over the inliers, in degrees in [-180, 180): how
   // far the test strip's content is turned from the stored strip's, towards increasing
   // azimuth. A robot that turned by +psi about body z sees its scene turned by -psi.
