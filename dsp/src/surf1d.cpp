@@ -18,6 +18,16 @@ double Wrap(double x, double n) {
   return x - n * std::round(x / n);
 }
 
+// The same for |x| within a few n, without a library call in the RANSAC loop (std::round
+// is not inlined without SSE4.1): +-n/2 are left as they are.
+double Fold(double x, double n, double half) {
+  while (x > half)
+    x -= n;
+  while (x < -half)
+    x += n;
+  return x;
+}
+
 // SplitMix64: a small, seedable generator whose sequence is fixed by the seed on every
 // platform (std:: distributions are not).
 std::uint64_t NextRandom(std::uint64_t* state) {
@@ -270,6 +280,7 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     return Surf1dError::kOk;
 
   const double nd = n;
+  const double half = 0.5 * nd;
   const auto xs = [&](int m) { return pairs_[static_cast<std::size_t>(m)].x_stored; };
   const auto xt = [&](int m) { return pairs_[static_cast<std::size_t>(m)].x_test; };
   const auto count = static_cast<std::uint64_t>(matches);
@@ -284,20 +295,21 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     if (j >= i)
       ++j;
     // Differences measured the short way round, anchored at match i.
-    const double ds = Wrap(xs(j) - xs(i), nd);
-    const double dt = Wrap(xt(j) - xt(i), nd);
+    const double ds = Fold(xs(j) - xs(i), nd, half);
+    const double dt = Fold(xt(j) - xt(i), nd, half);
     if (ds == 0.0)
       continue;
     const double scale = dt / ds;
     const auto max_scale = static_cast<double>(options_.max_scale);
-    if (!(std::abs(scale) >= 1.0 / max_scale && std::abs(scale) <= max_scale)) {
+    // A mirrored horizon (b_s < 0) is not a view of the same place.
+    if (!(scale >= 1.0 / max_scale && scale <= max_scale)) {
       continue;
     }
     int inliers = 0;
     double residual_sum = 0.0;
     for (int m = 0; m < matches; ++m) {
-      const double predicted = scale * Wrap(xs(m) - xs(i), nd);
-      const double residual = std::abs(Wrap(Wrap(xt(m) - xt(i), nd) - predicted, nd));
+      const double predicted = scale * Fold(xs(m) - xs(i), nd, half);
+      const double residual = std::abs(Fold(Fold(xt(m) - xt(i), nd, half) - predicted, nd, half));
       const bool in = residual <= static_cast<double>(options_.inlier_threshold);
       inlier_[static_cast<std::size_t>(m)] = in ? 1 : 0;
       if (in) {

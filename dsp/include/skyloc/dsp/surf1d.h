@@ -115,7 +115,7 @@ struct LandmarkMatchOptions {
   float min_distance = 1e-3f;     // distance floor in the 1 / distance score
   int ransac_iterations = 200;    // fixed: the cost does not depend on the data
   float inlier_threshold = 2.0f;  // columns
-  float max_scale = 1.25f;        // |b_s| within [1 / max_scale, max_scale]
+  float max_scale = 1.25f;        // b_s within [1 / max_scale, max_scale] (> 0)
   std::uint64_t seed = 1;         // the same inputs always give the same answer
 };
 
