@@ -1,0 +1,444 @@
+#include "skyloc/dsp/surf1d.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "skyloc/dsp/horizon_strip.h"
+#include "skyloc/dsp/lens.h"
+#include "skyloc/platform/alloc_counter.h"
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// A rough integer-valued strip (a smoothed random walk), so that integral sums are exact
+// and shifted copies give bit-identical responses.
+std::vector<float> IntegerStrip(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> step(-6, 6);
+  std::vector<float> s(static_cast<std::size_t>(n));
+  int v = 120;
+  for (auto& x : s) {
+    v = std::clamp(v + step(rng), 10, 245);
+    x = static_cast<float>(v);
+  }
+  return s;
+}
+
+std::vector<float> Shifted(const std::vector<float>& s, int k) {
+  const int n = static_cast<int>(s.size());
+  std::vector<float> out(s.size());
+  for (int j = 0; j < n; ++j)
+    out[static_cast<std::size_t>((j + k) % n)] = s[static_cast<std::size_t>(j)];
+  return out;
+}
+
+std::vector<Surf1dFeature> DetectAll(Surf1d& surf, const std::vector<float>& strip) {
+  std::vector<Surf1dFeature> f(512);
+  int count = 0;
+  EXPECT_EQ(surf.Detect(strip, f, &count), Surf1dError::kOk);
+  f.resize(static_cast<std::size_t>(count));
+  return f;
+}
+
+TEST(Surf1dTest, LayersAreTheDistinctSurfLobeWidths) {
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(360, Surf1dOptions{}), Surf1dError::kOk);
+  const std::vector<int> expected = {3, 5, 7, 9, 13, 17, 25, 33, 49};
+  EXPECT_EQ(std::vector<int>(surf.lobes().begin(), surf.lobes().end()), expected);
+  EXPECT_EQ(Surf1dMaxLobe(Surf1dOptions{}), 49);
+}
+
+// Second implementation: the three lobes summed sample by sample with wrap-around.
+TEST(Surf1dTest, BoxResponseEqualsDirectLobeSums) {
+  const int n = 257;
+  const std::vector<float> s = IntegerStrip(n, 3);
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(n, Surf1dOptions{}), Surf1dError::kOk);
+  DetectAll(surf, s);
+  const auto at = [&](int i) {
+    return static_cast<double>(s[static_cast<std::size_t>(((i % n) + n) % n)]);
+  };
+  for (int layer = 0; layer < static_cast<int>(surf.lobes().size()); ++layer) {
+    const int l = surf.lobes()[static_cast<std::size_t>(layer)];
+    for (int x = 0; x < n; ++x) {
+      double d = 0.0;
+      for (int k = -(l - 1) / 2; k <= (l - 1) / 2; ++k)
+        d += at(x - l + k) + at(x + l + k) - 2.0 * at(x + k);
+      ASSERT_NEAR(surf.Response(layer, x), d / l, 1e-4 * (1.0 + std::abs(d / l)))
+          << "l=" << l << " x=" << x;
+    }
+  }
+}
+
+// On a cosine the box filter has a closed form (box gain times second-difference gain),
+// and at low frequency it matches the Gaussian second derivative of sigma^2 = l^2/4 - 1/12.
+TEST(Surf1dTest, BoxResponseOnCosineMatchesClosedFormAndGaussianDerivative) {
+  const int n = 512;
+  const double amplitude = 50.0;
+  for (const int cycles : {1, 2, 3, 7}) {
+    const double w = 2.0 * kPi * cycles / n;
+    std::vector<float> s(n);
+    for (int x = 0; x < n; ++x)
+      s[static_cast<std::size_t>(x)] = static_cast<float>(128.0 + amplitude * std::cos(w * x));
+    Surf1d surf;
+    ASSERT_EQ(surf.Init(n, Surf1dOptions{}), Surf1dError::kOk);
+    DetectAll(surf, s);
+    for (int layer = 0; layer < static_cast<int>(surf.lobes().size()); ++layer) {
+      const double l = surf.lobes()[static_cast<std::size_t>(layer)];
+      const double gain = -4.0 * std::pow(std::sin(w * l / 2), 3) / std::sin(w / 2);
+      const double sigma2 = l * l / 4 - 1.0 / 12;
+      const double gaussian = -w * w * std::exp(-w * w * sigma2 / 2);
+      for (int x = 0; x < n; x += 17) {
+        const double d = static_cast<double>(surf.Response(layer, x)) * l;
+        EXPECT_NEAR(d, gain * amplitude * std::cos(w * x), 2e-3 * amplitude);
+        if (w * std::sqrt(sigma2) <= 0.6) {
+          // Fourth-order agreement: within 0.5 % of the peak second derivative.
+          EXPECT_NEAR(d / (l * l * l), gaussian * amplitude * std::cos(w * x),
+                      5e-3 * w * w * amplitude);
+        }
+      }
+    }
+  }
+}
+
+// The continuous response of the box filter to a Gaussian blob A exp(-x^2 / 2 sb^2) at its
+// centre, from the error function: lobes [-3l/2, -l/2], [-l/2, l/2], [l/2, 3l/2].
+double AnalyticBlobResponse(double l, double sb) {
+  const auto e = [&](double a) { return std::erf(a / (sb * std::sqrt(2.0))); };
+  return sb * std::sqrt(kPi / 2) * (2 * e(1.5 * l) - 6 * e(0.5 * l)) / l;
+}
+
+TEST(Surf1dTest, GaussianBlobIsFoundAtItsAnalyticScaleAndPosition) {
+  const int n = 512;
+  Surf1dOptions options;
+  options.suppress_across_scale = true;
+  options.threshold = 1.0f;
+  for (const double sb : {2.0, 4.0, 5.0, 10.0}) {
+    for (const double sign : {1.0, -1.0}) {
+      const int centre = 300;
+      std::vector<float> s(n);
+      for (int x = 0; x < n; ++x) {
+        const double u = x - centre;
+        s[static_cast<std::size_t>(x)] =
+            static_cast<float>(100.0 + sign * 80.0 * std::exp(-u * u / (2 * sb * sb)));
+      }
+      Surf1d surf;
+      ASSERT_EQ(surf.Init(n, options), Surf1dError::kOk);
+      const std::vector<Surf1dFeature> f = DetectAll(surf, s);
+      int predicted = 0;
+      double best = 0.0;
+      for (int layer = 0; layer < static_cast<int>(surf.lobes().size()); ++layer) {
+        const double r =
+            std::abs(AnalyticBlobResponse(surf.lobes()[static_cast<std::size_t>(layer)], sb));
+        if (r > best) {
+          best = r;
+          predicted = layer;
+        }
+      }
+      const auto hit = std::find_if(f.begin(), f.end(),
+                                    [&](const Surf1dFeature& g) { return g.position == centre; });
+      ASSERT_NE(hit, f.end()) << "sb=" << sb;
+      EXPECT_EQ(hit->layer, predicted) << "sb=" << sb;
+      EXPECT_EQ(hit->laplacian_sign, sign > 0 ? -1 : 1);
+      EXPECT_NEAR(std::abs(hit->response), 80.0 * best, 0.03 * 80.0 * best);
+      // Exactly one feature at the blob's centre across scales.
+      EXPECT_EQ(
+          std::count_if(f.begin(), f.end(),
+                        [&](const Surf1dFeature& g) { return std::abs(g.position - centre) <= 1; }),
+          1);
+    }
+  }
+}
+
+TEST(Surf1dTest, ShiftedStripGivesShiftedFeaturesWithIdenticalDescriptors) {
+  const int n = 360;
+  const std::vector<float> s = IntegerStrip(n, 11);
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(n, Surf1dOptions{}), Surf1dError::kOk);
+  const std::vector<Surf1dFeature> base = DetectAll(surf, s);
+  ASSERT_GE(base.size(), 20u);
+  ASSERT_EQ(surf.dropped(), 0);
+  LandmarkMatcher matcher;
+  ASSERT_EQ(matcher.Init(512, LandmarkMatchOptions{}), Surf1dError::kOk);
+  for (const int k : {1, 37, 180, 300, 359}) {
+    const std::vector<Surf1dFeature> moved = DetectAll(surf, Shifted(s, k));
+    ASSERT_EQ(moved.size(), base.size()) << "k=" << k;
+    for (const Surf1dFeature& a : base) {
+      const auto b = std::find_if(moved.begin(), moved.end(), [&](const Surf1dFeature& g) {
+        return g.position == (a.position + k) % n && g.layer == a.layer;
+      });
+      ASSERT_NE(b, moved.end()) << "k=" << k << " position " << a.position;
+      EXPECT_EQ(b->response, a.response);
+      EXPECT_EQ(b->descriptor, a.descriptor);
+    }
+    LandmarkMatch m;
+    ASSERT_EQ(matcher.Match(base, moved, n, &m), Surf1dError::kOk);
+    ASSERT_TRUE(m.model_found);
+    double expected = k * 360.0 / n;
+    if (expected >= 180.0)
+      expected -= 360.0;
+    EXPECT_NEAR(m.heading_offset_deg, expected, 360.0 / n) << "k=" << k;
+    EXPECT_NEAR(m.scale, 1.0, 1e-9);
+    EXPECT_GE(m.inliers, m.matches * 9 / 10);
+  }
+}
+
+// --- Synthetic places: a skyline (elevation of the sky's lower edge, degrees, per
+// azimuth) above textured ground. Pixels above the skyline are sky (220), below it ground
+// whose brightness varies with azimuth (buildings, trees).
+struct Place {
+  std::vector<double> harmonics;  // a, b pairs
+  std::vector<double> texture;
+  double Skyline(double phi) const {
+    double h = 9.0;
+    for (std::size_t k = 0; k < harmonics.size() / 2; ++k)
+      h += harmonics[2 * k] * std::cos(static_cast<double>(k + 1) * phi) +
+           harmonics[2 * k + 1] * std::sin(static_cast<double>(k + 1) * phi);
+    return h;
+  }
+  double Ground(double phi) const {
+    double g = 70.0;
+    for (std::size_t k = 0; k < texture.size() / 2; ++k)
+      g += texture[2 * k] * std::cos(static_cast<double>(k + 3) * phi) +
+           texture[2 * k + 1] * std::sin(static_cast<double>(k + 3) * phi);
+    return g;
+  }
+};
+
+Place RandomPlace(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Place p;
+  for (int k = 0; k < 24; ++k) {
+    const double a = 7.0 / (1.0 + 0.25 * (k / 2));
+    p.harmonics.push_back(a * normal(rng) / 2.0);
+  }
+  for (int k = 0; k < 20; ++k)
+    p.texture.push_back(12.0 * normal(rng) / (1.0 + 0.2 * (k / 2)));
+  return p;
+}
+
+// The place's value seen at body azimuth phi and elevation (degrees) when the scene is
+// turned by yaw (radians) towards increasing azimuth.
+double SceneValue(const Place& p, double phi, double elevation_deg, double yaw) {
+  const double world = phi - yaw;
+  return elevation_deg > p.Skyline(world) ? 220.0 : p.Ground(world);
+}
+
+std::vector<std::uint8_t> RenderFisheye(const Lens& lens, const Place& p, double yaw) {
+  const int w = lens.params().width, h = lens.params().height;
+  std::vector<std::uint8_t> grey(static_cast<std::size_t>(w * h), 0);
+  Eigen::Vector3d ray;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (!lens.PixelToRay(x, y, &ray))
+        continue;
+      const double elevation = std::asin(std::clamp(ray.z(), -1.0, 1.0)) * 180.0 / kPi;
+      const double v = SceneValue(p, std::atan2(ray.y(), ray.x()), elevation, yaw);
+      grey[static_cast<std::size_t>(y * w + x)] =
+          static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
+    }
+  }
+  return grey;
+}
+
+TEST(Surf1dTest, RecoversTheYawOfAFisheyeSceneThroughTheLens) {
+  LensParams params;
+  params.model = LensModel::kEquidistant;
+  params.width = 640;
+  params.height = 480;
+  params.fov_deg = 185.0;
+  Lens lens;
+  ASSERT_EQ(lens.Init(params), LensError::kOk);
+  HorizonStrip strip;
+  ASSERT_EQ(strip.Init(lens, HorizonStripOptions{}), HorizonStripError::kOk);
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(strip.n_azimuth(), Surf1dOptions{}), Surf1dError::kOk);
+  LandmarkMatcher matcher;
+  ASSERT_EQ(matcher.Init(512, LandmarkMatchOptions{}), Surf1dError::kOk);
+
+  const Place place = RandomPlace(5);
+  const auto features_for = [&](double yaw_deg) {
+    const std::vector<std::uint8_t> grey = RenderFisheye(lens, place, yaw_deg * kPi / 180.0);
+    std::vector<float> values(static_cast<std::size_t>(strip.n_azimuth()));
+    EXPECT_EQ(strip.Extract({grey.data(), 640, 480, 640, PixelFormat::kGrey8}, values),
+              HorizonStripError::kOk);
+    return DetectAll(surf, values);
+  };
+  const std::vector<Surf1dFeature> stored = features_for(0.0);
+  ASSERT_GE(stored.size(), 15u);
+  for (const double yaw : {23.5, -71.2, 178.4, -163.0}) {
+    const std::vector<Surf1dFeature> test = features_for(yaw);
+    LandmarkMatch m;
+    ASSERT_EQ(matcher.Match(stored, test, strip.n_azimuth(), &m), Surf1dError::kOk);
+    ASSERT_TRUE(m.model_found) << "yaw " << yaw;
+    double error = m.heading_offset_deg - yaw;
+    error -= 360.0 * std::round(error / 360.0);
+    EXPECT_LE(std::abs(error), 2.0) << "yaw " << yaw << " recovered " << m.heading_offset_deg;
+    EXPECT_GE(m.inliers, 8) << "yaw " << yaw;
+    std::printf("yaw %+7.1f deg: recovered %+7.2f deg, %zu/%zu features, %d matches, %d inliers\n",
+                yaw, m.heading_offset_deg, stored.size(), test.size(), m.matches, m.inliers);
+  }
+}
+
+// The band-mean strip of a place, straight from the scene model (the same average the
+// horizon strip takes, without rendering an image), with a view change: turned by yaw,
+// contrast and brightness changed, the skyline raised or lowered a little on one side (a
+// small translation), and pixel noise.
+std::vector<float> PlaceStrip(const Place& p, int n, double yaw, double gain, double offset,
+                              double tilt, std::mt19937* rng) {
+  std::normal_distribution<double> noise(0.0, 1.5);
+  std::vector<float> s(static_cast<std::size_t>(n));
+  Place seen = p;
+  for (int j = 0; j < n; ++j) {
+    const double phi = 2.0 * kPi * j / n;
+    double sum = 0.0;
+    for (int r = 0; r < 16; ++r) {
+      const double elevation = (r + 0.5) * 20.0 / 16 - tilt * std::cos(phi - yaw);
+      sum += SceneValue(seen, phi, elevation, yaw);
+    }
+    s[static_cast<std::size_t>(j)] = static_cast<float>(gain * sum / 16 + offset + noise(*rng));
+  }
+  return s;
+}
+
+// Area under the ROC curve (Mann-Whitney): the chance that a matched pair outscores an
+// unmatched one, ties counting half.
+double Auc(const std::vector<double>& positives, const std::vector<double>& negatives) {
+  double wins = 0.0;
+  for (const double a : positives)
+    for (const double b : negatives)
+      wins += a > b ? 1.0 : (a == b ? 0.5 : 0.0);
+  return wins / (static_cast<double>(positives.size()) * static_cast<double>(negatives.size()));
+}
+
+TEST(Surf1dTest, MatchedPlacesOutscoreUnrelatedOnes) {
+  const int n = 360, places = 30;
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(n, Surf1dOptions{}), Surf1dError::kOk);
+  LandmarkMatcher matcher;
+  ASSERT_EQ(matcher.Init(512, LandmarkMatchOptions{}), Surf1dError::kOk);
+  std::mt19937 rng(2012);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<std::vector<Surf1dFeature>> stored, test;
+  std::vector<double> yaws;
+  for (int p = 0; p < places; ++p) {
+    const Place place = RandomPlace(100u + static_cast<unsigned>(p));
+    stored.push_back(DetectAll(surf, PlaceStrip(place, n, 0.0, 1.0, 0.0, 0.0, &rng)));
+    const double yaw = (uniform(rng) * 2.0 - 1.0) * kPi;
+    yaws.push_back(yaw);
+    test.push_back(
+        DetectAll(surf, PlaceStrip(place, n, yaw, 0.8 + 0.4 * uniform(rng),
+                                   20.0 * uniform(rng) - 10.0, 1.5 * uniform(rng), &rng)));
+  }
+  std::vector<double> nn_pos, nn_neg, ransac_pos, ransac_neg;
+  int heading_ok = 0;
+  for (int a = 0; a < places; ++a) {
+    for (int b = 0; b < places; ++b) {
+      LandmarkMatch m;
+      ASSERT_EQ(matcher.Match(stored[static_cast<std::size_t>(a)],
+                              test[static_cast<std::size_t>(b)], n, &m),
+                Surf1dError::kOk);
+      (a == b ? nn_pos : nn_neg).push_back(m.score);
+      (a == b ? ransac_pos : ransac_neg).push_back(m.model_found ? m.ransac_score : 0.0);
+      if (a == b && m.model_found) {
+        double error = m.heading_offset_deg - yaws[static_cast<std::size_t>(a)] * 180.0 / kPi;
+        error -= 360.0 * std::round(error / 360.0);
+        if (std::abs(error) <= 2.0)
+          ++heading_ok;
+      }
+    }
+  }
+  const double auc_nn = Auc(nn_pos, nn_neg);
+  const double auc_ransac = Auc(ransac_pos, ransac_neg);
+  std::printf(
+      "1D SURF on %d synthetic places: AUC NN %.3f, NN with RANSAC %.3f (paper, real "
+      "office images: 0.880 / 0.896); heading within 2 deg for %d/%d matched pairs\n",
+      places, auc_nn, auc_ransac, heading_ok, places);
+  RecordProperty("auc_nn", std::to_string(auc_nn));
+  RecordProperty("auc_ransac", std::to_string(auc_ransac));
+  EXPECT_GE(auc_ransac, 0.95);
+  EXPECT_GE(auc_nn, 0.85);
+  EXPECT_GE(heading_ok, places * 8 / 10);
+}
+
+TEST(Surf1dTest, RejectsBadOptionsAndSizes) {
+  Surf1d surf;
+  std::vector<float> s(360, 1.0f);
+  std::vector<Surf1dFeature> f(8);
+  int count = -1;
+  EXPECT_EQ(surf.Detect(s, f, &count), Surf1dError::kNotInitialised);
+  Surf1dOptions o;
+  o.octaves = 0;
+  EXPECT_EQ(surf.Init(360, o), Surf1dError::kBadOptions);
+  o = {};
+  o.threshold = -1.0f;
+  EXPECT_EQ(surf.Init(360, o), Surf1dError::kBadOptions);
+  EXPECT_EQ(surf.Init(147, Surf1dOptions{}), Surf1dError::kStripTooShort);
+  ASSERT_EQ(surf.Init(148, Surf1dOptions{}), Surf1dError::kOk);
+  EXPECT_EQ(surf.Detect(s, f, &count), Surf1dError::kSizeMismatch);
+  EXPECT_NE(std::string(Surf1dErrorMessage(Surf1dError::kStripTooShort)).find("n_azimuth"),
+            std::string::npos);
+
+  LandmarkMatcher matcher;
+  LandmarkMatch m;
+  EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kNotInitialised);
+  EXPECT_EQ(matcher.Init(0, LandmarkMatchOptions{}), Surf1dError::kBadOptions);
+  ASSERT_EQ(matcher.Init(4, LandmarkMatchOptions{}), Surf1dError::kOk);
+  EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kTooManyFeatures);
+}
+
+// A full buffer keeps the strongest features.
+TEST(Surf1dTest, OverflowKeepsTheStrongest) {
+  const std::vector<float> s = IntegerStrip(360, 7);
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(360, Surf1dOptions{}), Surf1dError::kOk);
+  std::vector<Surf1dFeature> all = DetectAll(surf, s);
+  ASSERT_GT(all.size(), 10u);
+  std::vector<Surf1dFeature> few(10);
+  int count = 0;
+  ASSERT_EQ(surf.Detect(s, few, &count), Surf1dError::kOk);
+  EXPECT_EQ(count, 10);
+  EXPECT_EQ(surf.dropped(), static_cast<int>(all.size()) - 10);
+  std::vector<float> strengths;
+  for (const auto& g : all)
+    strengths.push_back(std::abs(g.response));
+  std::sort(strengths.rbegin(), strengths.rend());
+  for (const auto& g : few)
+    EXPECT_GE(std::abs(g.response), strengths[9]);
+  EXPECT_TRUE(std::is_sorted(few.begin(), few.end(),
+                             [](const auto& a, const auto& b) { return a.position < b.position; }));
+}
+
+TEST(Surf1dTest, DetectAndMatchAllocateNothing) {
+  ASSERT_TRUE(AllocationCounterActive());
+  const std::vector<float> a = IntegerStrip(360, 1);
+  const std::vector<float> b = Shifted(a, 40);
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(360, Surf1dOptions{}), Surf1dError::kOk);
+  LandmarkMatcher matcher;
+  ASSERT_EQ(matcher.Init(256, LandmarkMatchOptions{}), Surf1dError::kOk);
+  std::vector<Surf1dFeature> fa(256), fb(256);
+  int na = 0, nb = 0;
+  LandmarkMatch m;
+  AllocationScope scope;
+  ASSERT_EQ(surf.Detect(a, fa, &na), Surf1dError::kOk);
+  ASSERT_EQ(surf.Detect(b, fb, &nb), Surf1dError::kOk);
+  ASSERT_EQ(matcher.Match(std::span(fa).first(static_cast<std::size_t>(na)),
+                          std::span(fb).first(static_cast<std::size_t>(nb)), 360, &m),
+            Surf1dError::kOk);
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_TRUE(m.model_found);
+}
+
+}  // namespace
+}  // namespace skyloc::dsp
