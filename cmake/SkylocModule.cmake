@@ -20,6 +20,7 @@ function(skyloc_add_gtest name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} skyloc::warnings GTest::gtest_main GTest::gmock)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   target_compile_definitions(${name} PRIVATE
     SKYLOC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     SKYLOC_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")

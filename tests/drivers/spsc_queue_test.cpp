@@ -9,33 +9,12 @@
 #include <cstdio>
 #include <thread>
 
+#include "support/emulator.h"
+
 namespace skyloc::drivers {
 namespace {
 
-// The ELF machine (e_machine) of an executable, or 0 when it cannot be read.
-std::uint16_t ElfMachine(const char* path) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0)
-    return 0;
-  unsigned char header[20] = {};
-  const bool ok = ::read(fd, header, sizeof header) == static_cast<ssize_t>(sizeof header);
-  ::close(fd);
-  if (!ok || header[0] != 0x7f || header[1] != 'E')
-    return 0;
-  return static_cast<std::uint16_t>(header[18] | (header[19] << 8));  // little-endian targets
-}
-
-// True under a user-mode emulator (the cross builds run their tests in qemu-user): this
-// program is built for another machine than its parent process (ctest, a shell) runs on.
-// qemu-user 7.2 on the build machines hangs in pthread_create for dynamically linked
-// aarch64 programs, so threaded tests cannot run there.
-bool UnderUserModeEmulator() {
-  char parent[64];
-  std::snprintf(parent, sizeof parent, "/proc/%d/exe", static_cast<int>(::getppid()));
-  const std::uint16_t self = ElfMachine("/proc/self/exe");
-  const std::uint16_t host = ElfMachine(parent);
-  return self != 0 && host != 0 && self != host;
-}
+using skyloc::testing::UnderUserModeEmulator;
 
 TEST(SpscQueue, IsFifoAndReportsFullAndEmpty) {
   SpscQueue<int, 4> q;
