@@ -189,7 +189,11 @@ cmd_test() {
   deps host
   deps aarch64
   configure_and_build host
-  run_ctest host
+  run_ctest host -LE hil
+  # VM tests get one more try when they fail: libcamera 0.0.3 under QEMU TCG hung once in
+  # 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc. A real failure
+  # fails both tries.
+  run_ctest host -L hil --repeat until-pass:2
   configure_and_build asan
   # The sanitizer and aarch64 builds run every test but the VM ones (those boot a guest
   # with the host build's binaries) and the long soak runs (the host build runs those).
@@ -198,7 +202,8 @@ cmd_test() {
   # Every aarch64 test, the hil ones included: those boot an arm64 kernel in
   # qemu-system-aarch64 with the cross-built binaries (the rest run under qemu-user).
   # The slow soak runs are the host build's job.
-  run_ctest aarch64 -LE slow
+  run_ctest aarch64 -LE "slow|hil"
+  run_ctest aarch64 -L hil --repeat until-pass:2
   say "all test runs took $((SECONDS - start)) s"
   if [ ${#FAILED_KINDS[@]} -gt 0 ]; then
     echo "failing builds: ${FAILED_KINDS[*]}"
