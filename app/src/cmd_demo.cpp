@@ -68,7 +68,7 @@ int RunDemo(std::span<char* const> args) {
       quick = true;
     } else if (std::strcmp(args[i], "--world") == 0 && i + 1 < args.size()) {
       world = args[++i];
-    } else if (std::strcmp(args[i], "--help") == 0 || std::strcmp(args[i], "-h") == 0) {
+    } else if (IsHelpFlag(args[i])) {
       std::fputs(kUsage, stdout);
       return kExitOk;
     } else {

@@ -80,7 +80,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   for (std::size_t i = 0; i < args.size(); ++i) {
     const char* a = args[i];
     const auto value = [&]() -> const char* { return i + 1 < args.size() ? args[++i] : nullptr; };
-    if (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0) {
+    if (IsHelpFlag(a)) {
       std::fputs(kUsage, stdout);
       *done = true;
       return kExitOk;

@@ -305,7 +305,7 @@ std::string CommonNotes(const sim::ExperimentOptions& e) {
 
 int RunExperiment(std::span<char* const> args) {
   for (char* const a : args) {
-    if (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0) {
+    if (IsHelpFlag(a)) {
       std::fputs(kUsage, stdout);
       return kExitOk;
     }

@@ -54,7 +54,7 @@ int ParseModeArgs(const char* name, const char* usage, std::span<char* const> ar
         std::fprintf(stderr, "skyloc %s: %s needs a value\n%s", name, flag, usage);
       return next != nullptr;
     };
-    if (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0) {
+    if (IsHelpFlag(a)) {
       std::fputs(usage, stdout);
       return kExitOk;
     } else if (std::strcmp(a, "--route") == 0) {
@@ -170,8 +170,7 @@ int RunReplay(std::span<char* const> args) {
 }
 
 int RunRoute(std::span<char* const> args) {
-  if (args.size() == 1 &&
-      (std::strcmp(args[0], "--help") == 0 || std::strcmp(args[0], "-h") == 0)) {
+  if (args.size() == 1 && IsHelpFlag(args[0])) {
     std::fputs(kRouteUsage, stdout);
     return kExitOk;
   }

@@ -342,7 +342,7 @@ int Fail(const Status& s) {
 
 int RunSimulate(std::span<char* const> args) {
   for (char* const a : args) {
-    if (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0) {
+    if (IsHelpFlag(a)) {
       std::fputs(kUsage, stdout);
       return kExitOk;
     }

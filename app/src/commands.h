@@ -2,6 +2,7 @@
 // returning the process exit code; main() dispatches through kCommands.
 #pragma once
 
+#include <cstring>
 #include <span>
 
 namespace skyloc::app {
@@ -23,6 +24,11 @@ int RunEval(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);
 int RunSimulate(std::span<char* const> args);
 int RunExperiment(std::span<char* const> args);
+
+// True for the flags that ask a command for its usage text.
+inline bool IsHelpFlag(const char* arg) {
+  return std::strcmp(arg, "--help") == 0 || std::strcmp(arg, "-h") == 0;
+}
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

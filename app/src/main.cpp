@@ -37,8 +37,7 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   const char* name = argv[1];
-  if (std::strcmp(name, "--help") == 0 || std::strcmp(name, "-h") == 0 ||
-      std::strcmp(name, "help") == 0) {
+  if (IsHelpFlag(name) || std::strcmp(name, "help") == 0) {
     PrintUsage(stdout);
     return kExitOk;
   }
