@@ -14,9 +14,14 @@ endif()
 # Floating point is IEEE everywhere: host and ARM must agree with the same reference
 # files. -ffp-contract=off stops GCC fusing a*b+c into FMA on aarch64 (x86-64 baseline
 # has no FMA), which would otherwise make the two architectures round differently.
+# -fno-math-errno and -fno-trapping-math change no value: they tell GCC that nothing here
+# reads errno after maths (sqrt of a negative is NaN either way) and nothing enables
+# floating-point traps or reads the exception flags. That lets sqrt be one instruction
+# and a select like `var > 0 ? z : 0` run without a branch, so such loops vectorise.
 add_library(skyloc_fp INTERFACE)
 add_library(skyloc::fp ALIAS skyloc_fp)
-target_compile_options(skyloc_fp INTERFACE -ffp-contract=off -fno-fast-math)
+target_compile_options(skyloc_fp INTERFACE -ffp-contract=off -fno-fast-math -fno-math-errno
+                                           -fno-trapping-math)
 
 add_library(skyloc_sanitize INTERFACE)
 add_library(skyloc::sanitize ALIAS skyloc_sanitize)
