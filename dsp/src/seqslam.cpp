@@ -94,26 +94,28 @@ inline Float4 Abs4(Float4 v) {
   return v;
 }
 
-}  // namespace
-
-void DifferenceColumn(std::span<const float> database, int dim, std::span<const float> query,
-                      std::span<float> out) {
+// Mean absolute difference of every row of a database to the query. `Rows` says how the
+// database holds its elements (float or bfloat16): Load8 gives elements i .. i + 7 of a
+// row as two Float4, Element one element as a float.
+//
+// Eight independent partial sums per row (lane l sums elements l, l + 8, l + 16, ...),
+// held as two SIMD registers, combined as ((0+1)+(2+3))+((4+5)+(6+7)). No sum is
+// reordered (no fast-math), so every build gives the same floats, and a bfloat16
+// database gives exactly what its float conversion would. Two rows per pass share each
+// load of the query, which does not fit in registers.
+template <typename Rows>
+void DifferenceRows(const typename Rows::Element* database, int dim, const float* q,
+                    std::span<float> out) {
   const std::size_t d = Sz(dim);
   const float inv_dim = 1.0f / static_cast<float>(dim);
-  // Eight independent partial sums per row (lane l sums elements l, l + 8, l + 16, ...),
-  // held as two SIMD registers, combined as ((0+1)+(2+3))+((4+5)+(6+7)). No sum is
-  // reordered (no fast-math), so every build gives the same floats, and
-  // DifferenceColumnBFloat16 (the same lanes written as scalar code) agrees bit for bit.
-  // Two rows per pass share each load of the query, which does not fit in registers.
   constexpr std::size_t kLanes = 8;
   const std::size_t whole = d - d % kLanes;
-  const float* q = query.data();
-  const auto finish = [&](Float4 lo, Float4 hi, const float* row) {
+  const auto finish = [&](Float4 lo, Float4 hi, const typename Rows::Element* row) {
     float lane[kLanes];
     std::memcpy(lane, &lo, sizeof lo);
     std::memcpy(lane + 4, &hi, sizeof hi);
     for (std::size_t i = whole; i < d; ++i)
-      lane[i - whole] += std::fabs(row[i] - q[i]);
+      lane[i - whole] += std::fabs(Rows::ToFloat(row[i]) - q[i]);
     const float sum =
         ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
     // Mean absolute difference (OpenSeqSLAM divides by the number of references instead:
@@ -122,28 +124,67 @@ void DifferenceColumn(std::span<const float> database, int dim, std::span<const 
   };
   std::size_t r = 0;
   for (; r + 2 <= out.size(); r += 2) {
-    const float* row0 = database.data() + r * d;
-    const float* row1 = row0 + d;
+    const typename Rows::Element* row0 = database + r * d;
+    const typename Rows::Element* row1 = row0 + d;
     Float4 a_lo = {}, a_hi = {}, b_lo = {}, b_hi = {};
     for (std::size_t i = 0; i < whole; i += kLanes) {
       const Float4 q_lo = Load4(q + i), q_hi = Load4(q + i + 4);
-      a_lo += Abs4(Load4(row0 + i) - q_lo);
-      a_hi += Abs4(Load4(row0 + i + 4) - q_hi);
-      b_lo += Abs4(Load4(row1 + i) - q_lo);
-      b_hi += Abs4(Load4(row1 + i + 4) - q_hi);
+      Float4 lo, hi;
+      Rows::Load8(row0 + i, &lo, &hi);
+      a_lo += Abs4(lo - q_lo);
+      a_hi += Abs4(hi - q_hi);
+      Rows::Load8(row1 + i, &lo, &hi);
+      b_lo += Abs4(lo - q_lo);
+      b_hi += Abs4(hi - q_hi);
     }
     out[r] = finish(a_lo, a_hi, row0);
     out[r + 1] = finish(b_lo, b_hi, row1);
   }
   for (; r < out.size(); ++r) {
-    const float* row = database.data() + r * d;
-    Float4 lo = {}, hi = {};
+    const typename Rows::Element* row = database + r * d;
+    Float4 acc_lo = {}, acc_hi = {};
     for (std::size_t i = 0; i < whole; i += kLanes) {
-      lo += Abs4(Load4(row + i) - Load4(q + i));
-      hi += Abs4(Load4(row + i + 4) - Load4(q + i + 4));
+      Float4 lo, hi;
+      Rows::Load8(row + i, &lo, &hi);
+      acc_lo += Abs4(lo - Load4(q + i));
+      acc_hi += Abs4(hi - Load4(q + i + 4));
     }
-    out[r] = finish(lo, hi, row);
+    out[r] = finish(acc_lo, acc_hi, row);
   }
+}
+
+struct Float32Rows {
+  using Element = float;
+  static float ToFloat(float x) { return x; }
+  static void Load8(const float* p, Float4* lo, Float4* hi) {
+    *lo = Load4(p);
+    *hi = Load4(p + 4);
+  }
+};
+
+struct BFloat16Rows {
+  using Element = std::uint16_t;
+  static float ToFloat(std::uint16_t x) { return FromBFloat16(x); }
+  // Eight bfloat16 become eight floats by interleaving them with zero halves: the
+  // bfloat16 lands in the high 16 bits of each 32-bit lane (punpcklwd / zip1).
+  static void Load8(const std::uint16_t* p, Float4* lo, Float4* hi) {
+    static_assert(std::endian::native == std::endian::little, "lane layout assumes little endian");
+    using Half8 = std::uint16_t __attribute__((vector_size(16)));
+    Half8 h;
+    std::memcpy(&h, p, sizeof h);
+    const Half8 zero = {};
+    const Half8 low = __builtin_shuffle(zero, h, Half8{0, 8, 1, 9, 2, 10, 3, 11});
+    const Half8 high = __builtin_shuffle(zero, h, Half8{4, 12, 5, 13, 6, 14, 7, 15});
+    std::memcpy(lo, &low, sizeof low);
+    std::memcpy(hi, &high, sizeof high);
+  }
+};
+
+}  // namespace
+
+void DifferenceColumn(std::span<const float> database, int dim, std::span<const float> query,
+                      std::span<float> out) {
+  DifferenceRows<Float32Rows>(database.data(), dim, query.data(), out);
 }
 
 std::uint16_t ToBFloat16(float value) {
@@ -160,33 +201,7 @@ float FromBFloat16(std::uint16_t value) {
 
 void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
                               std::span<const float> query, std::span<float> out) {
-  // The loop of DifferenceColumn with the conversion in front of each element: same lanes,
-  // same order, so the result equals DifferenceColumn over the converted database.
-  const std::size_t d = Sz(dim);
-  const float inv_dim = 1.0f / static_cast<float>(dim);
-  constexpr std::size_t kLanes = 8;
-  const std::size_t whole = d - d % kLanes;
-  const float* q = query.data();
-  for (std::size_t r = 0; r < out.size(); ++r) {
-    const std::uint16_t* row = database.data() + r * d;
-    float lane[kLanes] = {};
-    for (std::size_t i = 0; i < whole; i += kLanes) {
-      // Widen eight elements at once (shift into the high half), then reinterpret: the
-      // form the vectoriser turns into unpack + subtract + and-not.
-      std::uint32_t bits[kLanes];
-      for (std::size_t l = 0; l < kLanes; ++l)
-        bits[l] = static_cast<std::uint32_t>(row[i + l]) << 16;
-      float value[kLanes];
-      std::memcpy(value, bits, sizeof value);
-      for (std::size_t l = 0; l < kLanes; ++l)
-        lane[l] += std::fabs(value[l] - q[i + l]);
-    }
-    for (std::size_t i = whole; i < d; ++i)
-      lane[i - whole] += std::fabs(FromBFloat16(row[i]) - q[i]);
-    const float sum =
-        ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
-    out[r] = sum * inv_dim;
-  }
+  DifferenceRows<BFloat16Rows>(database.data(), dim, query.data(), out);
 }
 
 float EnhancementShift(int n, int contrast_window) {
@@ -199,71 +214,125 @@ float EnhancementShift(int n, int contrast_window) {
   return static_cast<float>(static_cast<double>(m - 1) / std::sqrt(static_cast<double>(m)));
 }
 
-void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out,
-                   std::span<float> scratch) {
-  const int n = static_cast<int>(d.size());
-  if (n == 0)
-    return;
+void ColumnEnhancer::Begin(int n, int contrast_window) {
+  n_ = n;
+  half_ = contrast_window / 2;
+  shift_ = EnhancementShift(n, contrast_window);
+  done_ = 0;
+  m_ = 0;
+  primed_ = false;
+  sum_ = 0.0;
+  sum_sq_ = 0.0;
+}
+
+int ColumnEnhancer::Advance(const float* d, int available, float* out) {
   // OpenSeqSLAM (doContrastEnhancement.m): rows a = max(1, i - R/2) .. b = min(N, i + R/2),
   // DD(i,:) = (D(i,:) - mean(D(a:b,:))) ./ std(D(a:b,:)). The window slides by one row per
   // step, so its sums are kept running (in double: a few ulp of drift over 100k rows)
   // instead of recomputed: O(N) rather than O(N * R).
-  //
-  // Pass 1 (sequential): the window mean into out[] and its variance into scratch[]. The
-  // only loop-carried work is one add per running sum; the divisions by the window size
-  // use reciprocals that change only near the ends.
-  const int half = contrast_window / 2;
-  const float shift = EnhancementShift(n, contrast_window);
-  double sum = 0.0, sum_sq = 0.0;
-  int m = 0;
-  for (int r = 0; r <= std::min(n - 1, half); ++r) {
-    const double v = static_cast<double>(d[Sz(r)]);
-    sum += v;
-    sum_sq += v * v;
-    ++m;
-  }
-  int m_cached = -1;
-  double inv_m = 0.0, inv_m1 = 0.0;
-  for (int i = 0; i < n; ++i) {
-    if (m != m_cached) {
-      m_cached = m;
-      inv_m = 1.0 / m;
-      inv_m1 = m > 1 ? 1.0 / (m - 1) : 0.0;
+  const int n = n_, half = half_;
+  if (!primed_) {
+    const int first_window = std::min(n, half + 1);  // rows 0 .. R/2: the window of row 0
+    if (available < first_window)
+      return done_;
+    for (int r = 0; r < first_window; ++r) {
+      const double v = static_cast<double>(d[Sz(r)]);
+      sum_ += v;
+      sum_sq_ += v * v;
+      ++m_;
     }
-    const double mean = sum * inv_m;
-    const double var = (sum_sq - sum * mean) * inv_m1;
-    // A window whose values are all equal has variance 0 but the running sums leave a
-    // rounding residue: anything below 1e-10 of the mean square counts as zero and the
-    // entry is "no contrast" (0), never NaN or Inf (note 5). A 1-row window has no std.
-    const double floor_var = 1e-10 * (sum_sq * inv_m) + 1e-30;
-    out[Sz(i)] = static_cast<float>(mean);
-    scratch[Sz(i)] = m > 1 && var > floor_var ? static_cast<float>(var) : 0.0f;
-    // Slide to row i + 1: row i + half + 1 enters, row i - half leaves.
-    double delta = 0.0, delta_sq = 0.0;
-    const int enter = i + half + 1, leave = i - half;
-    if (enter < n) {
-      const double v = static_cast<double>(d[Sz(enter)]);
-      delta += v;
-      delta_sq += v * v;
-      ++m;
-    }
-    if (leave >= 0) {
-      const double v = static_cast<double>(d[Sz(leave)]);
-      delta -= v;
-      delta_sq -= v * v;
-      --m;
-    }
-    sum += delta;
-    sum_sq += delta_sq;
+    primed_ = true;
   }
-  // Pass 2 (independent per row, vectorises): z-score plus the shift (note 4). The
-  // reciprocal square root is taken of max(var, tiny) so no lane ever divides by zero.
-  for (std::size_t i = 0; i < Sz(n); ++i) {
-    const float var = scratch[i];
-    const float inv_std = 1.0f / std::sqrt(std::max(var, 1e-30f));
-    const float z = var > 0.0f ? (d[i] - out[i]) * inv_std : 0.0f;
-    out[i] = z + shift;
+  // Row i is finished (written, and the window slid on to row i + 1) once row
+  // i + R/2 + 1 has arrived, or lies past the end of the column.
+  const int limit = available >= n ? n : std::max(done_, available - half - 1);
+  double sum = sum_, sum_sq = sum_sq_;
+  int m = m_;
+  while (done_ < limit) {
+    const int first = done_;
+    const int last = std::min(limit, first + kRowsPerPass);
+    // Pass 1 (sequential): the window mean and variance of every row. The only
+    // loop-carried work is one add per running sum: the rows entering and leaving the
+    // window are combined first.
+    double inv_m = 1.0 / m, inv_m1 = m > 1 ? 1.0 / (m - 1) : 0.0;
+    int m_of_inv = m;
+    const auto window_stats = [&](int i) {
+      if (m != m_of_inv) {  // only near the ends of the column
+        m_of_inv = m;
+        inv_m = 1.0 / m;
+        inv_m1 = m > 1 ? 1.0 / (m - 1) : 0.0;
+      }
+      const double mean = sum * inv_m;
+      const double var = (sum_sq - sum * mean) * inv_m1;
+      // A window whose values are all equal has variance 0 but the running sums leave a
+      // rounding residue: anything below 1e-10 of the mean square counts as zero and the
+      // entry is "no contrast" (0), never NaN or Inf (note 5). A 1-row window has no std.
+      const double floor_var = 1e-10 * (sum_sq * inv_m) + 1e-30;
+      mean_[i - first] = static_cast<float>(mean);
+      var_[i - first] = static_cast<float>(m > 1 && var > floor_var ? var : 0.0);
+    };
+    // Rows whose window has a row entering and one leaving (the whole column but its
+    // ends) take the branch-free path; it does the same arithmetic as the general one.
+    const int middle_begin = std::clamp(half, first, last);
+    const int middle_end = std::clamp(n - half - 1, middle_begin, last);
+    const auto general_row = [&](int i) {
+      window_stats(i);
+      double delta = 0.0, delta_sq = 0.0;
+      const int enter = i + half + 1, leave = i - half;
+      if (enter < n) {
+        const double v = static_cast<double>(d[Sz(enter)]);
+        delta += v;
+        delta_sq += v * v;
+        ++m;
+      }
+      if (leave >= 0) {
+        const double v = static_cast<double>(d[Sz(leave)]);
+        delta -= v;
+        delta_sq -= v * v;
+        --m;
+      }
+      sum += delta;
+      sum_sq += delta_sq;
+    };
+    for (int i = first; i < middle_begin; ++i)
+      general_row(i);
+    for (int i = middle_begin; i < middle_end; ++i) {
+      window_stats(i);
+      const double v_in = static_cast<double>(d[Sz(i + half + 1)]);
+      const double v_out = static_cast<double>(d[Sz(i - half)]);
+      sum += (0.0 + v_in) - v_out;
+      sum_sq += (0.0 + v_in * v_in) - v_out * v_out;
+    }
+    for (int i = middle_end; i < last; ++i)
+      general_row(i);
+    // Pass 2 (independent per row, vectorises): z-score plus the shift (note 4). The
+    // reciprocal square root is taken of max(var, tiny) so no lane ever divides by zero,
+    // and the zero-variance rows are selected afterwards, without a branch.
+    const int count = last - first;
+    const float* __restrict d_rows = d + first;
+    const float* __restrict means = mean_;
+    const float* __restrict vars = var_;
+    float* __restrict out_rows = out + first;
+    const float shift = shift_;
+    for (int i = 0; i < count; ++i) {
+      const float var = vars[i];
+      const float inv_std = 1.0f / std::sqrt(std::max(var, 1e-30f));
+      const float z = (d_rows[i] - means[i]) * inv_std;
+      out_rows[i] = (var > 0.0f ? z : 0.0f) + shift;
+    }
+    done_ = last;
   }
+  sum_ = sum;
+  sum_sq_ = sum_sq;
+  m_ = m;
+  return done_;
+}
+
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out) {
+  ColumnEnhancer enhancer;
+  const int n = static_cast<int>(d.size());
+  enhancer.Begin(n, contrast_window);
+  enhancer.Advance(d.data(), n, out.data());
 }
 
 // ---- Trajectory search -----------------------------------------------------------------
@@ -287,12 +356,28 @@ SeqSlamError TrajectorySearch::Init(const SeqSlamParams& params) {
       offsets_[Sz(k * sequence_length_ + j)] = static_cast<int>(std::floor(j * v + 1e-9));
     }
   }
+  distinct_.clear();
+  max_offset_ = 0;
+  for (int k = 0; k < velocity_count_; ++k) {
+    const auto row = [&](int i) { return offsets_.begin() + i * sequence_length_; };
+    bool seen = false;
+    for (int earlier = 0; earlier < k && !seen; ++earlier)
+      seen = std::equal(row(k), row(k) + sequence_length_, row(earlier));
+    if (!seen)
+      distinct_.push_back(k);
+    max_offset_ = std::max(max_offset_, offset(k, sequence_length_ - 1));
+  }
   return SeqSlamError::kOk;
 }
 
 SeqSlamMatch TrajectorySearch::Search(std::span<const float* const> columns, int n, int position,
                                       std::span<float> scores) const {
-  SeqSlamMatch match;
+  ScoreStarts(columns, n, 0, n, scores);
+  return Finish(columns, n, position, scores);
+}
+
+void TrajectorySearch::ScoreStarts(std::span<const float* const> columns, int n, int begin, int end,
+                                   std::span<float> scores) const {
   const int len = sequence_length_;
   const int last = len - 1;
   // Starts are processed in blocks whose partial sums stay in L1; within a block the
@@ -301,11 +386,11 @@ SeqSlamMatch TrajectorySearch::Search(std::span<const float* const> columns, int
   // blocking: batch and streaming give identical floats.
   constexpr int kBlock = 512;
   float acc[kBlock];
-  for (int b0 = 0; b0 < n; b0 += kBlock) {
-    const int b1 = std::min(n, b0 + kBlock);
+  for (int b0 = begin; b0 < end; b0 += kBlock) {
+    const int b1 = std::min(end, b0 + kBlock);
     float* best = scores.data() + b0;
     std::fill(best, best + (b1 - b0), kInf);
-    for (int k = 0; k < velocity_count_; ++k) {
+    for (const int k : distinct_) {
       // A trajectory from start s must end inside the database: s + offset(k, ds-1) < n
       // (OpenSeqSLAM's +inf row does the same; note 7).
       const int s_end = std::min(b1, n - offset(k, last));
@@ -333,7 +418,13 @@ SeqSlamMatch TrajectorySearch::Search(std::span<const float* const> columns, int
         best[i] = std::min(best[i], acc[i]);
     }
   }
+}
 
+SeqSlamMatch TrajectorySearch::Finish(std::span<const float* const> columns, int n, int position,
+                                      std::span<const float> scores) const {
+  SeqSlamMatch match;
+  const int len = sequence_length_;
+  const int last = len - 1;
   // Best start (the first on ties, as MATLAB's min).
   int best_s = -1;
   float best_score = kInf;
@@ -410,10 +501,9 @@ SeqSlamError EnhanceDifferenceMatrix(std::span<const float> d, int n_ref, int n_
     return SeqSlamError::kSizeMismatch;
   if (contrast_window < 0 || contrast_window > kMaxWindow)
     return SeqSlamError::kBadContrastWindow;
-  std::vector<float> scratch(Sz(n_ref));
   for (int q = 0; q < n_query; ++q) {
     EnhanceColumn(d.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), contrast_window,
-                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)), scratch);
+                  out.subspan(Sz(q) * Sz(n_ref), Sz(n_ref)));
   }
   return SeqSlamError::kOk;
 }
@@ -535,28 +625,52 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
     return SeqSlamError::kSizeMismatch;
   if (size_ == 0)
     return SeqSlamError::kEmptyDatabase;
-  const std::size_t n = Sz(size_);
+  const int n = size_;
   const int len = params_.sequence_length;
-  std::span<float> diff(difference_.data(), n);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    DifferenceColumn(std::span<const float>(database_.data(), n * Sz(dim_)), dim_, query, diff);
-  } else {
-    DifferenceColumnBFloat16(std::span<const std::uint16_t>(database_bf16_.data(), n * Sz(dim_)),
-                             dim_, query, diff);
-  }
-  // Ring slots are `capacity` floats apart; only the first `size` of each are used.
+  const std::size_t dim = Sz(dim_);
+  float* diff = difference_.data();
+  // Ring slots are `capacity` floats apart; only the first `size` of each are used. The
+  // new column goes into slot head_; when it fills the ring, the search reads the ring
+  // oldest first, which is then the slot after head_.
   float* slot = ring_.data() + Sz(head_) * Sz(capacity_);
-  // scores_ is free until the search: the enhancement's scratch.
-  EnhanceColumn(diff, params_.contrast_window, std::span<float>(slot, n),
-                std::span<float>(scores_.data(), n));
+  const bool full = count_ + 1 >= len;
+  if (full) {
+    for (int j = 0; j < len; ++j)
+      order_[Sz(j)] = ring_.data() + Sz((head_ + 1 + j) % len) * Sz(capacity_);
+  }
+  // Difference, enhancement and search run a chunk of reference rows at a time: each
+  // chunk's differences are enhanced as soon as their contrast windows are complete, and
+  // the starts whose trajectories lie in enhanced rows are scored, while those rows are
+  // still in L1/L2. Each step gives the same floats as whole-column passes would.
+  constexpr int kRowsPerChunk = 1024;
+  enhancer_.Begin(n, params_.contrast_window);
+  const int max_offset = search_.max_offset();
+  int read = 0, scored = 0;
+  while (read < n) {
+    const int next = std::min(n, read + kRowsPerChunk);
+    const std::size_t rows = Sz(next - read);
+    if (storage_ == ReferenceStorage::kFloat32) {
+      DifferenceColumn(std::span<const float>(database_.data() + Sz(read) * dim, rows * dim), dim_,
+                       query, std::span<float>(diff + read, rows));
+    } else {
+      DifferenceColumnBFloat16(
+          std::span<const std::uint16_t>(database_bf16_.data() + Sz(read) * dim, rows * dim), dim_,
+          query, std::span<float>(diff + read, rows));
+    }
+    read = next;
+    const int enhanced = enhancer_.Advance(diff, read, slot);
+    if (full) {
+      // Start s reads rows up to s + max_offset of the newest column.
+      const int ready = enhanced == n ? n : std::max(scored, enhanced - max_offset);
+      search_.ScoreStarts(order_, n, scored, ready, scores_);
+      scored = ready;
+    }
+  }
   head_ = (head_ + 1) % len;
   count_ = std::min(count_ + 1, len);
-  if (count_ < len)
+  if (!full)
     return SeqSlamError::kOk;  // warming up: not a full sequence yet
-  // Oldest first: the ring is full, so the oldest column is at head_.
-  for (int j = 0; j < len; ++j)
-    order_[Sz(j)] = ring_.data() + Sz((head_ + j) % len) * Sz(capacity_);
-  *out = search_.Search(order_, size_, len - 1, std::span<float>(scores_.data(), n));
+  *out = search_.Finish(order_, n, len - 1, std::span<const float>(scores_.data(), Sz(n)));
   return SeqSlamError::kOk;
 }
 

@@ -88,9 +88,9 @@ BENCHMARK(BM_DifferenceColumn)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicros
 void BM_EnhanceColumn(benchmark::State& state) {
   const std::size_t n = static_cast<std::size_t>(state.range(0));
   const std::vector<float> d = RandomFloats(n, 3);
-  std::vector<float> out(n), scratch(n);
+  std::vector<float> out(n);
   for (auto _ : state) {
-    skyloc::dsp::EnhanceColumn(d, 10, out, scratch);
+    skyloc::dsp::EnhanceColumn(d, 10, out);
     benchmark::DoNotOptimize(out.data());
   }
 }

@@ -263,6 +263,57 @@ TEST(SeqSlamStreaming, EqualsBatchWithTrailingWindow) {
   }
 }
 
+// The streaming step works through the database a chunk of rows at a time (difference,
+// enhancement and search interleaved); a route several chunks long, with contrast windows
+// that straddle the chunk boundaries, must still give the batch engine's floats exactly.
+TEST(SeqSlamStreaming, LongRouteEqualsBatchAcrossChunks) {
+  const int n_ref = 2600, n_query = 30;
+  const PlantedRoute route = MakeRoute(n_ref, n_query, 1013.0, 0.9, 0.2f, 29u);
+  for (const ReferenceStorage storage : {ReferenceStorage::kFloat32, ReferenceStorage::kBFloat16}) {
+    std::vector<float> reference = route.reference;
+    if (storage == ReferenceStorage::kBFloat16) {
+      for (float& x : reference)
+        x = FromBFloat16(ToBFloat16(x));
+    }
+    for (const int contrast : {10, 601}) {
+      SeqSlamParams p;
+      p.contrast_window = contrast;
+      std::vector<SeqSlamMatch> batch(n_query);
+      ASSERT_EQ(BatchSeqSlam(reference, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
+                SeqSlamError::kOk);
+      StreamingSeqSlam s;
+      ASSERT_EQ(s.Init(p, route.dim, n_ref, storage), SeqSlamError::kOk);
+      for (int r = 0; r < n_ref; ++r) {
+        ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
+                                     .subspan(static_cast<std::size_t>(r * route.dim),
+                                              static_cast<std::size_t>(route.dim))),
+                  SeqSlamError::kOk);
+      }
+      int found = 0;
+      for (int t = 0; t < n_query; ++t) {
+        SeqSlamMatch m;
+        ASSERT_EQ(s.Step(std::span<const float>(route.query)
+                             .subspan(static_cast<std::size_t>(t * route.dim),
+                                      static_cast<std::size_t>(route.dim)),
+                         &m),
+                  SeqSlamError::kOk);
+        const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
+        ASSERT_EQ(m.valid, b.valid) << "t " << t;
+        if (!m.valid)
+          continue;
+        EXPECT_EQ(m.reference, b.reference) << "R " << contrast << " t " << t;
+        EXPECT_EQ(m.start, b.start);
+        EXPECT_EQ(m.velocity, b.velocity);
+        EXPECT_EQ(m.score, b.score);
+        EXPECT_EQ(m.uniqueness, b.uniqueness);
+        found += std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
+      }
+      // And it localises: the planted route is found once the window is full.
+      EXPECT_GE(found, n_query - 10 - 2) << "R " << contrast;
+    }
+  }
+}
+
 TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
   const PlantedRoute route = MakeRoute(150, 40, 20.0, 1.1, 0.3f, 17u);
   SeqSlamParams p;
@@ -501,8 +552,8 @@ TEST(SeqSlamBatch, MatchesNaiveReference) {
 
 TEST(SeqSlamEnhancement, ZeroVarianceGivesFiniteOutput) {
   // A constant column (all references equally far) and a database of identical frames.
-  std::vector<float> d(50, 3.0f), out(50), scratch(50);
-  EnhanceColumn(d, 10, out, scratch);
+  std::vector<float> d(50, 3.0f), out(50);
+  EnhanceColumn(d, 10, out);
   for (float x : out)
     EXPECT_FLOAT_EQ(x, EnhancementShift(50, 10));
   std::vector<float> same(20 * 8, 0.5f), query(8, 0.5f);
@@ -536,6 +587,42 @@ TEST(SeqSlamEnhancement, ZeroVarianceGivesFiniteOutput) {
   EXPECT_EQ(m.reference, 0);
   EXPECT_TRUE(std::isfinite(m.score));
   EXPECT_EQ(m.uniqueness, 1.0f);
+}
+
+// The enhancement fed a column in arbitrary pieces writes only rows whose windows are
+// complete, and ends with exactly EnhanceColumn's floats.
+TEST(SeqSlamEnhancement, IncrementalEqualsWholeColumn) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> uni(0.0f, 2.0f);
+  std::uniform_int_distribution<int> piece(1, 700);
+  const int n = 1500;
+  std::vector<float> d(n);
+  for (float& x : d)
+    x = uni(rng);
+  std::fill(d.begin() + 300, d.begin() + 340, 1.0f);  // a flat stretch (zero std)
+  for (const int contrast : {0, 1, 2, 10, 37, 5000}) {
+    std::vector<float> whole(n), pieces(n, -1.0f);
+    EnhanceColumn(d, contrast, whole);
+    ColumnEnhancer enhancer;
+    enhancer.Begin(n, contrast);
+    int available = 0, done = 0;
+    while (done < n) {
+      available = std::min(n, available + piece(rng));
+      const int now = enhancer.Advance(d.data(), available, pieces.data());
+      ASSERT_GE(now, done);
+      if (available < n) {  // a row needs the R/2 rows after it (and one more to slide on)
+        ASSERT_LE(now, std::max(0, available - contrast / 2 - 1)) << "R " << contrast;
+      }
+      for (int r = done; r < now; ++r)
+        ASSERT_EQ(pieces[static_cast<std::size_t>(r)], whole[static_cast<std::size_t>(r)])
+            << "R " << contrast << " row " << r;
+      for (int r = now; r < n; ++r)  // nothing written ahead of the rows it reports
+        ASSERT_EQ(pieces[static_cast<std::size_t>(r)], -1.0f) << "R " << contrast << " row " << r;
+      done = now;
+    }
+    for (float x : whole)
+      ASSERT_TRUE(std::isfinite(x));
+  }
 }
 
 TEST(SeqSlamStreaming, DatabaseShorterThanTrajectoryGivesNoMatch) {

@@ -118,12 +118,36 @@ float FromBFloat16(std::uint16_t value);
 
 // Local contrast enhancement of one column of D: out[r] = (d[r] - mean) / std over rows
 // max(0, r - R/2) .. min(N - 1, r + R/2) (sample std, as MATLAB's std), plus the shift of
-// note 4 above; 0 + shift where the std is 0. O(N) with running sums. scratch: >= N floats.
-void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out,
-                   std::span<float> scratch);
+// note 4 above; 0 + shift where the std is 0. O(N) with running sums.
+void EnhanceColumn(std::span<const float> d, int contrast_window, std::span<float> out);
 
 // The constant added by EnhanceColumn for a database of n references (note 4).
 float EnhancementShift(int n, int contrast_window);
+
+// EnhanceColumn produced incrementally, as the rows of d arrive: the streaming engine
+// enhances the rows of a column while the rest of its differences are still being read
+// from the database. Every row gets the same operations in the same order however the
+// column is split, so the result equals EnhanceColumn's bit for bit (EnhanceColumn is
+// Begin + one Advance). Holds a fixed scratch of kRowsPerPass floats: allocates nothing.
+class ColumnEnhancer {
+ public:
+  void Begin(int n, int contrast_window);
+  // d[0 .. available) are known (available <= n). Writes out[r] for every row whose
+  // window is complete and returns how many leading rows of out are final.
+  int Advance(const float* d, int available, float* out);
+
+ private:
+  static constexpr int kRowsPerPass = 256;
+  int n_ = 0;
+  int half_ = 0;
+  float shift_ = 0;
+  int done_ = 0;  // rows of out written
+  int m_ = 0;     // rows in the running window of row done_
+  bool primed_ = false;
+  double sum_ = 0, sum_sq_ = 0;  // running sums over the window of row done_
+  float mean_[kRowsPerPass];
+  float var_[kRowsPerPass];
+};
 
 // The trajectory search over a window of ds enhanced columns.
 class TrajectorySearch {
@@ -135,8 +159,18 @@ class TrajectorySearch {
   // position: which of the ds query frames the match is reported for (0..ds-1).
   // scores: scratch of >= n floats; on return scores[s] is the best trajectory score
   // starting at reference row s (+inf when no velocity fits). Allocates nothing.
+  // Search = ScoreStarts over 0..n, then Finish.
   SeqSlamMatch Search(std::span<const float* const> columns, int n, int position,
                       std::span<float> scores) const;
+
+  // scores[s] for starts s in [begin, end): reads rows s .. s + max_offset() of the
+  // columns. Each score is summed in the same order whatever the range, so scoring a
+  // database piece by piece gives the same floats as scoring it at once.
+  void ScoreStarts(std::span<const float* const> columns, int n, int begin, int end,
+                   std::span<float> scores) const;
+  // The match from complete scores: best start, its velocity, the runner-up.
+  SeqSlamMatch Finish(std::span<const float* const> columns, int n, int position,
+                      std::span<const float> scores) const;
 
   int sequence_length() const { return sequence_length_; }
   int velocity_count() const { return velocity_count_; }
@@ -145,13 +179,19 @@ class TrajectorySearch {
   int offset(int k, int j) const {
     return offsets_[static_cast<std::size_t>(k * sequence_length_ + j)];
   }
+  // The largest offset(k, ds - 1): a trajectory from start s reads rows up to s + this.
+  int max_offset() const { return max_offset_; }
 
  private:
   int sequence_length_ = 0;
   int velocity_count_ = 0;
   int uniqueness_window_ = 0;
+  int max_offset_ = 0;
   std::vector<float> velocities_;
   std::vector<int> offsets_;  // velocity_count_ x sequence_length_
+  // The velocities whose row offsets differ from every earlier velocity's: with ds = 10,
+  // 1.0 and 1.1 give the same rows (floor(9 * 1.1) = 9), so one sum serves both.
+  std::vector<int> distinct_;
 };
 
 // ---- Batch engine ----------------------------------------------------------------------
@@ -202,7 +242,10 @@ class StreamingSeqSlam {
 
   // One query frame: difference column, enhancement, trajectory search over the last ds
   // frames (trailing window). `out->valid` is false until ds frames have been seen.
-  // O(N * (dim + velocities * ds)), allocates nothing.
+  // O(N * (dim + velocities * ds)), allocates nothing. The three run interleaved, a few
+  // hundred reference rows at a time, so the enhancement and the search work on rows
+  // still in cache while the database streams in (the same floats as running them one
+  // after the other: see ColumnEnhancer and TrajectorySearch::ScoreStarts).
   SeqSlamError Step(std::span<const float> query, SeqSlamMatch* out);
 
   int size() const { return size_; }
@@ -220,6 +263,7 @@ class StreamingSeqSlam {
  private:
   SeqSlamParams params_;
   TrajectorySearch search_;
+  ColumnEnhancer enhancer_;
   int dim_ = 0;
   int capacity_ = 0;
   int size_ = 0;
