@@ -1,7 +1,7 @@
-// The plots `skyloc eval` draws, as SVG text: precision-recall curves of several runs,
-// and frame correspondences (matched reference against query frame over the ground truth,
-// the paper's Fig. 5a). Plain data in, the document out; the command writes it where it
-// likes.
+// The two plots `skyloc eval` and `skyloc experiment` draw, as SVG text: precision-recall
+// curves of several runs, and frame correspondences (matched reference against query
+// frame over the ground truth, the paper's Fig. 5a). Plain data in, the document out;
+// the commands write it where they like.
 #pragma once
 
 #include <cstdint>
