@@ -25,6 +25,7 @@
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/platform/status.h"
+#include "svg_plot.h"
 
 namespace skyloc::app {
 namespace {
@@ -507,29 +508,6 @@ std::string JsonString(const std::string& s) {
   return out + "\"";
 }
 
-std::string XmlEscape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 Status WriteMatchesCsv(const std::string& path, const std::vector<Run>& runs) {
   OutFile f;
   SKYLOC_TRY(f.Open(path));
@@ -584,159 +562,43 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
   return f.Close();
 }
 
-constexpr const char* kPalette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-                                    "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
-constexpr std::size_t kPaletteSize = sizeof kPalette / sizeof kPalette[0];
-
-// Precision (y) against recall (x), one step curve per run, legend with the AUC.
-Status WritePrSvg(const std::string& path, const std::vector<Run>& runs) {
+Status WriteText(const std::string& path, const std::string& text) {
   OutFile f;
   SKYLOC_TRY(f.Open(path));
-  std::FILE* out = f.get();
-  const double left = 70, top = 40, w = 460, h = 400;
-  const double legend_h = 22.0 * static_cast<double>(runs.size());
-  const double width = left + w + 260, height = top + h + 60 + legend_h;
-  auto sx = [&](double r) { return left + r * w; };
-  auto sy = [&](double p) { return top + (1.0 - p) * h; };
-  std::fprintf(out,
-               "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-               "font-family=\"sans-serif\" font-size=\"12\">\n",
-               width, height);
-  std::fprintf(out, "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n");
-  std::fprintf(out,
-               "<text x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">Precision - "
-               "recall (sweeping the uniqueness threshold)</text>\n",
-               left + w / 2);
-  for (int i = 0; i <= 5; ++i) {
-    const double v = i / 5.0;
-    std::fprintf(out,
-                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
-                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n",
-                 sx(v), sy(0), sx(v), sy(1), sx(0), sy(v), sx(1), sy(v));
-    std::fprintf(out,
-                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.1f</text>\n"
-                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.1f</text>\n",
-                 sx(v), sy(0) + 16, v, sx(0) - 6, sy(v) + 4, v);
-  }
-  std::fprintf(out,
-               "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
-               "stroke=\"black\"/>\n",
-               left, top, w, h);
-  std::fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">Recall</text>\n",
-               left + w / 2, top + h + 36);
-  std::fprintf(out,
-               "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 "
-               "%.1f)\">Precision</text>\n",
-               top + h / 2, top + h / 2);
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const Run& r = runs[i];
-    const char* colour = kPalette[i % kPaletteSize];
-    const char* dash =
-        r.ds == 1 ? " stroke-dasharray=\"6 3\"" : (r.ds >= 20 ? " stroke-dasharray=\"2 2\"" : "");
-    std::fprintf(out, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"2\"%s points=\"",
-                 colour, dash);
-    double prev_r = 0.0;
-    for (std::size_t k = 0; k < r.curve.size(); ++k) {
-      const dsp::PrPoint& p = r.curve[k];
-      if (k == 0)
-        std::fprintf(out, "%.1f,%.1f ", sx(0.0), sy(p.precision));
-      // Step: along the old recall at the new precision, as the AUC sums it.
-      std::fprintf(out, "%.1f,%.1f %.1f,%.1f ", sx(prev_r), sy(p.precision), sx(p.recall),
-                   sy(p.precision));
-      prev_r = p.recall;
-    }
-    std::fprintf(out, "\"/>\n");
-    const double ly = top + h + 56 + 22.0 * static_cast<double>(i);
-    std::fprintf(out,
-                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
-                 "stroke-width=\"2\"%s/>\n",
-                 left, ly - 4, left + 30, ly - 4, colour, dash);
-    std::fprintf(out,
-                 "<text x=\"%.1f\" y=\"%.1f\">%s: AUC %.3f, precision at 100%% recall %.3f, "
-                 "recall at 100%% precision %.3f</text>\n",
-                 left + 38, ly, XmlEscape(r.label).c_str(), r.summary.area_under_curve,
-                 r.summary.precision_at_full_recall, r.summary.recall_at_full_precision);
-  }
-  std::fprintf(out, "</svg>\n");
+  std::fwrite(text.data(), 1, text.size(), f.get());
   return f.Close();
 }
 
-// One panel per run: matched reference index against query index, green when correct,
-// red when not, over the ground truth (black), as the paper's Fig. 5a.
-Status WriteCorrespondenceSvg(const std::string& path, const std::vector<Run>& runs,
-                              const GroundTruth& gt, int n_ref, int n_query) {
-  OutFile f;
-  SKYLOC_TRY(f.Open(path));
-  std::FILE* out = f.get();
-  const int columns = static_cast<int>(std::min<std::size_t>(runs.size(), 3));
-  const int rows = static_cast<int>((runs.size() + 2) / 3);
-  const double pw = 330, ph = 300, ml = 60, mt = 40, mb = 50, mr = 20;
-  const double cell_w = ml + pw + mr, cell_h = mt + ph + mb;
-  std::fprintf(out,
-               "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-               "font-family=\"sans-serif\" font-size=\"12\">\n",
-               cell_w * columns, cell_h * rows + 30);
-  std::fprintf(out, "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n");
-  std::fprintf(out,
-               "<text x=\"10\" y=\"%.1f\">black: ground truth; green: correct match; red: "
-               "wrong match</text>\n",
-               cell_h * rows + 20);
-  const double qmax = std::max(1, n_query - 1), rmax = std::max(1, n_ref - 1);
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const Run& r = runs[i];
-    const double ox = cell_w * static_cast<double>(i % 3), oy = cell_h * static_cast<double>(i / 3);
-    const double left = ox + ml, top = oy + mt;
-    auto sx = [&](double q) { return left + q / qmax * pw; };
-    auto sy = [&](double ref) { return top + (1.0 - ref / rmax) * ph; };
-    std::fprintf(out,
-                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" font-size=\"14\">%s "
-                 "(%d of %d correct)</text>\n",
-                 left + pw / 2, top - 14, XmlEscape(r.label).c_str(), r.summary.correct,
-                 r.summary.evaluated);
-    std::fprintf(out,
-                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
-                 "stroke=\"black\"/>\n",
-                 left, top, pw, ph);
-    for (int k = 0; k <= 4; ++k) {
-      const double q = qmax * k / 4.0, ref = rmax * k / 4.0;
-      std::fprintf(out,
-                   "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.0f</text>\n"
-                   "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.0f</text>\n",
-                   sx(q), top + ph + 16, q, left - 6, sy(ref) + 4, ref);
-    }
-    std::fprintf(out, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">query frame</text>\n",
-                 left + pw / 2, top + ph + 36);
-    std::fprintf(out,
-                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 "
-                 "%.1f %.1f)\">reference frame</text>\n",
-                 ox + 16, top + ph / 2, ox + 16, top + ph / 2);
-    // Ground truth: polylines broken where the query is off the route.
-    bool open = false;
-    for (int q = 0; q < n_query; ++q) {
-      const int t = gt.reference[static_cast<std::size_t>(q)];
-      if (t < 0) {
-        if (open)
-          std::fprintf(out, "\"/>\n");
-        open = false;
-        continue;
-      }
-      if (!open)
-        std::fprintf(out,
-                     "<polyline fill=\"none\" stroke=\"black\" stroke-width=\"1.5\" points=\"");
-      open = true;
-      std::fprintf(out, "%.1f,%.1f ", sx(q), sy(t));
-    }
-    if (open)
-      std::fprintf(out, "\"/>\n");
+// One curve per run, its summary in the legend; dashed ds = 1 and dotted ds >= 20 tell the
+// sequence lengths of one method apart (docs/SEQSLAM.md).
+std::string PrPlot(const std::vector<Run>& runs) {
+  std::vector<PrCurve> curves;
+  for (const Run& r : runs) {
+    char summary[128];
+    std::snprintf(summary, sizeof summary,
+                  ": AUC %.3f, precision at 100%% recall %.3f, recall at 100%% precision %.3f",
+                  r.summary.area_under_curve, r.summary.precision_at_full_recall,
+                  r.summary.recall_at_full_precision);
+    const LineDash dash =
+        r.ds == 1 ? LineDash::kDashed : (r.ds >= 20 ? LineDash::kDotted : LineDash::kSolid);
+    curves.push_back({r.label + summary, r.curve, dash});
+  }
+  return PrPlotSvg("Precision - recall (sweeping the uniqueness threshold)", curves);
+}
+
+// One panel per run, at most three a row.
+std::string CorrespondencePlot(const std::vector<Run>& runs, const GroundTruth& gt, int n_ref) {
+  std::vector<CorrespondencePanel> panels;
+  for (const Run& r : runs) {
+    CorrespondencePanel panel{r.label, gt.reference, n_ref, {}};
     for (std::size_t k = 0; k < r.evaluated_queries.size(); ++k) {
       const int q = r.evaluated_queries[k];
-      const int m = r.matches[static_cast<std::size_t>(q)].reference;
-      std::fprintf(out, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.2\" fill=\"%s\"/>\n", sx(q), sy(m),
-                   r.evaluated[k].correct ? "#1a9e1a" : "#d62020");
+      panel.matches.push_back(
+          {q, r.matches[static_cast<std::size_t>(q)].reference, r.evaluated[k].correct});
     }
+    panels.push_back(std::move(panel));
   }
-  std::fprintf(out, "</svg>\n");
-  return f.Close();
+  return CorrespondenceSvg(panels, 3);
 }
 
 Status Evaluate(const EvalOptions& o) {
@@ -768,8 +630,8 @@ Status Evaluate(const EvalOptions& o) {
   }
   SKYLOC_TRY(WriteMatchesCsv(o.out + "/matches.csv", runs));
   SKYLOC_TRY(WriteMetricsJson(o.out + "/metrics.json", o, gt, runs, n_ref, n_query));
-  SKYLOC_TRY(WritePrSvg(o.out + "/pr.svg", runs));
-  SKYLOC_TRY(WriteCorrespondenceSvg(o.out + "/correspondence.svg", runs, gt, n_ref, n_query));
+  SKYLOC_TRY(WriteText(o.out + "/pr.svg", PrPlot(runs)));
+  SKYLOC_TRY(WriteText(o.out + "/correspondence.svg", CorrespondencePlot(runs, gt, n_ref)));
 
   std::printf("%-10s %4s %9s %8s %13s %13s %7s\n", "method", "ds", "evaluated", "correct",
               "P@100%recall", "R@100%prec", "AUC");

@@ -16,6 +16,7 @@
 
 #include "commands.h"
 #include "skyloc/sim/experiment.h"
+#include "svg_plot.h"
 
 namespace skyloc::app {
 namespace {
@@ -159,96 +160,35 @@ Status WriteFile(const std::string& path, const std::string& text) {
   return Status::Ok();
 }
 
-// Precision-recall curves of one method, one polyline per row.
-std::string PrPlotSvg(const char* title, const std::vector<Row>& rows, bool sky) {
-  static constexpr const char* kColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-                                             "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
-  constexpr double kX0 = 60, kY0 = 30, kW = 360, kH = 300;
-  std::string s = Format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"640\" height=\"380\" "
-      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"640\" height=\"380\" "
-      "fill=\"white\"/>\n<text x=\"%g\" y=\"18\" font-size=\"14\">%s</text>\n"
-      "<rect x=\"%g\" y=\"%g\" width=\"%g\" height=\"%g\" fill=\"none\" stroke=\"black\"/>\n",
-      kX0, title, kX0, kY0, kW, kH);
-  for (int t = 0; t <= 10; t += 2) {
-    const double f = t / 10.0;
-    s += Format("<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">%.1f</text>\n", kX0 + f * kW,
-                kY0 + kH + 16, f);
-    s += Format("<text x=\"%g\" y=\"%g\" text-anchor=\"end\">%.1f</text>\n", kX0 - 6,
-                kY0 + kH - f * kH + 4, f);
-  }
-  s += Format("<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">recall</text>\n", kX0 + kW / 2,
-              kY0 + kH + 32);
-  s += Format(
-      "<text x=\"16\" y=\"%g\" transform=\"rotate(-90 16 %g)\" "
-      "text-anchor=\"middle\">precision</text>\n",
-      kY0 + kH / 2, kY0 + kH / 2);
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const sim::MethodScore& m = sky ? *rows[i].sky : *rows[i].vanilla;
-    const char* colour = kColours[i % 10];
-    s += Format("<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"1.5\" points=\"", colour);
-    for (const dsp::PrPoint& p : m.curve)
-      s += Format("%.1f,%.1f ", kX0 + p.recall * kW, kY0 + kH - p.precision * kH);
-    s += "\"/>\n";
-    s += Format("<text x=\"%g\" y=\"%g\" fill=\"%s\">%s</text>\n", kX0 + kW + 12,
-                kY0 + 14 + 16.0 * static_cast<double>(i), colour, rows[i].label.c_str());
-  }
-  return s + "</svg>\n";
+// Precision-recall curves of one method, one per row.
+std::string PrPlot(const char* title, const std::vector<Row>& rows, bool sky) {
+  std::vector<PrCurve> curves;
+  for (const Row& r : rows)
+    curves.push_back({r.label, sky ? r.sky->curve : r.vanilla->curve, LineDash::kSolid});
+  return PrPlotSvg(title, curves);
 }
 
 // Frame correspondences (the paper's Figs. 5a, 8, 9): for every row, vanilla (left) and
-// sky (right); x = query frame, y = matched reference frame; grey = ground truth, green =
-// correct match, red = wrong.
-std::string CorrespondenceSvg(const std::vector<Row>& rows, int tolerance_frames) {
-  constexpr double kW = 220, kH = 160, kPad = 40;
-  const double width = 2 * (kW + kPad) + kPad;
-  const double height = static_cast<double>(rows.size()) * (kH + kPad) + kPad;
-  std::string s = Format(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-      "font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"%.0f\" height=\"%.0f\" "
-      "fill=\"white\"/>\n",
-      width, height, width, height);
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    for (int column = 0; column < 2; ++column) {
-      const sim::MethodScore& m = column == 0 ? *rows[i].vanilla : *rows[i].sky;
-      const double x0 = kPad + column * (kW + kPad);
-      const double y0 = kPad / 2 + static_cast<double>(i) * (kH + kPad) + 12;
-      const std::size_t n_query = m.truth.size();
-      int n_ref = 1;
-      for (std::size_t q = 0; q < n_query; ++q)
-        n_ref = std::max({n_ref, m.truth[q] + 1, m.matched[q] + 1});
-      s += Format("<text x=\"%g\" y=\"%g\">%s: %s</text>\n", x0, y0 - 4,
-                  column == 0 ? "vanilla" : "sky", rows[i].label.c_str());
-      s += Format(
-          "<rect x=\"%g\" y=\"%g\" width=\"%g\" height=\"%g\" fill=\"none\" "
-          "stroke=\"black\"/>\n",
-          x0, y0, kW, kH);
-      auto px = [&](std::size_t q) {
-        return x0 +
-               kW * static_cast<double>(q) / static_cast<double>(std::max<std::size_t>(n_query, 1));
-      };
-      auto py = [&](int r) { return y0 + kH - kH * r / n_ref; };
-      // One path per colour, each point a zero-length segment with a round cap: a few
-      // bytes a point, so the plot of a whole experiment stays small.
-      std::string truth, correct, wrong;
-      for (std::size_t q = 0; q < n_query; ++q) {
-        if (m.truth[q] >= 0)
-          truth += Format("M%.1f %.1fh0", px(q), py(m.truth[q]));
+// sky (right).
+std::string CorrespondencePlot(const std::vector<Row>& rows, int tolerance_frames) {
+  std::vector<CorrespondencePanel> panels;
+  for (const Row& r : rows) {
+    for (const bool sky : {false, true}) {
+      const sim::MethodScore& m = sky ? *r.sky : *r.vanilla;
+      CorrespondencePanel panel{(sky ? "sky: " : "vanilla: ") + r.label, m.truth, 1, {}};
+      for (std::size_t q = 0; q < m.truth.size(); ++q) {
+        panel.reference_frames =
+            std::max({panel.reference_frames, m.truth[q] + 1, m.matched[q] + 1});
         if (m.matched[q] >= 0) {
-          const bool ok = dsp::MatchWithinFrames(m.matched[q], m.truth[q], tolerance_frames);
-          (ok ? correct : wrong) += Format("M%.1f %.1fh0", px(q), py(m.matched[q]));
+          panel.matches.push_back(
+              {static_cast<int>(q), m.matched[q],
+               dsp::MatchWithinFrames(m.matched[q], m.truth[q], tolerance_frames)});
         }
       }
-      s += "<path d=\"" + truth +
-           "\" stroke=\"#bbbbbb\" stroke-width=\"1.6\" stroke-linecap=\"round\"/>\n";
-      s += "<path d=\"" + correct +
-           "\" stroke=\"#2ca02c\" stroke-width=\"2.6\" stroke-linecap=\"round\"/>\n";
-      s += "<path d=\"" + wrong +
-           "\" stroke=\"#d62728\" stroke-width=\"2.6\" stroke-linecap=\"round\"/>\n";
-      s += "\n";
+      panels.push_back(std::move(panel));
     }
   }
-  return s + "</svg>\n";
+  return CorrespondenceSvg(panels, 2);
 }
 
 Status WriteOutputs(const Options& o, const std::string& command, const std::string& header,
@@ -279,10 +219,10 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
   json += "  ]\n}\n";
   SKYLOC_TRY(WriteFile(o.out + "/results.md", md));
   SKYLOC_TRY(WriteFile(o.out + "/metrics.json", json));
-  SKYLOC_TRY(WriteFile(o.out + "/pr_sky.svg", PrPlotSvg("SeqSLAM (sky)", rows, true)));
-  SKYLOC_TRY(WriteFile(o.out + "/pr_vanilla.svg", PrPlotSvg("SeqSLAM (vanilla)", rows, false)));
+  SKYLOC_TRY(WriteFile(o.out + "/pr_sky.svg", PrPlot("SeqSLAM (sky)", rows, true)));
+  SKYLOC_TRY(WriteFile(o.out + "/pr_vanilla.svg", PrPlot("SeqSLAM (vanilla)", rows, false)));
   SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg",
-                       CorrespondenceSvg(rows, o.experiment.tolerance_frames)));
+                       CorrespondencePlot(rows, o.experiment.tolerance_frames)));
   return Status::Ok();
 }
 
