@@ -37,6 +37,8 @@ constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutp
                                                              {"gpio", StatusOutputKind::kGpio}};
 constexpr EnumName<StatusEncoding> kStatusEncodings[] = {{"per-state", StatusEncoding::kPerState},
                                                          {"blink", StatusEncoding::kBlink}};
+constexpr EnumName<RouteStorage> kRouteStorages[] = {{"float32", RouteStorage::kFloat32},
+                                                     {"bfloat16", RouteStorage::kBFloat16}};
 
 template <typename E, std::size_t N>
 const char* NameOf(const EnumName<E> (&names)[N], E value) {
@@ -469,6 +471,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   {
     SectionReader r(section("capacities"), "capacities", source_name, &error);
     r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
+    r.Enum("route_storage", &c.capacities.route_storage, kRouteStorages);
     r.Finish();
   }
   {

@@ -18,6 +18,7 @@ enum class GridPreset : std::uint8_t { kAuto, kPaper, kCustom };
 enum class Normalisation : std::uint8_t { kNone, kDivideByA0, kUnitL2 };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
+enum class RouteStorage : std::uint8_t { kFloat32, kBFloat16 };
 
 const char* CameraKindName(CameraKind kind);
 const char* SegmentationMethodName(SegmentationMethod method);
@@ -76,6 +77,8 @@ struct SeqSlamConfig {
 
 struct CapacityConfig {
   int route_frames = 10000;  // the largest route teach records and repeat loads
+  // How the matcher holds the route in memory (the route file always stores floats).
+  RouteStorage route_storage = RouteStorage::kFloat32;
 
   bool operator==(const CapacityConfig&) const = default;
 };

@@ -96,7 +96,10 @@ Status Pipeline::Init(const Config& config) {
   seq.uniqueness_window = config.seqslam.rwindow;
   seq.contrast_window = config.seqslam.contrast_r;
   if (const dsp::SeqSlamError e =
-          seqslam_.Init(seq, descriptor_.bands(), config.capacities.route_frames);
+          seqslam_.Init(seq, descriptor_.bands(), config.capacities.route_frames,
+                        config.capacities.route_storage == RouteStorage::kBFloat16
+                            ? dsp::ReferenceStorage::kBFloat16
+                            : dsp::ReferenceStorage::kFloat32);
       e != dsp::SeqSlamError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[seqslam]: %s",
                          dsp::SeqSlamErrorMessage(e));

@@ -59,6 +59,8 @@ longitudes = 64
 normalisation = "unit_l2"
 [seqslam]
 ds = 1
+[capacities]
+route_storage = "bfloat16"
 [realtime]
 mlockall = true
 cpu_affinity = 3
@@ -77,6 +79,7 @@ encoding = "blink"
   EXPECT_EQ(c->descriptor.longitudes, 64);
   EXPECT_EQ(c->descriptor.normalisation, Normalisation::kUnitL2);
   EXPECT_EQ(c->seqslam.ds, 1);
+  EXPECT_EQ(c->capacities.route_storage, RouteStorage::kBFloat16);
   EXPECT_TRUE(c->realtime.mlockall);
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
   EXPECT_EQ(c->status.kind, StatusOutputKind::kGpio);
@@ -118,6 +121,7 @@ const BadCase kBadCases[] = {
     {"[descriptor]\ndistance = \"l1\"\n", "[descriptor] distance"},
     {"[descriptor]\nnormalisation = \"max\"\n", "[descriptor] normalisation"},
     {"[seqslam]\nds = 0\n", "[seqslam] ds"},
+    {"[capacities]\nroute_storage = \"float16\"\n", "[capacities] route_storage"},
     {"[seqslam]\nds = 101\n", "[seqslam] ds"},
     {"[seqslam]\nvmin = 0\n", "[seqslam] vmin"},
     {"[seqslam]\nvmax = 11\n", "[seqslam] vmax"},
