@@ -14,8 +14,9 @@ std::size_t LatencyHistogram::BucketOf(std::uint64_t ns) {
     return kBuckets - 1;
   const int shift = bit - (kExactBits - 1);
   const std::uint64_t sub = (ns >> shift) - static_cast<std::uint64_t>(kSubBuckets);
-  return kExact + static_cast<std::size_t>(bit - kExactBits) * kSubBuckets +
-         static_cast<std::size_t>(sub);
+  // In size_t throughout: on 32-bit ARM, uint64_t + size_t would be 64-bit again.
+  return static_cast<std::size_t>(kExact) +
+         static_cast<std::size_t>(bit - kExactBits) * kSubBuckets + static_cast<std::size_t>(sub);
 }
 
 std::uint64_t LatencyHistogram::BucketUpperEdge(std::size_t bucket) {
