@@ -80,13 +80,21 @@ Status ListFrames(const std::string& frames_dir, std::vector<std::string>* names
     const int saved = errno;
     return Status::FromErrno(saved, "cannot list %s", frames_dir.c_str());
   }
-  while (const dirent* e = ::readdir(d)) {
+  for (;;) {
+    errno = 0;  // readdir returns null both at the end and on an error: errno tells which
+    const dirent* e = ::readdir(d);
+    if (e == nullptr) {
+      const int saved = errno;
+      ::closedir(d);
+      if (saved != 0)
+        return Status::FromErrno(saved, "cannot list %s", frames_dir.c_str());
+      break;
+    }
     const std::string_view name(e->d_name);
     if (name.empty() || name[0] == '.' || !HasImageExtension(name))
       continue;
     names->emplace_back(name);
   }
-  ::closedir(d);
   std::sort(names->begin(), names->end());
   return Status::Ok();
 }
