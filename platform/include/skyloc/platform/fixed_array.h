@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <new>
 #include <span>
@@ -23,7 +24,12 @@ class FixedArray {
   // Allocates `count` value-initialised elements. Calling it again replaces the storage;
   // that is start-up work only.
   Status Allocate(std::size_t count) {
-    data_.reset(new (std::nothrow) T[count == 0 ? 1 : count]());
+    // A count whose byte size overflows makes even a nothrow new[] throw
+    // std::bad_array_new_length (GCC), so it is refused before new is reached; no object
+    // may exceed PTRDIFF_MAX bytes anyway.
+    const bool too_large =
+        count > static_cast<std::size_t>(std::numeric_limits<std::ptrdiff_t>::max()) / sizeof(T);
+    data_.reset(too_large ? nullptr : new (std::nothrow) T[count == 0 ? 1 : count]());
     if (!data_) {
       size_ = 0;
       return Status::Error(StatusCode::kResourceExhausted,
