@@ -4,6 +4,7 @@
 
 #include <boost/math/special_functions/spherical_harmonic.hpp>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -22,6 +23,10 @@ std::vector<double> Triangle(int bands, double theta) {
 // Reference: Boost.Math's Y_l^m(θ, 0) = P̄_lm(cos θ) (Condon–Shortley phase included), in
 // long double. Tolerance relative to the natural scale sqrt((2l+1)/4π).
 TEST(Legendre, MatchesBoostLongDoubleAtL256) {
+  if (std::numeric_limits<long double>::digits <= std::numeric_limits<double>::digits) {
+    GTEST_SKIP() << "Boost's reference is only more precise than this code with a long double "
+                    "wider than double; on this target (e.g. armhf) they are the same type";
+  }
   for (double theta : {0.05, 0.7, 1.3, 1.5707, 2.4}) {
     const std::vector<double> p = Triangle(kBands, theta);
     double worst = 0;

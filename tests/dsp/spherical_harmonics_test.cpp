@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <boost/math/special_functions/spherical_harmonic.hpp>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -35,6 +36,10 @@ std::vector<double> RealSh(int bands, double theta, double phi) {
 // basis: √2·Re Y_l^m for m > 0, √2·Im Y_l^|m| for m < 0, Y_l^0 for m = 0. Absolute tolerance
 // 1e-10 on values of size up to ~3.
 TEST(RealSphericalHarmonics, MatchBoostInTheRealBasisUpToL120) {
+  if (std::numeric_limits<long double>::digits <= std::numeric_limits<double>::digits) {
+    GTEST_SKIP() << "Boost's reference is only more precise than this code with a long double "
+                    "wider than double; on this target (e.g. armhf) they are the same type";
+  }
   constexpr int kBands = 121;
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> theta_dist(0.0, kPi), phi_dist(0.0, 2 * kPi);
