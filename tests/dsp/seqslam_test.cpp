@@ -188,7 +188,26 @@ struct PlantedRoute {
   std::vector<float> reference;
   std::vector<float> query;
   std::vector<int> truth;  // reference index under each query frame
+
+  std::span<const float> Reference(int r) const { return Row(reference, r); }
+  std::span<const float> Query(int t) const { return Row(query, t); }
+
+ private:
+  std::span<const float> Row(const std::vector<float>& rows, int i) const {
+    return std::span<const float>(rows).subspan(static_cast<std::size_t>(i * dim),
+                                                static_cast<std::size_t>(dim));
+  }
 };
+
+// Teaches the whole route to a streaming engine.
+::testing::AssertionResult AddRoute(StreamingSeqSlam& s, const PlantedRoute& route) {
+  const int n = static_cast<int>(route.reference.size()) / route.dim;
+  for (int r = 0; r < n; ++r) {
+    if (const SeqSlamError e = s.AddReference(route.Reference(r)); e != SeqSlamError::kOk)
+      return ::testing::AssertionFailure() << "reference " << r << ": " << SeqSlamErrorMessage(e);
+  }
+  return ::testing::AssertionSuccess();
+}
 
 PlantedRoute MakeRoute(int n_ref, int n_query, double start, double v, float noise, unsigned seed,
                        bool smooth = true) {
@@ -235,19 +254,10 @@ TEST(SeqSlamStreaming, EqualsBatchWithTrailingWindow) {
         SeqSlamError::kOk);
     StreamingSeqSlam s;
     ASSERT_EQ(s.Init(p, route.dim, 256), SeqSlamError::kOk);
-    for (int r = 0; r < 200; ++r) {
-      ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
-                                   .subspan(static_cast<std::size_t>(r * route.dim),
-                                            static_cast<std::size_t>(route.dim))),
-                SeqSlamError::kOk);
-    }
+    ASSERT_TRUE(AddRoute(s, route));
     for (int t = 0; t < 60; ++t) {
       SeqSlamMatch m;
-      ASSERT_EQ(s.Step(std::span<const float>(route.query)
-                           .subspan(static_cast<std::size_t>(t * route.dim),
-                                    static_cast<std::size_t>(route.dim)),
-                       &m),
-                SeqSlamError::kOk);
+      ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
       const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
       ASSERT_EQ(m.valid, b.valid) << "ds " << ds << " t " << t;
       if (!m.valid)
@@ -283,20 +293,11 @@ TEST(SeqSlamStreaming, LongRouteEqualsBatchAcrossChunks) {
                 SeqSlamError::kOk);
       StreamingSeqSlam s;
       ASSERT_EQ(s.Init(p, route.dim, n_ref, storage), SeqSlamError::kOk);
-      for (int r = 0; r < n_ref; ++r) {
-        ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
-                                     .subspan(static_cast<std::size_t>(r * route.dim),
-                                              static_cast<std::size_t>(route.dim))),
-                  SeqSlamError::kOk);
-      }
+      ASSERT_TRUE(AddRoute(s, route));
       int found = 0;
       for (int t = 0; t < n_query; ++t) {
         SeqSlamMatch m;
-        ASSERT_EQ(s.Step(std::span<const float>(route.query)
-                             .subspan(static_cast<std::size_t>(t * route.dim),
-                                      static_cast<std::size_t>(route.dim)),
-                         &m),
-                  SeqSlamError::kOk);
+        ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
         const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
         ASSERT_EQ(m.valid, b.valid) << "t " << t;
         if (!m.valid)
@@ -325,19 +326,12 @@ TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
             SeqSlamError::kOk);
   StreamingSeqSlam s;
   ASSERT_EQ(s.Init(p, route.dim, 150, ReferenceStorage::kBFloat16), SeqSlamError::kOk);
-  for (int r = 0; r < 150; ++r) {
-    ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
-                                 .subspan(static_cast<std::size_t>(r * route.dim), 16)),
-              SeqSlamError::kOk);
-  }
+  ASSERT_TRUE(AddRoute(s, route));
   AllocationScope scope;
   int correct = 0;
   for (int t = 0; t < 40; ++t) {
     SeqSlamMatch m;
-    ASSERT_EQ(
-        s.Step(std::span<const float>(route.query).subspan(static_cast<std::size_t>(t * 16), 16),
-               &m),
-        SeqSlamError::kOk);
+    ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
     const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
     ASSERT_EQ(m.valid, b.valid);
     EXPECT_EQ(m.reference, b.reference);
@@ -371,17 +365,10 @@ TEST(SeqSlamStreaming, SingleImageModeMatchesEveryFrame) {
   p.sequence_length = 1;
   StreamingSeqSlam s;
   ASSERT_EQ(s.Init(p, route.dim, 100), SeqSlamError::kOk);
-  for (int r = 0; r < 100; ++r) {
-    ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
-                                 .subspan(static_cast<std::size_t>(r * route.dim), 16)),
-              SeqSlamError::kOk);
-  }
+  ASSERT_TRUE(AddRoute(s, route));
   for (int t = 0; t < 30; ++t) {
     SeqSlamMatch m;
-    ASSERT_EQ(
-        s.Step(std::span<const float>(route.query).subspan(static_cast<std::size_t>(t * 16), 16),
-               &m),
-        SeqSlamError::kOk);
+    ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
     ASSERT_TRUE(m.valid) << "t " << t;  // no warm-up with ds = 1
     EXPECT_EQ(m.reference, route.truth[static_cast<std::size_t>(t)]);
     EXPECT_GE(m.confidence, 0.0f);
@@ -645,17 +632,12 @@ TEST(SeqSlamStreaming, StepAllocatesNothing) {
   SeqSlamParams p;
   StreamingSeqSlam s;
   ASSERT_EQ(s.Init(p, route.dim, 300), SeqSlamError::kOk);
-  for (int r = 0; r < 300; ++r) {
-    ASSERT_EQ(s.AddReference(std::span<const float>(route.reference)
-                                 .subspan(static_cast<std::size_t>(r * route.dim), 16)),
-              SeqSlamError::kOk);
-  }
+  ASSERT_TRUE(AddRoute(s, route));
   AllocationScope scope;
   int valid = 0;
   for (int t = 0; t < 40; ++t) {
     SeqSlamMatch m;
-    const SeqSlamError e = s.Step(
-        std::span<const float>(route.query).subspan(static_cast<std::size_t>(t * 16), 16), &m);
+    const SeqSlamError e = s.Step(route.Query(t), &m);
     valid += e == SeqSlamError::kOk && m.valid ? 1 : 0;
   }
   EXPECT_EQ(scope.allocations(), 0u);
