@@ -52,6 +52,14 @@ const char* SeqSlamErrorMessage(SeqSlamError error) {
       return "SeqSLAM engine used before Init succeeded";
     case SeqSlamError::kEmptyDatabase:
       return "no reference frames to match against";
+    case SeqSlamError::kBadMaxAdvance:
+      return "max_advance (route rows per query frame) must be 1..64";
+    case SeqSlamError::kBadKeyframeFactor:
+      return "keyframe noise factor must be 0..100 (0 keeps every taught frame)";
+    case SeqSlamError::kRouteNotFinished:
+      return "route not finished: call FinishRoute() after the last taught frame";
+    case SeqSlamError::kRouteFinished:
+      return "route already finished: clear it before adding taught frames";
   }
   return "unknown SeqSLAM error";
 }
@@ -467,6 +475,7 @@ SeqSlamMatch TrajectorySearch::Finish(std::span<const float* const> columns, int
   match.velocity = velocities_[Sz(best_k)];
   // The reference under query frame `position` on the best trajectory (note 6).
   match.reference = best_s + offset(best_k, position);
+  match.row = match.reference;
   match.score = best_score;
   // No finite runner-up, or both zero: nothing shows this match is distinctive (note 8).
   if (second == kInf || !(second > 0.0f)) {

@@ -57,6 +57,10 @@ enum class SeqSlamError : std::uint8_t {
   kDatabaseFull,         // AddReference beyond the capacity given to Init
   kNotInitialised,       // StreamingSeqSlam used before a successful Init
   kEmptyDatabase,        // Step() with no reference frames
+  kBadMaxAdvance,        // route filter: max_advance outside 1..kMaxAdvance
+  kBadKeyframeFactor,    // route filter: keyframe_noise_factor outside 0..100
+  kRouteNotFinished,     // route filter: Step() before FinishRoute()
+  kRouteFinished,        // route filter: AddReference() after FinishRoute()
 };
 
 // A sentence saying what is wrong, for the caller to turn into its error.
@@ -87,6 +91,9 @@ struct SeqSlamMatch {
   // fits in the database; the other fields are then meaningless.
   bool valid = false;
   int reference = -1;  // the reference frame matched to query frame t
+  // The engine's route row: the reference frame itself for SeqSLAM, a keyframe row for
+  // the route filter (docs/SEQSLAM.md). Route-index consistency is checked in rows.
+  int row = -1;
   int start = -1;      // the reference row where the best trajectory starts
   float velocity = 0;  // its velocity (reference frames per query frame)
   // Sum of the shifted enhanced differences along the trajectory (>= 0, lower = better).

@@ -1,0 +1,128 @@
+// The route filter: where on the taught route the robot is, from a stream of descriptors
+// taken at a fixed frame rate while the robot accelerates, cruises, stops and runs at
+// another speed than when it was taught. The firmware's default matcher; docs/SEQSLAM.md
+// ("The route filter") argues the design with measurements. In short:
+//
+//  1. Keyframes. A taught route sampled in time holds runs of nearly identical frames
+//     wherever the robot stood. FinishRoute() merges each such run into one route row: a
+//     frame joins the current row while its mean absolute difference to the row's first
+//     frame is at most keyframe_noise_factor x the route's noise floor, the 10th
+//     percentile of the differences between consecutive frames (the sensor noise of a
+//     standing robot when the route has stops; the slowest motion when it has none, and
+//     then little is merged). Frames in motion are kept, so a match keeps its precision
+//     in frames; a matched row reports the middle frame of its run.
+//  2. Emission. Each query's difference column (mean absolute difference to every row,
+//     as SeqSLAM's) is z-scored over the whole route: z = (d - mean) / std. No local
+//     contrast window, so the minimum stays where the descriptor puts it (OpenSeqSLAM's
+//     +-R/2 window moves it to the edge of a wide basin of alike frames).
+//  3. Motion. A min-sum filter over rows (Viterbi's recursion, run forward only) with a
+//     memory of ds frames:
+//        cost_t(i) = z_t(i) + lambda * min_{k = 0..K} cost_{t-1}(i - k),  lambda = 1 - 1/ds
+//     so the position may stand still (k = 0) or advance up to K = max_advance rows per
+//     frame, with any speed profile in between, not one straight line per window. cost_t(i)
+//     is the lowest discounted sum of z along any such path ending at row i; old evidence
+//     fades with lambda, so the filter re-localises within about ds frames after a kidnap
+//     without a special case. ds = 1 is single-image nearest neighbour (lambda = 0).
+//  4. Confidence. The best row against the runner-up, the best row outside the best's
+//     basin (the rows around it whose cost rises monotonically away from it) and outside
+//     +-uniqueness_window/2: margin = (cost_second - cost_best) / ds, how many column
+//     standard deviations per frame of the filter's memory the best path beats the
+//     runner-up by. confidence = 1 - exp(-margin), uniqueness = exp(-margin) (so
+//     confidence = 1 - uniqueness, as for SeqSLAM). Right after a reset the costs hold
+//     few frames, so the confidence starts low and grows with the evidence.
+//
+// Fixed memory (everything at Init), no allocation in AddReference, FinishRoute or Step.
+// Step is O(rows x (dim + K)).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "skyloc/dsp/seqslam.h"
+
+namespace skyloc::dsp {
+
+inline constexpr int kMaxAdvance = 64;
+
+struct RouteFilterParams {
+  int sequence_length = 10;  // ds: frames of evidence the filter remembers (1..1000)
+  // K: the most route rows the position may move forward in one query frame (1..64). A
+  // repeat run up to K times faster than the taught one is followed; slower runs and
+  // stops need no setting. 4 covers the 0.3-3x speed ratios robots see with margin.
+  int max_advance = 4;
+  int uniqueness_window = 10;  // runner-up outside +-window/2 rows of the best (0..10000)
+  // Merge a frame into the current route row while it differs from the row's first
+  // frame by at most this x the route's noise floor (0..100; 0 keeps every frame).
+  float keyframe_noise_factor = 2.0f;
+};
+
+SeqSlamError ValidateRouteFilterParams(const RouteFilterParams& params);
+
+class RouteFilter {
+ public:
+  // Allocates everything (the only allocation): the route of `capacity` frames of `dim`
+  // elements, the row table, two cost columns and the difference column.
+  SeqSlamError Init(const RouteFilterParams& params, int dim, int capacity,
+                    ReferenceStorage storage = ReferenceStorage::kFloat32);
+
+  // Appends a taught frame (in order). The route is not matched against until
+  // FinishRoute() has merged it into rows.
+  SeqSlamError AddReference(std::span<const float> descriptor);
+  // Merges stationary runs into rows (docs above, 1.) and forgets the query history.
+  // O(frames x dim) plus a median; allocates nothing.
+  SeqSlamError FinishRoute();
+  void ClearReferences();
+  // Forgets the query history (a gap in the frames, a new run).
+  void ResetQueries();
+
+  // One query frame: difference column, z-score, filter update, best row and runner-up.
+  // Valid from the first frame (its confidence grows with the evidence).
+  SeqSlamError Step(std::span<const float> query, SeqSlamMatch* out);
+
+  int frames() const { return frames_; }  // taught frames added
+  int rows() const { return rows_; }      // route rows after FinishRoute
+  bool finished() const { return finished_; }
+  int capacity() const { return capacity_; }
+  int dim() const { return dim_; }
+  ReferenceStorage storage() const { return storage_; }
+  // The taught frames merged into row r: first .. last (inclusive).
+  int row_first_frame(int r) const { return first_frame_[static_cast<std::size_t>(r)]; }
+  int row_last_frame(int r) const { return last_frame_[static_cast<std::size_t>(r)]; }
+  // The frame a match to row r reports: the middle of its run.
+  int row_frame(int r) const { return (row_first_frame(r) + row_last_frame(r)) / 2; }
+  // The merge threshold FinishRoute used (0: nothing merged).
+  float keyframe_threshold() const { return keyframe_threshold_; }
+  // The filter's costs after the last Step, one per row.
+  std::span<const float> costs() const { return {cost_.data(), static_cast<std::size_t>(rows_)}; }
+
+  static std::size_t BytesPerReference(int dim,
+                                       ReferenceStorage storage = ReferenceStorage::kFloat32);
+  std::size_t AllocatedBytes() const;
+
+ private:
+  void Differences(const float* query, int first_row, int count, float* out) const;
+
+  RouteFilterParams params_;
+  int dim_ = 0;
+  int capacity_ = 0;
+  int frames_ = 0;
+  int rows_ = 0;
+  bool finished_ = false;
+  int steps_ = 0;        // query frames since the last reset
+  double memory_ = 1;    // 1 + lambda + lambda^2 + ... = ds
+  float lambda_ = 0;     // 1 - 1/ds
+  float keyframe_threshold_ = 0;
+  ReferenceStorage storage_ = ReferenceStorage::kFloat32;
+  std::vector<float> database_;               // capacity x dim (kFloat32), rows then frames
+  std::vector<std::uint16_t> database_bf16_;  // capacity x dim (kBFloat16)
+  std::vector<int> first_frame_;              // capacity
+  std::vector<int> last_frame_;               // capacity
+  std::vector<float> cost_;                   // capacity: cost after the last step
+  std::vector<float> previous_;               // capacity: cost before it
+  std::vector<float> difference_;             // capacity: this frame's differences
+  std::vector<float> key_;                    // dim: a row's descriptor as floats
+};
+
+}  // namespace skyloc::dsp

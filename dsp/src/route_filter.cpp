@@ -1,0 +1,302 @@
+#include "skyloc/dsp/route_filter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#include <utility>
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+std::size_t Sz(int v) {
+  return static_cast<std::size_t>(v);
+}
+
+// Rows per pass of the filter update: the band minimum works on a block of rows that
+// stays in L1 while it is read K + 1 times.
+constexpr int kBlockRows = 1024;
+
+}  // namespace
+
+SeqSlamError ValidateRouteFilterParams(const RouteFilterParams& p) {
+  if (p.sequence_length < 1 || p.sequence_length > kMaxSequenceLength)
+    return SeqSlamError::kBadSequenceLength;
+  if (p.max_advance < 1 || p.max_advance > kMaxAdvance)
+    return SeqSlamError::kBadMaxAdvance;
+  if (p.uniqueness_window < 0 || p.uniqueness_window > kMaxWindow)
+    return SeqSlamError::kBadUniquenessWindow;
+  if (!(p.keyframe_noise_factor >= 0.0f && p.keyframe_noise_factor <= 100.0f))
+    return SeqSlamError::kBadKeyframeFactor;
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError RouteFilter::Init(const RouteFilterParams& params, int dim, int capacity,
+                               ReferenceStorage storage) {
+  const SeqSlamError e = ValidateRouteFilterParams(params);
+  if (e != SeqSlamError::kOk)
+    return e;
+  if (dim < 1)
+    return SeqSlamError::kBadDimension;
+  if (capacity < 1)
+    return SeqSlamError::kBadCapacity;
+  params_ = params;
+  dim_ = dim;
+  capacity_ = capacity;
+  storage_ = storage;
+  lambda_ =
+      static_cast<float>(params.sequence_length - 1) / static_cast<float>(params.sequence_length);
+  memory_ = static_cast<double>(params.sequence_length);  // 1 + lambda + lambda^2 + ...
+  database_.clear();
+  database_.shrink_to_fit();
+  database_bf16_.clear();
+  database_bf16_.shrink_to_fit();
+  if (storage == ReferenceStorage::kFloat32) {
+    database_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  } else {
+    database_bf16_.assign(Sz(capacity) * Sz(dim), 0);
+  }
+  first_frame_.assign(Sz(capacity), 0);
+  last_frame_.assign(Sz(capacity), 0);
+  cost_.assign(Sz(capacity), 0.0f);
+  previous_.assign(Sz(capacity), 0.0f);
+  difference_.assign(Sz(capacity), 0.0f);
+  key_.assign(Sz(dim), 0.0f);
+  ClearReferences();
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError RouteFilter::AddReference(std::span<const float> descriptor) {
+  if (capacity_ == 0)
+    return SeqSlamError::kNotInitialised;
+  if (finished_)
+    return SeqSlamError::kRouteFinished;
+  if (descriptor.size() != Sz(dim_))
+    return SeqSlamError::kSizeMismatch;
+  if (frames_ >= capacity_)
+    return SeqSlamError::kDatabaseFull;
+  const std::size_t at = Sz(frames_) * Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    std::copy(descriptor.begin(), descriptor.end(), database_.data() + at);
+  } else {
+    for (std::size_t i = 0; i < descriptor.size(); ++i)
+      database_bf16_[at + i] = ToBFloat16(descriptor[i]);
+  }
+  ++frames_;
+  return SeqSlamError::kOk;
+}
+
+void RouteFilter::ClearReferences() {
+  frames_ = 0;
+  rows_ = 0;
+  finished_ = false;
+  keyframe_threshold_ = 0;
+  ResetQueries();
+}
+
+void RouteFilter::ResetQueries() {
+  steps_ = 0;
+}
+
+void RouteFilter::Differences(const float* query, int first_row, int count, float* out) const {
+  const std::span<const float> q(query, Sz(dim_));
+  const std::size_t at = Sz(first_row) * Sz(dim_);
+  const std::size_t elements = Sz(count) * Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    DifferenceColumn(std::span<const float>(database_.data() + at, elements), dim_, q,
+                     std::span<float>(out, Sz(count)));
+  } else {
+    DifferenceColumnBFloat16(std::span<const std::uint16_t>(database_bf16_.data() + at, elements),
+                             dim_, q, std::span<float>(out, Sz(count)));
+  }
+}
+
+SeqSlamError RouteFilter::FinishRoute() {
+  if (capacity_ == 0)
+    return SeqSlamError::kNotInitialised;
+  ResetQueries();
+  finished_ = true;
+  rows_ = 0;
+  keyframe_threshold_ = 0;
+  const int n = frames_;
+  if (n == 0)
+    return SeqSlamError::kOk;  // Step() will say the route is empty
+  const std::size_t dim = Sz(dim_);
+  // Frame i's descriptor as floats into key_ (exact for both storages).
+  const auto load_key = [&](int i) {
+    const std::size_t at = Sz(i) * dim;
+    if (storage_ == ReferenceStorage::kFloat32) {
+      std::copy_n(database_.data() + at, dim, key_.data());
+    } else {
+      for (std::size_t k = 0; k < dim; ++k)
+        key_[k] = FromBFloat16(database_bf16_[at + k]);
+    }
+  };
+  const bool merge = params_.keyframe_noise_factor > 0.0f && n >= 2;
+  if (merge) {
+    // The noise floor: the 10th percentile of consecutive differences (header, 1.).
+    for (int i = 1; i < n; ++i) {
+      load_key(i - 1);
+      Differences(key_.data(), i, 1, &difference_[Sz(i - 1)]);
+    }
+    const auto begin = difference_.begin();
+    const auto nth = begin + (n - 1) / 10;
+    std::nth_element(begin, nth, begin + (n - 1));
+    keyframe_threshold_ = params_.keyframe_noise_factor * *nth;
+  }
+  // Compact in place: row r's descriptor moves to slot r (r <= i, so frame i is still in
+  // slot i when it is read).
+  int r = 0;
+  first_frame_[0] = 0;
+  last_frame_[0] = 0;
+  load_key(0);
+  for (int i = 1; i < n; ++i) {
+    float d = 0;
+    if (merge)
+      Differences(key_.data(), i, 1, &d);
+    if (merge && d <= keyframe_threshold_) {
+      last_frame_[Sz(r)] = i;
+      continue;
+    }
+    ++r;
+    if (r != i) {
+      if (storage_ == ReferenceStorage::kFloat32) {
+        std::copy_n(database_.data() + Sz(i) * dim, dim, database_.data() + Sz(r) * dim);
+      } else {
+        std::copy_n(database_bf16_.data() + Sz(i) * dim, dim, database_bf16_.data() + Sz(r) * dim);
+      }
+    }
+    first_frame_[Sz(r)] = i;
+    last_frame_[Sz(r)] = i;
+    if (merge)
+      load_key(i);
+  }
+  rows_ = r + 1;
+  return SeqSlamError::kOk;
+}
+
+SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) {
+  *out = SeqSlamMatch{};
+  if (capacity_ == 0)
+    return SeqSlamError::kNotInitialised;
+  if (query.size() != Sz(dim_))
+    return SeqSlamError::kSizeMismatch;
+  if (!finished_)
+    return SeqSlamError::kRouteNotFinished;
+  if (rows_ == 0)
+    return SeqSlamError::kEmptyDatabase;
+  const int n = rows_;
+  float* diff = difference_.data();
+
+  // 1. Differences, and their sums for the z-score. Four partial sums in a fixed order:
+  // the same doubles on every machine, without one long dependent add chain.
+  double sum[4] = {0, 0, 0, 0}, sum_sq[4] = {0, 0, 0, 0};
+  for (int r0 = 0; r0 < n; r0 += kBlockRows) {
+    const int count = std::min(kBlockRows, n - r0);
+    Differences(query.data(), r0, count, diff + r0);
+    for (int i = r0; i < r0 + count; ++i) {
+      const double v = static_cast<double>(diff[Sz(i)]);
+      sum[i & 3] += v;
+      sum_sq[i & 3] += v * v;
+    }
+  }
+  const double total = (sum[0] + sum[1]) + (sum[2] + sum[3]);
+  const double total_sq = (sum_sq[0] + sum_sq[1]) + (sum_sq[2] + sum_sq[3]);
+  const double mean = total / n;
+  const double var = (total_sq - total * mean) / n;
+  // A column whose differences are all equal (one row, or a route of identical frames)
+  // carries no evidence: z = 0 everywhere. The floor absorbs the rounding residue of the
+  // sums, as in EnhanceColumn.
+  const bool flat = !(var > 1e-10 * (total_sq / n) + 1e-30);
+  const float mean_f = static_cast<float>(mean);
+  const float inv_std = flat ? 0.0f : static_cast<float>(1.0 / std::sqrt(var));
+
+  // 2. The filter update: cost(i) = z(i) + lambda * min over k = 0..K of previous(i - k).
+  std::swap(cost_, previous_);
+  const float* __restrict prev = previous_.data();
+  float* __restrict cost = cost_.data();
+  const float lambda = lambda_;
+  const int advance = params_.max_advance;
+  const bool first = steps_ == 0;
+  for (int r0 = 0; r0 < n; r0 += kBlockRows) {
+    const int count = std::min(kBlockRows, n - r0);
+    float band[kBlockRows];
+    if (first) {
+      std::fill(band, band + count, 0.0f);
+    } else {
+      std::copy_n(prev + r0, count, band);
+      for (int k = 1; k <= advance; ++k) {
+        const int lo = std::max(r0, k);  // rows i >= k have a row i - k
+        for (int i = lo; i < r0 + count; ++i)
+          band[i - r0] = std::min(band[i - r0], prev[i - k]);
+      }
+    }
+    for (int i = 0; i < count; ++i) {
+      const float z = (diff[Sz(r0 + i)] - mean_f) * inv_std;
+      cost[r0 + i] = z + lambda * band[i];
+    }
+  }
+  ++steps_;
+
+  // 3. The best row (the first on ties) and the best row outside its window.
+  int best = 0;
+  float best_cost = cost[0];
+  for (int i = 1; i < n; ++i) {
+    if (cost[i] < best_cost) {
+      best_cost = cost[i];
+      best = i;
+    }
+  }
+  // The runner-up is the best row outside the best's basin: the rows around it whose cost
+  // rises monotonically away from it (a route sampled in time has alike neighbours, so
+  // the basin can be wider than any fixed window), and at least +-uniqueness_window/2.
+  const int half = params_.uniqueness_window / 2;
+  int w0 = std::max(0, best - half), w1 = std::min(n - 1, best + half);
+  for (int i = best; i > 0 && cost[i - 1] >= cost[i]; --i)
+    w0 = std::min(w0, i - 1);
+  for (int i = best; i + 1 < n && cost[i + 1] >= cost[i]; ++i)
+    w1 = std::max(w1, i + 1);
+  float second = kInf;
+  for (int i = 0; i < w0; ++i)
+    second = std::min(second, cost[i]);
+  for (int i = w1 + 1; i < n; ++i)
+    second = std::min(second, cost[i]);
+
+  out->valid = true;
+  out->row = best;
+  out->reference = row_frame(best);
+  out->start = -1;    // no straight trajectory: the path may change speed every frame
+  out->velocity = 0;  // not estimated
+  // Costs are sums over the filter's memory (ds frames of weight); per frame on average:
+  out->score = static_cast<float>(static_cast<double>(best_cost) / memory_);
+  if (second == kInf) {
+    // No row outside the window: nothing shows this match is distinctive.
+    out->uniqueness = 1.0f;
+  } else {
+    // Over the full memory, not the evidence so far: the first frames after a reset have
+    // little evidence, and their confidence grows with it instead of starting high.
+    const double margin =
+        (static_cast<double>(second) - static_cast<double>(best_cost)) / memory_;
+    out->uniqueness = static_cast<float>(std::exp(-margin));
+  }
+  out->confidence = 1.0f - out->uniqueness;
+  return SeqSlamError::kOk;
+}
+
+std::size_t RouteFilter::BytesPerReference(int dim, ReferenceStorage storage) {
+  const std::size_t element = storage == ReferenceStorage::kFloat32 ? 4 : 2;
+  // Descriptor, two frame numbers, two cost columns, the difference column.
+  return element * Sz(dim) + 2 * sizeof(int) + 3 * sizeof(float);
+}
+
+std::size_t RouteFilter::AllocatedBytes() const {
+  return sizeof(float) * (database_.size() + cost_.size() + previous_.size() + difference_.size() +
+                          key_.size()) +
+         sizeof(std::uint16_t) * database_bf16_.size() +
+         sizeof(int) * (first_frame_.size() + last_frame_.size());
+}
+
+}  // namespace skyloc::dsp

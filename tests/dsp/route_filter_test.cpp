@@ -1,0 +1,516 @@
+// The route filter (dsp/route_filter.h) against a second implementation written from
+// docs/SEQSLAM.md in double precision with plain loops, against planted routes sampled in
+// time (stops, 0.5x and 2x speed, a kidnap), and against the failure it replaces: the
+// fixed-window contrast enhancement's basin-edge shift.
+#include "skyloc/dsp/route_filter.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "skyloc/dsp/seqslam.h"
+#include "skyloc/platform/alloc_counter.h"
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+
+// A route's appearance as a smooth function of the distance travelled: each descriptor
+// element is a sum of sinusoids of random wavelengths (metres), so neighbouring places
+// look alike over about a metre and places far apart differ.
+class AppearanceField {
+ public:
+  AppearanceField(int dim, unsigned seed, double min_wavelength_m = 3.0,
+                  double max_wavelength_m = 15.0)
+      : dim_(dim) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> wavelength(min_wavelength_m, max_wavelength_m),
+        phase(0.0, kTwoPi);
+    for (int i = 0; i < dim * kWaves; ++i) {
+      wavelengths_.push_back(wavelength(rng));
+      phases_.push_back(phase(rng));
+    }
+  }
+  int dim() const { return dim_; }
+  void At(double s_m, float noise, std::mt19937& rng, std::vector<float>* out) const {
+    std::normal_distribution<float> gauss(0.0f, noise);
+    for (int i = 0; i < dim_; ++i) {
+      double x = 2.0 * kWaves;  // positive, like amplitudes
+      for (int w = 0; w < kWaves; ++w) {
+        const std::size_t k = static_cast<std::size_t>(i * kWaves + w);
+        x += std::sin(kTwoPi * s_m / wavelengths_[k] + phases_[k]);
+      }
+      out->push_back(static_cast<float>(x) + (noise > 0 ? gauss(rng) : 0.0f));
+    }
+  }
+
+ private:
+  static constexpr int kWaves = 3;
+  int dim_;
+  std::vector<double> wavelengths_, phases_;
+};
+
+// A speed profile: (seconds, metres per second) pieces, sampled at a fixed frame rate.
+struct Piece {
+  double seconds;
+  double speed_mps;
+};
+
+std::vector<double> SampleInTime(const std::vector<Piece>& profile, double fps, double start_m) {
+  std::vector<double> s;
+  double at = start_m;
+  for (const Piece& p : profile) {
+    const int frames = static_cast<int>(std::lround(p.seconds * fps));
+    for (int i = 0; i < frames; ++i) {
+      s.push_back(at);
+      at += p.speed_mps / fps;
+    }
+  }
+  return s;
+}
+
+struct TimedRun {
+  std::vector<double> s_m;  // distance along the route of each frame
+  std::vector<float> descriptors;
+  int frames() const { return static_cast<int>(s_m.size()); }
+  std::span<const float> Frame(int i, int dim) const {
+    return std::span<const float>(descriptors)
+        .subspan(static_cast<std::size_t>(i * dim), static_cast<std::size_t>(dim));
+  }
+};
+
+TimedRun MakeRun(const AppearanceField& field, std::vector<double> s_m, float noise,
+                 unsigned seed) {
+  TimedRun run;
+  run.s_m = std::move(s_m);
+  std::mt19937 rng(seed);
+  for (const double s : run.s_m)
+    field.At(s, noise, rng, &run.descriptors);
+  return run;
+}
+
+// The truth of a query: every reference frame tied for nearest in distance along the
+// route (a stop holds many); a match is right within +-tolerance frames of them.
+bool Within(const TimedRun& reference, double query_s, int matched, int tolerance) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const double s : reference.s_m)
+    best = std::min(best, std::abs(s - query_s));
+  for (int r = 0; r < reference.frames(); ++r) {
+    if (std::abs(reference.s_m[static_cast<std::size_t>(r)] - query_s) <= best + 1e-9 &&
+        std::abs(r - matched) <= tolerance)
+      return true;
+  }
+  return false;
+}
+
+::testing::AssertionResult Teach(RouteFilter& filter, const TimedRun& run, int dim) {
+  for (int i = 0; i < run.frames(); ++i) {
+    if (const SeqSlamError e = filter.AddReference(run.Frame(i, dim)); e != SeqSlamError::kOk)
+      return ::testing::AssertionFailure() << "frame " << i << ": " << SeqSlamErrorMessage(e);
+  }
+  if (const SeqSlamError e = filter.FinishRoute(); e != SeqSlamError::kOk)
+    return ::testing::AssertionFailure() << SeqSlamErrorMessage(e);
+  return ::testing::AssertionSuccess();
+}
+
+std::vector<SeqSlamMatch> Repeat(RouteFilter& filter, const TimedRun& run, int dim) {
+  std::vector<SeqSlamMatch> matches(static_cast<std::size_t>(run.frames()));
+  for (int t = 0; t < run.frames(); ++t)
+    EXPECT_EQ(filter.Step(run.Frame(t, dim), &matches[static_cast<std::size_t>(t)]),
+              SeqSlamError::kOk);
+  return matches;
+}
+
+// ---- The second implementation -----------------------------------------------------
+// Written from docs/SEQSLAM.md ("The route filter"), not from route_filter.cpp: doubles,
+// whole matrices, every sum spelled out.
+
+double MeanAbsDifference(std::span<const float> a, std::span<const float> b) {
+  double sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    sum += std::abs(static_cast<double>(a[i]) - static_cast<double>(b[i]));
+  return sum / static_cast<double>(a.size());
+}
+
+struct NaiveResult {
+  std::vector<int> first, last;  // frames merged into each row
+  std::vector<int> row, reference;
+  std::vector<double> confidence;
+  std::vector<double> gap;  // best cost against the next lowest cost of any row
+};
+
+NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int dim,
+                        const RouteFilterParams& p) {
+  NaiveResult out;
+  const int n = reference.frames();
+  // Keyframes: the 10th percentile (index floor((n - 1) / 10) of the sorted consecutive
+  // differences) times the factor; a frame joins a row while within it of the row's first.
+  double threshold = -1;
+  if (p.keyframe_noise_factor > 0 && n >= 2) {
+    std::vector<double> consecutive;
+    for (int i = 1; i < n; ++i)
+      consecutive.push_back(
+          MeanAbsDifference(reference.Frame(i - 1, dim), reference.Frame(i, dim)));
+    std::sort(consecutive.begin(), consecutive.end());
+    threshold = static_cast<double>(p.keyframe_noise_factor) *
+                consecutive[static_cast<std::size_t>((n - 1) / 10)];
+  }
+  out.first.push_back(0);
+  out.last.push_back(0);
+  for (int i = 1; i < n; ++i) {
+    const double d =
+        MeanAbsDifference(reference.Frame(out.first.back(), dim), reference.Frame(i, dim));
+    if (d <= threshold) {
+      out.last.back() = i;
+    } else {
+      out.first.push_back(i);
+      out.last.push_back(i);
+    }
+  }
+  const int rows = static_cast<int>(out.first.size());
+  const double lambda = 1.0 - 1.0 / p.sequence_length;
+  std::vector<double> cost(static_cast<std::size_t>(rows), 0.0);
+  for (int t = 0; t < query.frames(); ++t) {
+    std::vector<double> d(static_cast<std::size_t>(rows));
+    for (int r = 0; r < rows; ++r)
+      d[static_cast<std::size_t>(r)] = MeanAbsDifference(
+          reference.Frame(out.first[static_cast<std::size_t>(r)], dim), query.Frame(t, dim));
+    double mean = 0;
+    for (const double v : d)
+      mean += v / rows;
+    double var = 0;
+    for (const double v : d)
+      var += (v - mean) * (v - mean) / rows;
+    std::vector<double> next(static_cast<std::size_t>(rows));
+    for (int r = 0; r < rows; ++r) {
+      const double z = var > 0 ? (d[static_cast<std::size_t>(r)] - mean) / std::sqrt(var) : 0.0;
+      double from = std::numeric_limits<double>::infinity();
+      for (int k = 0; k <= p.max_advance; ++k) {
+        if (r - k >= 0)
+          from = std::min(from, t == 0 ? 0.0 : cost[static_cast<std::size_t>(r - k)]);
+      }
+      next[static_cast<std::size_t>(r)] = z + lambda * from;
+    }
+    cost = next;
+    const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+    // The best's basin: the rows on either side while the cost does not fall, and at
+    // least +-window/2; the runner-up is the lowest cost outside it.
+    int lo = best, hi = best;
+    while (lo > 0 && cost[static_cast<std::size_t>(lo - 1)] >= cost[static_cast<std::size_t>(lo)])
+      --lo;
+    while (hi + 1 < rows &&
+           cost[static_cast<std::size_t>(hi + 1)] >= cost[static_cast<std::size_t>(hi)])
+      ++hi;
+    lo = std::min(lo, best - p.uniqueness_window / 2);
+    hi = std::max(hi, best + p.uniqueness_window / 2);
+    double second = std::numeric_limits<double>::infinity();
+    double next_lowest = std::numeric_limits<double>::infinity();
+    for (int r = 0; r < rows; ++r) {
+      if (r != best)
+        next_lowest = std::min(next_lowest, cost[static_cast<std::size_t>(r)]);
+      if (r < lo || r > hi)
+        second = std::min(second, cost[static_cast<std::size_t>(r)]);
+    }
+    out.row.push_back(best);
+    out.reference.push_back(
+        (out.first[static_cast<std::size_t>(best)] + out.last[static_cast<std::size_t>(best)]) / 2);
+    out.confidence.push_back(
+        std::isinf(second)
+            ? 0.0
+            : 1.0 - std::exp(-(second - cost[static_cast<std::size_t>(best)]) / p.sequence_length));
+    out.gap.push_back(next_lowest - cost[static_cast<std::size_t>(best)]);
+  }
+  return out;
+}
+
+struct Scenario {
+  AppearanceField field{24, 7};
+  TimedRun reference, query;
+};
+
+// Taught at 1 m/s with a 4 s stop at the start and one midway; repeated with a stop of
+// its own elsewhere, then at 2x and at 0.5x the taught speed.
+Scenario StopsAndSpeeds() {
+  Scenario sc;
+  sc.reference =
+      MakeRun(sc.field, SampleInTime({{4, 0}, {30, 1.0}, {5, 0}, {30, 1.0}}, 10, 0.0), 0.02f, 11);
+  sc.query = MakeRun(
+      sc.field, SampleInTime({{3, 0}, {10, 1.0}, {6, 0}, {8, 2.0}, {20, 0.5}, {5, 1.0}}, 10, 0.0),
+      0.02f, 12);
+  return sc;
+}
+
+TEST(RouteFilter, EqualsTheNaiveImplementationEveryFrame) {
+  for (const ReferenceStorage storage : {ReferenceStorage::kFloat32, ReferenceStorage::kBFloat16}) {
+    Scenario sc = StopsAndSpeeds();
+    const int dim = sc.field.dim();
+    if (storage == ReferenceStorage::kBFloat16) {
+      // The naive filter sees the route as the engine stores it.
+      for (float& v : sc.reference.descriptors)
+        v = FromBFloat16(ToBFloat16(v));
+    }
+    for (const int ds : {1, 4, 10}) {
+      RouteFilterParams p;
+      p.sequence_length = ds;
+      RouteFilter filter;
+      ASSERT_EQ(filter.Init(p, dim, sc.reference.frames(), storage), SeqSlamError::kOk);
+      ASSERT_TRUE(Teach(filter, sc.reference, dim));
+      const NaiveResult naive = NaiveFilter(sc.reference, sc.query, dim, p);
+      ASSERT_EQ(filter.rows(), static_cast<int>(naive.first.size()));
+      for (int r = 0; r < filter.rows(); ++r) {
+        ASSERT_EQ(filter.row_first_frame(r), naive.first[static_cast<std::size_t>(r)]) << r;
+        ASSERT_EQ(filter.row_last_frame(r), naive.last[static_cast<std::size_t>(r)]) << r;
+      }
+      const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, dim);
+      int compared = 0;
+      for (std::size_t t = 0; t < m.size(); ++t) {
+        ASSERT_TRUE(m[t].valid);
+        // Float and double may order two rows whose costs are within rounding (1e-4 of a
+        // column standard deviation) either way; every other frame must agree exactly.
+        if (naive.gap[t] < 1e-4)
+          continue;
+        ++compared;
+        EXPECT_EQ(m[t].row, naive.row[t]) << "ds " << ds << " frame " << t;
+        EXPECT_EQ(m[t].reference, naive.reference[t]) << "ds " << ds << " frame " << t;
+        EXPECT_NEAR(m[t].confidence, naive.confidence[t], 1e-4) << "ds " << ds << " frame " << t;
+      }
+      EXPECT_GT(compared, static_cast<int>(m.size()) * 9 / 10);
+    }
+  }
+}
+
+TEST(RouteFilter, MergesStopsIntoOneRowAndKeepsFramesInMotion) {
+  const Scenario sc = StopsAndSpeeds();
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, sc.field.dim(), sc.reference.frames()),
+            SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  // 40 standing frames at the start, 300 moving, 50 standing, 300 moving. The stops are
+  // noise only; in motion a frame moves 0.1 m, far above the noise: every one is kept.
+  ASSERT_EQ(sc.reference.frames(), 690);
+  EXPECT_EQ(filter.row_first_frame(0), 0);
+  EXPECT_GE(filter.row_last_frame(0), 40);  // the start's stop (and maybe the next frame)
+  EXPECT_LE(filter.row_last_frame(0), 41);
+  int stop_rows = 0;
+  for (int r = 0; r < filter.rows(); ++r) {
+    const int span = filter.row_last_frame(r) - filter.row_first_frame(r);
+    if (span > 1)
+      ++stop_rows;
+    EXPECT_LE(span, 51) << "row " << r;
+  }
+  EXPECT_EQ(stop_rows, 2);
+  EXPECT_NEAR(filter.rows(), 690 - 40 - 50, 4);
+  EXPECT_GT(filter.keyframe_threshold(), 0.0f);
+
+  // Factor 0 keeps every frame.
+  RouteFilterParams keep;
+  keep.keyframe_noise_factor = 0;
+  RouteFilter all;
+  ASSERT_EQ(all.Init(keep, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(all, sc.reference, sc.field.dim()));
+  EXPECT_EQ(all.rows(), 690);
+}
+
+TEST(RouteFilter, FollowsAPlantedRouteThroughStopsAndSpeedChanges) {
+  const Scenario sc = StopsAndSpeeds();
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, sc.field.dim(), sc.reference.frames()),
+            SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+  // After the first ds frames of evidence, every frame within 5 frames of the truth:
+  // through the query's stops, the 2x and the 0.5x stretch.
+  int wrong = 0;
+  for (int t = 10; t < sc.query.frames(); ++t) {
+    if (!Within(sc.reference, sc.query.s_m[static_cast<std::size_t>(t)],
+                m[static_cast<std::size_t>(t)].reference, 5)) {
+      ++wrong;
+      ADD_FAILURE() << "frame " << t << " at " << sc.query.s_m[static_cast<std::size_t>(t)]
+                    << " m matched reference " << m[static_cast<std::size_t>(t)].reference;
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+}
+
+TEST(RouteFilter, ThreeTimesFasterThanTaughtIsFollowed) {
+  Scenario sc;
+  sc.reference = MakeRun(sc.field, SampleInTime({{60, 0.5}}, 10, 0.0), 0.02f, 21);
+  sc.query = MakeRun(sc.field, SampleInTime({{9, 1.5}}, 10, 0.5), 0.02f, 22);
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, sc.field.dim(), sc.reference.frames()),
+            SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+  for (int t = 10; t < sc.query.frames(); ++t) {
+    EXPECT_TRUE(Within(sc.reference, sc.query.s_m[static_cast<std::size_t>(t)],
+                       m[static_cast<std::size_t>(t)].reference, 5))
+        << "frame " << t;
+  }
+}
+
+TEST(RouteFilter, RelocalisesAfterAKidnap) {
+  Scenario sc;
+  sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, 31);
+  // 10 s from 5 m, then carried to 50 m (a kidnap) and on for 20 s.
+  std::vector<double> s = SampleInTime({{10, 1.0}}, 10, 5.0);
+  const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, 50.0);
+  s.insert(s.end(), after.begin(), after.end());
+  sc.query = MakeRun(sc.field, s, 0.02f, 32);
+  RouteFilterParams p;
+  p.sequence_length = 10;
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+  // Back on the truth within 2 ds frames of the kidnap (frame 100), and stays there.
+  int back = -1;
+  for (int t = 100; t < sc.query.frames() && back < 0; ++t) {
+    if (Within(sc.reference, s[static_cast<std::size_t>(t)],
+               m[static_cast<std::size_t>(t)].reference, 5))
+      back = t;
+  }
+  ASSERT_GE(back, 100);
+  EXPECT_LE(back - 100, 2 * p.sequence_length);
+  for (int t = back; t < sc.query.frames(); ++t)
+    EXPECT_TRUE(Within(sc.reference, s[static_cast<std::size_t>(t)],
+                       m[static_cast<std::size_t>(t)].reference, 5))
+        << "frame " << t;
+}
+
+TEST(RouteFilter, SingleImageIsNearestNeighbour) {
+  const Scenario sc = StopsAndSpeeds();
+  const int dim = sc.field.dim();
+  RouteFilterParams p;
+  p.sequence_length = 1;
+  p.keyframe_noise_factor = 0;
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(p, dim, sc.reference.frames()), SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, dim));
+  std::vector<float> column(static_cast<std::size_t>(sc.reference.frames()));
+  for (int t = 0; t < sc.query.frames(); ++t) {
+    SeqSlamMatch m;
+    ASSERT_EQ(filter.Step(sc.query.Frame(t, dim), &m), SeqSlamError::kOk);
+    DifferenceColumn(sc.reference.descriptors, dim, sc.query.Frame(t, dim), column);
+    const int nearest =
+        static_cast<int>(std::min_element(column.begin(), column.end()) - column.begin());
+    EXPECT_EQ(m.reference, nearest) << "frame " << t;
+  }
+}
+
+// The failure the filter replaces (docs/SEQSLAM.md): a route sampled densely in space, so
+// the basin of alike frames around each place is ~20 frames wide. OpenSeqSLAM's
+// enhancement against +-R/2 = 5 neighbouring rows turns the basin's floor into a plateau
+// and puts the enhanced minimum near its edge, about R/2 frames from the truth; the
+// filter's whole-route z-score keeps the minimum where the descriptor puts it.
+TEST(RouteFilter, NoBasinEdgeShiftWhereFixedWindowEnhancementHasOne) {
+  AppearanceField field(24, 5, 6.0, 20.0);
+  const TimedRun reference = MakeRun(field, SampleInTime({{40, 1.0}}, 20, 0.0), 0.0f, 41);
+  // The query: the same places half a frame along, with a little noise.
+  const TimedRun query = MakeRun(field, SampleInTime({{30, 1.0}}, 20, 5.025), 0.002f, 42);
+  const int dim = field.dim(), n = reference.frames();
+  std::vector<float> column(static_cast<std::size_t>(n)), enhanced(column.size());
+  double enhanced_error = 0;
+  for (int t = 0; t < query.frames(); ++t) {
+    DifferenceColumn(reference.descriptors, dim, query.Frame(t, dim), column);
+    EnhanceColumn(column, 10, enhanced);
+    const int truth = 100 + t;  // 5.025 m at 0.05 m per frame, rounded down
+    const int e =
+        static_cast<int>(std::min_element(enhanced.begin(), enhanced.end()) - enhanced.begin());
+    enhanced_error += std::abs(e - truth);
+  }
+  enhanced_error /= query.frames();
+  EXPECT_GT(enhanced_error, 3.0) << "fixed-window enhancement no longer shows the shift";
+
+  RouteFilterParams p;
+  p.sequence_length = 1;
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(p, dim, n), SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, reference, dim));
+  double filter_error = 0;
+  for (int t = 0; t < query.frames(); ++t) {
+    SeqSlamMatch m;
+    ASSERT_EQ(filter.Step(query.Frame(t, dim), &m), SeqSlamError::kOk);
+    filter_error += std::abs(m.reference - (100 + t));
+  }
+  filter_error /= query.frames();
+  EXPECT_LE(filter_error, 1.0);
+}
+
+TEST(RouteFilter, ConfidenceFallsOnAnUntaughtRoute) {
+  Scenario sc;
+  sc.reference = MakeRun(sc.field, SampleInTime({{40, 1.0}}, 10, 0.0), 0.02f, 51);
+  sc.query = MakeRun(sc.field, SampleInTime({{20, 1.0}}, 10, 5.0), 0.02f, 52);
+  const AppearanceField elsewhere(24, 99);
+  const TimedRun untaught = MakeRun(elsewhere, SampleInTime({{20, 1.0}}, 10, 0.0), 0.02f, 53);
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, sc.field.dim(), sc.reference.frames()),
+            SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  const std::vector<SeqSlamMatch> on = Repeat(filter, sc.query, sc.field.dim());
+  filter.ResetQueries();
+  const std::vector<SeqSlamMatch> off = Repeat(filter, untaught, sc.field.dim());
+  // Every on-route frame after warm-up is more confident than the most confident
+  // off-route frame.
+  float off_max = 0;
+  for (const SeqSlamMatch& m : off)
+    off_max = std::max(off_max, m.confidence);
+  for (std::size_t t = 10; t < on.size(); ++t)
+    EXPECT_GT(on[t].confidence, off_max) << "frame " << t;
+}
+
+TEST(RouteFilter, StepAllocatesNothing) {
+  const Scenario sc = StopsAndSpeeds();
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, sc.field.dim(), sc.reference.frames(),
+                        ReferenceStorage::kBFloat16),
+            SeqSlamError::kOk);
+  ASSERT_TRUE(AllocationCounterActive());
+  AllocationScope scope;
+  for (int i = 0; i < sc.reference.frames(); ++i)
+    ASSERT_EQ(filter.AddReference(sc.reference.Frame(i, sc.field.dim())), SeqSlamError::kOk);
+  ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
+  SeqSlamMatch m;
+  for (int t = 0; t < sc.query.frames(); ++t)
+    ASSERT_EQ(filter.Step(sc.query.Frame(t, sc.field.dim()), &m), SeqSlamError::kOk);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
+TEST(RouteFilter, RefusesBadParametersAndCallOrder) {
+  RouteFilterParams p;
+  p.max_advance = 0;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadMaxAdvance);
+  p = {};
+  p.sequence_length = 0;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadSequenceLength);
+  p = {};
+  p.keyframe_noise_factor = -1;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadKeyframeFactor);
+  p.keyframe_noise_factor = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadKeyframeFactor);
+
+  RouteFilter filter;
+  SeqSlamMatch m;
+  const std::vector<float> d(4, 1.0f);
+  EXPECT_EQ(filter.Step(d, &m), SeqSlamError::kNotInitialised);
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, 4, 2), SeqSlamError::kOk);
+  ASSERT_EQ(filter.AddReference(d), SeqSlamError::kOk);
+  EXPECT_EQ(filter.Step(d, &m), SeqSlamError::kRouteNotFinished);
+  ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
+  EXPECT_EQ(filter.AddReference(d), SeqSlamError::kRouteFinished);
+  ASSERT_EQ(filter.Step(d, &m), SeqSlamError::kOk);
+  EXPECT_TRUE(m.valid);
+  EXPECT_EQ(m.reference, 0);
+  EXPECT_EQ(m.confidence, 0.0f);  // one row: nothing to be distinctive against
+  filter.ClearReferences();
+  ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
+  EXPECT_EQ(filter.Step(d, &m), SeqSlamError::kEmptyDatabase);
+  EXPECT_EQ(filter.Step(std::vector<float>(3), &m), SeqSlamError::kSizeMismatch);
+}
+
+}  // namespace
+}  // namespace skyloc::dsp
