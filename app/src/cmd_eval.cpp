@@ -17,10 +17,14 @@
 #include <vector>
 
 #include "commands.h"
+#include "config.h"
+#include "pipeline.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
 #include "skyloc/dsp/lens.h"
+#include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/place_metrics.h"
+#include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
@@ -33,13 +37,18 @@ namespace {
 constexpr const char* kUsage =
     "usage: skyloc eval --reference DIR --query DIR --out DIR [options]\n"
     "\n"
-    "Matches every query frame against the reference route with SeqSLAM and scores the\n"
-    "matches against the ground truth. DIRs are dataset folders (docs/DATASETS.md).\n"
+    "Matches every query frame against the reference route and scores the matches\n"
+    "against the ground truth. DIRs are dataset folders (docs/DATASETS.md).\n"
     "\n"
     "  --method sky|vanilla   descriptor (repeat to compare; default: sky and vanilla)\n"
+    "  --matcher filter|openseqslam  the matcher (repeat to compare; default: filter, the\n"
+    "                         firmware's route filter; docs/SEQSLAM.md)\n"
     "  --ds N                 sequence length in frames (repeat; default: 1 10 20)\n"
-    "  --batch                OpenSeqSLAM's centred window (default)\n"
-    "  --streaming            the firmware's causal engine (trailing window)\n"
+    "  --batch                openseqslam: OpenSeqSLAM's centred window (default)\n"
+    "  --streaming            openseqslam: the causal engine (trailing window)\n"
+    "                         (either alone implies --matcher openseqslam)\n"
+    "  --max-advance K        filter: route rows per frame at most (default 4)\n"
+    "  --keyframe-noise F     filter: keyframe merge threshold x noise floor (default 2)\n"
     "  --gt FILE              ground truth CSV: query_index,reference_index (-1: off route)\n"
     "  --tolerance-m X        ground truth from the datasets' poses: a match is correct when\n"
     "                         the matched reference was recorded within X m of the query\n"
@@ -54,12 +63,19 @@ constexpr const char* kUsage =
     "\n"
     "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
     "reference recorded nearest to it, correct within --frame-tolerance frames.\n"
-    "Writes OUT/matches.csv, OUT/metrics.json, OUT/pr.svg, OUT/correspondence.svg.\n";
+    "Writes OUT/matches.csv, OUT/metrics.json, OUT/pr.svg, OUT/correspondence.svg.\n"
+    "Every run also replays the firmware's state machine (default [state] settings) over\n"
+    "its matches: matches.csv gives each frame's state, metrics.json the share of\n"
+    "LOCALISED frames that are correct.\n";
 
 enum class Method : std::uint8_t { kSky, kVanilla };
 
 const char* MethodName(Method m) {
   return m == Method::kSky ? "sky" : "vanilla";
+}
+
+const char* MatcherName(Matcher m) {
+  return m == Matcher::kRouteFilter ? "filter" : "openseqslam";
 }
 
 struct EvalOptions {
@@ -70,7 +86,10 @@ struct EvalOptions {
   double tolerance_m = -1.0;  // < 0: not given
   int frame_tolerance = 5;
   std::vector<Method> methods;
+  std::vector<Matcher> matchers;
   std::vector<int> ds_list;
+  int max_advance = SeqSlamConfig{}.max_advance;
+  double keyframe_noise_factor = SeqSlamConfig{}.keyframe_noise_factor;
   bool streaming = false;
   std::string camera;  // --camera FILE
   std::optional<dsp::LensModel> lens;
@@ -143,6 +162,22 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
       } else {
         return fail("--method '%s': use sky or vanilla", v);
       }
+    } else if (a == "--matcher") {
+      if (std::strcmp(v, "filter") == 0) {
+        o->matchers.push_back(Matcher::kRouteFilter);
+      } else if (std::strcmp(v, "openseqslam") == 0) {
+        o->matchers.push_back(Matcher::kOpenSeqSlam);
+      } else {
+        return fail("--matcher '%s': use filter or openseqslam", v);
+      }
+    } else if (a == "--max-advance") {
+      if (!ParseIntArg(v, &o->max_advance) || o->max_advance < 1 ||
+          o->max_advance > dsp::kMaxAdvance)
+        return fail("--max-advance '%s': give 1..64 route rows per frame", v);
+    } else if (a == "--keyframe-noise") {
+      if (!ParseDoubleArg(v, &o->keyframe_noise_factor) || o->keyframe_noise_factor < 0 ||
+          o->keyframe_noise_factor > 100)
+        return fail("--keyframe-noise '%s': give 0..100 (0 keeps every reference frame)", v);
     } else if (a == "--ds") {
       int ds = 0;
       if (!ParseIntArg(v, &ds) || ds < 1 || ds > dsp::kMaxSequenceLength)
@@ -179,6 +214,15 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
     return fail("%s", "--gt and --tolerance-m exclude each other");
   if (o->methods.empty())
     o->methods = {Method::kSky, Method::kVanilla};
+  if (o->matchers.empty()) {
+    o->matchers = {(batch || o->streaming) ? Matcher::kOpenSeqSlam : Matcher::kRouteFilter};
+  } else if ((batch || o->streaming) && std::find(o->matchers.begin(), o->matchers.end(),
+                                                  Matcher::kOpenSeqSlam) == o->matchers.end()) {
+    return fail("%s",
+                "--batch and --streaming choose openseqslam's window: add --matcher openseqslam");
+  }
+  std::sort(o->matchers.begin(), o->matchers.end());
+  o->matchers.erase(std::unique(o->matchers.begin(), o->matchers.end()), o->matchers.end());
   if (o->ds_list.empty())
     o->ds_list = {1, 10, 20};
   std::sort(o->methods.begin(), o->methods.end());
@@ -388,41 +432,80 @@ Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset
 
 struct Run {
   Method method = Method::kVanilla;
+  Matcher matcher = Matcher::kRouteFilter;
   int ds = 0;
   std::vector<dsp::SeqSlamMatch> matches;  // per query frame
-  std::vector<int> evaluated_queries;      // queries with a match, in order
+  std::vector<dsp::TrackState> states;     // per query frame: the state machine replayed
+  int localised = 0, localised_correct = 0;
+  std::vector<int> evaluated_queries;  // queries with a match, in order
   std::vector<dsp::EvaluatedMatch> evaluated;
   std::vector<dsp::PrPoint> curve;
   dsp::PrSummary summary;
   std::string label;
 };
 
-Status RunSeqSlam(const Descriptors& ref, const Descriptors& query, bool streaming, Run* run) {
-  dsp::SeqSlamParams p;
-  p.sequence_length = run->ds;
+Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOptions& o,
+                  Run* run) {
   run->matches.assign(static_cast<std::size_t>(query.count), dsp::SeqSlamMatch{});
-  dsp::SeqSlamError e;
-  if (streaming) {
+  const auto row = [](const Descriptors& d, int i) {
+    return d.all().subspan(static_cast<std::size_t>(i * d.dim), static_cast<std::size_t>(d.dim));
+  };
+  dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
+  if (run->matcher == Matcher::kRouteFilter) {
+    // The firmware's engine, as repeat runs it: causal, one query at a time.
+    dsp::RouteFilterParams p;
+    p.sequence_length = run->ds;
+    p.max_advance = o.max_advance;
+    p.keyframe_noise_factor = static_cast<float>(o.keyframe_noise_factor);
+    dsp::RouteFilter engine;
+    e = engine.Init(p, ref.dim, std::max(1, ref.count));
+    for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
+      e = engine.AddReference(row(ref, r));
+    if (e == dsp::SeqSlamError::kOk)
+      e = engine.FinishRoute();
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t)
+      e = engine.Step(row(query, t), &run->matches[static_cast<std::size_t>(t)]);
+  } else if (o.streaming) {
+    dsp::SeqSlamParams p;
+    p.sequence_length = run->ds;
     dsp::StreamingSeqSlam engine;
     e = engine.Init(p, ref.dim, std::max(1, ref.count));
-    for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r) {
-      e = engine.AddReference(ref.all().subspan(static_cast<std::size_t>(r * ref.dim),
-                                                static_cast<std::size_t>(ref.dim)));
-    }
-    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
-      e = engine.Step(query.all().subspan(static_cast<std::size_t>(t * query.dim),
-                                          static_cast<std::size_t>(query.dim)),
-                      &run->matches[static_cast<std::size_t>(t)]);
-    }
+    for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
+      e = engine.AddReference(row(ref, r));
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t)
+      e = engine.Step(row(query, t), &run->matches[static_cast<std::size_t>(t)]);
   } else {
+    dsp::SeqSlamParams p;
+    p.sequence_length = run->ds;
     e = dsp::BatchSeqSlam(ref.all(), query.all(), ref.dim, p, dsp::SeqSlamWindow::kCentred,
                           run->matches);
   }
   if (e != dsp::SeqSlamError::kOk) {
-    return Status::Error(StatusCode::kInvalidArgument, "SeqSLAM (%s, ds %d): %s",
-                         MethodName(run->method), run->ds, dsp::SeqSlamErrorMessage(e));
+    return Status::Error(StatusCode::kInvalidArgument, "%s (%s, ds %d): %s",
+                         MatcherName(run->matcher), MethodName(run->method), run->ds,
+                         dsp::SeqSlamErrorMessage(e));
   }
   return Status::Ok();
+}
+
+// The firmware's state machine over the run's matches, with the default [state] settings
+// and the matcher's motion limits (what repeat would have shown, frame by frame).
+void ReplayStateMachine(const EvalOptions& o, Run* run) {
+  Config config;
+  config.seqslam.matcher = run->matcher;
+  config.seqslam.max_advance = o.max_advance;
+  dsp::LocalisationStateMachine machine;
+  machine.Init(StateMachineParamsFrom(config));
+  run->states.clear();
+  for (std::size_t t = 0; t < run->matches.size(); ++t) {
+    const dsp::SeqSlamMatch& m = run->matches[t];
+    dsp::MatchObservation obs;
+    obs.frame = t;
+    obs.index = m.valid ? m.row : -1;
+    obs.uniqueness = m.valid ? m.uniqueness : 1.0f;
+    obs.confidence = m.valid ? m.confidence : 0.0f;
+    run->states.push_back(machine.Update(obs));
+  }
 }
 
 bool IsCorrect(const GroundTruth& gt, const EvalOptions& o, const drivers::Dataset& ref,
@@ -455,7 +538,15 @@ void Score(const GroundTruth& gt, const EvalOptions& o, const drivers::Dataset& 
   run->curve.resize(run->evaluated.size());
   run->curve.resize(dsp::PrecisionRecallCurve(run->evaluated, order, run->curve));
   run->summary = dsp::SummarisePrecisionRecall(run->evaluated, run->curve);
-  run->label = std::string(MethodName(run->method)) + " ds=" + std::to_string(run->ds);
+  for (std::size_t k = 0; k < run->evaluated_queries.size(); ++k) {
+    if (run->states[static_cast<std::size_t>(run->evaluated_queries[k])] ==
+        dsp::TrackState::kLocalised) {
+      ++run->localised;
+      run->localised_correct += run->evaluated[k].correct ? 1 : 0;
+    }
+  }
+  run->label = std::string(MethodName(run->method)) + " " + MatcherName(run->matcher) +
+               " ds=" + std::to_string(run->ds);
 }
 
 // ---- Output files ------------------------------------------------------------------------
@@ -511,14 +602,17 @@ std::string JsonString(const std::string& s) {
 Status WriteMatchesCsv(const std::string& path, const std::vector<Run>& runs) {
   OutFile f;
   SKYLOC_TRY(f.Open(path));
-  std::fprintf(f.get(), "method,ds,query_index,reference_index,score,uniqueness,correct\n");
+  // New columns go last, so readers of the first seven keep working.
+  std::fprintf(f.get(),
+               "method,ds,query_index,reference_index,score,uniqueness,correct,matcher,state\n");
   for (const Run& run : runs) {
     for (std::size_t i = 0; i < run.evaluated_queries.size(); ++i) {
       const int q = run.evaluated_queries[i];
       const dsp::SeqSlamMatch& m = run.matches[static_cast<std::size_t>(q)];
-      std::fprintf(f.get(), "%s,%d,%d,%d,%.6g,%.6g,%d\n", MethodName(run.method), run.ds, q,
+      std::fprintf(f.get(), "%s,%d,%d,%d,%.6g,%.6g,%d,%s,%s\n", MethodName(run.method), run.ds, q,
                    m.reference, static_cast<double>(m.score), static_cast<double>(m.uniqueness),
-                   run.evaluated[i].correct ? 1 : 0);
+                   run.evaluated[i].correct ? 1 : 0, MatcherName(run.matcher),
+                   dsp::TrackStateName(run.states[static_cast<std::size_t>(q)]));
     }
   }
   return f.Close();
@@ -533,7 +627,7 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
                JsonString(o.query).c_str());
   std::fprintf(out, "  \"reference_frames\": %d,\n  \"query_frames\": %d,\n", n_ref, n_query);
   std::fprintf(
-      out, "  \"engine\": %s,\n",
+      out, "  \"openseqslam_engine\": %s,\n",
       JsonString(o.streaming ? "streaming (trailing window)" : "batch (centred window)").c_str());
   std::fprintf(out, "  \"ground_truth\": %s,\n  \"frame_tolerance\": %d,\n",
                JsonString(gt.description).c_str(), o.frame_tolerance);
@@ -542,10 +636,13 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
     const Run& r = runs[i];
     const dsp::PrSummary& s = r.summary;
     std::fprintf(out,
-                 "    {\"method\": %s, \"ds\": %d, \"evaluated\": %d, \"with_ground_truth\": %d, "
-                 "\"correct\": %d,\n",
-                 JsonString(MethodName(r.method)).c_str(), r.ds, s.evaluated, s.with_ground_truth,
+                 "    {\"method\": %s, \"matcher\": %s, \"ds\": %d, \"evaluated\": %d, "
+                 "\"with_ground_truth\": %d, \"correct\": %d,\n",
+                 JsonString(MethodName(r.method)).c_str(),
+                 JsonString(MatcherName(r.matcher)).c_str(), r.ds, s.evaluated, s.with_ground_truth,
                  s.correct);
+    std::fprintf(out, "     \"localised\": %d, \"localised_correct\": %d,\n", r.localised,
+                 r.localised_correct);
     std::fprintf(out,
                  "     \"precision_at_100_recall\": %.6f, \"recall_at_100_precision\": %.6f, "
                  "\"auc\": %.6f,\n",
@@ -619,13 +716,17 @@ Status Evaluate(const EvalOptions& o) {
                  n_ref, n_query);
     SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o));
     SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o));
-    for (const int ds : o.ds_list) {
-      Run run;
-      run.method = method;
-      run.ds = ds;
-      SKYLOC_TRY(RunSeqSlam(rd, qd, o.streaming, &run));
-      Score(gt, o, ref, query, &run);
-      runs.push_back(std::move(run));
+    for (const Matcher matcher : o.matchers) {
+      for (const int ds : o.ds_list) {
+        Run run;
+        run.method = method;
+        run.matcher = matcher;
+        run.ds = ds;
+        SKYLOC_TRY(RunMatcher(rd, qd, o, &run));
+        ReplayStateMachine(o, &run);
+        Score(gt, o, ref, query, &run);
+        runs.push_back(std::move(run));
+      }
     }
   }
   SKYLOC_TRY(WriteMatchesCsv(o.out + "/matches.csv", runs));
@@ -633,15 +734,19 @@ Status Evaluate(const EvalOptions& o) {
   SKYLOC_TRY(WriteText(o.out + "/pr.svg", PrPlot(runs)));
   SKYLOC_TRY(WriteText(o.out + "/correspondence.svg", CorrespondencePlot(runs, gt, n_ref)));
 
-  std::printf("%-10s %4s %9s %8s %13s %13s %7s\n", "method", "ds", "evaluated", "correct",
-              "P@100%recall", "R@100%prec", "AUC");
+  std::printf("%-8s %-12s %4s %9s %8s %13s %13s %7s %18s\n", "method", "matcher", "ds", "evaluated",
+              "correct", "P@100%recall", "R@100%prec", "AUC", "LOCALISED correct");
   for (const Run& r : runs) {
-    std::printf("%-10s %4d %9d %8d %13.3f %13.3f %7.3f\n", MethodName(r.method), r.ds,
-                r.summary.evaluated, r.summary.correct, r.summary.precision_at_full_recall,
-                r.summary.recall_at_full_precision, r.summary.area_under_curve);
+    std::printf("%-8s %-12s %4d %9d %8d %13.3f %13.3f %7.3f %8d of %6d\n", MethodName(r.method),
+                MatcherName(r.matcher), r.ds, r.summary.evaluated, r.summary.correct,
+                r.summary.precision_at_full_recall, r.summary.recall_at_full_precision,
+                r.summary.area_under_curve, r.localised_correct, r.localised);
   }
-  std::printf("ground truth: %s; %s engine; results in %s\n", gt.description.c_str(),
-              o.streaming ? "streaming" : "batch", o.out.c_str());
+  const bool openseqslam =
+      std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();
+  std::printf("ground truth: %s;%s results in %s\n", gt.description.c_str(),
+              openseqslam ? (o.streaming ? " openseqslam streaming;" : " openseqslam batch;") : "",
+              o.out.c_str());
   return Status::Ok();
 }
 

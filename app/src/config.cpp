@@ -37,6 +37,8 @@ constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutp
                                                              {"gpio", StatusOutputKind::kGpio}};
 constexpr EnumName<StatusEncoding> kStatusEncodings[] = {{"per-state", StatusEncoding::kPerState},
                                                          {"blink", StatusEncoding::kBlink}};
+constexpr EnumName<Matcher> kMatchers[] = {{"filter", Matcher::kRouteFilter},
+                                           {"openseqslam", Matcher::kOpenSeqSlam}};
 constexpr EnumName<RouteStorage> kRouteStorages[] = {{"float32", RouteStorage::kFloat32},
                                                      {"bfloat16", RouteStorage::kBFloat16}};
 
@@ -458,7 +460,10 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   }
   {
     SectionReader r(section("seqslam"), "seqslam", source_name, &error);
+    r.Enum("matcher", &c.seqslam.matcher, kMatchers);
     r.Int("ds", &c.seqslam.ds, 1, 100);
+    r.Int("max_advance", &c.seqslam.max_advance, 1, 64);
+    r.Double("keyframe_noise_factor", &c.seqslam.keyframe_noise_factor, 0.0, 100.0);
     r.Double("vmin", &c.seqslam.vmin, 0.1, 10.0);
     r.Double("vmax", &c.seqslam.vmax, 0.1, 10.0);
     r.Double("vstep", &c.seqslam.vstep, 0.01, 10.0);

@@ -64,8 +64,20 @@ struct DescriptorConfig {
   bool operator==(const DescriptorConfig&) const = default;
 };
 
+// Which matcher follows the route (docs/SEQSLAM.md).
+enum class Matcher : std::uint8_t {
+  kRouteFilter,  // dsp/route_filter.h: runs sampled in time, stops, speed changes
+  kOpenSeqSlam,  // dsp/seqslam.h streaming engine: OpenSeqSLAM's enhancement and search
+};
+
 struct SeqSlamConfig {
+  Matcher matcher = Matcher::kRouteFilter;
   int ds = 10;
+  // Route filter: route rows the position may advance per frame, and the keyframe merge
+  // threshold in multiples of the route's noise floor (0 keeps every frame).
+  int max_advance = 4;
+  double keyframe_noise_factor = 2.0;
+  // OpenSeqSLAM: velocity band and contrast enhancement window.
   double vmin = 0.8;
   double vmax = 1.2;
   double vstep = 0.1;

@@ -72,6 +72,23 @@ std::uint64_t LensHash(const dsp::LensParams& p) {
   return h;
 }
 
+dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
+  dsp::StateMachineParams sm;
+  sm.enter_confidence = static_cast<float>(config.state.enter_confidence);
+  sm.stay_confidence = static_cast<float>(config.state.stay_confidence);
+  sm.max_uniqueness = static_cast<float>(config.state.max_uniqueness);
+  sm.confirm_frames = config.state.confirm_frames;
+  sm.drop_frames = config.state.drop_frames;
+  sm.lost_frames = config.state.lost_frames;
+  // Route-index consistency in the matcher's rows: the filter's position stands still or
+  // advances up to max_advance rows per frame; OpenSeqSLAM's moves at vmin..vmax.
+  const bool filter = config.seqslam.matcher == Matcher::kRouteFilter;
+  sm.vmin = filter ? 0.0 : config.seqslam.vmin;
+  sm.vmax = filter ? config.seqslam.max_advance : config.seqslam.vmax;
+  sm.index_tolerance = config.state.index_tolerance;
+  return sm;
+}
+
 Status Pipeline::Init(const Config& config) {
   SKYLOC_TRY_ASSIGN(const dsp::LensParams lens_params, LensFromConfig(config));
   if (const dsp::LensError e = lens_.Init(lens_params); e != dsp::LensError::kOk)
@@ -88,32 +105,35 @@ Status Pipeline::Init(const Config& config) {
     return Status::Error(StatusCode::kInvalidArgument, "[descriptor]: %s", e.message);
   SKYLOC_TRY(amplitudes_.Allocate(static_cast<std::size_t>(descriptor_.bands())));
 
-  dsp::SeqSlamParams seq;
-  seq.sequence_length = config.seqslam.ds;
-  seq.v_min = static_cast<float>(config.seqslam.vmin);
-  seq.v_max = static_cast<float>(config.seqslam.vmax);
-  seq.v_step = static_cast<float>(config.seqslam.vstep);
-  seq.uniqueness_window = config.seqslam.rwindow;
-  seq.contrast_window = config.seqslam.contrast_r;
-  if (const dsp::SeqSlamError e =
-          seqslam_.Init(seq, descriptor_.bands(), config.capacities.route_frames,
-                        config.capacities.route_storage == RouteStorage::kBFloat16
-                            ? dsp::ReferenceStorage::kBFloat16
-                            : dsp::ReferenceStorage::kFloat32);
-      e != dsp::SeqSlamError::kOk)
+  matcher_ = config.seqslam.matcher;
+  const dsp::ReferenceStorage storage = config.capacities.route_storage == RouteStorage::kBFloat16
+                                            ? dsp::ReferenceStorage::kBFloat16
+                                            : dsp::ReferenceStorage::kFloat32;
+  dsp::SeqSlamError matcher_error = dsp::SeqSlamError::kOk;
+  if (matcher_ == Matcher::kRouteFilter) {
+    dsp::RouteFilterParams filter;
+    filter.sequence_length = config.seqslam.ds;
+    filter.max_advance = config.seqslam.max_advance;
+    filter.uniqueness_window = config.seqslam.rwindow;
+    filter.keyframe_noise_factor = static_cast<float>(config.seqslam.keyframe_noise_factor);
+    matcher_error =
+        filter_.Init(filter, descriptor_.bands(), config.capacities.route_frames, storage);
+  } else {
+    dsp::SeqSlamParams seq;
+    seq.sequence_length = config.seqslam.ds;
+    seq.v_min = static_cast<float>(config.seqslam.vmin);
+    seq.v_max = static_cast<float>(config.seqslam.vmax);
+    seq.v_step = static_cast<float>(config.seqslam.vstep);
+    seq.uniqueness_window = config.seqslam.rwindow;
+    seq.contrast_window = config.seqslam.contrast_r;
+    matcher_error =
+        seqslam_.Init(seq, descriptor_.bands(), config.capacities.route_frames, storage);
+  }
+  if (matcher_error != dsp::SeqSlamError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[seqslam]: %s",
-                         dsp::SeqSlamErrorMessage(e));
+                         dsp::SeqSlamErrorMessage(matcher_error));
 
-  dsp::StateMachineParams sm;
-  sm.enter_confidence = static_cast<float>(config.state.enter_confidence);
-  sm.stay_confidence = static_cast<float>(config.state.stay_confidence);
-  sm.max_uniqueness = static_cast<float>(config.state.max_uniqueness);
-  sm.confirm_frames = config.state.confirm_frames;
-  sm.drop_frames = config.state.drop_frames;
-  sm.lost_frames = config.state.lost_frames;
-  sm.vmin = config.seqslam.vmin;
-  sm.vmax = config.seqslam.vmax;
-  sm.index_tolerance = config.state.index_tolerance;
+  const dsp::StateMachineParams sm = StateMachineParamsFrom(config);
   if (state_.Init(sm) != dsp::StateMachineError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[state]: inconsistent thresholds");
 
@@ -142,18 +162,34 @@ Status Pipeline::SetRoute(const RouteFrames& route) {
                          "pipeline %d",
                          route.dim(), dim());
   }
-  seqslam_.ClearReferences();
+  const bool filter = matcher_ == Matcher::kRouteFilter;
+  if (filter)
+    filter_.ClearReferences();
+  else
+    seqslam_.ClearReferences();
   for (std::size_t i = 0; i < route.size(); ++i) {
-    if (const dsp::SeqSlamError e = seqslam_.AddReference(route.descriptor(i));
+    if (const dsp::SeqSlamError e = filter ? filter_.AddReference(route.descriptor(i))
+                                           : seqslam_.AddReference(route.descriptor(i));
         e != dsp::SeqSlamError::kOk)
       return Status::Error(StatusCode::kResourceExhausted, "route frame %zu: %s", i,
+                           dsp::SeqSlamErrorMessage(e));
+  }
+  if (filter) {
+    if (const dsp::SeqSlamError e = filter_.FinishRoute(); e != dsp::SeqSlamError::kOk)
+      return Status::Error(StatusCode::kFailedPrecondition, "route: %s",
                            dsp::SeqSlamErrorMessage(e));
   }
   ResetTracking();
   return Status::Ok();
 }
 
+std::size_t Pipeline::route_size() const {
+  return static_cast<std::size_t>(matcher_ == Matcher::kRouteFilter ? filter_.frames()
+                                                                    : seqslam_.size());
+}
+
 void Pipeline::ResetTracking() {
+  filter_.ResetQueries();
   seqslam_.ResetQueries();
   state_.Reset();
 }
@@ -182,7 +218,9 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result) {
   dsp::SeqSlamMatch match;
   {
     StageTimer timer(latency_, stage_seqslam, clock_);
-    if (const dsp::SeqSlamError e = seqslam_.Step(amplitudes_.span(), &match);
+    if (const dsp::SeqSlamError e = matcher_ == Matcher::kRouteFilter
+                                        ? filter_.Step(amplitudes_.span(), &match)
+                                        : seqslam_.Step(amplitudes_.span(), &match);
         e != dsp::SeqSlamError::kOk)
       return Status::Error(StatusCode::kFailedPrecondition, "seqslam: %s",
                            dsp::SeqSlamErrorMessage(e));
@@ -194,7 +232,7 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result) {
   result->confidence = match.valid ? match.confidence : 0.0f;
   dsp::MatchObservation obs;
   obs.frame = frame.sequence;
-  obs.index = result->best_index;
+  obs.index = match.valid ? match.row : -1;  // rows: see sm.vmin/vmax in Init
   obs.uniqueness = result->uniqueness;
   obs.confidence = result->confidence;
   result->state = state_.Update(obs);

@@ -1,6 +1,6 @@
 // The per-frame pipeline of the firmware, built once from the configuration:
-//   frame -> sky descriptor (segment, sample, SH, amplitudes) -> streaming SeqSLAM ->
-//   LOST/SEARCHING/LOCALISED.
+//   frame -> sky descriptor (segment, sample, SH, amplitudes) -> route filter (or
+//   OpenSeqSLAM's streaming engine) -> LOST/SEARCHING/LOCALISED.
 // Init() is the start-up: the lens, the sampling table, the SH tables, the SeqSLAM route
 // database at [capacities] route_frames, the ring of the last ds columns. After it,
 // Describe() and Localise() allocate nothing (tests/app/frame_loop_test.cpp proves it).
@@ -13,6 +13,7 @@
 #include "skyloc/drivers/camera.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/localisation_state.h"
+#include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/fixed_array.h"
@@ -47,6 +48,9 @@ Result<dsp::LensParams> LensFromConfig(const Config& config);
 // A hash of everything in the lens parameters that changes which pixel a sample reads.
 std::uint64_t LensHash(const dsp::LensParams& lens);
 
+// The state machine's parameters from [state] and the matcher's motion limits.
+dsp::StateMachineParams StateMachineParamsFrom(const Config& config);
+
 class Pipeline {
  public:
   // Latency stages, in the order the table prints them.
@@ -62,7 +66,7 @@ class Pipeline {
 
   // Replaces the route SeqSLAM matches against (start-up, after loading the database).
   Status SetRoute(const RouteFrames& route);
-  std::size_t route_size() const { return static_cast<std::size_t>(seqslam_.size()); }
+  std::size_t route_size() const;  // taught frames
 
   // The descriptor of one frame into descriptor(). Allocates nothing.
   Status Describe(const dsp::ImageView& image, FrameResult* result);
@@ -79,7 +83,9 @@ class Pipeline {
  private:
   dsp::Lens lens_;
   dsp::SkyDescriptor descriptor_;
-  dsp::StreamingSeqSlam seqslam_;
+  Matcher matcher_ = Matcher::kRouteFilter;
+  dsp::RouteFilter filter_;        // [seqslam] matcher = "filter"
+  dsp::StreamingSeqSlam seqslam_;  // [seqslam] matcher = "openseqslam"; Init allocates one
   dsp::LocalisationStateMachine state_;
   FixedArray<float> amplitudes_;
   RouteDbSettings route_settings_;

@@ -137,15 +137,21 @@ SeqSlamError RouteFilter::FinishRoute() {
   };
   const bool merge = params_.keyframe_noise_factor > 0.0f && n >= 2;
   if (merge) {
-    // The noise floor: the 10th percentile of consecutive differences (header, 1.).
+    // The noise floor: the 10th percentile of consecutive differences (header, 1.). It
+    // is capped at half the median, the change of a typical frame: on a route without
+    // stops, whose frames all differ alike (or look unrelated), little or nothing merges.
     for (int i = 1; i < n; ++i) {
       load_key(i - 1);
       Differences(key_.data(), i, 1, &difference_[Sz(i - 1)]);
     }
     const auto begin = difference_.begin();
-    const auto nth = begin + (n - 1) / 10;
-    std::nth_element(begin, nth, begin + (n - 1));
-    keyframe_threshold_ = params_.keyframe_noise_factor * *nth;
+    const auto end = begin + (n - 1);
+    const auto median = begin + (n - 1) / 2;
+    std::nth_element(begin, median, end);
+    const float half_median = 0.5f * *median;
+    const auto floor = begin + (n - 1) / 10;
+    std::nth_element(begin, floor, median);  // the 10th percentile is below the median
+    keyframe_threshold_ = std::min(params_.keyframe_noise_factor * *floor, half_median);
   }
   // Compact in place: row r's descriptor moves to slot r (r <= i, so frame i is still in
   // slot i when it is read).
@@ -278,8 +284,7 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   } else {
     // Over the full memory, not the evidence so far: the first frames after a reset have
     // little evidence, and their confidence grows with it instead of starting high.
-    const double margin =
-        (static_cast<double>(second) - static_cast<double>(best_cost)) / memory_;
+    const double margin = (static_cast<double>(second) - static_cast<double>(best_cost)) / memory_;
     out->uniqueness = static_cast<float>(std::exp(-margin));
   }
   out->confidence = 1.0f - out->uniqueness;

@@ -1,14 +1,15 @@
-// Streaming SeqSLAM step cost at route lengths of 1k, 10k and 100k reference frames with
-// 120-float descriptors (the paper's l = 120 amplitude spectrum). Targets: <= 0.25 ms at
-// 10k and <= 2.5 ms at 100k on one core. The reference in the same run is one pass
-// summing the whole database (the memory traffic the difference column cannot avoid),
-// so the ratio step / read says how far the step is from the memory bound.
+// Streaming SeqSLAM and route filter step cost at route lengths of 1k, 10k and 100k reference
+// frames with 120-float descriptors (the paper's l = 120 amplitude spectrum). Targets: <= 0.25 ms
+// at 10k and <= 2.5 ms at 100k on one core. The reference in the same run is one pass summing the
+// whole database (the memory traffic the difference column cannot avoid), so the ratio step / read
+// says how far the step is from the memory bound.
 #include <benchmark/benchmark.h>
 
 #include <cstring>
 #include <random>
 #include <vector>
 
+#include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 
 namespace {
@@ -75,6 +76,53 @@ BENCHMARK(BM_StreamingStepBFloat16)
     ->Unit(benchmark::kMicrosecond);
 
 // The parts of a step, to see where the time goes.
+// The route filter (the firmware's default matcher) on the same routes and queries: one
+// difference column, its z-score, the band minimum over K + 1 rows and the runner-up.
+// Random frames are unrelated, so FinishRoute merges none: every frame is a row.
+void RouteFilterStep(benchmark::State& state, skyloc::dsp::ReferenceStorage storage) {
+  const int n = static_cast<int>(state.range(0));
+  skyloc::dsp::RouteFilterParams p;  // ds 10, K 4
+  skyloc::dsp::RouteFilter engine;
+  if (engine.Init(p, kDim, n, storage) != skyloc::dsp::SeqSlamError::kOk) {
+    state.SkipWithError("Init failed");
+    return;
+  }
+  const std::vector<float> db = RandomFloats(static_cast<std::size_t>(n) * kDim, 1);
+  for (int r = 0; r < n; ++r) {
+    (void)engine.AddReference(
+        std::span<const float>(db).subspan(static_cast<std::size_t>(r) * kDim, kDim));
+  }
+  if (engine.FinishRoute() != skyloc::dsp::SeqSlamError::kOk || engine.rows() != n) {
+    state.SkipWithError("FinishRoute failed or merged random frames");
+    return;
+  }
+  const std::vector<float> queries = RandomFloats(16 * kDim, 2);
+  SeqSlamMatch m;
+  int t = 0;
+  for (auto _ : state) {
+    (void)engine.Step(
+        std::span<const float>(queries).subspan(static_cast<std::size_t>(t % 16) * kDim, kDim), &m);
+    benchmark::DoNotOptimize(m);
+    ++t;
+  }
+  state.counters["bytes_per_ref"] =
+      static_cast<double>(skyloc::dsp::RouteFilter::BytesPerReference(kDim, storage));
+}
+
+void BM_RouteFilterStep(benchmark::State& state) {
+  RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kFloat32);
+}
+BENCHMARK(BM_RouteFilterStep)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+
+void BM_RouteFilterStepBFloat16(benchmark::State& state) {
+  RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kBFloat16);
+}
+BENCHMARK(BM_RouteFilterStepBFloat16)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMicrosecond);
+
 void BM_DifferenceColumn(benchmark::State& state) {
   const std::size_t n = static_cast<std::size_t>(state.range(0));
   const std::vector<float> db = RandomFloats(n * kDim, 1), q = RandomFloats(kDim, 2);

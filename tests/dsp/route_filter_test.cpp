@@ -149,7 +149,8 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
   NaiveResult out;
   const int n = reference.frames();
   // Keyframes: the 10th percentile (index floor((n - 1) / 10) of the sorted consecutive
-  // differences) times the factor; a frame joins a row while within it of the row's first.
+  // differences) times the factor, at most half the median (index floor((n - 1) / 2)); a
+  // frame joins a row while within it of the row's first.
   double threshold = -1;
   if (p.keyframe_noise_factor > 0 && n >= 2) {
     std::vector<double> consecutive;
@@ -157,8 +158,9 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
       consecutive.push_back(
           MeanAbsDifference(reference.Frame(i - 1, dim), reference.Frame(i, dim)));
     std::sort(consecutive.begin(), consecutive.end());
-    threshold = static_cast<double>(p.keyframe_noise_factor) *
-                consecutive[static_cast<std::size_t>((n - 1) / 10)];
+    threshold = std::min(static_cast<double>(p.keyframe_noise_factor) *
+                             consecutive[static_cast<std::size_t>((n - 1) / 10)],
+                         0.5 * consecutive[static_cast<std::size_t>((n - 1) / 2)]);
   }
   out.first.push_back(0);
   out.last.push_back(0);
@@ -314,6 +316,24 @@ TEST(RouteFilter, MergesStopsIntoOneRowAndKeepsFramesInMotion) {
   ASSERT_EQ(all.Init(keep, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
   ASSERT_TRUE(Teach(all, sc.reference, sc.field.dim()));
   EXPECT_EQ(all.rows(), 690);
+}
+
+// Frames that look unrelated (a route sampled far apart): every consecutive difference
+// is alike, the 10th percentile is no noise floor, and nothing may merge.
+TEST(RouteFilter, UnrelatedFramesAreNeverMerged) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+  constexpr int kDim = 24, kFrames = 60;
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(RouteFilterParams{}, kDim, kFrames), SeqSlamError::kOk);
+  std::vector<float> frame(kDim);
+  for (int i = 0; i < kFrames; ++i) {
+    for (float& v : frame)
+      v = uniform(rng);
+    ASSERT_EQ(filter.AddReference(frame), SeqSlamError::kOk);
+  }
+  ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
+  EXPECT_EQ(filter.rows(), kFrames);
 }
 
 TEST(RouteFilter, FollowsAPlantedRouteThroughStopsAndSpeedChanges) {

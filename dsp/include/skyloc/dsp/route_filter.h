@@ -8,9 +8,10 @@
 //     frame joins the current row while its mean absolute difference to the row's first
 //     frame is at most keyframe_noise_factor x the route's noise floor, the 10th
 //     percentile of the differences between consecutive frames (the sensor noise of a
-//     standing robot when the route has stops; the slowest motion when it has none, and
-//     then little is merged). Frames in motion are kept, so a match keeps its precision
-//     in frames; a matched row reports the middle frame of its run.
+//     standing robot when the route has stops), and at most half their median (the
+//     change of a typical frame: on a route without stops, or of unrelated frames,
+//     little or nothing merges). Frames in motion are kept, so a match keeps its
+//     precision in frames; a matched row reports the middle frame of its run.
 //  2. Emission. Each query's difference column (mean absolute difference to every row,
 //     as SeqSLAM's) is z-scored over the whole route: z = (d - mean) / std. No local
 //     contrast window, so the minimum stays where the descriptor puts it (OpenSeqSLAM's
