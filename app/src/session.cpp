@@ -129,7 +129,7 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
   motion.zigzag_deg = run.zigzag_deg;
   motion.bumps_deg = run.bumps_deg;
   motion.yaw_offset_deg = run.yaw_deg;
-  motion.frame_period_s = 1.0 / config.camera.fps;
+  motion.fps = config.camera.fps;
   motion.seed = run.run_seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));
