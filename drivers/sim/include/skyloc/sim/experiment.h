@@ -3,10 +3,11 @@
 // SeqSLAM (vanilla): visible image -> grey 64x32 patch-normalised — and score a reference
 // run against a query run with the same SeqSLAM and precision-recall code as `skyloc eval`.
 //
-// Ground truth from positions: a query frame's true reference frame is the reference frame
-// nearest to it (x, y); a match is correct within `tolerance_frames` of that frame (the
-// paper: 5), and a query frame farther than `max_offset_m` from every reference frame has
-// no ground truth. Start-up/offline work: everything here allocates.
+// Ground truth from positions by the rule of dsp/place_metrics.h (the same as `skyloc
+// eval`): a query frame's truth is the interval of reference frames tied for nearest to it
+// (x, y, z); a match is correct within `tolerance_frames` of that interval (the paper: 5),
+// and a query frame farther than `max_offset_m` from every reference frame has no ground
+// truth. Start-up/offline work: everything here allocates.
 #pragma once
 
 #include <cstdint>
@@ -58,8 +59,9 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 struct MethodScore {
   dsp::PrSummary summary;
   std::vector<dsp::PrPoint> curve;
-  std::vector<int> matched;  // per query frame: matched reference (-1: no match)
-  std::vector<int> truth;    // per query frame: true reference (-1: none)
+  std::vector<int> matched;               // per query frame: matched reference (-1: none)
+  std::vector<dsp::TruthInterval> truth;  // per query frame
+  std::vector<bool> correct;              // per query frame: matched and correct
 };
 
 // SeqSLAM (batch, centred window) of `query` against `reference` with descriptors
