@@ -142,6 +142,17 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
   motion.bumps_deg = run.bumps_deg;
   motion.yaw_offset_deg = run.yaw_deg;
   motion.fps = config.camera.fps;
+  if (config.camera.sim_sampling == "time") {
+    motion.sampling = sim::Sampling::kTime;
+    motion.speed.cruise_mps = config.camera.sim_speed_mps;
+    motion.speed.band = config.camera.sim_speed_band;
+    motion.speed.accel_mps2 = config.camera.sim_accel_mps2;
+    motion.speed.start_stop_s = config.camera.sim_start_stop_s;
+    motion.speed.stops = config.camera.sim_stops;
+    motion.speed.stop_min_s = config.camera.sim_stop_min_s;
+    motion.speed.stop_max_s = config.camera.sim_stop_max_s;
+    motion.speed_ratio = run.speed_ratio;
+  }
   motion.seed = run.run_seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));

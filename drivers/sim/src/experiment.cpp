@@ -12,7 +12,10 @@ namespace skyloc::sim {
 Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
                    const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
   MotionConfig motion = spec.motion;
+  motion.sampling = options.sampling;
   motion.frame_spacing_m = options.spacing_m;
+  motion.fps = options.fps;
+  motion.speed = options.speed;
   motion.height_m = options.camera_height_m;
   motion.max_frames = options.max_frames;
   out->label = spec.label;

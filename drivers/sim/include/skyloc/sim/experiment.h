@@ -27,8 +27,14 @@ namespace skyloc::sim {
 struct ExperimentOptions {
   int width = 320;
   int height = 240;
-  int bands = 120;         // SH bands of the sky descriptor (the paper: 120)
+  int bands = 120;  // SH bands of the sky descriptor (the paper: 120)
+  // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
+  // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its
+  // RunSpec::motion.speed_ratio scales its cruise speed).
+  Sampling sampling = Sampling::kDistance;
   double spacing_m = 1.0;  // frame spacing along the route
+  double fps = 10;
+  SpeedProfile speed;
   double camera_height_m = 1.0;
   int max_frames = 0;  // 0: the whole route
   std::uint64_t world_seed = 1;
@@ -48,7 +54,9 @@ struct RunDescriptors {
 
 struct RunSpec {
   std::string label;
-  MotionConfig motion;  // spacing, height and max_frames are overridden by the options
+  // Sampling, spacing, fps, speed profile, height and max_frames come from the options;
+  // the rest (seed, manoeuvres, speed_ratio) is the run's own.
+  MotionConfig motion;
   Lighting lighting;
 };
 
