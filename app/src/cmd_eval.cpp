@@ -319,8 +319,9 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
 // ---- Ground truth ----------------------------------------------------------------------
 
 struct GroundTruth {
-  std::vector<int> reference;  // per query frame; -1: not on the reference route
-  bool by_distance = false;    // correctness by pose distance (--tolerance-m)
+  std::vector<dsp::TruthInterval> reference;       // per query frame (dsp/place_metrics.h)
+  dsp::MatchTolerance tolerance;                   // frames, or metres with --tolerance-m
+  std::vector<dsp::Position3> ref_xyz, query_xyz;  // empty with --gt FILE
   std::string description;
 };
 
@@ -334,7 +335,7 @@ Status ReadGroundTruthCsv(const std::string& path, int n_query, int n_ref, Groun
     const int saved = errno;
     return Status::FromErrno(saved, "cannot open ground truth %s", path.c_str());
   }
-  gt->reference.assign(static_cast<std::size_t>(n_query), -1);
+  gt->reference.assign(static_cast<std::size_t>(n_query), dsp::TruthInterval{});
   std::vector<bool> seen(static_cast<std::size_t>(n_query), false);
   char line[256];
   int line_no = 0;
@@ -377,7 +378,7 @@ Status ReadGroundTruthCsv(const std::string& path, int n_query, int n_ref, Groun
                              path.c_str(), line_no, q);
     } else {
       seen[static_cast<std::size_t>(q)] = true;
-      gt->reference[static_cast<std::size_t>(q)] = r;
+      gt->reference[static_cast<std::size_t>(q)] = dsp::TruthAtFrame(r);
     }
   }
   const bool read_error = std::ferror(f) != 0;
@@ -395,6 +396,7 @@ Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset
   GroundTruth gt;
   const int n_query = static_cast<int>(query.frames.size());
   const int n_ref = static_cast<int>(ref.frames.size());
+  gt.tolerance.frames = o.frame_tolerance;
   if (!o.gt_file.empty()) {
     SKYLOC_TRY(ReadGroundTruthCsv(o.gt_file, n_query, n_ref, &gt));
     gt.description = "file " + o.gt_file;
@@ -406,22 +408,22 @@ Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset
                          "(query_index,reference_index)",
                          ref.has_poses ? query.dir.c_str() : ref.dir.c_str());
   }
-  gt.by_distance = o.tolerance_m > 0;
-  gt.reference.assign(static_cast<std::size_t>(n_query), -1);
-  std::vector<dsp::Position3> ref_xyz, query_xyz;
+  const bool by_distance = o.tolerance_m > 0;
+  gt.tolerance.metres = by_distance ? o.tolerance_m : 0;
+  gt.reference.assign(static_cast<std::size_t>(n_query), dsp::TruthInterval{});
   for (const drivers::DatasetFrame& f : ref.frames)
-    ref_xyz.push_back(PositionOf(f));
+    gt.ref_xyz.push_back(PositionOf(f));
   for (const drivers::DatasetFrame& f : query.frames)
-    query_xyz.push_back(PositionOf(f));
+    gt.query_xyz.push_back(PositionOf(f));
   // With a distance tolerance, a query farther than it from the whole route is off it.
   dsp::GroundTruthFromPositions(
-      ref_xyz, query_xyz, gt.by_distance ? o.tolerance_m : std::numeric_limits<double>::infinity(),
-      gt.reference);
+      gt.ref_xyz, gt.query_xyz,
+      by_distance ? o.tolerance_m : std::numeric_limits<double>::infinity(), gt.reference);
   char text[96];
-  if (gt.by_distance) {
+  if (by_distance) {
     std::snprintf(text, sizeof text, "poses, correct within %.3g m", o.tolerance_m);
   } else {
-    std::snprintf(text, sizeof text, "poses (nearest reference), correct within %d frames",
+    std::snprintf(text, sizeof text, "poses (nearest reference frames), correct within %d frames",
                   o.frame_tolerance);
   }
   gt.description = text;
@@ -508,29 +510,21 @@ void ReplayStateMachine(const EvalOptions& o, Run* run) {
   }
 }
 
-bool IsCorrect(const GroundTruth& gt, const EvalOptions& o, const drivers::Dataset& ref,
-               const drivers::Dataset& query, int q, int matched) {
-  const int truth = gt.reference[static_cast<std::size_t>(q)];
-  if (truth < 0 || matched < 0)
-    return false;
-  if (gt.by_distance) {
-    return dsp::PositionDistance(PositionOf(query.frames[static_cast<std::size_t>(q)]),
-                                 PositionOf(ref.frames[static_cast<std::size_t>(matched)])) <=
-           o.tolerance_m;
-  }
-  return dsp::MatchWithinFrames(matched, truth, o.frame_tolerance);
+bool IsCorrect(const GroundTruth& gt, int q, int matched) {
+  const auto i = static_cast<std::size_t>(q);
+  return dsp::MatchIsCorrect(matched, gt.reference[i], gt.tolerance, gt.ref_xyz,
+                             i < gt.query_xyz.size() ? gt.query_xyz[i] : dsp::Position3{});
 }
 
-void Score(const GroundTruth& gt, const EvalOptions& o, const drivers::Dataset& ref,
-           const drivers::Dataset& query, Run* run) {
+void Score(const GroundTruth& gt, Run* run) {
   for (std::size_t q = 0; q < run->matches.size(); ++q) {
     const dsp::SeqSlamMatch& m = run->matches[q];
     if (!m.valid)
       continue;
     dsp::EvaluatedMatch e;
     e.uniqueness = m.uniqueness;
-    e.has_ground_truth = gt.reference[q] >= 0;
-    e.correct = IsCorrect(gt, o, ref, query, static_cast<int>(q), m.reference);
+    e.has_ground_truth = gt.reference[q].has_truth();
+    e.correct = IsCorrect(gt, static_cast<int>(q), m.reference);
     run->evaluated_queries.push_back(static_cast<int>(q));
     run->evaluated.push_back(e);
   }
@@ -685,9 +679,12 @@ std::string PrPlot(const std::vector<Run>& runs) {
 
 // One panel per run, at most three a row.
 std::string CorrespondencePlot(const std::vector<Run>& runs, const GroundTruth& gt, int n_ref) {
+  std::vector<int> nearest;  // the truth line: the nearest reference frame of each query
+  for (const dsp::TruthInterval& t : gt.reference)
+    nearest.push_back(t.nearest);
   std::vector<CorrespondencePanel> panels;
   for (const Run& r : runs) {
-    CorrespondencePanel panel{r.label, gt.reference, n_ref, {}};
+    CorrespondencePanel panel{r.label, nearest, n_ref, {}};
     for (std::size_t k = 0; k < r.evaluated_queries.size(); ++k) {
       const int q = r.evaluated_queries[k];
       panel.matches.push_back(
@@ -724,7 +721,7 @@ Status Evaluate(const EvalOptions& o) {
         run.ds = ds;
         SKYLOC_TRY(RunMatcher(rd, qd, o, &run));
         ReplayStateMachine(o, &run);
-        Score(gt, o, ref, query, &run);
+        Score(gt, &run);
         runs.push_back(std::move(run));
       }
     }

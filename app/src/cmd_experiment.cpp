@@ -170,20 +170,18 @@ std::string PrPlot(const char* title, const std::vector<Row>& rows, bool sky) {
 
 // Frame correspondences (the paper's Figs. 5a, 8, 9): for every row, vanilla (left) and
 // sky (right).
-std::string CorrespondencePlot(const std::vector<Row>& rows, int tolerance_frames) {
+std::string CorrespondencePlot(const std::vector<Row>& rows) {
   std::vector<CorrespondencePanel> panels;
   for (const Row& r : rows) {
     for (const bool sky : {false, true}) {
       const sim::MethodScore& m = sky ? *r.sky : *r.vanilla;
-      CorrespondencePanel panel{(sky ? "sky: " : "vanilla: ") + r.label, m.truth, 1, {}};
+      CorrespondencePanel panel{(sky ? "sky: " : "vanilla: ") + r.label, {}, 1, {}};
       for (std::size_t q = 0; q < m.truth.size(); ++q) {
+        panel.ground_truth.push_back(m.truth[q].nearest);
         panel.reference_frames =
-            std::max({panel.reference_frames, m.truth[q] + 1, m.matched[q] + 1});
-        if (m.matched[q] >= 0) {
-          panel.matches.push_back(
-              {static_cast<int>(q), m.matched[q],
-               dsp::MatchWithinFrames(m.matched[q], m.truth[q], tolerance_frames)});
-        }
+            std::max({panel.reference_frames, m.truth[q].nearest + 1, m.matched[q] + 1});
+        if (m.matched[q] >= 0)
+          panel.matches.push_back({static_cast<int>(q), m.matched[q], m.correct[q]});
       }
       panels.push_back(std::move(panel));
     }
@@ -221,8 +219,7 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
   SKYLOC_TRY(WriteFile(o.out + "/metrics.json", json));
   SKYLOC_TRY(WriteFile(o.out + "/pr_sky.svg", PrPlot("SeqSLAM (sky)", rows, true)));
   SKYLOC_TRY(WriteFile(o.out + "/pr_vanilla.svg", PrPlot("SeqSLAM (vanilla)", rows, false)));
-  SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg",
-                       CorrespondencePlot(rows, o.experiment.tolerance_frames)));
+  SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg", CorrespondencePlot(rows)));
   return Status::Ok();
 }
 
@@ -234,8 +231,9 @@ std::string CommonNotes(const sim::ExperimentOptions& e) {
   return Format(
       "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands, frames every "
       "%.3g m with +-20 %% speed jitter, SeqSLAM ds %d (unless stated), v %.1f..%.1f, "
-      "R %d, Rwindow %d, centred window. Ground truth: the nearest reference frame by "
-      "position; correct within %d frames; no truth farther than %.3g m.\n",
+      "R %d, Rwindow %d, centred window. Ground truth: the reference frames tied (within 1 cm) "
+      "for nearest by position; correct within %d frames of them; no truth farther than "
+      "%.3g m.\n",
       e.width, e.height, e.bands, e.spacing_m, e.seqslam.sequence_length,
       static_cast<double>(e.seqslam.v_min), static_cast<double>(e.seqslam.v_max),
       e.seqslam.contrast_window, e.seqslam.uniqueness_window, e.tolerance_frames, e.max_offset_m);

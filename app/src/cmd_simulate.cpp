@@ -66,8 +66,12 @@ struct Options {
   std::uint64_t run = 1;
   std::string route_file;
   std::string data_dir = "../shared/data/seville2009";
-  std::optional<double> spacing, camera_height;
-  double jitter = 0.2, start = 0, tilt = 0, zigzag = 0, zigzag_period = 20, bumps = 0, yaw = 0;
+  std::optional<double> spacing, jitter, camera_height;
+  // Time sampling; unset values take sim::SpeedProfile's defaults.
+  std::optional<double> fps, speed, speed_band, accel, start_stop, stop_min, stop_max;
+  std::optional<int> stops;
+  const char* time_flag = nullptr;  // the first time-sampling flag given (for errors)
+  double start = 0, tilt = 0, zigzag = 0, zigzag_period = 20, bumps = 0, yaw = 0;
   double exposure = 0;
   std::optional<double> sun_azimuth, sun_elevation, clouds;
   int frames = 0;
@@ -135,6 +139,48 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!ParseDouble(v, &d) || d < 0 || d >= 1)
         return fail(flag, v, "a fraction in [0, 1)");
       o->jitter = d;
+    } else if (std::strcmp(flag, "--fps") == 0) {
+      if (!ParseDouble(v, &d) || !(d > 0 && d <= 1000))
+        return fail(flag, v, "frames per second within (0, 1000]");
+      o->fps = d;
+      o->time_flag = o->time_flag ? o->time_flag : "--fps";
+    } else if (std::strcmp(flag, "--speed") == 0) {
+      if (!ParseDouble(v, &d) || !(d > 0 && d <= 100))
+        return fail(flag, v, "a cruise speed within (0, 100] m/s");
+      o->speed = d;
+      o->time_flag = o->time_flag ? o->time_flag : "--speed";
+    } else if (std::strcmp(flag, "--speed-band") == 0) {
+      if (!ParseDouble(v, &d) || d < 0 || d >= 1)
+        return fail(flag, v, "a fraction in [0, 1)");
+      o->speed_band = d;
+      o->time_flag = o->time_flag ? o->time_flag : "--speed-band";
+    } else if (std::strcmp(flag, "--accel") == 0) {
+      if (!ParseDouble(v, &d) || !(d > 0 && d <= 100))
+        return fail(flag, v, "an acceleration within (0, 100] m/s^2");
+      o->accel = d;
+      o->time_flag = o->time_flag ? o->time_flag : "--accel";
+    } else if (std::strcmp(flag, "--start-stop") == 0) {
+      if (!ParseDouble(v, &d) || d < 0 || d > 3600)
+        return fail(flag, v, "seconds within 0..3600");
+      o->start_stop = d;
+      o->time_flag = o->time_flag ? o->time_flag : "--start-stop";
+    } else if (std::strcmp(flag, "--stops") == 0) {
+      if (!ParseInt(v, 0, 1000, &n))
+        return fail(flag, v, "a number of stops within 0..1000");
+      o->stops = static_cast<int>(n);
+      o->time_flag = o->time_flag ? o->time_flag : "--stops";
+    } else if (std::strcmp(flag, "--stop-seconds") == 0) {
+      char* end = nullptr;
+      const double lo = std::strtod(v, &end);
+      if (end == v || *end != ',')
+        return fail(flag, v, "MIN,MAX seconds, e.g. 2,6");
+      const char* hi_text = end + 1;
+      const double hi = std::strtod(hi_text, &end);
+      if (end == hi_text || *end != '\0' || !(lo >= 0 && lo <= hi && hi <= 3600))
+        return fail(flag, v, "MIN,MAX seconds with 0 <= MIN <= MAX <= 3600");
+      o->stop_min = lo;
+      o->stop_max = hi;
+      o->time_flag = o->time_flag ? o->time_flag : "--stop-seconds";
     } else if (std::strcmp(flag, "--camera-height") == 0) {
       if (!ParseDouble(v, &d) || d <= 0)
         return fail(flag, v, "a positive height in metres");
@@ -225,6 +271,20 @@ int ParseArgs(std::span<char* const> args, Options* o) {
     std::fprintf(stderr, "skyloc simulate: --out DIR is required\n");
     return kExitUsage;
   }
+  if (o->time_flag != nullptr && (o->spacing || o->jitter)) {
+    std::fprintf(stderr,
+                 "skyloc simulate: %s samples in time but %s samples in distance: drop %s "
+                 "for a fixed frame rate, or drop %s for a frame every --spacing metres\n",
+                 o->time_flag, o->spacing ? "--spacing" : "--jitter",
+                 o->spacing ? "--spacing" : "--jitter", o->time_flag);
+    return kExitUsage;
+  }
+  if (o->jitter && !o->spacing) {
+    std::fprintf(stderr,
+                 "skyloc simulate: --jitter applies to distance sampling: add --spacing M (1 "
+                 "was the old default), or drop --jitter and shape the speed with --speed-band\n");
+    return kExitUsage;
+  }
   if (o->size_given && !o->camera_file.empty()) {
     std::fprintf(stderr,
                  "skyloc simulate: --width/--height and --camera both give the image "
@@ -280,23 +340,37 @@ Status WriteCameraFile(const std::string& dir, const Options& o, const dsp::Lens
 // DIR/simulation.toml: how the run was made, to reproduce or explain it.
 Status WriteSimulationToml(const std::string& dir, const Options& o, sim::Spectrum spectrum,
                            const sim::Lighting& lighting, const sim::MotionConfig& motion) {
-  char text[2048];
+  char sampling[512];
+  if (motion.sampling == sim::Sampling::kDistance) {
+    std::snprintf(sampling, sizeof sampling,
+                  "sampling = \"distance\"\nframe_spacing_m = %.6f\nspeed_jitter = %.6f\n",
+                  motion.frame_spacing_m, motion.speed_jitter);
+  } else {
+    const sim::SpeedProfile& p = motion.speed;
+    std::snprintf(sampling, sizeof sampling,
+                  "sampling = \"time\"\nfps = %.6f\ncruise_mps = %.6f\nspeed_band = %.6f\n"
+                  "cruise_change_every_m = %.6f\naccel_mps2 = %.6f\nstart_stop_s = %.6f\n"
+                  "stops = %d\nstop_seconds = [%.6f, %.6f]\nspeed_ratio = %.6f\n",
+                  motion.fps, p.cruise_mps, p.band, p.change_every_m, p.accel_mps2, p.start_stop_s,
+                  p.stops, p.stop_min_s, p.stop_max_s, motion.speed_ratio);
+  }
+  char text[2560];
   std::snprintf(
       text, sizeof text,
       "# Written by skyloc simulate (docs/SIMULATOR.md).\n[world]\nname = \"%s\"\nseed = "
-      "%llu\nroute = \"%s\"\n\n[run]\nseed = %llu\nspectrum = \"%s\"\nframe_spacing_m = "
-      "%.6f\nspeed_jitter = %.6f\ncamera_height_m = %.6f\nstart_m = %.6f\ntilt_deg = %.6f\n"
+      "%llu\nroute = \"%s\"\n\n[run]\nseed = %llu\nspectrum = \"%s\"\n%scamera_height_m = "
+      "%.6f\nstart_m = %.6f\ntilt_deg = %.6f\n"
       "zigzag_deg = %.6f\nzigzag_period_m = %.6f\nbumps_deg = %.6f\nyaw_offset_deg = %.6f\n"
       "\n[lighting]\npreset = \"%s\"\nsun_azimuth_deg = %.6f\nsun_elevation_deg = %.6f\n"
       "cloud_cover = %.6f\nsky_brightness = %.6f\nexposure_ev = %.6f\nnoise_sigma = %.6f\n"
       "flare = %.6f\n",
       sim::WorldKindName(o.world), static_cast<unsigned long long>(o.seed),
       o.route_file.empty() ? "(the world's own)" : o.route_file.c_str(),
-      static_cast<unsigned long long>(o.run), sim::SpectrumName(spectrum), motion.frame_spacing_m,
-      motion.speed_jitter, motion.height_m, motion.start_m, motion.tilt_deg, motion.zigzag_deg,
-      motion.zigzag_period_m, motion.bumps_deg, motion.yaw_offset_deg, o.lighting.c_str(),
-      lighting.sun_azimuth_deg, lighting.sun_elevation_deg, lighting.cloud_cover,
-      lighting.sky_brightness, lighting.exposure_ev, lighting.noise_sigma, lighting.flare);
+      static_cast<unsigned long long>(o.run), sim::SpectrumName(spectrum), sampling,
+      motion.height_m, motion.start_m, motion.tilt_deg, motion.zigzag_deg, motion.zigzag_period_m,
+      motion.bumps_deg, motion.yaw_offset_deg, o.lighting.c_str(), lighting.sun_azimuth_deg,
+      lighting.sun_elevation_deg, lighting.cloud_cover, lighting.sky_brightness,
+      lighting.exposure_ev, lighting.noise_sigma, lighting.flare);
   return WriteText(dir + "/simulation.toml", text);
 }
 
@@ -380,8 +454,23 @@ int RunSimulate(std::span<char* const> args) {
   }
 
   sim::MotionConfig motion;
-  motion.frame_spacing_m = o.spacing.value_or(seville ? 0.05 : 1.0);
-  motion.speed_jitter = o.jitter;
+  if (o.spacing) {
+    motion.sampling = sim::Sampling::kDistance;
+    motion.frame_spacing_m = *o.spacing;
+    motion.speed_jitter = o.jitter.value_or(motion.speed_jitter);
+  } else {
+    motion.sampling = sim::Sampling::kTime;
+    motion.fps = o.fps.value_or(motion.fps);
+    sim::SpeedProfile& p = motion.speed;
+    // An ant-sized run: 5 cm frames at 10 fps, as the distance sampling's ant spacing.
+    p.cruise_mps = o.speed.value_or(seville ? 0.5 : p.cruise_mps);
+    p.band = o.speed_band.value_or(p.band);
+    p.accel_mps2 = o.accel.value_or(p.accel_mps2);
+    p.start_stop_s = o.start_stop.value_or(p.start_stop_s);
+    p.stops = o.stops.value_or(p.stops);
+    p.stop_min_s = o.stop_min.value_or(p.stop_min_s);
+    p.stop_max_s = o.stop_max.value_or(p.stop_max_s);
+  }
   motion.height_m = o.camera_height.value_or(seville ? 0.01 : 1.0);
   motion.tilt_deg = o.tilt;
   motion.zigzag_deg = o.zigzag;

@@ -234,7 +234,7 @@ class SectionReader {
     }
   }
 
-  static constexpr std::size_t kMaxKeys = 16;
+  static constexpr std::size_t kMaxKeys = 32;  // [camera] has 19
   const toml::table* table_;
   const char* section_;
   std::string_view source_;
@@ -420,6 +420,16 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.String("lens_file", &c.camera.lens_file, true);
     r.OneOf("sim_world", &c.camera.sim_world, {"city", "forest", "repetitive", "street"});
     r.Int64("sim_seed", &c.camera.sim_seed, 0, INT64_MAX);
+    r.OneOf("sim_sampling", &c.camera.sim_sampling, {"distance", "time"});
+    r.Double("sim_speed_mps", &c.camera.sim_speed_mps, 0.01, 100.0);
+    r.Double("sim_speed_band", &c.camera.sim_speed_band, 0.0, 0.99);
+    r.Double("sim_accel_mps2", &c.camera.sim_accel_mps2, 0.01, 100.0);
+    r.Double("sim_start_stop_s", &c.camera.sim_start_stop_s, 0.0, 3600.0);
+    r.Int("sim_stops", &c.camera.sim_stops, 0, 1000);
+    r.Double("sim_stop_min_s", &c.camera.sim_stop_min_s, 0.0, 3600.0);
+    r.Double("sim_stop_max_s", &c.camera.sim_stop_max_s, 0.0, 3600.0);
+    if (error.ok() && c.camera.sim_stop_min_s > c.camera.sim_stop_max_s)
+      r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
     r.Int("width", &c.camera.width, 16, 8192);
     r.Int("height", &c.camera.height, 16, 8192);
     r.Double("fps", &c.camera.fps, 0.1, 1000.0);

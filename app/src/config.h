@@ -34,6 +34,16 @@ struct CameraConfig {
   std::string lens_file;               // camera/lens TOML; empty: 185-degree equidistant
   std::string sim_world = "city";      // kind = sim: city | forest | repetitive
   std::int64_t sim_seed = 1;
+  // kind = sim (not "street"): "distance" (a frame every metre, the demo's) or "time" (a
+  // frame every 1/fps seconds along a speed profile with stops; docs/SIMULATOR.md).
+  std::string sim_sampling = "distance";
+  double sim_speed_mps = 1.0;  // sim_sampling = "time": sim::SpeedProfile's fields
+  double sim_speed_band = 0.3;
+  double sim_accel_mps2 = 0.5;
+  double sim_start_stop_s = 2.0;
+  int sim_stops = 2;
+  double sim_stop_min_s = 2.0;
+  double sim_stop_max_s = 6.0;
   int width = 640;
   int height = 480;
   double fps = 30.0;

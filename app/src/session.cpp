@@ -46,33 +46,45 @@ class ResultRecorder final : public FrameSink {
   std::uint64_t dropped_ = 0;
 };
 
-double Distance(const RouteFrameMeta& route, const drivers::Pose& pose) {
-  return std::hypot(route.pose[0] - pose.x_m, route.pose[1] - pose.y_m);
+// Horizontal: the session's tolerance is a place on the ground, whatever the camera height
+// of either run. A route frame without a pose is NaN, never near anything.
+dsp::Position3 GroundPosition(const RouteFrameMeta& meta) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  return meta.has_pose ? dsp::Position3{meta.pose[0], meta.pose[1], 0}
+                       : dsp::Position3{nan, nan, 0};
 }
 
-// Precision/recall of the recorded matches, with ground truth from the poses: a query
-// frame's truth is the nearest route frame, if within the tolerance (else it is off the
-// route); a match is correct when the matched route frame is within the tolerance.
+// Precision/recall of the recorded matches, with ground truth from the poses by the rule of
+// dsp/place_metrics.h in distance mode: a query frame farther than the tolerance from the
+// whole route is off it; a match is correct when the matched route frame is within the
+// tolerance.
 void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, double tolerance,
               SessionReport* report) {
-  std::vector<dsp::EvaluatedMatch> matches;  // after the loop: allocation is fine here
+  // After the loop: allocation is fine here.
+  std::vector<dsp::Position3> reference(route.size());
+  for (std::size_t i = 0; i < route.size(); ++i)
+    reference[i] = GroundPosition(route.meta(i));
+  const dsp::MatchTolerance rule{0, tolerance};
+  std::vector<dsp::EvaluatedMatch> matches;
   for (const FrameResult& r : results) {
     if (!r.has_pose)
       return;  // no ground truth
-    bool on_route = false;
-    for (std::size_t i = 0; i < route.size() && !on_route; ++i)
-      on_route = route.meta(i).has_pose && Distance(route.meta(i), r.pose) <= tolerance;
+    const dsp::Position3 query{r.pose.x_m, r.pose.y_m, 0};
+    dsp::TruthInterval truth;
+    dsp::GroundTruthFromPositions(reference, std::span<const dsp::Position3>(&query, 1), tolerance,
+                                  std::span<dsp::TruthInterval>(&truth, 1));
+    const bool known_frame =
+        r.best_index >= 0 && static_cast<std::uint64_t>(r.best_index) < reference.size();
     const bool correct =
-        r.matched && r.best_index >= 0 && static_cast<std::size_t>(r.best_index) < route.size() &&
-        route.meta(static_cast<std::size_t>(r.best_index)).has_pose &&
-        Distance(route.meta(static_cast<std::size_t>(r.best_index)), r.pose) <= tolerance;
+        r.matched && known_frame &&
+        dsp::MatchIsCorrect(static_cast<int>(r.best_index), truth, rule, reference, query);
     if (r.state == dsp::TrackState::kLocalised) {
       ++report->localised_frames;
       report->localised_correct += correct ? 1 : 0;
     }
     if (!r.matched)
       continue;
-    matches.push_back({r.uniqueness, on_route, correct});
+    matches.push_back({r.uniqueness, truth.has_truth(), correct});
   }
   if (matches.empty())
     return;
@@ -129,7 +141,18 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
   motion.zigzag_deg = run.zigzag_deg;
   motion.bumps_deg = run.bumps_deg;
   motion.yaw_offset_deg = run.yaw_deg;
-  motion.frame_period_s = 1.0 / config.camera.fps;
+  motion.fps = config.camera.fps;
+  if (config.camera.sim_sampling == "time") {
+    motion.sampling = sim::Sampling::kTime;
+    motion.speed.cruise_mps = config.camera.sim_speed_mps;
+    motion.speed.band = config.camera.sim_speed_band;
+    motion.speed.accel_mps2 = config.camera.sim_accel_mps2;
+    motion.speed.start_stop_s = config.camera.sim_start_stop_s;
+    motion.speed.stops = config.camera.sim_stops;
+    motion.speed.stop_min_s = config.camera.sim_stop_min_s;
+    motion.speed.stop_max_s = config.camera.sim_stop_max_s;
+    motion.speed_ratio = run.speed_ratio;
+  }
   motion.seed = run.run_seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));

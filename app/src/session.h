@@ -25,7 +25,8 @@ struct SimRun {
   double bumps_deg = 0;           // roll/pitch random walk bound
   double yaw_deg = 0;             // constant heading offset
   std::string lighting = "noon";  // noon, dawn, overcast
-  std::uint64_t run_seed = 1;     // jitter, bumps, clouds, noise
+  std::uint64_t run_seed = 1;     // jitter or speed profile and stops, bumps, clouds, noise
+  double speed_ratio = 1.0;       // [camera] sim_sampling = "time": scales the cruise speed
 };
 
 struct SessionArgs {

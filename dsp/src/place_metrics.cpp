@@ -14,20 +14,44 @@ double PositionDistance(const Position3& a, const Position3& b) {
 
 void GroundTruthFromPositions(std::span<const Position3> reference,
                               std::span<const Position3> query, double max_distance_m,
-                              std::span<int> truth) {
+                              std::span<TruthInterval> truth) {
   const std::size_t n = std::min(query.size(), truth.size());
   for (std::size_t q = 0; q < n; ++q) {
     double best = std::numeric_limits<double>::infinity();
-    int best_r = -1;
+    std::size_t best_r = reference.size();
     for (std::size_t r = 0; r < reference.size(); ++r) {
       const double d = PositionDistance(query[q], reference[r]);
       if (d < best) {  // the first of equally near references
         best = d;
-        best_r = static_cast<int>(r);
+        best_r = r;
       }
     }
-    truth[q] = best <= max_distance_m ? best_r : -1;
+    if (best_r == reference.size() || !(best <= max_distance_m)) {
+      truth[q] = TruthInterval{};
+      continue;
+    }
+    auto tied = [&](std::size_t r) {
+      return PositionDistance(query[q], reference[r]) <= best + kTruthTieM;
+    };
+    std::size_t first = best_r, last = best_r;
+    while (first > 0 && tied(first - 1))
+      --first;
+    while (last + 1 < reference.size() && tied(last + 1))
+      ++last;
+    truth[q] = {static_cast<int>(first), static_cast<int>(last), static_cast<int>(best_r)};
   }
+}
+
+bool MatchIsCorrect(int matched, const TruthInterval& truth, const MatchTolerance& tolerance,
+                    std::span<const Position3> reference, const Position3& query) {
+  if (!truth.has_truth() || matched < 0)
+    return false;
+  if (tolerance.metres > 0) {
+    return static_cast<std::size_t>(matched) < reference.size() &&
+           PositionDistance(query, reference[static_cast<std::size_t>(matched)]) <=
+               tolerance.metres;
+  }
+  return matched >= truth.first - tolerance.frames && matched <= truth.last + tolerance.frames;
 }
 
 std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <span>
 #include <vector>
 
 namespace skyloc::dsp {
@@ -63,28 +64,93 @@ TEST(PlaceMetrics, PerfectAndHopelessRuns) {
   EXPECT_EQ(PrecisionRecallCurve({}, order, curve), 0u);
 }
 
-TEST(PlaceMetrics, FrameTolerance) {
-  EXPECT_TRUE(MatchWithinFrames(15, 10, 5));
-  EXPECT_TRUE(MatchWithinFrames(5, 10, 5));
-  EXPECT_FALSE(MatchWithinFrames(16, 10, 5));
-  EXPECT_FALSE(MatchWithinFrames(3, 10, 5));
-  EXPECT_FALSE(MatchWithinFrames(0, -1, 5));  // no ground truth
+// A reference run along x at 1 m steps that stops at x = 3 for five frames (3..7).
+const std::vector<Position3> kStopRoute = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0},
+                                           {3, 0, 0}, {3, 0, 0}, {3, 0, 0}, {3, 0, 0},
+                                           {4, 0, 0}, {5, 0, 0}, {6, 0, 0}, {7, 0, 0}};
+constexpr double kNoLimit = std::numeric_limits<double>::infinity();
+
+TruthInterval TruthOf(const std::vector<Position3>& reference, Position3 query,
+                      double max_distance_m = kNoLimit) {
+  TruthInterval truth[1];
+  GroundTruthFromPositions(reference, std::span<const Position3>(&query, 1), max_distance_m, truth);
+  return truth[0];
 }
 
-TEST(PlaceMetrics, GroundTruthFromPositions) {
-  // Reference route along x at 1 m spacing; queries 0.4 m to the side.
-  const std::vector<Position3> ref = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
-  const std::vector<Position3> query = {
-      {2.2, 0.4, 0},  // nearest reference 2 (0.447 m)
-      {0.9, 0.4, 0},  // nearest 1 (0.412 m)
-      {3.0, 5.0, 0},  // nearest 3 but 5 m away: off the route with a 1 m tolerance
-      {1.5, 0.0, 0},  // exactly between 1 and 2: the first
-  };
-  std::vector<int> truth(4);
-  GroundTruthFromPositions(ref, query, 1.0, truth);
-  EXPECT_EQ(truth, (std::vector<int>{2, 1, -1, 1}));
-  GroundTruthFromPositions(ref, query, std::numeric_limits<double>::infinity(), truth);
-  EXPECT_EQ(truth[2], 3);
+void ExpectInterval(const TruthInterval& t, int first, int last, int nearest) {
+  EXPECT_EQ(t.first, first);
+  EXPECT_EQ(t.last, last);
+  EXPECT_EQ(t.nearest, nearest);
+}
+
+TEST(PlaceMetrics, AStopIsOneTruthInterval) {
+  // 0.2 m beside the stop: frames 3..7 are all 0.2 m away.
+  const TruthInterval t = TruthOf(kStopRoute, {3, 0.2, 0});
+  ExpectInterval(t, 3, 7, 3);
+  const MatchTolerance two_frames{2, 0};
+  // Within 2 frames of 3..7: 1..9. (The nearest frame alone, 3, would call 6..9 wrong.)
+  for (int matched = 0; matched < 12; ++matched) {
+    EXPECT_EQ(MatchIsCorrect(matched, t, two_frames, {}, {}), matched >= 1 && matched <= 9)
+        << "matched " << matched;
+  }
+}
+
+TEST(PlaceMetrics, NearTiesWithinOneCentimetreJoinTheInterval) {
+  // Between frames 1 and 2: 0.504 m and 0.496 m, 8 mm apart: both are the truth.
+  ExpectInterval(TruthOf(kStopRoute, {1.504, 0, 0}), 1, 2, 2);
+  // 0.52 m and 0.48 m, 4 cm apart: frame 2 alone.
+  ExpectInterval(TruthOf(kStopRoute, {1.52, 0, 0}), 2, 2, 2);
+  // Exactly between: the first is the nearest, both are the truth.
+  ExpectInterval(TruthOf(kStopRoute, {1.5, 0, 0}), 1, 2, 1);
+}
+
+TEST(PlaceMetrics, AQueryOffTheRouteHasNoTruth) {
+  const TruthInterval off = TruthOf(kStopRoute, {3, 5, 0}, 1.0);  // 5 m from the stop
+  EXPECT_FALSE(off.has_truth());
+  ExpectInterval(off, -1, -1, -1);
+  EXPECT_FALSE(MatchIsCorrect(3, off, MatchTolerance{5, 0}, {}, {}));
+  EXPECT_FALSE(MatchIsCorrect(3, off, MatchTolerance{0, 10.0}, kStopRoute, {3, 5, 0}));
+  // Without a limit the same query belongs to the stop.
+  ExpectInterval(TruthOf(kStopRoute, {3, 5, 0}), 3, 7, 3);
+  // At exactly the limit it is still on the route (<=).
+  EXPECT_TRUE(TruthOf(kStopRoute, {3, 1, 0}, 1.0).has_truth());
+}
+
+TEST(PlaceMetrics, DistanceModeJudgesTheMatchedPosition) {
+  const TruthInterval t = TruthOf(kStopRoute, {3, 0.2, 0});
+  const MatchTolerance metres{0, 1.5};
+  // Frame 8 is at (4, 0): sqrt(1 + 0.04) = 1.02 m from the query; frame 9 at 2.01 m.
+  EXPECT_TRUE(MatchIsCorrect(8, t, metres, kStopRoute, {3, 0.2, 0}));
+  EXPECT_FALSE(MatchIsCorrect(9, t, metres, kStopRoute, {3, 0.2, 0}));
+  EXPECT_TRUE(MatchIsCorrect(2, t, metres, kStopRoute, {3, 0.2, 0}));  // 1.02 m
+  EXPECT_FALSE(MatchIsCorrect(0, t, metres, kStopRoute, {3, 0.2, 0}));
+  EXPECT_FALSE(MatchIsCorrect(-1, t, metres, kStopRoute, {3, 0.2, 0}));  // no match
+  EXPECT_FALSE(MatchIsCorrect(12, t, metres, kStopRoute, {3, 0.2, 0}));  // not a frame
+}
+
+TEST(PlaceMetrics, TiesElsewhereOnTheRouteAreAnotherVisit) {
+  // A loop back to its start: frames 0 and 4 share a place; the query is at frame 0's.
+  const std::vector<Position3> loop = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}};
+  ExpectInterval(TruthOf(loop, {0, 0.1, 0}), 0, 0, 0);
+}
+
+TEST(PlaceMetrics, PositionsWithoutAPoseAreNeverNear) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Position3> ref = {{nan, nan, nan}, {2, 0, 0}, {nan, 0, 0}};
+  ExpectInterval(TruthOf(ref, {0, 0, 0}), 1, 1, 1);
+  EXPECT_FALSE(MatchIsCorrect(0, TruthOf(ref, {0, 0, 0}), MatchTolerance{0, 5.0}, ref, {0, 0, 0}));
+  EXPECT_FALSE(TruthOf(std::vector<Position3>{{nan, 0, 0}}, {0, 0, 0}).has_truth());
+  EXPECT_FALSE(TruthOf({}, {0, 0, 0}).has_truth());
+}
+
+TEST(PlaceMetrics, AGroundTruthFileGivesOneFrame) {
+  EXPECT_FALSE(TruthAtFrame(-1).has_truth());
+  const TruthInterval t = TruthAtFrame(10);
+  ExpectInterval(t, 10, 10, 10);
+  EXPECT_TRUE(MatchIsCorrect(15, t, MatchTolerance{5, 0}, {}, {}));
+  EXPECT_TRUE(MatchIsCorrect(5, t, MatchTolerance{5, 0}, {}, {}));
+  EXPECT_FALSE(MatchIsCorrect(16, t, MatchTolerance{5, 0}, {}, {}));
+  EXPECT_FALSE(MatchIsCorrect(4, t, MatchTolerance{5, 0}, {}, {}));
   EXPECT_DOUBLE_EQ(PositionDistance({0, 0, 0}, {2, 3, 6}), 7.0);
 }
 

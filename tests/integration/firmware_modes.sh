@@ -100,8 +100,8 @@ grep -q "recovered" "$WORK/out" || fail "route recover: $(cat "$WORK/out")"
 expect_rc 0 "repeat on the recovered route" -- "${RUN[@]}" repeat --route "$WORK/kill.db" --config "$CONFIG" --frames 20
 
 # 9. replay: teach from one simulated recording, replay another (other jitter, tilt, dawn).
-if "${RUN[@]}" simulate --world city --out "$WORK/ref" --frames 60 --width 96 --height 96 >/dev/null 2>&1 &&
-  "${RUN[@]}" simulate --world city --out "$WORK/qry" --frames 60 --width 96 --height 96 \
+if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/ref" --frames 60 --width 96 --height 96 >/dev/null 2>&1 &&
+  "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/qry" --frames 60 --width 96 --height 96 \
     --run 2 --tilt 5 --lighting dawn >/dev/null 2>&1; then
   expect_rc 0 "teach from a dataset" -- "${RUN[@]}" teach --route "$WORK/ds.db" --config "$CONFIG" --dataset "$WORK/ref"
   expect_err "60 frames committed" "teach from a dataset"

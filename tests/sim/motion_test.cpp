@@ -5,7 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace skyloc::sim {
 namespace {
@@ -95,6 +98,207 @@ TEST(Motion, BadConfigurationIsRejected) {
   EXPECT_EQ(BuildTrajectory(kStraight, false, config, &t).code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(BuildTrajectory(std::vector<Point2>{{0, 0}}, false, MotionConfig{}, &t).code(),
             StatusCode::kInvalidArgument);
+}
+
+// Values the distance sampling gave before time sampling existed (the code at 0e1072a),
+// printed with %a: distance sampling must stay as it was for every existing caller. Exact
+// on one build; the 1e-12 tolerance only admits libm's last-bit differences between
+// architectures (atan2, sin, hypot), far below what one changed random draw would move.
+TEST(Motion, DistanceSamplingIsUnchanged) {
+  struct Expected {
+    std::size_t i;
+    double x, y, roll, pitch, yaw, time, route;
+  };
+  const std::vector<Point2> route = {{0, 0}, {30, 0}, {30, 20}, {5, 25}};
+  MotionConfig config;
+  config.bumps_deg = 10;
+  config.zigzag_deg = 15;
+  config.tilt_deg = 5;
+  config.seed = 42;
+  config.start_m = 3;
+  const Expected open[] = {
+      {0, 0x1.8p+1, 0x0p+0, -0x1.baded97ce64e2p+0, 0x1.a8fb17986b64ap+2, 0x1.8454021de755ep+3,
+       0x0p+0, 0x1.8p+1},
+      {1, 0x1.032dbf970da14p+2, 0x0p+0, -0x1.e56f58bfc8a2ap+0, 0x1.aa4791db8170cp+2,
+       0x1.cac4116c5114ap+3, 0x1.999999999999ap-4, 0x1.032dbf970da14p+2},
+      {17, 0x1.53597607f302bp+4, 0x0p+0, -0x1.ded12b6f03c5cp-1, 0x1.158e8b7089077p+3,
+       0x1.640475421ddbcp+2, 0x1.b333333333334p+0, 0x1.53597607f302bp+4},
+      {77, 0x1.483402d2c2f1cp+2, 0x1.8f96ffdbdca72p+4, 0x1.24256a5021584p-1, 0x1.6df7332702d31p+3,
+       0x1.339394b44e587p+7, 0x1.ecccccccccccdp+2, 0x1.2d75214409d54p+6},
+  };
+  const Expected closed[] = {
+      {17, 0x1.53597607f302cp+4, 0x0p+0, -0x1.ded12b6f03c5cp-1, 0x1.158e8b7089077p+3,
+       0x1.640475421ddbcp+2, 0x1.b333333333334p+0, 0x1.53597607f302bp+4},
+      {107, 0x1.1ae1a7ce2832p+1, 0x0p+0, -0x1.4bec354d2a67ap+0, 0x1.d937917d1e45ap+3,
+       0x1.954b49e72b697p+3, 0x1.5666666666667p+3, 0x1.1ae1a7ce2832p+1},
+  };
+  for (const bool is_closed : {false, true}) {
+    std::vector<TrajectoryPoint> t;
+    ASSERT_TRUE(BuildTrajectory(route, is_closed, config, &t).ok());
+    ASSERT_EQ(t.size(), is_closed ? 108u : 78u);
+    for (const Expected& e : is_closed ? std::span<const Expected>(closed) : open) {
+      SCOPED_TRACE(testing::Message() << (is_closed ? "closed" : "open") << " frame " << e.i);
+      const TrajectoryPoint& p = t[e.i];
+      EXPECT_NEAR(p.pose.x_m, e.x, 1e-12);
+      EXPECT_NEAR(p.pose.y_m, e.y, 1e-12);
+      EXPECT_NEAR(p.pose.roll_deg, e.roll, 1e-12);
+      EXPECT_NEAR(p.pose.pitch_deg, e.pitch, 1e-12);
+      EXPECT_NEAR(p.pose.yaw_deg, e.yaw, 1e-12);
+      EXPECT_NEAR(p.time_s, e.time, 1e-12);
+      EXPECT_NEAR(p.route_m, e.route, 1e-12);
+    }
+  }
+}
+
+MotionConfig TimeSampled() {
+  MotionConfig config;
+  config.sampling = Sampling::kTime;
+  config.fps = 10;
+  return config;
+}
+
+// Runs of consecutive frames whose whole pose is identical: (first index, length).
+std::vector<std::pair<std::size_t, std::size_t>> StandingRuns(
+    const std::vector<TrajectoryPoint>& t) {
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    const drivers::Pose& a = t[i].pose;
+    const drivers::Pose& b = t[i - 1].pose;
+    if (a.x_m != b.x_m || a.y_m != b.y_m || a.z_m != b.z_m || a.roll_deg != b.roll_deg ||
+        a.pitch_deg != b.pitch_deg || a.yaw_deg != b.yaw_deg)
+      continue;
+    if (!runs.empty() && runs.back().first + runs.back().second == i)
+      ++runs.back().second;
+    else
+      runs.push_back({i - 1, 2});
+  }
+  return runs;
+}
+
+TEST(Motion, TimeSampledFramesStepByThePeriod) {
+  MotionConfig config = TimeSampled();
+  config.fps = 25;
+  std::vector<TrajectoryPoint> t;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &t).ok());
+  ASSERT_GT(t.size(), 100u);
+  for (std::size_t i = 0; i < t.size(); ++i)
+    ASSERT_NEAR(t[i].time_s, static_cast<double>(i) / 25.0, 1e-9) << "frame " << i;
+  EXPECT_NEAR(t.front().route_m, 0, 1e-12);
+  EXPECT_NEAR(t.back().route_m, 100, 1e-6) << "the run ends at the end of the route";
+}
+
+// The trapezoid rule is exact for a speed that is piecewise linear in time, except in the
+// frame intervals where the acceleration changes (a start, a stop, a new cruise target):
+// each such kink costs at most a_max h^2 / 4 = 1.25 mm (a = 0.5, h = 0.1 s). A 100 m run
+// with two stops and cruise changes every ~30 m has under 20 kinks: 25 mm bounds it.
+TEST(Motion, ArcLengthIsTheIntegralOfTheSpeed) {
+  MotionConfig config = TimeSampled();
+  config.bumps_deg = 5;
+  std::vector<TrajectoryPoint> t;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &t).ok());
+  double integral = 0;
+  for (std::size_t i = 1; i < t.size(); ++i)
+    integral += 0.5 * (t[i].speed_mps + t[i - 1].speed_mps) * (t[i].time_s - t[i - 1].time_s);
+  EXPECT_NEAR(integral, t.back().route_m - t.front().route_m, 0.025);
+  EXPECT_NEAR(t.back().route_m, 100, 1e-6);
+}
+
+TEST(Motion, StopsRepeatThePoseForTheirDuration) {
+  MotionConfig config = TimeSampled();
+  config.bumps_deg = 5;  // a standing robot does not bump: the whole pose repeats
+  config.speed.start_stop_s = 2;
+  config.speed.stops = 1;
+  config.speed.stop_min_s = 3.5;
+  config.speed.stop_max_s = 3.5;
+  std::vector<TrajectoryPoint> t;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &t).ok());
+  const auto runs = StandingRuns(t);
+  ASSERT_EQ(runs.size(), 2u) << "the start and one stop; elsewhere every frame moves";
+  EXPECT_EQ(runs[0].first, 0u);
+  EXPECT_NEAR(static_cast<double>(runs[0].second), 2 * 10, 1);
+  EXPECT_NEAR(static_cast<double>(runs[1].second), 3.5 * 10, 1);
+  for (std::size_t i = runs[1].first; i < runs[1].first + runs[1].second; ++i)
+    EXPECT_EQ(t[i].speed_mps, 0) << "frame " << i;
+  const double stop_m = t[runs[1].first].route_m;
+  EXPECT_GT(stop_m, 5);
+  EXPECT_LT(stop_m, 95);
+  // Another run seed stops elsewhere (a repeat run does not stop where the taught one did).
+  config.seed = 2;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &t).ok());
+  const auto other = StandingRuns(t);
+  ASSERT_EQ(other.size(), 2u);
+  EXPECT_GT(std::fabs(t[other[1].first].route_m - stop_m), 1.0);
+}
+
+TEST(Motion, AccelerationNeverExceedsTheLimit) {
+  MotionConfig config = TimeSampled();
+  config.speed.cruise_mps = 2;
+  config.speed.accel_mps2 = 0.8;
+  config.speed.stops = 4;
+  config.speed.change_every_m = 10;
+  std::vector<TrajectoryPoint> t;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &t).ok());
+  const double h = 0.1;
+  double largest = 0;
+  for (std::size_t i = 1; i + 1 < t.size(); ++i) {
+    // The second difference of the positions: the mean acceleration over two frames.
+    const double a = (t[i + 1].route_m - 2 * t[i].route_m + t[i - 1].route_m) / (h * h);
+    largest = std::max(largest, std::fabs(a));
+    ASSERT_LE(std::fabs(a), 0.8 * (1 + 1e-6)) << "frame " << i;
+    ASSERT_LE(std::fabs(t[i].speed_mps - t[i - 1].speed_mps), 0.8 * h * (1 + 1e-6));
+  }
+  EXPECT_GT(largest, 0.7) << "the profile should actually use its acceleration";
+}
+
+// Without stops or cruise changes the run time is analytic: accelerate to v at a, cruise,
+// brake at a: T = L / v + v / a. 100 m at 1 m/s: 102 s (1021 frames at 10 fps); twice as
+// fast: 54 s (541 frames), not quite half because the speed-up and slow-down take longer.
+// The profile is planned on 1 cm nodes, so the time may differ from T by a frame or two.
+TEST(Motion, SpeedRatioScalesTheRunTime) {
+  MotionConfig config = TimeSampled();
+  config.speed.band = 0;
+  config.speed.stops = 0;
+  config.speed.start_stop_s = 0;
+  std::vector<TrajectoryPoint> slow, fast;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &slow).ok());
+  config.speed_ratio = 2;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &fast).ok());
+  EXPECT_NEAR(static_cast<double>(slow.size()), 1021, 2);
+  EXPECT_NEAR(static_cast<double>(fast.size()), 541, 2);
+  EXPECT_NEAR(fast[fast.size() / 2].speed_mps, 2, 1e-9);
+  config.speed_ratio = 0.3;
+  ASSERT_TRUE(BuildTrajectory(kStraight, false, config, &slow).ok());
+  EXPECT_NEAR(static_cast<double>(slow.size()), (100 / 0.3 + 0.3 / 0.5) * 10 + 1, 2);
+}
+
+TEST(Motion, TimeSampledClosedLoopRunsOneLap) {
+  const std::vector<Point2> square = {{0, 0}, {10, 0}, {10, 10}, {0, 10}};
+  MotionConfig config = TimeSampled();
+  config.start_m = 15;
+  std::vector<TrajectoryPoint> t;
+  ASSERT_TRUE(BuildTrajectory(square, true, config, &t).ok());
+  EXPECT_NEAR(t.front().route_m, 15, 1e-9);
+  EXPECT_NEAR(t.front().pose.x_m, 10, 1e-9);
+  EXPECT_NEAR(t.back().route_m, 15, 1e-6) << "one lap back to the start";
+}
+
+TEST(Motion, BadSpeedProfileIsRejected) {
+  std::vector<TrajectoryPoint> t;
+  auto code = [&](void (*edit)(MotionConfig*)) {
+    MotionConfig config = TimeSampled();
+    edit(&config);
+    return BuildTrajectory(kStraight, false, config, &t).code();
+  };
+  EXPECT_EQ(code([](MotionConfig*) {}), StatusCode::kOk);
+  EXPECT_EQ(code([](MotionConfig* c) { c->fps = 0; }), StatusCode::kInvalidArgument);
+  EXPECT_EQ(code([](MotionConfig* c) { c->speed.cruise_mps = 0; }), StatusCode::kInvalidArgument);
+  EXPECT_EQ(code([](MotionConfig* c) { c->speed.accel_mps2 = -1; }), StatusCode::kInvalidArgument);
+  EXPECT_EQ(code([](MotionConfig* c) { c->speed.band = 1; }), StatusCode::kInvalidArgument);
+  EXPECT_EQ(code([](MotionConfig* c) { c->speed.stops = -1; }), StatusCode::kInvalidArgument);
+  EXPECT_EQ(code([](MotionConfig* c) { c->speed.stop_min_s = 7; }),
+            StatusCode::kInvalidArgument);  // above the maximum, 6 s
+  EXPECT_EQ(code([](MotionConfig* c) { c->speed_ratio = 0; }), StatusCode::kInvalidArgument);
+  EXPECT_EQ(code([](MotionConfig* c) { c->start_m = 200; }), StatusCode::kInvalidArgument);
 }
 
 std::string WriteTemp(const char* name, const char* contents) {

@@ -12,7 +12,10 @@ namespace skyloc::sim {
 Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
                    const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
   MotionConfig motion = spec.motion;
+  motion.sampling = options.sampling;
   motion.frame_spacing_m = options.spacing_m;
+  motion.fps = options.fps;
+  motion.speed = options.speed;
   motion.height_m = options.camera_height_m;
   motion.max_frames = options.max_frames;
   out->label = spec.label;
@@ -76,10 +79,13 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, b
       p.push_back({t.pose.x_m, t.pose.y_m, t.pose.z_m});
     return p;
   };
-  out->truth.assign(static_cast<std::size_t>(n_query), -1);
-  dsp::GroundTruthFromPositions(positions(reference), positions(query), options.max_offset_m,
-                                out->truth);
+  const std::vector<dsp::Position3> reference_xyz = positions(reference);
+  const std::vector<dsp::Position3> query_xyz = positions(query);
+  out->truth.assign(static_cast<std::size_t>(n_query), dsp::TruthInterval{});
+  dsp::GroundTruthFromPositions(reference_xyz, query_xyz, options.max_offset_m, out->truth);
+  const dsp::MatchTolerance tolerance{options.tolerance_frames, 0};
   out->matched.assign(static_cast<std::size_t>(n_query), -1);
+  out->correct.assign(static_cast<std::size_t>(n_query), false);
   std::vector<dsp::EvaluatedMatch> evaluated;
   for (std::size_t q = 0; q < static_cast<std::size_t>(n_query); ++q) {
     const dsp::SeqSlamMatch& m = matches[q];
@@ -88,8 +94,10 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, b
     out->matched[q] = m.reference;
     dsp::EvaluatedMatch em;
     em.uniqueness = m.uniqueness;
-    em.has_ground_truth = out->truth[q] >= 0;
-    em.correct = dsp::MatchWithinFrames(m.reference, out->truth[q], options.tolerance_frames);
+    em.has_ground_truth = out->truth[q].has_truth();
+    em.correct =
+        dsp::MatchIsCorrect(m.reference, out->truth[q], tolerance, reference_xyz, query_xyz[q]);
+    out->correct[q] = em.correct;
     evaluated.push_back(em);
   }
   std::vector<std::size_t> order(evaluated.size());
@@ -249,7 +257,8 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
       SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
       SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
       const auto with_truth =
-          std::count_if(row.sky.truth.begin(), row.sky.truth.end(), [](int t) { return t >= 0; });
+          std::count_if(row.sky.truth.begin(), row.sky.truth.end(),
+                        [](const dsp::TruthInterval& t) { return t.has_truth(); });
       row.truth_fraction = row.sky.truth.empty() ? 0
                                                  : static_cast<double>(with_truth) /
                                                        static_cast<double>(row.sky.truth.size());

@@ -45,12 +45,6 @@ struct PrSummary {
   double area_under_curve = 0.0;
 };
 
-// A match is correct when |matched - truth| <= tolerance (the paper: 5 frames).
-inline bool MatchWithinFrames(int matched, int truth, int tolerance_frames) {
-  const int d = matched - truth;
-  return truth >= 0 && (d < 0 ? -d : d) <= tolerance_frames;
-}
-
 // A recorded camera position, metres, in one fixed frame per pair of runs.
 struct Position3 {
   double x = 0, y = 0, z = 0;
@@ -58,12 +52,52 @@ struct Position3 {
 
 double PositionDistance(const Position3& a, const Position3& b);
 
-// Ground truth from poses: truth[q] = the reference recorded nearest to query q, or -1 when
-// even that one is farther than max_distance_m (off the route; pass infinity for no limit).
-// O(queries x references). truth.size() must equal query.size().
+// ---- Ground truth and correctness: the one rule for eval, replay/demo and experiments ----
+//
+// A query's truth is the interval of reference frames tied for nearest to it: every frame
+// within kTruthTieM of the nearest distance, contiguous with the nearest frame. A robot
+// that stopped while teaching left many frames at one place; any of them is the truth.
+// Ties elsewhere on the route (a loop's closing frame on its first) are another visit and
+// stay out of the interval, as the nearest frame alone did before.
+
+// 1 cm: a stop's frames are bit-identical in simulation but a recorded pose (odometry,
+// RTK GNSS) wanders by about a centimetre while standing, and frames.csv rounds; yet 1 cm
+// is 5x below the finest frame step in use (the ants' 5 cm), so frames of a moving robot
+// tie only when the query lies halfway between two of them, where either is right.
+inline constexpr double kTruthTieM = 0.01;
+
+struct TruthInterval {
+  int first = -1;    // -1: no ground truth (the query is off the reference route)
+  int last = -1;     // inclusive
+  int nearest = -1;  // the first reference at the smallest distance (plots)
+  bool has_truth() const { return first >= 0; }
+};
+
+// The truth of a ground-truth file: one reference frame, or none for -1.
+inline TruthInterval TruthAtFrame(int reference) {
+  return reference >= 0 ? TruthInterval{reference, reference, reference} : TruthInterval{};
+}
+
+// truth[q] for every query: the tied interval, or none when even the nearest reference is
+// farther than max_distance_m (off the route; pass infinity for no limit). A position with
+// a NaN coordinate (a frame without a pose) is never near anything. O(queries x
+// references). truth.size() must equal query.size().
 void GroundTruthFromPositions(std::span<const Position3> reference,
                               std::span<const Position3> query, double max_distance_m,
-                              std::span<int> truth);
+                              std::span<TruthInterval> truth);
+
+// How a match is judged: within +-frames of the truth interval (the paper: 5), or, with
+// metres > 0, recorded within that distance of the query (the interval then only says
+// whether the query has a truth at all).
+struct MatchTolerance {
+  int frames = 5;
+  double metres = 0;
+};
+
+// `reference` and `query` are needed in distance mode only (pass {} and any position with
+// a ground-truth file, which has frames only).
+bool MatchIsCorrect(int matched, const TruthInterval& truth, const MatchTolerance& tolerance,
+                    std::span<const Position3> reference, const Position3& query);
 
 // Fills `curve` (needs matches.size() points at most) from the strictest threshold to the
 // loosest and returns the number of points written. `order` is scratch of matches.size()

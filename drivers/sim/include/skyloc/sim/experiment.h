@@ -3,10 +3,11 @@
 // SeqSLAM (vanilla): visible image -> grey 64x32 patch-normalised — and score a reference
 // run against a query run with the same SeqSLAM and precision-recall code as `skyloc eval`.
 //
-// Ground truth from positions: a query frame's true reference frame is the reference frame
-// nearest to it (x, y); a match is correct within `tolerance_frames` of that frame (the
-// paper: 5), and a query frame farther than `max_offset_m` from every reference frame has
-// no ground truth. Start-up/offline work: everything here allocates.
+// Ground truth from positions by the rule of dsp/place_metrics.h (the same as `skyloc
+// eval`): a query frame's truth is the interval of reference frames tied for nearest to it
+// (x, y, z); a match is correct within `tolerance_frames` of that interval (the paper: 5),
+// and a query frame farther than `max_offset_m` from every reference frame has no ground
+// truth. Start-up/offline work: everything here allocates.
 #pragma once
 
 #include <cstdint>
@@ -26,8 +27,14 @@ namespace skyloc::sim {
 struct ExperimentOptions {
   int width = 320;
   int height = 240;
-  int bands = 120;         // SH bands of the sky descriptor (the paper: 120)
+  int bands = 120;  // SH bands of the sky descriptor (the paper: 120)
+  // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
+  // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its
+  // RunSpec::motion.speed_ratio scales its cruise speed).
+  Sampling sampling = Sampling::kDistance;
   double spacing_m = 1.0;  // frame spacing along the route
+  double fps = 10;
+  SpeedProfile speed;
   double camera_height_m = 1.0;
   int max_frames = 0;  // 0: the whole route
   std::uint64_t world_seed = 1;
@@ -47,7 +54,9 @@ struct RunDescriptors {
 
 struct RunSpec {
   std::string label;
-  MotionConfig motion;  // spacing, height and max_frames are overridden by the options
+  // Sampling, spacing, fps, speed profile, height and max_frames come from the options;
+  // the rest (seed, manoeuvres, speed_ratio) is the run's own.
+  MotionConfig motion;
   Lighting lighting;
 };
 
@@ -58,8 +67,9 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 struct MethodScore {
   dsp::PrSummary summary;
   std::vector<dsp::PrPoint> curve;
-  std::vector<int> matched;  // per query frame: matched reference (-1: no match)
-  std::vector<int> truth;    // per query frame: true reference (-1: none)
+  std::vector<int> matched;               // per query frame: matched reference (-1: none)
+  std::vector<dsp::TruthInterval> truth;  // per query frame
+  std::vector<bool> correct;              // per query frame: matched and correct
 };
 
 // SeqSLAM (batch, centred window) of `query` against `reference` with descriptors

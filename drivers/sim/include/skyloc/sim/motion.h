@@ -1,7 +1,12 @@
-// Trajectories: a route (polyline on the ground) sampled into camera poses at a frame
-// spacing, with the manoeuvres of Stone et al. 2016: speed jitter (so SeqSLAM's velocity
-// search matters), camera height, constant tilt about the pitch axis, zig-zag yaw, bumpy
-// roll/pitch (a bounded random walk), and a constant yaw offset between runs.
+// Trajectories: a route (polyline on the ground) sampled into camera poses, with the
+// manoeuvres of Stone et al. 2016: camera height, constant tilt about the pitch axis,
+// zig-zag yaw, bumpy roll/pitch (a bounded random walk), and a constant yaw offset between
+// runs. Two samplings:
+//  - distance: a frame every `frame_spacing_m` with speed jitter (so SeqSLAM's velocity
+//    search matters); the original behaviour, kept bit for bit;
+//  - time: a frame every 1/fps seconds while the robot follows a speed profile (starts
+//    standing, accelerates, cruises at changing speeds, stops for seconds), as a real
+//    camera at a fixed frame rate sees it. docs/SIMULATOR.md, "Motion".
 #pragma once
 
 #include <cstdint>
@@ -14,25 +19,47 @@
 
 namespace skyloc::sim {
 
+enum class Sampling : std::uint8_t {
+  kDistance,  // a frame every frame_spacing_m of route (with speed jitter)
+  kTime,      // a frame every 1/fps seconds along the speed profile
+};
+
+// Sampling::kTime: how the robot drives. Every speed is reached with at most accel_mps2;
+// a stop is a place where the speed is exactly 0 for its duration, so its frames repeat.
+struct SpeedProfile {
+  double cruise_mps = 1.0;     // mean cruise speed (times MotionConfig::speed_ratio)
+  double band = 0.3;           // cruise targets are drawn within cruise x (1 +- band)
+  double change_every_m = 30;  // mean route distance between new cruise targets
+  double accel_mps2 = 0.5;     // acceleration and deceleration limit
+  double start_stop_s = 2.0;   // standing still before the run starts moving
+  int stops = 2;               // further stops, at random places along the route
+  double stop_min_s = 2.0;     // each stop lasts a random time within min..max
+  double stop_max_s = 6.0;
+};
+
 struct MotionConfig {
-  double frame_spacing_m = 1.0;  // mean distance between frames
-  double speed_jitter = 0.2;     // speed wanders within (1 +- jitter) x nominal
+  Sampling sampling = Sampling::kDistance;
+  double frame_spacing_m = 1.0;  // kDistance: mean distance between frames
+  double speed_jitter = 0.2;     // kDistance: speed wanders within (1 +- jitter) x nominal
+  SpeedProfile speed;            // kTime
+  double speed_ratio = 1.0;      // kTime: scales every cruise speed (a faster repeat run)
   double height_m = 1.0;         // camera above the ground
   double tilt_deg = 0;           // constant pitch (the paper's alpha), nose up positive
   double zigzag_deg = 0;         // yaw amplitude of a sinusoidal weave about the route
   double zigzag_period_m = 20;   // route distance of one full weave
   double bumps_deg = 0;          // roll/pitch random walk bound (0: smooth ride)
   double yaw_offset_deg = 0;     // constant heading offset (full yaw change between runs)
-  double frame_period_s = 0.1;   // timestamp step
+  double fps = 10;               // frames per second: kTime samples at it; timestamps i / fps
   double start_m = 0;            // where along the route the run starts
   int max_frames = 0;            // 0: until the end of the route (one lap of a loop)
-  std::uint64_t seed = 1;        // speed jitter and bumps
+  std::uint64_t seed = 1;        // speed jitter or profile (targets, stops), and bumps
 };
 
 struct TrajectoryPoint {
   drivers::Pose pose;
   double time_s = 0;
-  double route_m = 0;  // arc length along the route: the ground truth for place matching
+  double route_m = 0;    // arc length along the route: the ground truth for place matching
+  double speed_mps = 0;  // kTime: the speed at time_s; kDistance: the speed to the next frame
 };
 
 // Samples `route` (metres). Allocates `out` (start-up work).
