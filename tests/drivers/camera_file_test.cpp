@@ -106,6 +106,27 @@ TEST(CameraFile, ErrorsNameTheFileTheKeyAndTheFix) {
               HasSubstr("folds back"));
 }
 
+// toml++ 3.3.0 reaches __builtin_unreachable() on some non-ASCII characters between tokens
+// (the config fuzz target found it). Camera files go through the same guarded reader as the
+// configuration: such text is refused with its position before toml++ sees it, while
+// comments and strings may hold any UTF-8.
+TEST(CameraFile, NonAsciiOutsideStringsIsRefusedWithItsPosition) {
+  // The config fuzzer's input: U+FCFF inside a table header.
+  std::string m =
+      Message(Parse("[im\xef\xb3\xbf"
+                    "age]\nwidth = 640\nheight = 480\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:1:4: a non-ASCII character outside a string or comment"));
+  // U+00A0 (no-break space) where toml++ looks for whitespace, after a value.
+  m = Message(Parse("[image]\nwidth = 640\xc2\xa0\nheight = 480\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:2:12: a non-ASCII"));
+
+  auto ok = Parse(
+      "# Kamera f\xc3\xbcr UV \xe2\x80\x94 a comment\n[image]\nwidth = 640  # \xc3\xa9\n"
+      "height = 480\n[lens]\nmodel = \"equidistant\"\n");
+  ASSERT_TRUE(ok.ok()) << ok.status().message();
+  EXPECT_EQ(ok->width, 640);
+}
+
 TEST(CameraFile, MissingFileIsNotFound) {
   auto r = LoadCameraFile("/nonexistent/camera.toml");
   ASSERT_FALSE(r.ok());
