@@ -18,7 +18,10 @@ namespace skyloc::app {
 struct StreetCameraOptions {
   int width = 640;
   int height = 480;
-  std::uint64_t seed = 1;     // the street: building heights along both sides
+  std::uint64_t seed = 1;  // the street: building heights along both sides
+  // Which drive along that street: the sensor noise and the speed jitter. Two runs of one
+  // street differ in every frame, as two drives with a real camera do; 0 is the first.
+  std::uint64_t run_seed = 0;
   double step_m = 0.5;        // metres travelled per frame
   double speed_jitter = 0.0;  // relative random variation of the step, 0..0.5
   double tilt_deg = 0.0;      // constant pitch of the camera

@@ -56,15 +56,17 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
   }
 }
 
-// Counts states and checks the matched index tracks the frame number on a repeat of the
-// same street (same step, so route index == frame index).
+// Counts states and checks each LOCALISED frame's match against the truth: the taught
+// street has a frame every 0.5 m from x = 0 (Street()), so the right route index for a
+// repeat frame is its own position / 0.5 m, whatever the repeat's speed.
 class TrackingSink final : public FrameSink {
  public:
   void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
     ++frames;
     if (r.state == dsp::TrackState::kLocalised) {
       ++localised;
-      const std::int64_t d = r.best_index - static_cast<std::int64_t>(r.frame % 300);
+      const double truth = r.has_pose ? r.pose.x_m / 0.5 : -1000.0;
+      const double d = static_cast<double>(r.best_index) - truth;
       if (d >= -3 && d <= 3)
         ++localised_correct;
     }
@@ -72,7 +74,17 @@ class TrackingSink final : public FrameSink {
   std::uint64_t frames = 0, localised = 0, localised_correct = 0;
 };
 
-TEST(FrameLoop, LocalisesOnARepeatOfTheTaughtStreet) {
+// A second drive along the taught street: other sensor noise and +-20 % speed jitter, so
+// no repeat frame is a copy of a taught one and the route index drifts from the frame
+// number (a matcher that only finds identical frames, or that assumes equal speed, fails).
+StreetCameraOptions Repeat(std::uint64_t frames) {
+  StreetCameraOptions o = Street(frames);
+  o.run_seed = 2;
+  o.speed_jitter = 0.2;
+  return o;
+}
+
+TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   ClearSignalFlags();
   Pipeline pipeline;
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
@@ -81,7 +93,8 @@ TEST(FrameLoop, LocalisesOnARepeatOfTheTaughtStreet) {
   ASSERT_EQ(route.size(), 300u);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
 
-  StreetCamera camera(Street(300));
+  // 280 frames stay inside the 150 m route at up to 20 % above the taught speed on average.
+  StreetCamera camera(Repeat(280));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;
@@ -91,7 +104,7 @@ TEST(FrameLoop, LocalisesOnARepeatOfTheTaughtStreet) {
   LoopSummary summary;
   ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &sink, options, &summary).ok());
   EXPECT_TRUE(summary.end_of_source);
-  EXPECT_EQ(summary.frames, 300u);
+  EXPECT_EQ(summary.frames, 280u);
   // At 64x64 pixels and 16 bands about 60 % of the frames are confident enough; what
   // matters more is that no LOCALISED frame is wrong.
   EXPECT_GT(sink.localised, 150u);
@@ -110,7 +123,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   RouteFrames route;
   Teach(pipeline, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
-  StreetCamera camera(Street(0));  // endless: the street goes on past the route
+  StreetCamera camera(Repeat(0));  // endless: the street goes on past the route
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;
