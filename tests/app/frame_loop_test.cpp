@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "recording_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
@@ -235,10 +236,20 @@ namespace skyloc::app {
 namespace {
 
 // A camera that fails on the frames a test chooses, delegating the others to the street.
+// It notes whether the status lines were in the safe state at every capture call (what
+// the loop showed after the previous call).
 class FlakyCamera final : public drivers::Camera {
  public:
-  FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code)
-      : street_(Street(0)), fail_from_(fail_from), fail_count_(fail_count), code_(code) {}
+  FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code,
+              const RecordingStatusOutput* lines = nullptr)
+      : street_(Street(0)),
+        fail_from_(fail_from),
+        fail_count_(fail_count),
+        code_(code),
+        lines_(lines) {}
+
+  // safe_at_call()[i]: the lines were safe when capture call i began.
+  const std::vector<bool>& safe_at_call() const { return safe_at_call_; }
 
  private:
   Status DoOpen() override {
@@ -249,6 +260,8 @@ class FlakyCamera final : public drivers::Camera {
   Status DoStart() override { return street_.Start(); }
   Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
     const std::uint64_t call = calls_++;
+    if (lines_ != nullptr)
+      safe_at_call_.push_back(lines_->is_safe());
     if (call >= fail_from_ && call < fail_from_ + fail_count_)
       return Status::Error(code_, "injected fault at call %llu",
                            static_cast<unsigned long long>(call));
@@ -260,6 +273,8 @@ class FlakyCamera final : public drivers::Camera {
   StreetCamera street_;
   std::uint64_t fail_from_, fail_count_, calls_ = 0;
   StatusCode code_;
+  const RecordingStatusOutput* lines_;
+  std::vector<bool> safe_at_call_;
 };
 
 class FrameLoopFaults : public testing::Test {
@@ -277,19 +292,25 @@ class FrameLoopFaults : public testing::Test {
 };
 
 TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
-  FlakyCamera camera(40, 3, StatusCode::kDeadlineExceeded);
+  FlakyCamera camera(40, 3, StatusCode::kDeadlineExceeded, &status_);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
   LoopSummary summary;
-  // 40 frames, then 3 timeouts, then 1 frame.
-  options.max_frames = 40;
-  ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
-  EXPECT_FALSE(status_.is_safe()) << "a state is shown while frames flow";
-  options.max_frames = 1;
+  // Calls 0-39 frames, 40-42 timeouts, 43 a frame.
+  options.max_frames = 41;
   ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
   EXPECT_EQ(summary.capture_errors, 3u);
-  EXPECT_EQ(summary.frames, 1u);
+  EXPECT_EQ(summary.frames, 41u);
+  const std::vector<bool>& safe = camera.safe_at_call();
+  ASSERT_EQ(safe.size(), 44u);
+  // A state is shown while frames flow (call 0 follows Open(), before any frame)...
+  for (std::size_t call = 1; call <= 40; ++call)
+    EXPECT_FALSE(safe[call]) << "call " << call;
+  // ...and the lines are safe from the first timeout until a frame is shown again.
+  for (std::size_t call = 41; call <= 43; ++call)
+    EXPECT_TRUE(safe[call]) << "call " << call << ": timeouts must leave the lines safe";
+  EXPECT_FALSE(status_.is_safe());
   // The SeqSLAM sequence restarted: the frame after the gap has no match yet (ds = 10).
   EXPECT_EQ(status_.last_state(), drivers::LocalisationState::kLost);
 }
