@@ -237,16 +237,20 @@ namespace {
 
 // A camera that fails on the frames a test chooses, delegating the others to the street.
 // It notes whether the status lines were in the safe state at every capture call (what
-// the loop showed after the previous call).
+// the loop showed after the previous call), and a failing call can advance a ManualClock
+// as a driver waiting for its device would.
 class FlakyCamera final : public drivers::Camera {
  public:
   FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code,
-              const RecordingStatusOutput* lines = nullptr)
+              const RecordingStatusOutput* lines = nullptr, ManualClock* clock = nullptr,
+              Nanoseconds failure_takes = Nanoseconds{0})
       : street_(Street(0)),
         fail_from_(fail_from),
         fail_count_(fail_count),
         code_(code),
-        lines_(lines) {}
+        lines_(lines),
+        clock_(clock),
+        failure_takes_(failure_takes) {}
 
   // safe_at_call()[i]: the lines were safe when capture call i began.
   const std::vector<bool>& safe_at_call() const { return safe_at_call_; }
@@ -262,9 +266,12 @@ class FlakyCamera final : public drivers::Camera {
     const std::uint64_t call = calls_++;
     if (lines_ != nullptr)
       safe_at_call_.push_back(lines_->is_safe());
-    if (call >= fail_from_ && call < fail_from_ + fail_count_)
+    if (call >= fail_from_ && call < fail_from_ + fail_count_) {
+      if (clock_ != nullptr)
+        clock_->Advance(failure_takes_);
       return Status::Error(code_, "injected fault at call %llu",
                            static_cast<unsigned long long>(call));
+    }
     return street_.Capture(timeout);
   }
   void DoStop() override { street_.Stop(); }
@@ -274,6 +281,8 @@ class FlakyCamera final : public drivers::Camera {
   std::uint64_t fail_from_, fail_count_, calls_ = 0;
   StatusCode code_;
   const RecordingStatusOutput* lines_;
+  ManualClock* clock_;
+  Nanoseconds failure_takes_;
   std::vector<bool> safe_at_call_;
 };
 
@@ -359,16 +368,24 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraThatComesBackIsFollowed) {
 }
 
 TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
-  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable);
+  // Each failed capture takes 50 ms of the loop's (manual) clock, as a driver's reopen
+  // attempt would. The first failure ends at t, and the loop keeps trying while less than
+  // 200 ms have passed since: at t, t+50, t+100, t+150 (4 errors); at t+200 it gives up.
+  ManualClock clock;
+  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable, &status_, &clock,
+                     std::chrono::milliseconds(50));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
   options.reconnect_timeout = std::chrono::milliseconds(200);
+  options.clock = &clock;
   LoopSummary summary;
   const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
+  EXPECT_NE(std::string(s.message()).find("sim:street"), std::string::npos) << s.message();
   EXPECT_EQ(summary.frames, 3u);
-  EXPECT_GE(summary.capture_errors, 1u);
+  EXPECT_EQ(summary.capture_errors, 4u);
+  EXPECT_EQ(camera.safe_at_call().size(), 3u + 5u);
   EXPECT_TRUE(status_.is_safe());
 }
 
