@@ -13,6 +13,7 @@
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
 #include "street_camera.h"
+#include "support/scratch_dir.h"
 
 namespace skyloc::app {
 namespace {
@@ -154,9 +155,8 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   ClearSignalFlags();
   Pipeline pipeline;
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
-  char dir[] = "/tmp/skyloc_loop_XXXXXX";
-  ASSERT_NE(::mkdtemp(dir), nullptr);
-  const std::string path = std::string(dir) + "/route.db";
+  const skyloc::testing::ScratchDir scratch("skyloc_loop_");
+  const std::string path = scratch.path() + "/route.db";
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path.c_str(), pipeline.route_settings(), 25, false).ok());
   StreetCamera camera(Street(0));
@@ -177,8 +177,6 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   Status s = LoadRouteDb(path.c_str(), &want, RouteDbLoadPolicy::kStrict, &loaded, nullptr);
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_EQ(loaded.size(), 1000u);
-  std::remove(path.c_str());
-  ::rmdir(dir);
 }
 
 TEST(FrameLoop, StopsOnRequestedStop) {
@@ -286,7 +284,7 @@ class FlakyCamera final : public drivers::Camera {
   std::vector<bool> safe_at_call_;
 };
 
-class FrameLoopFaults : public testing::Test {
+class FrameLoopFaults : public ::testing::Test {
  protected:
   void SetUp() override {
     ClearSignalFlags();

@@ -2,11 +2,11 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <string>
+
+#include "support/scratch_dir.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -159,16 +159,11 @@ constexpr char kCalibResults[] =
 
 class OCamCalibFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/skyloc_camera_file_XXXXXX";
-    ASSERT_NE(mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { EXPECT_EQ(std::system(("rm -rf '" + dir_ + "'").c_str()), 0); }
   void Write(const char* name, const std::string& text) {
     std::ofstream(dir_ + "/" + name) << text;
   }
-  std::string dir_;
+  skyloc::testing::ScratchDir scratch_{"skyloc_camera_file_"};
+  const std::string& dir_ = scratch_.path();
 };
 
 TEST_F(OCamCalibFileTest, ToolboxFileLoadsRelativeToTheCameraFile) {
