@@ -107,9 +107,10 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &sink, options, &summary).ok());
   EXPECT_TRUE(summary.end_of_source);
   EXPECT_EQ(summary.frames, 280u);
-  // At 64x64 pixels and 16 bands about 60 % of the frames are confident enough; what
-  // matters more is that no LOCALISED frame is wrong.
-  EXPECT_GT(sink.localised, 150u);
+  // At 64x64 pixels and 16 bands, 267 of the 280 frames are LOCALISED (the first ds = 10
+  // cannot be); the floor of 220 leaves room for matcher changes. What matters more is that
+  // no LOCALISED frame is wrong.
+  EXPECT_GE(sink.localised, 220u);
   EXPECT_EQ(sink.localised_correct, sink.localised);
   EXPECT_EQ(status.last_state(), drivers::LocalisationState::kLocalised);
   EXPECT_FALSE(status.is_safe());
