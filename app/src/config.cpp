@@ -10,6 +10,7 @@
 #include <iterator>
 #include <sstream>
 
+#include "skyloc/drivers/toml_text.h"
 #include "skyloc/dsp/sh_grid.h"
 
 namespace skyloc::app {
@@ -263,87 +264,6 @@ void ResolveGrid(DescriptorConfig* d) {
   }
 }
 
-// toml++ 3.3.0 (Debian 12) reaches __builtin_unreachable() for many non-ASCII characters
-// where it looks for whitespace (is_non_ascii_horizontal_whitespace: U+00A1..U+0499 and
-// others), which is undefined behaviour on a garbled or mistyped file; the config fuzz
-// target found it. skyloc's keys and unquoted values are ASCII anyway, so non-ASCII text is
-// accepted only inside strings and comments, where the parser does not make that check.
-// Returns the 1-based line and column of the first offending byte, or line 0.
-struct TextPosition {
-  int line = 0;
-  int column = 0;
-};
-TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
-  enum class Mode { kCode, kComment, kBasic, kLiteral, kMultiBasic, kMultiLiteral };
-  Mode mode = Mode::kCode;
-  int line = 1, column = 0;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    ++column;
-    const auto starts = [&](const char* s) { return text.substr(i).starts_with(s); };
-    switch (mode) {
-      case Mode::kCode:
-        if (static_cast<unsigned char>(c) >= 0x80)
-          return {line, column};
-        if (c == '#') {
-          mode = Mode::kComment;
-        } else if (starts("\"\"\"")) {
-          mode = Mode::kMultiBasic;
-          i += 2;
-          column += 2;
-        } else if (starts("'''")) {
-          mode = Mode::kMultiLiteral;
-          i += 2;
-          column += 2;
-        } else if (c == '"') {
-          mode = Mode::kBasic;
-        } else if (c == '\'') {
-          mode = Mode::kLiteral;
-        }
-        break;
-      case Mode::kComment:
-        if (c == '\n')
-          mode = Mode::kCode;
-        break;
-      case Mode::kBasic:
-      case Mode::kMultiBasic:
-        if (c == '\\') {
-          ++i;  // the escaped character cannot end the string
-          ++column;
-          if (i < text.size() && text[i] == '\n') {
-            ++line;
-            column = 0;
-          }
-          continue;
-        }
-        if (mode == Mode::kBasic && (c == '"' || c == '\n')) {
-          mode = Mode::kCode;
-        } else if (mode == Mode::kMultiBasic && starts("\"\"\"")) {
-          mode = Mode::kCode;
-          i += 2;
-          column += 2;
-        }
-        break;
-      case Mode::kLiteral:
-        if (c == '\'' || c == '\n')
-          mode = Mode::kCode;
-        break;
-      case Mode::kMultiLiteral:
-        if (starts("'''")) {
-          mode = Mode::kCode;
-          i += 2;
-          column += 2;
-        }
-        break;
-    }
-    if (c == '\n') {
-      ++line;
-      column = 0;
-    }
-  }
-  return {};
-}
-
 }  // namespace
 
 const char* CameraKindName(CameraKind kind) {
@@ -373,21 +293,7 @@ Config DefaultConfig() {
 
 Result<Config> ParseConfig(std::string_view text, std::string_view source_name) {
   const std::string source(source_name);
-  if (const TextPosition p = FirstNonAsciiOutsideStrings(text); p.line > 0) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "%s:%d:%d: a non-ASCII character outside a string or comment: keys "
-                         "and unquoted values are ASCII",
-                         source.c_str(), p.line, p.column);
-  }
-  toml::parse_result parsed = toml::parse(text, source_name);
-  if (!parsed) {
-    const toml::parse_error& e = parsed.error();
-    const std::string description(e.description());
-    return Status::Error(StatusCode::kInvalidArgument, "%s:%u:%u: not valid TOML: %s",
-                         source.c_str(), e.source().begin.line, e.source().begin.column,
-                         description.c_str());
-  }
-  const toml::table& root = parsed.table();
+  SKYLOC_TRY_ASSIGN(const toml::table root, drivers::ParseTomlText(text, source.c_str()));
   Config c;
   Status error;
 

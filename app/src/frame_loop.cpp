@@ -54,7 +54,8 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
                     LoopSummary* summary) {
   if (options.mode == LoopMode::kTeach && route == nullptr)
     return Status::Error(StatusCode::kInternal, "teach without a route database");
-  MonotonicClock clock;
+  MonotonicClock monotonic;
+  const Clock& clock = options.clock != nullptr ? *options.clock : monotonic;
   LatencyTable& latency = pipeline.latency();
   LoopSummary s;
   int errors_in_a_row = 0;

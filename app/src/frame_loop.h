@@ -67,6 +67,9 @@ struct LoopOptions {
   // How long a camera may stay unavailable (unplugged; the V4L2 driver reopens it with
   // backoff) before the loop gives up; 0: at once.
   Nanoseconds reconnect_timeout = std::chrono::seconds(30);
+  // What the reconnect time, pacing and latencies are measured with; null: CLOCK_MONOTONIC.
+  // Tests pass a ManualClock their camera advances, so time-outs are exact, not timed.
+  const Clock* clock = nullptr;
 };
 
 struct LoopSummary {

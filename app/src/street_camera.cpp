@@ -77,7 +77,7 @@ Status StreetCamera::DoStart() {
   start_ = clock_.Now();
   next_ = 0;
   x_m_ = 0.0;
-  rng_ = options_.seed ^ 0xabcdef;
+  rng_ = (options_.seed ^ 0xabcdef) + options_.run_seed * 0x9e3779b97f4a7c15ull;
   return Status::Ok();
 }
 
@@ -111,8 +111,8 @@ void StreetCamera::Render(double x_m, double yaw, double pitch) {
           v = wall;
       }
     }
-    // Deterministic sensor noise, +-6 grey levels.
-    v += 12.0 * (Unit(p * 0x9e37u + next_) - 0.5);
+    // Deterministic sensor noise, +-6 grey levels, different on every run.
+    v += 12.0 * (Unit(p * 0x9e37u + next_ + options_.run_seed * 0xd1b54a32d192ed03ull) - 0.5);
     pixels_[p] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
   }
 }

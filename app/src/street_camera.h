@@ -1,8 +1,8 @@
 // A small built-in simulated camera: an upward 185-degree equidistant fisheye driving down
-// a street canyon whose building heights come from a seed. It is what `camera.kind = "sim"`
-// uses until the full simulator (procedural worlds, drivers/sim) is wired in, and what the
-// firmware's own tests run on: cheap enough for 100,000 frames, deterministic, and with
-// the manoeuvres the demo needs (tilt, zig-zag yaw, lighting, speed jitter).
+// a street canyon whose building heights come from a seed. `camera.kind = "sim"` uses it
+// for `sim_world = "street"` (the other worlds are the simulator's, rendered by
+// sim::RenderedCamera), and the firmware's own tests run on it: cheap enough for 100,000
+// frames, deterministic, with tilt, zig-zag yaw, lighting and speed jitter.
 //
 // Rendering allocates nothing: the per-pixel camera rays and the image are allocated in
 // Open() at the configured size.
@@ -18,7 +18,10 @@ namespace skyloc::app {
 struct StreetCameraOptions {
   int width = 640;
   int height = 480;
-  std::uint64_t seed = 1;     // the street: building heights along both sides
+  std::uint64_t seed = 1;  // the street: building heights along both sides
+  // Which drive along that street: the sensor noise and the speed jitter. Two runs of one
+  // street differ in every frame, as two drives with a real camera do; 0 is the first.
+  std::uint64_t run_seed = 0;
   double step_m = 0.5;        // metres travelled per frame
   double speed_jitter = 0.0;  // relative random variation of the step, 0..0.5
   double tilt_deg = 0.0;      // constant pitch of the camera

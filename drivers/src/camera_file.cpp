@@ -10,6 +10,8 @@
 #include <initializer_list>
 #include <string>
 
+#include "skyloc/drivers/toml_text.h"
+
 namespace skyloc::drivers {
 namespace {
 
@@ -233,15 +235,7 @@ Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* le
 
 Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* source,
                                         const char* base_dir) {
-  toml::parse_result parsed = toml::parse(text, std::string_view(source));
-  if (!parsed) {
-    const toml::parse_error& error = parsed.error();
-    return Status::Error(StatusCode::kInvalidArgument, "%s:%u:%u: not valid TOML: %s", source,
-                         static_cast<unsigned>(error.source().begin.line),
-                         static_cast<unsigned>(error.source().begin.column),
-                         std::string(error.description()).c_str());
-  }
-  const toml::table& root = parsed.table();
+  SKYLOC_TRY_ASSIGN(const toml::table root, ParseTomlText(text, source));
   SKYLOC_TRY(CheckKeys(root, source, "top level", {"image", "lens", "mount"}));
   for (const char* name : {"image", "lens", "mount"}) {
     const toml::node* node = root.get(name);

@@ -7,11 +7,13 @@
 
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "recording_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
 #include "street_camera.h"
+#include "support/scratch_dir.h"
 
 namespace skyloc::app {
 namespace {
@@ -56,15 +58,17 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
   }
 }
 
-// Counts states and checks the matched index tracks the frame number on a repeat of the
-// same street (same step, so route index == frame index).
+// Counts states and checks each LOCALISED frame's match against the truth: the taught
+// street has a frame every 0.5 m from x = 0 (Street()), so the right route index for a
+// repeat frame is its own position / 0.5 m, whatever the repeat's speed.
 class TrackingSink final : public FrameSink {
  public:
   void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
     ++frames;
     if (r.state == dsp::TrackState::kLocalised) {
       ++localised;
-      const std::int64_t d = r.best_index - static_cast<std::int64_t>(r.frame % 300);
+      const double truth = r.has_pose ? r.pose.x_m / 0.5 : -1000.0;
+      const double d = static_cast<double>(r.best_index) - truth;
       if (d >= -3 && d <= 3)
         ++localised_correct;
     }
@@ -72,7 +76,17 @@ class TrackingSink final : public FrameSink {
   std::uint64_t frames = 0, localised = 0, localised_correct = 0;
 };
 
-TEST(FrameLoop, LocalisesOnARepeatOfTheTaughtStreet) {
+// A second drive along the taught street: other sensor noise and +-20 % speed jitter, so
+// no repeat frame is a copy of a taught one and the route index drifts from the frame
+// number (a matcher that only finds identical frames, or that assumes equal speed, fails).
+StreetCameraOptions Repeat(std::uint64_t frames) {
+  StreetCameraOptions o = Street(frames);
+  o.run_seed = 2;
+  o.speed_jitter = 0.2;
+  return o;
+}
+
+TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   ClearSignalFlags();
   Pipeline pipeline;
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
@@ -81,7 +95,8 @@ TEST(FrameLoop, LocalisesOnARepeatOfTheTaughtStreet) {
   ASSERT_EQ(route.size(), 300u);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
 
-  StreetCamera camera(Street(300));
+  // 280 frames stay inside the 150 m route at up to 20 % above the taught speed on average.
+  StreetCamera camera(Repeat(280));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;
@@ -91,10 +106,11 @@ TEST(FrameLoop, LocalisesOnARepeatOfTheTaughtStreet) {
   LoopSummary summary;
   ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &sink, options, &summary).ok());
   EXPECT_TRUE(summary.end_of_source);
-  EXPECT_EQ(summary.frames, 300u);
-  // At 64x64 pixels and 16 bands about 60 % of the frames are confident enough; what
-  // matters more is that no LOCALISED frame is wrong.
-  EXPECT_GT(sink.localised, 150u);
+  EXPECT_EQ(summary.frames, 280u);
+  // At 64x64 pixels and 16 bands, 267 of the 280 frames are LOCALISED (the first ds = 10
+  // cannot be); the floor of 220 leaves room for matcher changes. What matters more is that
+  // no LOCALISED frame is wrong.
+  EXPECT_GE(sink.localised, 220u);
   EXPECT_EQ(sink.localised_correct, sink.localised);
   EXPECT_EQ(status.last_state(), drivers::LocalisationState::kLocalised);
   EXPECT_FALSE(status.is_safe());
@@ -110,7 +126,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   RouteFrames route;
   Teach(pipeline, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
-  StreetCamera camera(Street(0));  // endless: the street goes on past the route
+  StreetCamera camera(Repeat(0));  // endless: the street goes on past the route
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;
@@ -140,9 +156,8 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   ClearSignalFlags();
   Pipeline pipeline;
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
-  char dir[] = "/tmp/skyloc_loop_XXXXXX";
-  ASSERT_NE(::mkdtemp(dir), nullptr);
-  const std::string path = std::string(dir) + "/route.db";
+  const skyloc::testing::ScratchDir scratch("skyloc_loop_");
+  const std::string path = scratch.path() + "/route.db";
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path.c_str(), pipeline.route_settings(), 25, false).ok());
   StreetCamera camera(Street(0));
@@ -163,8 +178,6 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   Status s = LoadRouteDb(path.c_str(), &want, RouteDbLoadPolicy::kStrict, &loaded, nullptr);
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_EQ(loaded.size(), 1000u);
-  std::remove(path.c_str());
-  ::rmdir(dir);
 }
 
 TEST(FrameLoop, StopsOnRequestedStop) {
@@ -222,10 +235,24 @@ namespace skyloc::app {
 namespace {
 
 // A camera that fails on the frames a test chooses, delegating the others to the street.
+// It notes whether the status lines were in the safe state at every capture call (what
+// the loop showed after the previous call), and a failing call can advance a ManualClock
+// as a driver waiting for its device would.
 class FlakyCamera final : public drivers::Camera {
  public:
-  FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code)
-      : street_(Street(0)), fail_from_(fail_from), fail_count_(fail_count), code_(code) {}
+  FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code,
+              const RecordingStatusOutput* lines = nullptr, ManualClock* clock = nullptr,
+              Nanoseconds failure_takes = Nanoseconds{0})
+      : street_(Street(0)),
+        fail_from_(fail_from),
+        fail_count_(fail_count),
+        code_(code),
+        lines_(lines),
+        clock_(clock),
+        failure_takes_(failure_takes) {}
+
+  // safe_at_call()[i]: the lines were safe when capture call i began.
+  const std::vector<bool>& safe_at_call() const { return safe_at_call_; }
 
  private:
   Status DoOpen() override {
@@ -236,9 +263,14 @@ class FlakyCamera final : public drivers::Camera {
   Status DoStart() override { return street_.Start(); }
   Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
     const std::uint64_t call = calls_++;
-    if (call >= fail_from_ && call < fail_from_ + fail_count_)
+    if (lines_ != nullptr)
+      safe_at_call_.push_back(lines_->is_safe());
+    if (call >= fail_from_ && call < fail_from_ + fail_count_) {
+      if (clock_ != nullptr)
+        clock_->Advance(failure_takes_);
       return Status::Error(code_, "injected fault at call %llu",
                            static_cast<unsigned long long>(call));
+    }
     return street_.Capture(timeout);
   }
   void DoStop() override { street_.Stop(); }
@@ -247,9 +279,13 @@ class FlakyCamera final : public drivers::Camera {
   StreetCamera street_;
   std::uint64_t fail_from_, fail_count_, calls_ = 0;
   StatusCode code_;
+  const RecordingStatusOutput* lines_;
+  ManualClock* clock_;
+  Nanoseconds failure_takes_;
+  std::vector<bool> safe_at_call_;
 };
 
-class FrameLoopFaults : public testing::Test {
+class FrameLoopFaults : public ::testing::Test {
  protected:
   void SetUp() override {
     ClearSignalFlags();
@@ -264,20 +300,25 @@ class FrameLoopFaults : public testing::Test {
 };
 
 TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
-  FlakyCamera camera(40, 3, StatusCode::kDeadlineExceeded);
+  FlakyCamera camera(40, 3, StatusCode::kDeadlineExceeded, &status_);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
   LoopSummary summary;
-  // 40 frames, then 3 timeouts, then 1 frame.
-  options.max_frames = 40;
-  ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
-  EXPECT_FALSE(status_.is_safe()) << "a state is shown while frames flow";
-  EXPECT_EQ(status_.last_state(), drivers::LocalisationState::kLocalised);
-  options.max_frames = 1;
+  // Calls 0-39 frames, 40-42 timeouts, 43 a frame.
+  options.max_frames = 41;
   ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
   EXPECT_EQ(summary.capture_errors, 3u);
-  EXPECT_EQ(summary.frames, 1u);
+  EXPECT_EQ(summary.frames, 41u);
+  const std::vector<bool>& safe = camera.safe_at_call();
+  ASSERT_EQ(safe.size(), 44u);
+  // A state is shown while frames flow (call 0 follows Open(), before any frame)...
+  for (std::size_t call = 1; call <= 40; ++call)
+    EXPECT_FALSE(safe[call]) << "call " << call;
+  // ...and the lines are safe from the first timeout until a frame is shown again.
+  for (std::size_t call = 41; call <= 43; ++call)
+    EXPECT_TRUE(safe[call]) << "call " << call << ": timeouts must leave the lines safe";
+  EXPECT_FALSE(status_.is_safe());
   // Tracking restarted after the gap: one frame of evidence cannot confirm a place
   // (confirm_frames = 5), whatever the matcher made of it.
   EXPECT_NE(status_.last_state(), drivers::LocalisationState::kLocalised);
@@ -327,16 +368,24 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraThatComesBackIsFollowed) {
 }
 
 TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
-  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable);
+  // Each failed capture takes 50 ms of the loop's (manual) clock, as a driver's reopen
+  // attempt would. The first failure ends at t, and the loop keeps trying while less than
+  // 200 ms have passed since: at t, t+50, t+100, t+150 (4 errors); at t+200 it gives up.
+  ManualClock clock;
+  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable, &status_, &clock,
+                     std::chrono::milliseconds(50));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
   options.reconnect_timeout = std::chrono::milliseconds(200);
+  options.clock = &clock;
   LoopSummary summary;
   const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
+  EXPECT_NE(std::string(s.message()).find("sim:street"), std::string::npos) << s.message();
   EXPECT_EQ(summary.frames, 3u);
-  EXPECT_GE(summary.capture_errors, 1u);
+  EXPECT_EQ(summary.capture_errors, 4u);
+  EXPECT_EQ(camera.safe_at_call().size(), 3u + 5u);
   EXPECT_TRUE(status_.is_safe());
 }
 

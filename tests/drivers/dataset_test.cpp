@@ -8,17 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "support/scratch_dir.h"
+
 namespace skyloc::drivers {
 namespace {
 
-std::string MakeTempDir() {
-  std::string tmpl = ::testing::TempDir() + "skyloc_dataset_XXXXXX";
-  std::vector<char> buf(tmpl.begin(), tmpl.end());
-  buf.push_back('\0');
-  const char* dir = ::mkdtemp(buf.data());
-  EXPECT_NE(dir, nullptr);
-  return dir != nullptr ? std::string(dir) : std::string();
-}
+using skyloc::testing::ScratchDir;
 
 void WriteText(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
@@ -33,7 +28,8 @@ std::vector<std::uint8_t> Pixels(int frame) {
 }
 
 TEST(Dataset, WriteThenReadWithPoses) {
-  const std::string dir = MakeTempDir() + "/run1";
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string dir = scratch.path() + "/run1";
   DatasetWriter writer;
   ASSERT_TRUE(writer.Open(dir, /*with_poses=*/true).ok());
   for (int i = 0; i < 3; ++i) {
@@ -80,7 +76,8 @@ TEST(Dataset, WriteThenReadWithPoses) {
 }
 
 TEST(Dataset, KilledWriterLeavesAValidPrefixAndIsNeverOverwritten) {
-  const std::string dir = MakeTempDir();
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
   {
     DatasetWriter writer;
     ASSERT_TRUE(writer.Open(dir, false).ok());
@@ -132,7 +129,8 @@ TEST(Dataset, CsvErrorsNameFileAndLine) {
       {"no_frames", "index,file,timestamp_s\n", "no frames after the header"},
   };
   for (const BadCsv& c : cases) {
-    const std::string dir = MakeTempDir();
+    const ScratchDir scratch("skyloc_dataset_");
+    const std::string& dir = scratch.path();
     ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
     WriteText(dir + "/frames/a.png", "x");
     WriteText(dir + "/frames/b.png", "x");
@@ -146,7 +144,8 @@ TEST(Dataset, CsvErrorsNameFileAndLine) {
 }
 
 TEST(Dataset, FolderWithoutCsvIsListedByName) {
-  const std::string dir = MakeTempDir();
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
   ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
   for (const char* name : {"b.pgm", "a.png", "c.PNG", "notes.txt"})
     WriteText(dir + "/frames/" + name, "x");

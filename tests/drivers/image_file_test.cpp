@@ -1,32 +1,24 @@
 #include "skyloc/drivers/image_file.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <string>
+
+#include "support/scratch_dir.h"
 
 namespace skyloc::drivers {
 namespace {
 
 class ImageFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/skyloc_image_file_XXXXXX";
-    ASSERT_NE(mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    const int rc = std::system(("rm -rf '" + dir_ + "'").c_str());
-    EXPECT_EQ(rc, 0);
-  }
   std::string Path(const char* name) const { return dir_ + "/" + name; }
   void WriteBytes(const std::string& path, const std::string& bytes) const {
     std::ofstream(path, std::ios::binary) << bytes;
   }
-  std::string dir_;
+  skyloc::testing::ScratchDir scratch_{"skyloc_image_file_"};
+  const std::string& dir_ = scratch_.path();
 };
 
 OwnedImage Gradient(int w, int h, dsp::PixelFormat format) {

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "support/scratch_dir.h"
+
 namespace skyloc {
 namespace {
 
@@ -60,19 +62,11 @@ void ExpectFrames(const RouteFrames& frames, std::size_t n) {
   }
 }
 
-class RouteDbTest : public testing::Test {
+class RouteDbTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    char tmpl[] = "/tmp/skyloc_route_db_XXXXXX";
-    ASSERT_NE(::mkdtemp(tmpl), nullptr);
-    dir_ = tmpl;
     path_ = dir_ + "/route.db";
     ASSERT_TRUE(frames_.Allocate(10000, kDim).ok());
-  }
-  void TearDown() override {
-    std::remove(path_.c_str());
-    std::remove((path_ + ".tmp").c_str());
-    ::rmdir(dir_.c_str());
   }
 
   // Writes n frames, flushing every `flush_every`, and commits if asked.
@@ -104,7 +98,9 @@ class RouteDbTest : public testing::Test {
     return ParseRouteDb(bytes, &want, policy, &frames_, report);
   }
 
-  std::string dir_, path_;
+  skyloc::testing::ScratchDir scratch_{"skyloc_route_db_"};
+  const std::string& dir_ = scratch_.path();
+  std::string path_;
   RouteFrames frames_;
 };
 

@@ -12,6 +12,13 @@ constexpr const char* kConsumer = "skyloc";
 
 }  // namespace
 
+void GpiodChipCloser::operator()(gpiod_chip* chip) const {
+  ::gpiod_chip_close(chip);
+}
+void GpiodLineReleaser::operator()(gpiod_line* line) const {
+  ::gpiod_line_release(line);
+}
+
 GpioStatusOutput::GpioStatusOutput(const GpioStatusOutputConfig& config)
     : config_(config), pattern_(config.mode), levels_(pattern_.Safe()) {
   config_.chip[sizeof(config_.chip) - 1] = '\0';
@@ -28,59 +35,59 @@ Status GpioStatusOutput::Open() {
                          config_.chip);
   }
   errno = 0;
-  chip_ = ::gpiod_chip_open_lookup(config_.chip);
-  if (chip_ == nullptr) {
+  GpiodChip chip(::gpiod_chip_open_lookup(config_.chip));
+  if (chip == nullptr) {
     const int saved = errno != 0 ? errno : ENOENT;
     return Status::FromErrno(saved,
                              "GPIO chip '%s' cannot be opened (list chips with gpiodetect; set "
                              "status.gpio.chip in the configuration)",
                              config_.chip);
   }
-  std::snprintf(chip_name_, sizeof(chip_name_), "%s", ::gpiod_chip_name(chip_));
 
   const std::size_t count = pattern_.line_count();
   gpiod_line_bulk bulk;
   gpiod_line_bulk_init(&bulk);
+  // Not ours to release until requested: until then the chip owns them (an early return
+  // closes it, and them with it).
+  gpiod_line* found[StatusLines::kMaxLines] = {};
   int initial[StatusLines::kMaxLines] = {0, 0, 0};  // requested already in the safe state
   for (std::size_t i = 0; i < count; ++i) {
-    lines_[i] = ::gpiod_chip_get_line(chip_, config_.lines[i]);
-    if (lines_[i] == nullptr) {
+    found[i] = ::gpiod_chip_get_line(chip.get(), config_.lines[i]);
+    if (found[i] == nullptr) {
       const int saved = errno;
-      const Status s =
-          Status::FromErrno(saved, "GPIO chip %s has no line %u (it has %u lines)", config_.chip,
-                            config_.lines[i], ::gpiod_chip_num_lines(chip_));
-      lines_.fill(nullptr);  // none requested yet: nothing to drive or release
-      Close();
-      return s;
+      return Status::FromErrno(saved, "GPIO chip %s has no line %u (it has %u lines)", config_.chip,
+                               config_.lines[i], ::gpiod_chip_num_lines(chip.get()));
     }
-    gpiod_line_bulk_add(&bulk, lines_[i]);
+    gpiod_line_bulk_add(&bulk, found[i]);
   }
   const int flags = config_.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
   if (::gpiod_line_request_bulk_output_flags(&bulk, kConsumer, flags, initial) != 0) {
     const int saved = errno;
-    const Status s = Status::FromErrno(
+    return Status::FromErrno(
         saved,
         "GPIO chip %s: cannot request status lines %u,%u,%u as outputs (in use? see gpioinfo)",
         config_.chip, config_.lines[0], count > 1 ? config_.lines[1] : config_.lines[0],
         count > 2 ? config_.lines[2] : config_.lines[0]);
-    lines_.fill(nullptr);
-    Close();
-    return s;
   }
+  std::snprintf(chip_name_, sizeof(chip_name_), "%s", ::gpiod_chip_name(chip.get()));
+  chip_ = std::move(chip);
+  for (std::size_t i = 0; i < count; ++i)
+    lines_[i].reset(found[i]);
   levels_ = pattern_.Safe();
 
   if (config_.button_line >= 0) {
-    button_ = ::gpiod_chip_get_line(chip_, static_cast<unsigned>(config_.button_line));
+    gpiod_line* button =
+        ::gpiod_chip_get_line(chip_.get(), static_cast<unsigned>(config_.button_line));
     const int bflags = config_.button_active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
-    if (button_ == nullptr ||
-        ::gpiod_line_request_both_edges_events_flags(button_, kConsumer, bflags) != 0) {
+    if (button == nullptr ||
+        ::gpiod_line_request_both_edges_events_flags(button, kConsumer, bflags) != 0) {
       const int saved = errno;
-      button_ = nullptr;
-      Close();
+      Close();  // the status lines are requested: drive them off, then release them
       return Status::FromErrno(saved, "GPIO chip %s: cannot request button line %d for edge events",
                                config_.chip, config_.button_line);
     }
-    button_fd_ = ::gpiod_line_event_get_fd(button_);
+    button_.reset(button);
+    button_fd_ = ::gpiod_line_event_get_fd(button_.get());
   }
   return Status::Ok();
 }
@@ -92,7 +99,7 @@ Status GpioStatusOutput::Write(const StatusLines& lines) {
   gpiod_line_bulk_init(&bulk);
   int values[StatusLines::kMaxLines] = {};
   for (std::size_t i = 0; i < lines.count; ++i) {
-    gpiod_line_bulk_add(&bulk, lines_[i]);
+    gpiod_line_bulk_add(&bulk, lines_[i].get());
     values[i] = lines.level[i] ? 1 : 0;
   }
   if (::gpiod_line_set_value_bulk(&bulk, values) != 0) {
@@ -123,17 +130,11 @@ void GpioStatusOutput::Close() {
   if (chip_ == nullptr)
     return;
   (void)SafeState();
-  for (gpiod_line*& line : lines_) {
-    if (line != nullptr)
-      ::gpiod_line_release(line);
-    line = nullptr;
-  }
-  if (button_ != nullptr)
-    ::gpiod_line_release(button_);
-  button_ = nullptr;
+  button_.reset();
   button_fd_ = -1;
-  ::gpiod_chip_close(chip_);
-  chip_ = nullptr;
+  for (GpiodLineRequest& line : lines_)
+    line.reset();
+  chip_.reset();  // after its lines
   chip_name_[0] = '\0';
   levels_ = pattern_.Safe();
 }
@@ -143,7 +144,7 @@ Result<bool> GpioStatusOutput::ButtonPressed() const {
     return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: no button line open",
                          config_.chip);
   }
-  const int value = ::gpiod_line_get_value(button_);
+  const int value = ::gpiod_line_get_value(button_.get());
   if (value < 0) {
     const int saved = errno;
     return Status::FromErrno(saved, "GPIO chip %s: reading button line %d", config_.chip,
@@ -158,7 +159,7 @@ Result<ButtonEvent> GpioStatusOutput::ReadButtonEvent() {
                          config_.chip);
   }
   const timespec no_wait{0, 0};
-  const int ready = ::gpiod_line_event_wait(button_, &no_wait);
+  const int ready = ::gpiod_line_event_wait(button_.get(), &no_wait);
   if (ready < 0) {
     const int saved = errno;
     return Status::FromErrno(saved, "GPIO chip %s: waiting for button events", config_.chip);
@@ -168,7 +169,7 @@ Result<ButtonEvent> GpioStatusOutput::ReadButtonEvent() {
                          config_.chip);
   }
   gpiod_line_event event{};
-  if (::gpiod_line_event_read(button_, &event) != 0) {
+  if (::gpiod_line_event_read(button_.get(), &event) != 0) {
     const int saved = errno;
     return Status::FromErrno(saved, "GPIO chip %s: reading a button event", config_.chip);
   }

@@ -1,7 +1,9 @@
-// What the simulated camera films. A FrameSource renders frame `index` into the camera's
-// buffer (any of the camera's pixel formats) and, if it knows it, the pose the frame was
-// taken from. The default is SyntheticSkySource; the simulator's world renderer implements
-// the same interface, so the pipeline cannot tell a rendered world from a pattern.
+// What SimulatedCamera films. A FrameSource renders frame `index` into the camera's buffer
+// (any of the camera's pixel formats) and, if it knows it, the pose the frame was taken
+// from. SyntheticSkySource below is the one implementation; tests give it to the camera for
+// the compliance suite and fault injection. The simulator's worlds do not come through
+// here: sim::RenderedCamera (drivers/sim) is a Camera of its own, and the firmware's
+// `camera.kind = "sim"` uses it or app's StreetCamera.
 //
 // Render() runs on the frame path: it must not allocate (tests check it through the
 // simulated camera's compliance run).

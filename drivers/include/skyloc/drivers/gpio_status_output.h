@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 
 #include "skyloc/drivers/button_event.h"
 #include "skyloc/drivers/status_output.h"
@@ -25,6 +26,18 @@ struct gpiod_chip;
 struct gpiod_line;
 
 namespace skyloc::drivers {
+
+// Owners of libgpiod handles, so no path (an early return in Open(), the destructor) can
+// leak a chip or leave a line requested: the chip is closed, a requested line released,
+// when its owner goes. A line belongs to its chip, so a chip's owner must outlive its lines'.
+struct GpiodChipCloser {
+  void operator()(gpiod_chip* chip) const;
+};
+struct GpiodLineReleaser {
+  void operator()(gpiod_line* line) const;
+};
+using GpiodChip = std::unique_ptr<gpiod_chip, GpiodChipCloser>;
+using GpiodLineRequest = std::unique_ptr<gpiod_line, GpiodLineReleaser>;
 
 struct GpioStatusOutputConfig {
   char chip[64] = "gpiochip0";  // name ("gpiochip0"), number ("0"), path or label
@@ -63,9 +76,10 @@ class GpioStatusOutput final : public StatusOutput {
 
   GpioStatusOutputConfig config_;
   StatusPattern pattern_;
-  gpiod_chip* chip_ = nullptr;
-  std::array<gpiod_line*, StatusLines::kMaxLines> lines_{};
-  gpiod_line* button_ = nullptr;
+  // Declared before the lines: members are destroyed in reverse, lines first.
+  GpiodChip chip_;
+  std::array<GpiodLineRequest, StatusLines::kMaxLines> lines_;  // requested outputs
+  GpiodLineRequest button_;
   int button_fd_ = -1;  // owned by libgpiod (released with the line)
   StatusLines levels_;
   char chip_name_[32] = {};
