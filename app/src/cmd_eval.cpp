@@ -49,6 +49,9 @@ constexpr const char* kUsage =
     "                         (either alone implies --matcher openseqslam)\n"
     "  --max-advance K        filter: route rows per frame at most (default 4)\n"
     "  --keyframe-noise F     filter: keyframe merge threshold x noise floor (default 2)\n"
+    "  --config FILE          the firmware configuration whose [state] settings (and\n"
+    "                         [seqslam] max_advance, keyframe_noise_factor) the runs use\n"
+    "                         (default: the built-in defaults)\n"
     "  --gt FILE              ground truth CSV: query_index,reference_index (-1: off route)\n"
     "  --tolerance-m X        ground truth from the datasets' poses: a match is correct when\n"
     "                         the matched reference was recorded within X m of the query\n"
@@ -88,8 +91,10 @@ struct EvalOptions {
   std::vector<Method> methods;
   std::vector<Matcher> matchers;
   std::vector<int> ds_list;
-  int max_advance = SeqSlamConfig{}.max_advance;
-  double keyframe_noise_factor = SeqSlamConfig{}.keyframe_noise_factor;
+  std::optional<int> max_advance;
+  std::optional<double> keyframe_noise_factor;
+  std::string config_file;
+  Config config = DefaultConfig();  // --config FILE, then the flags above
   bool streaming = false;
   std::string camera;  // --camera FILE
   std::optional<dsp::LensModel> lens;
@@ -171,13 +176,17 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
         return fail("--matcher '%s': use filter or openseqslam", v);
       }
     } else if (a == "--max-advance") {
-      if (!ParseIntArg(v, &o->max_advance) || o->max_advance < 1 ||
-          o->max_advance > dsp::kMaxAdvance)
+      int k = 0;
+      if (!ParseIntArg(v, &k) || k < 1 || k > dsp::kMaxAdvance)
         return fail("--max-advance '%s': give 1..64 route rows per frame", v);
+      o->max_advance = k;
     } else if (a == "--keyframe-noise") {
-      if (!ParseDoubleArg(v, &o->keyframe_noise_factor) || o->keyframe_noise_factor < 0 ||
-          o->keyframe_noise_factor > 100)
+      double f = 0;
+      if (!ParseDoubleArg(v, &f) || f < 0 || f > 100)
         return fail("--keyframe-noise '%s': give 0..100 (0 keeps every reference frame)", v);
+      o->keyframe_noise_factor = f;
+    } else if (a == "--config") {
+      o->config_file = v;
     } else if (a == "--ds") {
       int ds = 0;
       if (!ParseIntArg(v, &ds) || ds < 1 || ds > dsp::kMaxSequenceLength)
@@ -457,8 +466,8 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
     // The firmware's engine, as repeat runs it: causal, one query at a time.
     dsp::RouteFilterParams p;
     p.sequence_length = run->ds;
-    p.max_advance = o.max_advance;
-    p.keyframe_noise_factor = static_cast<float>(o.keyframe_noise_factor);
+    p.max_advance = o.config.seqslam.max_advance;
+    p.keyframe_noise_factor = static_cast<float>(o.config.seqslam.keyframe_noise_factor);
     dsp::RouteFilter engine;
     e = engine.Init(p, ref.dim, std::max(1, ref.count));
     for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
@@ -493,9 +502,8 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
 // The firmware's state machine over the run's matches, with the default [state] settings
 // and the matcher's motion limits (what repeat would have shown, frame by frame).
 void ReplayStateMachine(const EvalOptions& o, Run* run) {
-  Config config;
+  Config config = o.config;
   config.seqslam.matcher = run->matcher;
-  config.seqslam.max_advance = o.max_advance;
   dsp::LocalisationStateMachine machine;
   machine.Init(StateMachineParamsFrom(config));
   run->states.clear();
@@ -695,7 +703,14 @@ std::string CorrespondencePlot(const std::vector<Run>& runs, const GroundTruth& 
   return CorrespondenceSvg(panels, 3);
 }
 
-Status Evaluate(const EvalOptions& o) {
+Status Evaluate(EvalOptions o) {
+  if (!o.config_file.empty()) {
+    SKYLOC_TRY_ASSIGN(o.config, LoadConfigFile(o.config_file.c_str()));
+  }
+  if (o.max_advance)
+    o.config.seqslam.max_advance = *o.max_advance;
+  if (o.keyframe_noise_factor)
+    o.config.seqslam.keyframe_noise_factor = *o.keyframe_noise_factor;
   SKYLOC_TRY_ASSIGN(const drivers::Dataset ref, drivers::ReadDataset(o.reference));
   SKYLOC_TRY_ASSIGN(const drivers::Dataset query, drivers::ReadDataset(o.query));
   SKYLOC_TRY_ASSIGN(const GroundTruth gt, MakeGroundTruth(o, ref, query));

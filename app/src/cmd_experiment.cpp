@@ -11,10 +11,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.h"
+#include "config.h"
+#include "pipeline.h"
+#include "skyloc/dsp/localisation_state.h"
 #include "skyloc/sim/experiment.h"
 #include "svg_plot.h"
 
@@ -22,7 +27,7 @@ namespace skyloc::app {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: skyloc experiment tilt|manoeuvre|ants --out DIR [options]\n"
+    "usage: skyloc experiment tilt|manoeuvre|ants|speed --out DIR [options]\n"
     "\n"
     "  tilt       City loop, runs at tilt -30..30 paired alpha1 ~ -alpha2 (differences\n"
     "             0..60): recall at 100 % precision, sky vs vanilla SeqSLAM\n"
@@ -30,6 +35,9 @@ constexpr const char* kUsage =
     "             dawn run with zig-zag and bumps: precision at 100 % recall, ds 1/10/20\n"
     "  ants       Seville habitat, ant1_route1 as reference vs other routes of ant 1 and\n"
     "             of other ants, at ant height (0.01 m) and robot height (0.1 m)\n"
+    "  speed      forest and city, sampled in time at 10 fps: a taught run with stops vs\n"
+    "             repeats at 0.5x/1x/2x, with and without stops, level and +-15 deg bumps;\n"
+    "             OpenSeqSLAM vs the route filter (sky), ds 1/5/10/20\n"
     "\n"
     "options:\n"
     "  --width W --height H   image size (default 320x240)\n"
@@ -53,12 +61,14 @@ bool ParseNumber(const char* text, double lo, double hi, double* value) {
 
 int ParseArgs(std::span<char* const> args, Options* o) {
   if (args.empty() || args[0][0] == '-') {
-    std::fprintf(stderr, "skyloc experiment: name the experiment: tilt, manoeuvre or ants\n");
+    std::fprintf(stderr,
+                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants or speed\n");
     return kExitUsage;
   }
   o->name = args[0];
-  if (o->name != "tilt" && o->name != "manoeuvre" && o->name != "ants") {
-    std::fprintf(stderr, "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants)\n",
+  if (o->name != "tilt" && o->name != "manoeuvre" && o->name != "ants" && o->name != "speed") {
+    std::fprintf(stderr,
+                 "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed)\n",
                  args[0]);
     return kExitUsage;
   }
@@ -116,13 +126,19 @@ int ParseArgs(std::span<char* const> args, Options* o) {
   return kExitOk;
 }
 
-// A row of any experiment, as the writers see it.
+// The methods an experiment compares, in column order: the JSON and file name of each
+// ("sky" -> pr_sky.svg) and its title.
+struct MethodName {
+  const char* key;
+  const char* title;
+};
+
+// A row of any experiment, as the writers see it: one score per method, in that order.
 struct Row {
   std::string label;    // also the plot legend
   std::string columns;  // markdown cells before the metrics
   std::string json;     // JSON fields before the metrics
-  const sim::MethodScore* sky;
-  const sim::MethodScore* vanilla;
+  std::vector<const sim::MethodScore*> scores;
 };
 
 // printf into a std::string; for short pieces (at most 511 characters).
@@ -161,21 +177,21 @@ Status WriteFile(const std::string& path, const std::string& text) {
 }
 
 // Precision-recall curves of one method, one per row.
-std::string PrPlot(const char* title, const std::vector<Row>& rows, bool sky) {
+std::string PrPlot(const char* title, const std::vector<Row>& rows, std::size_t method) {
   std::vector<PrCurve> curves;
   for (const Row& r : rows)
-    curves.push_back({r.label, sky ? r.sky->curve : r.vanilla->curve, LineDash::kSolid});
+    curves.push_back({r.label, r.scores[method]->curve, LineDash::kSolid});
   return PrPlotSvg(title, curves);
 }
 
-// Frame correspondences (the paper's Figs. 5a, 8, 9): for every row, vanilla (left) and
-// sky (right).
-std::string CorrespondencePlot(const std::vector<Row>& rows) {
+// Frame correspondences (the paper's Figs. 5a, 8, 9): for every row, one panel per method
+// (the last method first: vanilla left of sky, as the paper).
+std::string CorrespondencePlot(const std::vector<Row>& rows, std::span<const MethodName> methods) {
   std::vector<CorrespondencePanel> panels;
   for (const Row& r : rows) {
-    for (const bool sky : {false, true}) {
-      const sim::MethodScore& m = sky ? *r.sky : *r.vanilla;
-      CorrespondencePanel panel{(sky ? "sky: " : "vanilla: ") + r.label, {}, 1, {}};
+    for (std::size_t k = methods.size(); k-- > 0;) {
+      const sim::MethodScore& m = *r.scores[k];
+      CorrespondencePanel panel{std::string(methods[k].key) + ": " + r.label, {}, 1, {}};
       for (std::size_t q = 0; q < m.truth.size(); ++q) {
         panel.ground_truth.push_back(m.truth[q].nearest);
         panel.reference_frames =
@@ -186,41 +202,83 @@ std::string CorrespondencePlot(const std::vector<Row>& rows) {
       panels.push_back(std::move(panel));
     }
   }
-  return CorrespondenceSvg(panels, 2);
+  return CorrespondenceSvg(panels, static_cast<int>(methods.size()));
 }
 
 Status WriteOutputs(const Options& o, const std::string& command, const std::string& header,
-                    const std::string& separator, const std::vector<Row>& rows,
-                    const std::string& notes) {
+                    const std::string& separator, std::span<const MethodName> methods,
+                    const std::vector<Row>& rows, const std::string& notes) {
   if (::mkdir(o.out.c_str(), 0755) != 0 && errno != EEXIST)
     return Status::FromErrno(errno, "cannot create '%s'", o.out.c_str());
-  std::string md = "# skyloc experiment " + o.name + "\n\n```\n" + command + "\n```\n\n" + header +
-                   " sky P@R100 | vanilla P@R100 | sky R@P100 | vanilla R@P100 |\n" + separator +
-                   "---|---|---|---|\n";
+  std::string md = "# skyloc experiment " + o.name + "\n\n```\n" + command + "\n```\n\n" + header;
+  std::string rule = separator;
+  for (const char* metric : {"P@R100", "R@P100"}) {
+    for (const MethodName& m : methods) {
+      md += Format(" %s %s |", m.key, metric);
+      rule += "---|";
+    }
+  }
+  md += "\n" + rule + "\n";
   std::string json = "{\n  \"experiment\": \"" + o.name + "\",\n  \"command\": \"" + command +
                      "\",\n  \"rows\": [\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
-    md += r.columns + Format(" %.0f %% | %.0f %% | %.0f %% | %.0f %% |\n",
-                             100 * r.sky->summary.precision_at_full_recall,
-                             100 * r.vanilla->summary.precision_at_full_recall,
-                             100 * r.sky->summary.recall_at_full_precision,
-                             100 * r.vanilla->summary.recall_at_full_precision);
-    json += "    {" + r.json + "\"sky\": " + SummaryJson(*r.sky) +
-            ", \"vanilla\": " + SummaryJson(*r.vanilla) + "}" +
-            (i + 1 < rows.size() ? ",\n" : "\n");
+    md += r.columns;
+    for (const sim::MethodScore* m : r.scores)
+      md += Format(" %.0f %% |", 100 * m->summary.precision_at_full_recall);
+    for (const sim::MethodScore* m : r.scores)
+      md += Format(" %.0f %% |", 100 * m->summary.recall_at_full_precision);
+    md += "\n";
+    json += "    {" + r.json;
+    for (std::size_t k = 0; k < methods.size(); ++k)
+      json +=
+          (k ? ", \"" : "\"") + std::string(methods[k].key) + "\": " + SummaryJson(*r.scores[k]);
+    json += std::string("}") + (i + 1 < rows.size() ? ",\n" : "\n");
   }
+  std::string plots;
+  for (const MethodName& m : methods)
+    plots += std::string("pr_") + m.key + ".svg, ";
   md +=
       "\nP@R100: precision at 100 % recall (every match accepted); R@P100: recall at 100 % "
-      "precision. Plots: pr_sky.svg, pr_vanilla.svg, correspondence.svg.\n\n" +
-      notes;
+      "precision. Plots: " +
+      plots + "correspondence.svg.\n\n" + notes;
   json += "  ]\n}\n";
   SKYLOC_TRY(WriteFile(o.out + "/results.md", md));
   SKYLOC_TRY(WriteFile(o.out + "/metrics.json", json));
-  SKYLOC_TRY(WriteFile(o.out + "/pr_sky.svg", PrPlot("SeqSLAM (sky)", rows, true)));
-  SKYLOC_TRY(WriteFile(o.out + "/pr_vanilla.svg", PrPlot("SeqSLAM (vanilla)", rows, false)));
-  SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg", CorrespondencePlot(rows)));
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    SKYLOC_TRY(
+        WriteFile(o.out + "/pr_" + methods[k].key + ".svg", PrPlot(methods[k].title, rows, k)));
+  }
+  SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg", CorrespondencePlot(rows, methods)));
   return Status::Ok();
+}
+
+constexpr MethodName kDescriptorMethods[] = {{"sky", "SeqSLAM (sky)"},
+                                             {"vanilla", "SeqSLAM (vanilla)"},
+                                             {"sky_filter", "Route filter (sky)"}};
+constexpr MethodName kMatcherMethods[] = {{"openseqslam", "OpenSeqSLAM (sky)"},
+                                          {"filter", "Route filter (sky)"}};
+
+// The firmware's state machine (default [state] settings, the filter's motion limits)
+// over a filter run: how many frames it shows LOCALISED, and how many of those are right.
+std::pair<int, int> ReplayFilterStates(const sim::MethodScore& m) {
+  Config config;
+  config.seqslam.matcher = Matcher::kRouteFilter;
+  dsp::LocalisationStateMachine machine;
+  machine.Init(StateMachineParamsFrom(config));
+  int localised = 0, correct = 0;
+  for (std::size_t t = 0; t < m.rows.size(); ++t) {
+    dsp::MatchObservation obs;
+    obs.frame = t;
+    obs.index = m.rows[t];
+    obs.uniqueness = m.uniqueness[t];
+    obs.confidence = m.rows[t] >= 0 ? 1.0f - m.uniqueness[t] : 0.0f;
+    if (machine.Update(obs) == dsp::TrackState::kLocalised) {
+      ++localised;
+      correct += m.correct[t] ? 1 : 0;
+    }
+  }
+  return {localised, correct};
 }
 
 void PrintProgress(const char* what, void* /*context*/) {
@@ -261,6 +319,8 @@ int RunExperiment(std::span<char* const> args) {
   std::vector<sim::TiltRow> tilt;
   std::vector<sim::ManoeuvreRow> manoeuvre;
   std::vector<sim::AntsRow> ants;
+  std::vector<sim::SpeedRow> speed;
+  std::span<const MethodName> methods = kDescriptorMethods;
   std::string header, separator;
   if (o.name == "tilt") {
     const int differences[] = {0, 10, 20, 30, 40, 50, 60};
@@ -274,7 +334,7 @@ int RunExperiment(std::span<char* const> args) {
                       Format("\"tilt_difference_deg\": %.0f, \"reference_tilt_deg\": %.0f, "
                              "\"query_tilt_deg\": %.0f, ",
                              r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
-                      &r.sky, &r.vanilla});
+                      {&r.sky, &r.vanilla, &r.sky_filter}});
     }
   } else if (o.name == "manoeuvre") {
     const int ds[] = {1, 10, 20};
@@ -286,7 +346,32 @@ int RunExperiment(std::span<char* const> args) {
                       Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
                       Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world),
                              r.sequence_length),
-                      &r.sky, &r.vanilla});
+                      {&r.sky, &r.vanilla, &r.sky_filter}});
+    }
+  } else if (o.name == "speed") {
+    o.experiment.sampling = sim::Sampling::kTime;
+    const int ds[] = {1, 5, 10, 20};
+    status = sim::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
+    methods = kMatcherMethods;
+    header =
+        "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
+    separator = "|---|---|---|---|---|---|---|";
+    for (const sim::SpeedRow& r : speed) {
+      const auto [localised, correct] = ReplayFilterStates(r.filter);
+      rows.push_back(
+          {Format("%s %.1fx %s %s ds %d", sim::WorldKindName(r.world), r.speed_ratio,
+                  r.stops ? "stops" : "no-stops", r.bumps_deg > 0 ? "bumps" : "level",
+                  r.sequence_length),
+           Format("| %s | %.1fx | %s | %s | %d | %d | %d of %d |", sim::WorldKindName(r.world),
+                  r.speed_ratio, r.stops ? "yes" : "no",
+                  r.bumps_deg > 0 ? Format("±%.0f°", r.bumps_deg).c_str() : "level", r.query_frames,
+                  r.sequence_length, correct, localised),
+           Format("\"world\": \"%s\", \"speed_ratio\": %.2f, \"stops\": %s, \"bumps_deg\": %.0f, "
+                  "\"query_frames\": %d, \"ds\": %d, \"filter_localised\": %d, "
+                  "\"filter_localised_correct\": %d, ",
+                  sim::WorldKindName(r.world), r.speed_ratio, r.stops ? "true" : "false",
+                  r.bumps_deg, r.query_frames, r.sequence_length, localised, correct),
+           {&r.openseqslam, &r.filter}});
     }
   } else {
     if (!o.spacing_given)
@@ -305,7 +390,7 @@ int RunExperiment(std::span<char* const> args) {
                              "\"truth_fraction\": %.4f, ",
                              r.query.c_str(), r.same_ant ? "true" : "false", r.camera_height_m,
                              r.truth_fraction),
-                      &r.sky, &r.vanilla});
+                      {&r.sky, &r.vanilla, &r.sky_filter}});
     }
   }
   if (!status.ok()) {
@@ -315,7 +400,7 @@ int RunExperiment(std::span<char* const> args) {
   std::string notes = CommonNotes(o.experiment);
   if (o.name == "ants")
     notes += std::string("Reference route ") + sim::kAntsReferenceRoute + ".\n";
-  if (const Status s = WriteOutputs(o, command, header, separator, rows, notes); !s.ok()) {
+  if (const Status s = WriteOutputs(o, command, header, separator, methods, rows, notes); !s.ok()) {
     std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), s.message());
     return kExitFailure;
   }

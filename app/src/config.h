@@ -85,7 +85,7 @@ struct SeqSlamConfig {
   int ds = 10;
   // Route filter: route rows the position may advance per frame, and the keyframe merge
   // threshold in multiples of the route's noise floor (0 keeps every frame).
-  int max_advance = 4;
+  int max_advance = 8;
   double keyframe_noise_factor = 2.0;
   // OpenSeqSLAM: velocity band and contrast enhancement window.
   double vmin = 0.8;
@@ -106,8 +106,8 @@ struct CapacityConfig {
 };
 
 struct StateMachineConfig {
-  double enter_confidence = 0.1;  // a frame is "good" at or above this confidence
-  double stay_confidence = 0.05;  // once localised, frames at or above this keep it
+  double enter_confidence = 0.5;  // a frame is "good" at or above this confidence
+  double stay_confidence = 0.25;  // once localised, frames at or above this keep it
   double max_uniqueness = 0.95;   // best/second-best score ratio; above it the match is ambiguous
   int confirm_frames = 5;         // consecutive good, consistent frames to become LOCALISED
   int drop_frames = 5;            // consecutive misses to fall from LOCALISED to SEARCHING

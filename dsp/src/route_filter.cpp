@@ -282,9 +282,10 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
     // No row outside the window: nothing shows this match is distinctive.
     out->uniqueness = 1.0f;
   } else {
-    // Over the full memory, not the evidence so far: the first frames after a reset have
-    // little evidence, and their confidence grows with it instead of starting high.
-    const double margin = (static_cast<double>(second) - static_cast<double>(best_cost)) / memory_;
+    // The margin in column standard deviations of evidence, however many frames it took
+    // to gather: the same threshold means the same evidence at every ds, and right after a
+    // reset the confidence starts low and grows with the evidence.
+    const double margin = static_cast<double>(second) - static_cast<double>(best_cost);
     out->uniqueness = static_cast<float>(std::exp(-margin));
   }
   out->confidence = 1.0f - out->uniqueness;

@@ -60,7 +60,10 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
 
 // Counts states and checks each LOCALISED frame's match against the truth: the taught
 // street has a frame every 0.5 m from x = 0 (Street()), so the right route index for a
-// repeat frame is its own position / 0.5 m, whatever the repeat's speed.
+// repeat frame is its own position / 0.5 m, whatever the repeat's speed. Correct within
+// +-5 frames, the rule of eval and the experiments (the paper's): the route filter's
+// estimate runs up to ~4 rows ahead where neighbouring street frames look alike
+// (docs/SEQSLAM.md, "Known limits").
 class TrackingSink final : public FrameSink {
  public:
   void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
@@ -69,7 +72,7 @@ class TrackingSink final : public FrameSink {
       ++localised;
       const double truth = r.has_pose ? r.pose.x_m / 0.5 : -1000.0;
       const double d = static_cast<double>(r.best_index) - truth;
-      if (d >= -3 && d <= 3)
+      if (d >= -5 && d <= 5)
         ++localised_correct;
     }
   }

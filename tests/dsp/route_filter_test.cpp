@@ -222,9 +222,8 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
     out.reference.push_back(
         (out.first[static_cast<std::size_t>(best)] + out.last[static_cast<std::size_t>(best)]) / 2);
     out.confidence.push_back(
-        std::isinf(second)
-            ? 0.0
-            : 1.0 - std::exp(-(second - cost[static_cast<std::size_t>(best)]) / p.sequence_length));
+        std::isinf(second) ? 0.0
+                           : 1.0 - std::exp(-(second - cost[static_cast<std::size_t>(best)])));
     out.gap.push_back(next_lowest - cost[static_cast<std::size_t>(best)]);
   }
   return out;

@@ -43,13 +43,16 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   for (std::size_t i = 0; i < n; ++i) {
     const drivers::Pose& pose = out->trajectory[i].pose;
     SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kUv, i, uv_view));
-    SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kVisible, i, visible_view));
+    if (options.vanilla)
+      SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kVisible, i, visible_view));
     dsp::SegmentationResult segmentation;
     if (const dsp::DescriptorError e = sky.Compute(
             uv_view, std::span<float>(out->sky).subspan(i * bands, bands), &segmentation);
         !e.ok())
       return Status::Error(StatusCode::kInternal, "sky descriptor of frame %zu: %s", i, e.message);
     sky_fraction += segmentation.sky_fraction;
+    if (!options.vanilla)
+      continue;
     if (const dsp::VanillaError e = dsp::VanillaDescriptor(
             visible_view,
             std::span<float>(out->vanilla)
@@ -63,15 +66,46 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 }
 
 Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
-                 const ExperimentOptions& options, MethodScore* out) {
+                 const ExperimentOptions& options, MethodScore* out, ExperimentMatcher matcher) {
   const int dim = use_sky ? options.bands : dsp::kVanillaDescriptorSize;
   const auto n_query = static_cast<int>(query.trajectory.size());
+  const std::vector<float>& ref_descriptors = use_sky ? reference.sky : reference.vanilla;
+  const std::vector<float>& query_descriptors = use_sky ? query.sky : query.vanilla;
   std::vector<dsp::SeqSlamMatch> matches(static_cast<std::size_t>(n_query));
-  const dsp::SeqSlamError e = dsp::BatchSeqSlam(
-      use_sky ? reference.sky : reference.vanilla, use_sky ? query.sky : query.vanilla, dim,
-      options.seqslam, dsp::SeqSlamWindow::kCentred, matches);
+  dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
+  if (matcher == ExperimentMatcher::kOpenSeqSlam) {
+    e = dsp::BatchSeqSlam(ref_descriptors, query_descriptors, dim, options.seqslam,
+                          dsp::SeqSlamWindow::kCentred, matches);
+  } else {
+    dsp::RouteFilterParams p = options.filter;
+    p.sequence_length = options.seqslam.sequence_length;
+    dsp::RouteFilter filter;
+    const auto n_ref = static_cast<int>(ref_descriptors.size() / static_cast<std::size_t>(dim));
+    const auto row = [dim](const std::vector<float>& d, int i) {
+      return std::span<const float>(d).subspan(
+          static_cast<std::size_t>(i) * static_cast<std::size_t>(dim),
+          static_cast<std::size_t>(dim));
+    };
+    e = filter.Init(p, dim, std::max(1, n_ref));
+    for (int r = 0; e == dsp::SeqSlamError::kOk && r < n_ref; ++r)
+      e = filter.AddReference(row(ref_descriptors, r));
+    if (e == dsp::SeqSlamError::kOk)
+      e = filter.FinishRoute();
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < n_query; ++t)
+      e = filter.Step(row(query_descriptors, t), &matches[static_cast<std::size_t>(t)]);
+  }
   if (e != dsp::SeqSlamError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "SeqSLAM: %s", dsp::SeqSlamErrorMessage(e));
+    return Status::Error(StatusCode::kInvalidArgument, "%s: %s",
+                         matcher == ExperimentMatcher::kOpenSeqSlam ? "SeqSLAM" : "route filter",
+                         dsp::SeqSlamErrorMessage(e));
+  out->rows.assign(matches.size(), -1);
+  out->uniqueness.assign(matches.size(), 1.0f);
+  for (std::size_t q = 0; q < matches.size(); ++q) {
+    if (matches[q].valid) {
+      out->rows[q] = matches[q].row;
+      out->uniqueness[q] = matches[q].uniqueness;
+    }
+  }
   // Ground truth from the poses, the same rule as `skyloc eval`.
   auto positions = [](const RunDescriptors& run) {
     std::vector<dsp::Position3> p;
@@ -163,6 +197,8 @@ Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> 
     row.query_tilt_deg = alpha2;
     SKYLOC_TRY(ScoreRuns(*reference, *query, true, options, &row.sky));
     SKYLOC_TRY(ScoreRuns(*reference, *query, false, options, &row.vanilla));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, true, options, &row.sky_filter,
+                         ExperimentMatcher::kRouteFilter));
     rows->push_back(std::move(row));
   }
   return Status::Ok();
@@ -199,6 +235,8 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
       row.sequence_length = ds;
       SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
       SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
+      SKYLOC_TRY(
+          ScoreRuns(reference, query, true, o, &row.sky_filter, ExperimentMatcher::kRouteFilter));
       rows->push_back(std::move(row));
     }
   }
@@ -256,6 +294,8 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
       row.camera_height_m = height;
       SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
       SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
+      SKYLOC_TRY(
+          ScoreRuns(reference, query, true, o, &row.sky_filter, ExperimentMatcher::kRouteFilter));
       const auto with_truth =
           std::count_if(row.sky.truth.begin(), row.sky.truth.end(),
                         [](const dsp::TruthInterval& t) { return t.has_truth(); });
@@ -263,6 +303,73 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
                                                  : static_cast<double>(with_truth) /
                                                        static_cast<double>(row.sky.truth.size());
       rows->push_back(std::move(row));
+    }
+  }
+  return Status::Ok();
+}
+
+Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
+                          std::vector<SpeedRow>* rows, ProgressFn progress, void* context) {
+  rows->clear();
+  ExperimentOptions base = options;
+  base.sampling = Sampling::kTime;
+  base.vanilla = false;  // the matchers are compared on the sky descriptor
+  for (WorldKind kind : {WorldKind::kForest, WorldKind::kCity}) {
+    World world;
+    SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
+    // The taught run: the default profile (a stop at the start and two on the way).
+    RunSpec reference_spec;
+    reference_spec.label = std::string(WorldKindName(kind)) + " taught run (1x, stops)";
+    reference_spec.motion.seed = 501;
+    LightingPreset("noon", 601, &reference_spec.lighting);
+    RunDescriptors reference;
+    Report(progress, context, reference_spec.label.c_str());
+    SKYLOC_TRY(
+        DescribeRun(world, world.route, world.route_closed, reference_spec, base, &reference));
+    std::uint64_t seed = 510;
+    for (const double bumps : {0.0, 15.0}) {
+      for (const bool stops : {true, false}) {
+        for (const double ratio : {0.5, 1.0, 2.0}) {
+          ++seed;
+          ExperimentOptions o = base;
+          // A frame budget covers the taught run; a repeat stays within the stretch the
+          // taught run covered (0.9: its own stops and speed targets differ).
+          if (options.max_frames > 0)
+            o.max_frames = static_cast<int>(0.9 * options.max_frames / ratio);
+          if (!stops) {
+            o.speed.stops = 0;
+            o.speed.start_stop_s = 0;
+          }
+          RunSpec query_spec;
+          char label[160];
+          std::snprintf(label, sizeof label, "%s repeat %.1fx, %s, %s", WorldKindName(kind), ratio,
+                        stops ? "stops" : "no stops", bumps > 0 ? "+-15 deg bumps" : "level");
+          query_spec.label = label;
+          query_spec.motion.seed = seed;  // its stops, speed targets and bumps are its own
+          query_spec.motion.speed_ratio = ratio;
+          query_spec.motion.bumps_deg = bumps;
+          LightingPreset("noon", 600 + seed, &query_spec.lighting);  // other clouds and noise
+          RunDescriptors query;
+          Report(progress, context, label);
+          SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, o, &query));
+          for (const int ds : ds_values) {
+            ExperimentOptions scored = o;
+            scored.seqslam.sequence_length = ds;
+            SpeedRow row;
+            row.world = kind;
+            row.speed_ratio = ratio;
+            row.stops = stops;
+            row.bumps_deg = bumps;
+            row.sequence_length = ds;
+            row.query_frames = static_cast<int>(query.trajectory.size());
+            SKYLOC_TRY(ScoreRuns(reference, query, true, scored, &row.openseqslam,
+                                 ExperimentMatcher::kOpenSeqSlam));
+            SKYLOC_TRY(ScoreRuns(reference, query, true, scored, &row.filter,
+                                 ExperimentMatcher::kRouteFilter));
+            rows->push_back(std::move(row));
+          }
+        }
+      }
     }
   }
   return Status::Ok();

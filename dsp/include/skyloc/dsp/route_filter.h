@@ -26,11 +26,10 @@
 //     without a special case. ds = 1 is single-image nearest neighbour (lambda = 0).
 //  4. Confidence. The best row against the runner-up, the best row outside the best's
 //     basin (the rows around it whose cost rises monotonically away from it) and outside
-//     +-uniqueness_window/2: margin = (cost_second - cost_best) / ds, how many column
-//     standard deviations per frame of the filter's memory the best path beats the
-//     runner-up by. confidence = 1 - exp(-margin), uniqueness = exp(-margin) (so
-//     confidence = 1 - uniqueness, as for SeqSLAM). Right after a reset the costs hold
-//     few frames, so the confidence starts low and grows with the evidence.
+//     +-uniqueness_window/2: margin = cost_second - cost_best, how many column standard
+//     deviations of evidence the best path is ahead by. confidence = 1 - exp(-margin),
+//     uniqueness = exp(-margin) (so confidence = 1 - uniqueness, as for SeqSLAM). Right
+//     after a reset the costs hold little evidence, so the confidence starts low and grows.
 //
 // Fixed memory (everything at Init), no allocation in AddReference, FinishRoute or Step.
 // Step is O(rows x (dim + K)).
@@ -51,8 +50,10 @@ struct RouteFilterParams {
   int sequence_length = 10;  // ds: frames of evidence the filter remembers (1..1000)
   // K: the most route rows the position may move forward in one query frame (1..64). A
   // repeat run up to K times faster than the taught one is followed; slower runs and
-  // stops need no setting. 4 covers the 0.3-3x speed ratios robots see with margin.
-  int max_advance = 4;
+  // stops need no setting. 8: a 3x faster repeat through the stretches where the taught
+  // run was still accelerating (rows there are closer than at cruise speed); measured
+  // in docs/SEQSLAM.md.
+  int max_advance = 8;
   int uniqueness_window = 10;  // runner-up outside +-window/2 rows of the best (0..10000)
   // Merge a frame into the current route row while it differs from the row's first
   // frame by at most this x the route's noise floor (0..100; 0 keeps every frame).

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "skyloc/dsp/place_metrics.h"
+#include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/sim/motion.h"
@@ -38,7 +39,9 @@ struct ExperimentOptions {
   double camera_height_m = 1.0;
   int max_frames = 0;  // 0: the whole route
   std::uint64_t world_seed = 1;
-  dsp::SeqSlamParams seqslam;  // OpenSeqSLAM defaults: ds 10, v 0.8..1.2, R 10
+  dsp::SeqSlamParams seqslam;     // OpenSeqSLAM defaults: ds 10, v 0.8..1.2, R 10
+  dsp::RouteFilterParams filter;  // the route filter (ds taken from seqslam.sequence_length)
+  bool vanilla = true;            // also render the visible image and its descriptor
   int tolerance_frames = 5;
   double max_offset_m = 3.0;  // farther than this from the reference route: no truth
 };
@@ -68,14 +71,21 @@ struct MethodScore {
   dsp::PrSummary summary;
   std::vector<dsp::PrPoint> curve;
   std::vector<int> matched;               // per query frame: matched reference (-1: none)
+  std::vector<int> rows;                  // per query frame: the matcher's route row (-1: none)
+  std::vector<float> uniqueness;          // per query frame (1: no match)
   std::vector<dsp::TruthInterval> truth;  // per query frame
   std::vector<bool> correct;              // per query frame: matched and correct
 };
 
-// SeqSLAM (batch, centred window) of `query` against `reference` with descriptors
-// `sky` (use_sky) or `vanilla`, then precision-recall against the position ground truth.
+// Which matcher scores a pair of runs: OpenSeqSLAM (batch, centred window, as the paper)
+// or the route filter (the firmware's, causal).
+enum class ExperimentMatcher : std::uint8_t { kOpenSeqSlam, kRouteFilter };
+
+// The matcher over `query` against `reference` with descriptors `sky` (use_sky) or
+// `vanilla`, then precision-recall against the position ground truth.
 Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
-                 const ExperimentOptions& options, MethodScore* out);
+                 const ExperimentOptions& options, MethodScore* out,
+                 ExperimentMatcher matcher = ExperimentMatcher::kOpenSeqSlam);
 
 // ---- The experiments -------------------------------------------------------------------
 
@@ -86,6 +96,7 @@ struct TiltRow {
   double reference_tilt_deg = 0;
   double query_tilt_deg = 0;
   MethodScore sky, vanilla;
+  MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
 };
 
 // Progress: called before each run is rendered (may be null).
@@ -101,6 +112,7 @@ struct ManoeuvreRow {
   WorldKind world = WorldKind::kForest;
   int sequence_length = 10;
   MethodScore sky, vanilla;
+  MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
 };
 
 Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
@@ -115,9 +127,28 @@ struct AntsRow {
   double camera_height_m = 0;
   double truth_fraction = 0;  // query frames within max_offset_m of the reference route
   MethodScore sky, vanilla;
+  MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
 };
 
 inline constexpr const char* kAntsReferenceRoute = "ant1_route1";
+
+// Speed (issue 11): runs sampled in time at a fixed frame rate. A taught run with stops
+// against repeat runs at 0.5x, 1x and 2x its speed, with and without stops of their own,
+// level and with +-15 degree bumps, in the forest and city worlds; sky descriptor, both
+// matchers at each ds.
+struct SpeedRow {
+  WorldKind world = WorldKind::kForest;
+  double speed_ratio = 1;
+  bool stops = true;
+  double bumps_deg = 0;
+  int sequence_length = 10;
+  int query_frames = 0;
+  MethodScore openseqslam, filter;
+};
+
+Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
+                          std::vector<SpeedRow>* rows, ProgressFn progress = nullptr,
+                          void* context = nullptr);
 
 Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
                          std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
