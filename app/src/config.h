@@ -106,8 +106,8 @@ struct CapacityConfig {
 };
 
 struct StateMachineConfig {
-  double enter_confidence = 0.5;  // a frame is "good" at or above this confidence
-  double stay_confidence = 0.25;  // once localised, frames at or above this keep it
+  double enter_confidence = 0.3;  // a frame is "good" at or above this confidence
+  double stay_confidence = 0.15;  // once localised, frames at or above this keep it
   double max_uniqueness = 0.95;   // best/second-best score ratio; above it the match is ambiguous
   int confirm_frames = 5;         // consecutive good, consistent frames to become LOCALISED
   int drop_frames = 5;            // consecutive misses to fall from LOCALISED to SEARCHING

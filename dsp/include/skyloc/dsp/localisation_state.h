@@ -25,8 +25,8 @@ struct MatchObservation {
 };
 
 struct StateMachineParams {
-  float enter_confidence = 0.5f;
-  float stay_confidence = 0.25f;
+  float enter_confidence = 0.3f;
+  float stay_confidence = 0.15f;
   float max_uniqueness = 0.95f;
   int confirm_frames = 5;
   int drop_frames = 5;
