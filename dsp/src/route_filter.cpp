@@ -7,6 +7,8 @@
 #include <limits>
 #include <utility>
 
+#include "float4.h"
+
 namespace skyloc::dsp {
 namespace {
 
@@ -236,8 +238,16 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
       std::copy_n(prev + r0, count, band);
       for (int k = 1; k <= advance; ++k) {
         const int lo = std::max(r0, k);  // rows i >= k have a row i - k
-        for (int i = lo; i < r0 + count; ++i)
-          band[i - r0] = std::min(band[i - r0], prev[i - k]);
+        float* dst = band + (lo - r0);
+        const float* src = prev + (lo - k);
+        const int m = r0 + count - lo;
+        // Four rows at a time, branch-free: a scalar std::min compiles to a compare and a
+        // branch that random costs mispredict half the time.
+        int i = 0;
+        for (; i + 4 <= m; i += 4)
+          simd::Store4(dst + i, simd::Min4(simd::Load4(dst + i), simd::Load4(src + i)));
+        for (; i < m; ++i)
+          dst[i] = src[i] < dst[i] ? src[i] : dst[i];
       }
     }
     for (int i = 0; i < count; ++i) {

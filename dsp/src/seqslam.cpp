@@ -7,6 +7,8 @@
 #include <cstring>
 #include <limits>
 
+#include "float4.h"
+
 namespace skyloc::dsp {
 namespace {
 
@@ -82,25 +84,9 @@ SeqSlamError ValidateSeqSlamParams(const SeqSlamParams& p) {
 
 namespace {
 
-// Four floats as one SIMD register (GCC/Clang vector extension: SSE2 on x86-64, NEON on
-// aarch64, plain code elsewhere). Element-wise IEEE operations, so the results are the
-// same as the scalar loop's.
-using Float4 = float __attribute__((vector_size(16)));
-using Bits4 = std::uint32_t __attribute__((vector_size(16)));
-
-inline Float4 Load4(const float* p) {
-  Float4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-inline Float4 Abs4(Float4 v) {
-  Bits4 bits;
-  std::memcpy(&bits, &v, sizeof bits);
-  bits &= 0x7FFFFFFFu;
-  std::memcpy(&v, &bits, sizeof v);
-  return v;
-}
+using simd::Abs4;
+using simd::Float4;
+using simd::Load4;
 
 // Mean absolute difference of every row of a database to the query. `Rows` says how the
 // database holds its elements (float or bfloat16): Load8 gives elements i .. i + 7 of a
