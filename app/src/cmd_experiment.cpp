@@ -286,15 +286,28 @@ void PrintProgress(const char* what, void* /*context*/) {
 }
 
 std::string CommonNotes(const sim::ExperimentOptions& e) {
-  return Format(
-      "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands, frames every "
-      "%.3g m with +-20 %% speed jitter, SeqSLAM ds %d (unless stated), v %.1f..%.1f, "
-      "R %d, Rwindow %d, centred window. Ground truth: the reference frames tied (within 1 cm) "
-      "for nearest by position; correct within %d frames of them; no truth farther than "
-      "%.3g m.\n",
-      e.width, e.height, e.bands, e.spacing_m, e.seqslam.sequence_length,
-      static_cast<double>(e.seqslam.v_min), static_cast<double>(e.seqslam.v_max),
-      e.seqslam.contrast_window, e.seqslam.uniqueness_window, e.tolerance_frames, e.max_offset_m);
+  const std::string sampling =
+      e.sampling == sim::Sampling::kTime
+          ? Format(
+                "frames at %.3g fps along a speed profile (cruise %.3g m/s x the run's speed "
+                "ratio, a %.3g s stop at the start and %d more of %.3g-%.3g s unless stated)",
+                e.fps, e.speed.cruise_mps, e.speed.start_stop_s, e.speed.stops, e.speed.stop_min_s,
+                e.speed.stop_max_s)
+          : Format("frames every %.3g m with +-20 %% speed jitter", e.spacing_m);
+  return Format("Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands, ", e.width,
+                e.height, e.bands) +
+         sampling +
+         Format(
+             ". OpenSeqSLAM: ds %d (unless stated), v %.1f..%.1f, R %d, Rwindow %d, centred "
+             "window. Route filter: ds as OpenSeqSLAM's, K %d, keyframe noise factor %.3g, "
+             "Rwindow %d, causal. Ground truth: the reference frames tied (within 1 cm) "
+             "for nearest by position; correct within %d frames of them; no truth farther "
+             "than %.3g m.\n",
+             e.seqslam.sequence_length, static_cast<double>(e.seqslam.v_min),
+             static_cast<double>(e.seqslam.v_max), e.seqslam.contrast_window,
+             e.seqslam.uniqueness_window, e.filter.max_advance,
+             static_cast<double>(e.filter.keyframe_noise_factor), e.filter.uniqueness_window,
+             e.tolerance_frames, e.max_offset_m);
 }
 
 }  // namespace
@@ -404,10 +417,11 @@ int RunExperiment(std::span<char* const> args) {
     std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), s.message());
     return kExitFailure;
   }
-  std::printf(
-      "skyloc experiment %s: wrote %s/results.md, metrics.json, pr_sky.svg, "
-      "pr_vanilla.svg, correspondence.svg\n",
-      o.name.c_str(), o.out.c_str());
+  std::string files = "results.md, metrics.json, ";
+  for (const MethodName& m : methods)
+    files += std::string("pr_") + m.key + ".svg, ";
+  std::printf("skyloc experiment %s: wrote %s/: %scorrespondence.svg\n", o.name.c_str(),
+              o.out.c_str(), files.c_str());
   return kExitOk;
 }
 
