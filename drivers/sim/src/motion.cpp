@@ -175,9 +175,10 @@ void PlanProfile(double length, const MotionConfig& config, Profile* profile) {
   const SpeedProfile& p = config.speed;
   // 1 cm nodes (much finer than any frame step at 10 fps), at least 200 so stops keep clear
   // of the ends, at most 100000 so a long route costs a few megabytes.
-  // (32 bits: n + 1 cannot wrap, which the compiler's null-dereference check needs to see.)
-  const std::size_t n =
-      static_cast<std::uint32_t>(std::clamp(std::ceil(length / 0.01), 200.0, 1e5));
+  // The std::min makes n <= 100000 visible to the compiler: n + 1 cannot wrap, even with a
+  // 32-bit size_t (armhf), which its null-dereference check needs to see.
+  const std::size_t n = std::min<std::size_t>(
+      static_cast<std::size_t>(std::clamp(std::ceil(length / 0.01), 200.0, 1e5)), 100000);
   const double du = length / static_cast<double>(n);
   profile->du = du;
   std::vector<double> cap(n + 1);
