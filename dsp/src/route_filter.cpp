@@ -48,19 +48,10 @@ SeqSlamError RouteFilter::Init(const RouteFilterParams& params, int dim, int cap
   params_ = params;
   dim_ = dim;
   capacity_ = capacity;
-  storage_ = storage;
   lambda_ =
       static_cast<float>(params.sequence_length - 1) / static_cast<float>(params.sequence_length);
   memory_ = static_cast<double>(params.sequence_length);  // 1 + lambda + lambda^2 + ...
-  database_.clear();
-  database_.shrink_to_fit();
-  database_bf16_.clear();
-  database_bf16_.shrink_to_fit();
-  if (storage == ReferenceStorage::kFloat32) {
-    database_.assign(Sz(capacity) * Sz(dim), 0.0f);
-  } else {
-    database_bf16_.assign(Sz(capacity) * Sz(dim), 0);
-  }
+  route_.Allocate(dim, capacity, storage);
   first_frame_.assign(Sz(capacity), 0);
   last_frame_.assign(Sz(capacity), 0);
   cost_.assign(Sz(capacity), 0.0f);
@@ -80,13 +71,7 @@ SeqSlamError RouteFilter::AddReference(std::span<const float> descriptor) {
     return SeqSlamError::kSizeMismatch;
   if (frames_ >= capacity_)
     return SeqSlamError::kDatabaseFull;
-  const std::size_t at = Sz(frames_) * Sz(dim_);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    std::copy(descriptor.begin(), descriptor.end(), database_.data() + at);
-  } else {
-    for (std::size_t i = 0; i < descriptor.size(); ++i)
-      database_bf16_[at + i] = ToBFloat16(descriptor[i]);
-  }
+  route_.Store(frames_, descriptor);
   ++frames_;
   return SeqSlamError::kOk;
 }
@@ -103,19 +88,6 @@ void RouteFilter::ResetQueries() {
   steps_ = 0;
 }
 
-void RouteFilter::Differences(const float* query, int first_row, int count, float* out) const {
-  const std::span<const float> q(query, Sz(dim_));
-  const std::size_t at = Sz(first_row) * Sz(dim_);
-  const std::size_t elements = Sz(count) * Sz(dim_);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    DifferenceColumn(std::span<const float>(database_.data() + at, elements), dim_, q,
-                     std::span<float>(out, Sz(count)));
-  } else {
-    DifferenceColumnBFloat16(std::span<const std::uint16_t>(database_bf16_.data() + at, elements),
-                             dim_, q, std::span<float>(out, Sz(count)));
-  }
-}
-
 SeqSlamError RouteFilter::FinishRoute() {
   if (capacity_ == 0)
     return SeqSlamError::kNotInitialised;
@@ -126,17 +98,8 @@ SeqSlamError RouteFilter::FinishRoute() {
   const int n = frames_;
   if (n == 0)
     return SeqSlamError::kOk;  // Step() will say the route is empty
-  const std::size_t dim = Sz(dim_);
   // Frame i's descriptor as floats into key_ (exact for both storages).
-  const auto load_key = [&](int i) {
-    const std::size_t at = Sz(i) * dim;
-    if (storage_ == ReferenceStorage::kFloat32) {
-      std::copy_n(database_.data() + at, dim, key_.data());
-    } else {
-      for (std::size_t k = 0; k < dim; ++k)
-        key_[k] = FromBFloat16(database_bf16_[at + k]);
-    }
-  };
+  const auto load_key = [&](int i) { route_.RowAsFloat(i, key_.data()); };
   const bool merge = params_.keyframe_noise_factor > 0.0f && n >= 2;
   if (merge) {
     // The noise floor: the 10th percentile of consecutive differences (header, 1.). It
@@ -144,7 +107,7 @@ SeqSlamError RouteFilter::FinishRoute() {
     // stops, whose frames all differ alike (or look unrelated), little or nothing merges.
     for (int i = 1; i < n; ++i) {
       load_key(i - 1);
-      Differences(key_.data(), i, 1, &difference_[Sz(i - 1)]);
+      route_.Differences(key_, i, 1, &difference_[Sz(i - 1)]);
     }
     const auto begin = difference_.begin();
     const auto end = begin + (n - 1);
@@ -164,19 +127,14 @@ SeqSlamError RouteFilter::FinishRoute() {
   for (int i = 1; i < n; ++i) {
     float d = 0;
     if (merge)
-      Differences(key_.data(), i, 1, &d);
+      route_.Differences(key_, i, 1, &d);
     if (merge && d <= keyframe_threshold_) {
       last_frame_[Sz(r)] = i;
       continue;
     }
     ++r;
-    if (r != i) {
-      if (storage_ == ReferenceStorage::kFloat32) {
-        std::copy_n(database_.data() + Sz(i) * dim, dim, database_.data() + Sz(r) * dim);
-      } else {
-        std::copy_n(database_bf16_.data() + Sz(i) * dim, dim, database_bf16_.data() + Sz(r) * dim);
-      }
-    }
+    if (r != i)
+      route_.Copy(i, r);
     first_frame_[Sz(r)] = i;
     last_frame_[Sz(r)] = i;
     if (merge)
@@ -204,7 +162,7 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   double sum[4] = {0, 0, 0, 0}, sum_sq[4] = {0, 0, 0, 0};
   for (int r0 = 0; r0 < n; r0 += kBlockRows) {
     const int count = std::min(kBlockRows, n - r0);
-    Differences(query.data(), r0, count, diff + r0);
+    route_.Differences(query, r0, count, diff + r0);
     for (int i = r0; i < r0 + count; ++i) {
       const double v = static_cast<double>(diff[Sz(i)]);
       sum[i & 3] += v;
@@ -309,9 +267,8 @@ std::size_t RouteFilter::BytesPerReference(int dim, ReferenceStorage storage) {
 }
 
 std::size_t RouteFilter::AllocatedBytes() const {
-  return sizeof(float) * (database_.size() + cost_.size() + previous_.size() + difference_.size() +
-                          key_.size()) +
-         sizeof(std::uint16_t) * database_bf16_.size() +
+  return route_.AllocatedBytes() +
+         sizeof(float) * (cost_.size() + previous_.size() + difference_.size() + key_.size()) +
          sizeof(int) * (first_frame_.size() + last_frame_.size());
 }
 

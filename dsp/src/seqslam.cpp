@@ -549,6 +549,68 @@ SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const floa
   return SeqSlamFromDifferences(d, n_ref, n_query, params, window, matches);
 }
 
+// ---- Reference rows ---------------------------------------------------------------------
+
+void ReferenceRows::Allocate(int dim, int capacity, ReferenceStorage storage) {
+  dim_ = dim;
+  storage_ = storage;
+  float32_.clear();
+  float32_.shrink_to_fit();
+  bfloat16_.clear();
+  bfloat16_.shrink_to_fit();
+  if (storage == ReferenceStorage::kFloat32) {
+    float32_.assign(Sz(capacity) * Sz(dim), 0.0f);
+  } else {
+    bfloat16_.assign(Sz(capacity) * Sz(dim), 0);
+  }
+}
+
+void ReferenceRows::Store(int row, std::span<const float> descriptor) {
+  const std::size_t at = Sz(row) * Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    std::copy(descriptor.begin(), descriptor.end(), float32_.data() + at);
+  } else {
+    for (std::size_t i = 0; i < descriptor.size(); ++i)
+      bfloat16_[at + i] = ToBFloat16(descriptor[i]);
+  }
+}
+
+void ReferenceRows::Copy(int from, int to) {
+  const std::size_t dim = Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    std::copy_n(float32_.data() + Sz(from) * dim, dim, float32_.data() + Sz(to) * dim);
+  } else {
+    std::copy_n(bfloat16_.data() + Sz(from) * dim, dim, bfloat16_.data() + Sz(to) * dim);
+  }
+}
+
+void ReferenceRows::Differences(std::span<const float> query, int first_row, int count,
+                                float* out) const {
+  const std::size_t at = Sz(first_row) * Sz(dim_);
+  const std::size_t elements = Sz(count) * Sz(dim_);
+  if (storage_ == ReferenceStorage::kFloat32) {
+    DifferenceColumn(std::span<const float>(float32_.data() + at, elements), dim_, query,
+                     std::span<float>(out, Sz(count)));
+  } else {
+    DifferenceColumnBFloat16(std::span<const std::uint16_t>(bfloat16_.data() + at, elements), dim_,
+                             query, std::span<float>(out, Sz(count)));
+  }
+}
+
+void ReferenceRows::RowAsFloat(int row, float* out) const {
+  const std::size_t dim = Sz(dim_), at = Sz(row) * dim;
+  if (storage_ == ReferenceStorage::kFloat32) {
+    std::copy_n(float32_.data() + at, dim, out);
+  } else {
+    for (std::size_t k = 0; k < dim; ++k)
+      out[k] = FromBFloat16(bfloat16_[at + k]);
+  }
+}
+
+std::size_t ReferenceRows::AllocatedBytes() const {
+  return sizeof(float) * float32_.size() + sizeof(std::uint16_t) * bfloat16_.size();
+}
+
 // ---- Streaming engine ------------------------------------------------------------------
 
 SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int capacity,
@@ -564,16 +626,7 @@ SeqSlamError StreamingSeqSlam::Init(const SeqSlamParams& params, int dim, int ca
   dim_ = dim;
   capacity_ = capacity;
   const std::size_t len = Sz(params.sequence_length);
-  storage_ = storage;
-  database_.clear();
-  database_.shrink_to_fit();
-  database_bf16_.clear();
-  database_bf16_.shrink_to_fit();
-  if (storage == ReferenceStorage::kFloat32) {
-    database_.assign(Sz(capacity) * Sz(dim), 0.0f);
-  } else {
-    database_bf16_.assign(Sz(capacity) * Sz(dim), 0);
-  }
+  rows_.Allocate(dim, capacity, storage);
   ring_.assign(len * Sz(capacity), 0.0f);
   difference_.assign(Sz(capacity), 0.0f);
   scores_.assign(Sz(capacity), 0.0f);
@@ -590,13 +643,7 @@ SeqSlamError StreamingSeqSlam::AddReference(std::span<const float> descriptor) {
     return SeqSlamError::kSizeMismatch;
   if (size_ >= capacity_)
     return SeqSlamError::kDatabaseFull;
-  const std::size_t at = Sz(size_) * Sz(dim_);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    std::copy(descriptor.begin(), descriptor.end(), database_.data() + at);
-  } else {
-    for (std::size_t i = 0; i < descriptor.size(); ++i)
-      database_bf16_[at + i] = ToBFloat16(descriptor[i]);
-  }
+  rows_.Store(size_, descriptor);
   ++size_;
   ResetQueries();
   return SeqSlamError::kOk;
@@ -622,7 +669,6 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
     return SeqSlamError::kEmptyDatabase;
   const int n = size_;
   const int len = params_.sequence_length;
-  const std::size_t dim = Sz(dim_);
   float* diff = difference_.data();
   // Ring slots are `capacity` floats apart; only the first `size` of each are used. The
   // new column goes into slot head_; when it fills the ring, the search reads the ring
@@ -643,15 +689,7 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
   int read = 0, scored = 0;
   while (read < n) {
     const int next = std::min(n, read + kRowsPerChunk);
-    const std::size_t rows = Sz(next - read);
-    if (storage_ == ReferenceStorage::kFloat32) {
-      DifferenceColumn(std::span<const float>(database_.data() + Sz(read) * dim, rows * dim), dim_,
-                       query, std::span<float>(diff + read, rows));
-    } else {
-      DifferenceColumnBFloat16(
-          std::span<const std::uint16_t>(database_bf16_.data() + Sz(read) * dim, rows * dim), dim_,
-          query, std::span<float>(diff + read, rows));
-    }
+    rows_.Differences(query, read, next - read, diff + read);
     read = next;
     const int enhanced = enhancer_.Advance(diff, read, slot);
     if (full) {
@@ -676,8 +714,9 @@ std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int
 }
 
 std::size_t StreamingSeqSlam::AllocatedBytes() const {
-  return sizeof(float) * (database_.size() + ring_.size() + difference_.size() + scores_.size()) +
-         sizeof(std::uint16_t) * database_bf16_.size() + sizeof(const float*) * order_.size() +
+  return rows_.AllocatedBytes() +
+         sizeof(float) * (ring_.size() + difference_.size() + scores_.size()) +
+         sizeof(const float*) * order_.size() +
          sizeof(int) * Sz(search_.velocity_count() * search_.sequence_length()) +
          sizeof(float) * Sz(search_.velocity_count());
 }

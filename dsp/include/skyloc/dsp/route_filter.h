@@ -88,7 +88,7 @@ class RouteFilter {
   bool finished() const { return finished_; }
   int capacity() const { return capacity_; }
   int dim() const { return dim_; }
-  ReferenceStorage storage() const { return storage_; }
+  ReferenceStorage storage() const { return route_.storage(); }
   // The taught frames merged into row r: first .. last (inclusive).
   int row_first_frame(int r) const { return first_frame_[static_cast<std::size_t>(r)]; }
   int row_last_frame(int r) const { return last_frame_[static_cast<std::size_t>(r)]; }
@@ -104,27 +104,23 @@ class RouteFilter {
   std::size_t AllocatedBytes() const;
 
  private:
-  void Differences(const float* query, int first_row, int count, float* out) const;
-
   RouteFilterParams params_;
   int dim_ = 0;
   int capacity_ = 0;
   int frames_ = 0;
   int rows_ = 0;
   bool finished_ = false;
-  int steps_ = 0;        // query frames since the last reset
-  double memory_ = 1;    // 1 + lambda + lambda^2 + ... = ds
-  float lambda_ = 0;     // 1 - 1/ds
+  int steps_ = 0;      // query frames since the last reset
+  double memory_ = 1;  // 1 + lambda + lambda^2 + ... = ds
+  float lambda_ = 0;   // 1 - 1/ds
   float keyframe_threshold_ = 0;
-  ReferenceStorage storage_ = ReferenceStorage::kFloat32;
-  std::vector<float> database_;               // capacity x dim (kFloat32), rows then frames
-  std::vector<std::uint16_t> database_bf16_;  // capacity x dim (kBFloat16)
-  std::vector<int> first_frame_;              // capacity
-  std::vector<int> last_frame_;               // capacity
-  std::vector<float> cost_;                   // capacity: cost after the last step
-  std::vector<float> previous_;               // capacity: cost before it
-  std::vector<float> difference_;             // capacity: this frame's differences
-  std::vector<float> key_;                    // dim: a row's descriptor as floats
+  ReferenceRows route_;             // taught frames, then (FinishRoute) the keyframe rows
+  std::vector<int> first_frame_;   // capacity
+  std::vector<int> last_frame_;    // capacity
+  std::vector<float> cost_;        // capacity: cost after the last step
+  std::vector<float> previous_;    // capacity: cost before it
+  std::vector<float> difference_;  // capacity: this frame's differences
+  std::vector<float> key_;         // dim: a row's descriptor as floats
 };
 
 }  // namespace skyloc::dsp

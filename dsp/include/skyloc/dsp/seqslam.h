@@ -233,6 +233,32 @@ enum class ReferenceStorage : std::uint8_t {
               // the memory traffic; far below the noise of any image descriptor
 };
 
+// The taught route's descriptors as a matcher holds them (float32 or bfloat16), one row
+// per frame; shared by StreamingSeqSlam and RouteFilter. Allocate is the only allocation;
+// the rest indexes without checks (the engines check their bounds).
+class ReferenceRows {
+ public:
+  void Allocate(int dim, int capacity, ReferenceStorage storage);
+  // Row `row` becomes `descriptor` (dim floats; rounded to bfloat16 when stored so).
+  void Store(int row, std::span<const float> descriptor);
+  // Row `to` becomes a copy of row `from`.
+  void Copy(int from, int to);
+  // out[0 .. count) = DifferenceColumn of rows first_row .. first_row + count - 1.
+  void Differences(std::span<const float> query, int first_row, int count, float* out) const;
+  // Row `row` as dim floats (exact for both storages).
+  void RowAsFloat(int row, float* out) const;
+
+  int dim() const { return dim_; }
+  ReferenceStorage storage() const { return storage_; }
+  std::size_t AllocatedBytes() const;
+
+ private:
+  int dim_ = 0;
+  ReferenceStorage storage_ = ReferenceStorage::kFloat32;
+  std::vector<float> float32_;           // capacity x dim (kFloat32)
+  std::vector<std::uint16_t> bfloat16_;  // capacity x dim (kBFloat16)
+};
+
 class StreamingSeqSlam {
  public:
   // Allocates everything (the only allocation): the database of `capacity` descriptors of
@@ -257,7 +283,7 @@ class StreamingSeqSlam {
 
   int size() const { return size_; }
   int capacity() const { return capacity_; }
-  ReferenceStorage storage() const { return storage_; }
+  ReferenceStorage storage() const { return rows_.storage(); }
   int dim() const { return dim_; }
   int frames_in_window() const { return count_; }
 
@@ -274,15 +300,13 @@ class StreamingSeqSlam {
   int dim_ = 0;
   int capacity_ = 0;
   int size_ = 0;
-  int head_ = 0;   // ring slot the next column goes into
-  int count_ = 0;  // columns in the ring (<= ds)
-  ReferenceStorage storage_ = ReferenceStorage::kFloat32;
-  std::vector<float> database_;               // capacity x dim (kFloat32)
-  std::vector<std::uint16_t> database_bf16_;  // capacity x dim (kBFloat16)
-  std::vector<float> ring_;                   // ds x capacity enhanced columns
-  std::vector<float> difference_;             // capacity
-  std::vector<float> scores_;                 // capacity
-  std::vector<const float*> order_;           // ds column pointers, oldest first
+  int head_ = 0;                     // ring slot the next column goes into
+  int count_ = 0;                    // columns in the ring (<= ds)
+  ReferenceRows rows_;               // the route database
+  std::vector<float> ring_;          // ds x capacity enhanced columns
+  std::vector<float> difference_;    // capacity
+  std::vector<float> scores_;        // capacity
+  std::vector<const float*> order_;  // ds column pointers, oldest first
 };
 
 }  // namespace skyloc::dsp
