@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -50,7 +49,6 @@ SeqSlamError RouteFilter::Init(const RouteFilterParams& params, int dim, int cap
   capacity_ = capacity;
   lambda_ =
       static_cast<float>(params.sequence_length - 1) / static_cast<float>(params.sequence_length);
-  memory_ = static_cast<double>(params.sequence_length);  // 1 + lambda + lambda^2 + ...
   route_.Allocate(dim, capacity, storage);
   first_frame_.assign(Sz(capacity), 0);
   last_frame_.assign(Sz(capacity), 0);
@@ -92,6 +90,9 @@ SeqSlamError RouteFilter::FinishRoute() {
   if (capacity_ == 0)
     return SeqSlamError::kNotInitialised;
   ResetQueries();
+  // The slots now hold rows, not frames: merging them again would read the wrong ones.
+  if (finished_)
+    return SeqSlamError::kOk;
   finished_ = true;
   rows_ = 0;
   keyframe_threshold_ = 0;
@@ -244,8 +245,10 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   out->reference = row_frame(best);
   out->start = -1;    // no straight trajectory: the path may change speed every frame
   out->velocity = 0;  // not estimated
-  // Costs are sums over the filter's memory (ds frames of weight); per frame on average:
-  out->score = static_cast<float>(static_cast<double>(best_cost) / memory_);
+  // Costs are sums over the filter's memory (1 + lambda + lambda^2 + ... = ds frames of
+  // weight); per frame on average:
+  out->score = static_cast<float>(static_cast<double>(best_cost) /
+                                  static_cast<double>(params_.sequence_length));
   if (second == kInf) {
     // No row outside the window: nothing shows this match is distinctive.
     out->uniqueness = 1.0f;

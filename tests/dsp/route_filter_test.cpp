@@ -308,6 +308,13 @@ TEST(RouteFilter, MergesStopsIntoOneRowAndKeepsFramesInMotion) {
   EXPECT_NEAR(filter.rows(), 690 - 40 - 50, 4);
   EXPECT_GT(filter.keyframe_threshold(), 0.0f);
 
+  // Finishing again leaves the rows as they are (the slots hold rows now, not frames).
+  const int rows = filter.rows();
+  const int last_of_first = filter.row_last_frame(0);
+  ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
+  EXPECT_EQ(filter.rows(), rows);
+  EXPECT_EQ(filter.row_last_frame(0), last_of_first);
+
   // Factor 0 keeps every frame.
   RouteFilterParams keep;
   keep.keyframe_noise_factor = 0;

@@ -73,7 +73,8 @@ class RouteFilter {
   // FinishRoute() has merged it into rows.
   SeqSlamError AddReference(std::span<const float> descriptor);
   // Merges stationary runs into rows (docs above, 1.) and forgets the query history.
-  // O(frames x dim) plus a median; allocates nothing.
+  // O(frames x dim) plus a median; allocates nothing. Again on a finished route: only
+  // forgets the query history.
   SeqSlamError FinishRoute();
   void ClearReferences();
   // Forgets the query history (a gap in the frames, a new run).
@@ -96,8 +97,6 @@ class RouteFilter {
   int row_frame(int r) const { return (row_first_frame(r) + row_last_frame(r)) / 2; }
   // The merge threshold FinishRoute used (0: nothing merged).
   float keyframe_threshold() const { return keyframe_threshold_; }
-  // The filter's costs after the last Step, one per row.
-  std::span<const float> costs() const { return {cost_.data(), static_cast<std::size_t>(rows_)}; }
 
   static std::size_t BytesPerReference(int dim,
                                        ReferenceStorage storage = ReferenceStorage::kFloat32);
@@ -110,11 +109,10 @@ class RouteFilter {
   int frames_ = 0;
   int rows_ = 0;
   bool finished_ = false;
-  int steps_ = 0;      // query frames since the last reset
-  double memory_ = 1;  // 1 + lambda + lambda^2 + ... = ds
-  float lambda_ = 0;   // 1 - 1/ds
+  int steps_ = 0;     // query frames since the last reset
+  float lambda_ = 0;  // 1 - 1/ds
   float keyframe_threshold_ = 0;
-  ReferenceRows route_;             // taught frames, then (FinishRoute) the keyframe rows
+  ReferenceRows route_;            // taught frames, then (FinishRoute) the keyframe rows
   std::vector<int> first_frame_;   // capacity
   std::vector<int> last_frame_;    // capacity
   std::vector<float> cost_;        // capacity: cost after the last step
