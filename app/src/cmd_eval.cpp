@@ -47,7 +47,7 @@ constexpr const char* kUsage =
     "  --batch                openseqslam: OpenSeqSLAM's centred window (default)\n"
     "  --streaming            openseqslam: the causal engine (trailing window)\n"
     "                         (either alone implies --matcher openseqslam)\n"
-    "  --max-advance K        filter: route rows per frame at most (default 4)\n"
+    "  --max-advance K        filter: route rows per frame at most (default 8)\n"
     "  --keyframe-noise F     filter: keyframe merge threshold x noise floor (default 2)\n"
     "  --config FILE          the firmware configuration whose [state] settings (and\n"
     "                         [seqslam] max_advance, keyframe_noise_factor) the runs use\n"
@@ -67,7 +67,7 @@ constexpr const char* kUsage =
     "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
     "reference recorded nearest to it, correct within --frame-tolerance frames.\n"
     "Writes OUT/matches.csv, OUT/metrics.json, OUT/pr.svg, OUT/correspondence.svg.\n"
-    "Every run also replays the firmware's state machine (default [state] settings) over\n"
+    "Every run also replays the firmware's state machine ([state] of --config) over\n"
     "its matches: matches.csv gives each frame's state, metrics.json the share of\n"
     "LOCALISED frames that are correct.\n";
 
@@ -464,10 +464,9 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
   dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
   if (run->matcher == Matcher::kRouteFilter) {
     // The firmware's engine, as repeat runs it: causal, one query at a time.
-    dsp::RouteFilterParams p;
-    p.sequence_length = run->ds;
-    p.max_advance = o.config.seqslam.max_advance;
-    p.keyframe_noise_factor = static_cast<float>(o.config.seqslam.keyframe_noise_factor);
+    Config config = o.config;
+    config.seqslam.ds = run->ds;
+    const dsp::RouteFilterParams p = RouteFilterParamsFrom(config);
     dsp::RouteFilter engine;
     e = engine.Init(p, ref.dim, std::max(1, ref.count));
     for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
@@ -497,25 +496,6 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
                          dsp::SeqSlamErrorMessage(e));
   }
   return Status::Ok();
-}
-
-// The firmware's state machine over the run's matches, with the default [state] settings
-// and the matcher's motion limits (what repeat would have shown, frame by frame).
-void ReplayStateMachine(const EvalOptions& o, Run* run) {
-  Config config = o.config;
-  config.seqslam.matcher = run->matcher;
-  dsp::LocalisationStateMachine machine;
-  machine.Init(StateMachineParamsFrom(config));
-  run->states.clear();
-  for (std::size_t t = 0; t < run->matches.size(); ++t) {
-    const dsp::SeqSlamMatch& m = run->matches[t];
-    dsp::MatchObservation obs;
-    obs.frame = t;
-    obs.index = m.valid ? m.row : -1;
-    obs.uniqueness = m.valid ? m.uniqueness : 1.0f;
-    obs.confidence = m.valid ? m.confidence : 0.0f;
-    run->states.push_back(machine.Update(obs));
-  }
 }
 
 bool IsCorrect(const GroundTruth& gt, int q, int matched) {
@@ -735,7 +715,9 @@ Status Evaluate(EvalOptions o) {
         run.matcher = matcher;
         run.ds = ds;
         SKYLOC_TRY(RunMatcher(rd, qd, o, &run));
-        ReplayStateMachine(o, &run);
+        Config config = o.config;
+        config.seqslam.matcher = matcher;
+        run.states = ReplayStateMachine(config, run.matches);
         Score(gt, &run);
         runs.push_back(std::move(run));
       }

@@ -261,19 +261,13 @@ constexpr MethodName kMatcherMethods[] = {{"openseqslam", "OpenSeqSLAM (sky)"},
 
 // The firmware's state machine (default [state] settings, the filter's motion limits)
 // over a filter run: how many frames it shows LOCALISED, and how many of those are right.
-std::pair<int, int> ReplayFilterStates(const sim::MethodScore& m) {
+std::pair<int, int> LocalisedFrames(const sim::MethodScore& m) {
   Config config;
   config.seqslam.matcher = Matcher::kRouteFilter;
-  dsp::LocalisationStateMachine machine;
-  machine.Init(StateMachineParamsFrom(config));
+  const std::vector<dsp::TrackState> states = ReplayStateMachine(config, m.matches);
   int localised = 0, correct = 0;
-  for (std::size_t t = 0; t < m.rows.size(); ++t) {
-    dsp::MatchObservation obs;
-    obs.frame = t;
-    obs.index = m.rows[t];
-    obs.uniqueness = m.uniqueness[t];
-    obs.confidence = m.rows[t] >= 0 ? 1.0f - m.uniqueness[t] : 0.0f;
-    if (machine.Update(obs) == dsp::TrackState::kLocalised) {
+  for (std::size_t t = 0; t < states.size(); ++t) {
+    if (states[t] == dsp::TrackState::kLocalised) {
       ++localised;
       correct += m.correct[t] ? 1 : 0;
     }
@@ -370,7 +364,7 @@ int RunExperiment(std::span<char* const> args) {
         "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
     separator = "|---|---|---|---|---|---|---|";
     for (const sim::SpeedRow& r : speed) {
-      const auto [localised, correct] = ReplayFilterStates(r.filter);
+      const auto [localised, correct] = LocalisedFrames(r.filter);
       rows.push_back(
           {Format("%s %.1fx %s %s ds %d", sim::WorldKindName(r.world), r.speed_ratio,
                   r.stops ? "stops" : "no-stops", r.bumps_deg > 0 ? "bumps" : "level",

@@ -89,6 +89,33 @@ dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
   return sm;
 }
 
+dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config) {
+  dsp::RouteFilterParams filter;
+  filter.sequence_length = config.seqslam.ds;
+  filter.max_advance = config.seqslam.max_advance;
+  filter.uniqueness_window = config.seqslam.rwindow;
+  filter.keyframe_noise_factor = static_cast<float>(config.seqslam.keyframe_noise_factor);
+  return filter;
+}
+
+std::vector<dsp::TrackState> ReplayStateMachine(const Config& config,
+                                                std::span<const dsp::SeqSlamMatch> matches) {
+  dsp::LocalisationStateMachine machine;
+  machine.Init(StateMachineParamsFrom(config));
+  std::vector<dsp::TrackState> states;
+  states.reserve(matches.size());
+  for (std::size_t t = 0; t < matches.size(); ++t) {
+    const dsp::SeqSlamMatch& m = matches[t];
+    dsp::MatchObservation obs;
+    obs.frame = t;
+    obs.index = m.valid ? m.row : -1;  // rows: see StateMachineParamsFrom
+    obs.uniqueness = m.valid ? m.uniqueness : 1.0f;
+    obs.confidence = m.valid ? m.confidence : 0.0f;
+    states.push_back(machine.Update(obs));
+  }
+  return states;
+}
+
 Status Pipeline::Init(const Config& config) {
   SKYLOC_TRY_ASSIGN(const dsp::LensParams lens_params, LensFromConfig(config));
   if (const dsp::LensError e = lens_.Init(lens_params); e != dsp::LensError::kOk)
@@ -111,11 +138,7 @@ Status Pipeline::Init(const Config& config) {
                                             : dsp::ReferenceStorage::kFloat32;
   dsp::SeqSlamError matcher_error = dsp::SeqSlamError::kOk;
   if (matcher_ == Matcher::kRouteFilter) {
-    dsp::RouteFilterParams filter;
-    filter.sequence_length = config.seqslam.ds;
-    filter.max_advance = config.seqslam.max_advance;
-    filter.uniqueness_window = config.seqslam.rwindow;
-    filter.keyframe_noise_factor = static_cast<float>(config.seqslam.keyframe_noise_factor);
+    const dsp::RouteFilterParams filter = RouteFilterParamsFrom(config);
     matcher_error =
         filter_.Init(filter, descriptor_.bands(), config.capacities.route_frames, storage);
   } else {

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "config.h"
 #include "skyloc/drivers/camera.h"
@@ -50,6 +51,12 @@ std::uint64_t LensHash(const dsp::LensParams& lens);
 
 // The state machine's parameters from [state] and the matcher's motion limits.
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config);
+// The route filter's parameters from [seqslam].
+dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config);
+// The firmware's state machine replayed over per-frame matches, as repeat would have shown
+// them (offline: eval and the experiments). Allocates the result.
+std::vector<dsp::TrackState> ReplayStateMachine(const Config& config,
+                                                std::span<const dsp::SeqSlamMatch> matches);
 
 class Pipeline {
  public:

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
@@ -98,14 +99,6 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, b
     return Status::Error(StatusCode::kInvalidArgument, "%s: %s",
                          matcher == ExperimentMatcher::kOpenSeqSlam ? "SeqSLAM" : "route filter",
                          dsp::SeqSlamErrorMessage(e));
-  out->rows.assign(matches.size(), -1);
-  out->uniqueness.assign(matches.size(), 1.0f);
-  for (std::size_t q = 0; q < matches.size(); ++q) {
-    if (matches[q].valid) {
-      out->rows[q] = matches[q].row;
-      out->uniqueness[q] = matches[q].uniqueness;
-    }
-  }
   // Ground truth from the poses, the same rule as `skyloc eval`.
   auto positions = [](const RunDescriptors& run) {
     std::vector<dsp::Position3> p;
@@ -139,6 +132,7 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, b
   const std::size_t points = dsp::PrecisionRecallCurve(evaluated, order, out->curve);
   out->curve.resize(points);
   out->summary = dsp::SummarisePrecisionRecall(evaluated, out->curve);
+  out->matches = std::move(matches);
   return Status::Ok();
 }
 

@@ -70,11 +70,10 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 struct MethodScore {
   dsp::PrSummary summary;
   std::vector<dsp::PrPoint> curve;
-  std::vector<int> matched;               // per query frame: matched reference (-1: none)
-  std::vector<int> rows;                  // per query frame: the matcher's route row (-1: none)
-  std::vector<float> uniqueness;          // per query frame (1: no match)
-  std::vector<dsp::TruthInterval> truth;  // per query frame
-  std::vector<bool> correct;              // per query frame: matched and correct
+  std::vector<int> matched;                // per query frame: matched reference (-1: none)
+  std::vector<dsp::SeqSlamMatch> matches;  // per query frame, as the matcher gave them
+  std::vector<dsp::TruthInterval> truth;   // per query frame
+  std::vector<bool> correct;               // per query frame: matched and correct
 };
 
 // Which matcher scores a pair of runs: OpenSeqSLAM (batch, centred window, as the paper)
