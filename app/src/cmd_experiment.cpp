@@ -45,7 +45,12 @@ constexpr const char* kUsage =
     "  --spacing M            frame spacing in metres (default 1; ants 0.05)\n"
     "  --frames N             at most N frames a run (default: whole routes)\n"
     "  --seed N               procedural world seed (default 1)\n"
-    "  --data DIR             Seville data folder (default ../shared/data/seville2009)\n";
+    "  --data DIR             Seville data folder (default ../shared/data/seville2009)\n"
+    "  --attitude A           the gravity-aligned descriptor's zenith (tilt, manoeuvre,\n"
+    "                         speed): imu (the simulated IMU with noise and bias through\n"
+    "                         the attitude filter; default), truth (the true poses), none\n"
+    "  --cap-elevation DEG    the cap's lower edge, 0..80 (default: from the experiment's\n"
+    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n";
 
 struct Options {
   std::string name, out, data_dir = "../shared/data/seville2009";
@@ -110,6 +115,19 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!ParseNumber(v, 20, 1e6, &d) || d != std::floor(d))
         return bad("an integer of at least 20");
       e.max_frames = static_cast<int>(d);
+    } else if (std::strcmp(flag, "--attitude") == 0) {
+      if (std::strcmp(v, "none") == 0)
+        e.attitude = sim::AttitudeInput::kNone;
+      else if (std::strcmp(v, "truth") == 0)
+        e.attitude = sim::AttitudeInput::kTruth;
+      else if (std::strcmp(v, "imu") == 0)
+        e.attitude = sim::AttitudeInput::kSimulatedImu;
+      else
+        return bad("none, truth or imu");
+    } else if (std::strcmp(flag, "--cap-elevation") == 0) {
+      if (!ParseNumber(v, 0, 80, &d))
+        return bad("degrees within 0..80");
+      e.cap.elevation_deg = d;
     } else if (std::strcmp(flag, "--seed") == 0) {
       if (!ParseNumber(v, 0, 1e15, &d) || d != std::floor(d))
         return bad("a non-negative integer");
@@ -253,11 +271,18 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
   return Status::Ok();
 }
 
-constexpr MethodName kDescriptorMethods[] = {{"sky", "SeqSLAM (sky)"},
-                                             {"vanilla", "SeqSLAM (vanilla)"},
-                                             {"sky_filter", "Route filter (sky)"}};
+constexpr MethodName kDescriptorMethods[] = {
+    {"sky", "SeqSLAM (sky)"},
+    {"vanilla", "SeqSLAM (vanilla)"},
+    {"sky_filter", "Route filter (sky)"},
+    {"sky_cap", "SeqSLAM (sky, gravity-aligned cap)"},
+    {"sky_cap_filter", "Route filter (sky, gravity-aligned cap)"}};
 constexpr MethodName kMatcherMethods[] = {{"openseqslam", "OpenSeqSLAM (sky)"},
-                                          {"filter", "Route filter (sky)"}};
+                                          {"filter", "Route filter (sky)"},
+                                          {"filter_cap", "Route filter (sky, gravity-aligned cap)"}};
+// The methods without the gravity-aligned columns (--attitude none, and ants).
+constexpr std::size_t kDescriptorMethodsWithoutCap = 3;
+constexpr std::size_t kMatcherMethodsWithoutCap = 2;
 
 // The firmware's state machine (default [state] settings, the filter's motion limits)
 // over a filter run: how many frames it shows LOCALISED, and how many of those are right.
@@ -327,7 +352,10 @@ int RunExperiment(std::span<char* const> args) {
   std::vector<sim::ManoeuvreRow> manoeuvre;
   std::vector<sim::AntsRow> ants;
   std::vector<sim::SpeedRow> speed;
+  const bool cap = o.experiment.attitude != sim::AttitudeInput::kNone;
   std::span<const MethodName> methods = kDescriptorMethods;
+  if (!cap || o.name == "ants")
+    methods = methods.first(kDescriptorMethodsWithoutCap);
   std::string header, separator;
   if (o.name == "tilt") {
     const int differences[] = {0, 10, 20, 30, 40, 50, 60};
@@ -341,7 +369,7 @@ int RunExperiment(std::span<char* const> args) {
                       Format("\"tilt_difference_deg\": %.0f, \"reference_tilt_deg\": %.0f, "
                              "\"query_tilt_deg\": %.0f, ",
                              r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
-                      {&r.sky, &r.vanilla, &r.sky_filter}});
+                      {&r.sky, &r.vanilla, &r.sky_filter, &r.sky_cap, &r.sky_cap_filter}});
     }
   } else if (o.name == "manoeuvre") {
     const int ds[] = {1, 10, 20};
@@ -353,13 +381,15 @@ int RunExperiment(std::span<char* const> args) {
                       Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
                       Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world),
                              r.sequence_length),
-                      {&r.sky, &r.vanilla, &r.sky_filter}});
+                      {&r.sky, &r.vanilla, &r.sky_filter, &r.sky_cap, &r.sky_cap_filter}});
     }
   } else if (o.name == "speed") {
     o.experiment.sampling = sim::Sampling::kTime;
     const int ds[] = {1, 5, 10, 20};
     status = sim::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
     methods = kMatcherMethods;
+    if (!cap)
+      methods = methods.first(kMatcherMethodsWithoutCap);
     header =
         "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
     separator = "|---|---|---|---|---|---|---|";
@@ -378,7 +408,7 @@ int RunExperiment(std::span<char* const> args) {
                   "\"filter_localised_correct\": %d, ",
                   sim::WorldKindName(r.world), r.speed_ratio, r.stops ? "true" : "false",
                   r.bumps_deg, r.query_frames, r.sequence_length, localised, correct),
-           {&r.openseqslam, &r.filter}});
+           {&r.openseqslam, &r.filter, &r.filter_cap}});
     }
   } else {
     if (!o.spacing_given)
@@ -404,7 +434,21 @@ int RunExperiment(std::span<char* const> args) {
     std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), status.message());
     return kExitFailure;
   }
+  for (Row& r : rows)
+    r.scores.resize(methods.size());
   std::string notes = CommonNotes(o.experiment);
+  if (cap && o.name != "ants") {
+    notes += Format(
+        "Gravity-aligned cap (sky_cap columns): zenith from %s; lower edge %s, taper %.3g "
+        "degrees.\n",
+        o.experiment.attitude == sim::AttitudeInput::kTruth
+            ? "the true poses"
+            : "the simulated IMU (noise and bias on) through the attitude filter",
+        o.experiment.cap.elevation_deg < 0
+            ? "from the experiment's largest tilt (dsp::CapElevationForTilt)"
+            : Format("%.3g degrees", o.experiment.cap.elevation_deg).c_str(),
+        o.experiment.cap.taper_deg);
+  }
   if (o.name == "ants")
     notes += std::string("Reference route ") + sim::kAntsReferenceRoute + ".\n";
   if (const Status s = WriteOutputs(o, command, header, separator, methods, rows, notes); !s.ok()) {

@@ -51,7 +51,12 @@ bool MatchIsCorrect(int matched, const TruthInterval& truth, const MatchToleranc
            PositionDistance(query, reference[static_cast<std::size_t>(matched)]) <=
                tolerance.metres;
   }
-  return matched >= truth.first - tolerance.frames && matched <= truth.last + tolerance.frames;
+  if (matched >= truth.first - tolerance.frames && matched <= truth.last + tolerance.frames)
+    return true;
+  // Around the loop: the match one lap earlier or later.
+  const int lap = tolerance.loop_frames;
+  return lap > 0 && ((matched - lap >= truth.first - tolerance.frames) ||
+                     (matched + lap <= truth.last + tolerance.frames));
 }
 
 std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,

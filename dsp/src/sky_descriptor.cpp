@@ -1,5 +1,8 @@
 #include "skyloc/dsp/sky_descriptor.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace skyloc::dsp {
 namespace {
 
@@ -7,7 +10,14 @@ DescriptorError Fail(DescriptorError::Stage stage, const char* message) {
   return DescriptorError{stage, message};
 }
 
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegToRad = kPi / 180.0;
+
 }  // namespace
+
+double CapElevationForTilt(double max_tilt_deg, double fov_deg) {
+  return std::max(0.0, max_tilt_deg + 90.0 - std::min(90.0, fov_deg / 2.0));
+}
 
 DescriptorError SkyDescriptor::Init(const Lens& lens, const SkyDescriptorOptions& options) {
   using Stage = DescriptorError::Stage;
@@ -25,6 +35,28 @@ DescriptorError SkyDescriptor::Init(const Lens& lens, const SkyDescriptorOptions
     return Fail(Stage::kSampling, SampleLutErrorMessage(e));
   if (const ShError e = projector_.Init(grid_, options_.bands); e != ShError::kOk)
     return Fail(Stage::kProjection, ShErrorMessage(e));
+  if (options_.cap.enabled) {
+    const GravityCapOptions& cap = options_.cap;
+    if (!(cap.elevation_deg >= 0 && cap.elevation_deg <= 85 && cap.taper_deg >= 0 &&
+          cap.taper_deg <= 30 && cap.elevation_deg + cap.taper_deg < 90))
+      return Fail(Stage::kSampling,
+                  "gravity cap: elevation must be within 0..85 degrees, the taper within 0..30, "
+                  "and their sum below 90");
+    const int n_phi = grid_.longitudes();
+    cos_phi_.resize(static_cast<std::size_t>(n_phi));
+    sin_phi_.resize(static_cast<std::size_t>(n_phi));
+    along_phi_.resize(static_cast<std::size_t>(n_phi));
+    for (int j = 0; j < n_phi; ++j) {
+      cos_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::cos(grid_.phi(j)));
+      sin_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::sin(grid_.phi(j)));
+    }
+    ring_sin_.resize(static_cast<std::size_t>(grid_.ring_count()));
+    ring_cos_.resize(static_cast<std::size_t>(grid_.ring_count()));
+    for (int i = 0; i < grid_.ring_count(); ++i) {
+      ring_sin_[static_cast<std::size_t>(i)] = static_cast<float>(grid_.ring(i).sin_theta);
+      ring_cos_[static_cast<std::size_t>(i)] = static_cast<float>(grid_.ring(i).cos_theta);
+    }
+  }
   width_ = lens.params().width;
   height_ = lens.params().height;
   samples_.assign(grid_.sample_count(), 0.0f);
@@ -43,7 +75,8 @@ ImageView SkyDescriptor::mask() const {
 }
 
 DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> amplitudes,
-                                       SegmentationResult* segmentation) {
+                                       SegmentationResult* segmentation,
+                                       const Attitude* attitude) {
   using Stage = DescriptorError::Stage;
   if (amplitudes.size() != static_cast<std::size_t>(options_.bands))
     return Fail(Stage::kProjection, ShErrorMessage(ShError::kSizeMismatch));
@@ -64,6 +97,14 @@ DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> 
         e != SampleLutError::kOk)
       return Fail(Stage::kSampling, SampleLutErrorMessage(e));
   }
+  if (options_.cap.enabled) {
+    const std::array<double, 3> level{0, 0, 1};
+    const std::array<double, 3>& up = attitude != nullptr ? attitude->up : level;
+    if (!(std::isfinite(up[0]) && std::isfinite(up[1]) && std::isfinite(up[2])) ||
+        std::fabs(up[0] * up[0] + up[1] * up[1] + up[2] * up[2] - 1.0) > 1e-3)
+      return Fail(Stage::kSampling, "gravity cap: the attitude's zenith is not a unit vector");
+    ApplyCap(up);
+  }
   if (const ShError e = projector_.Project(samples_, coefficients_); e != ShError::kOk)
     return Fail(Stage::kProjection, ShErrorMessage(e));
   if (const ShError e =
@@ -73,6 +114,35 @@ DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> 
   if (segmentation != nullptr)
     *segmentation = result;
   return {};
+}
+
+void SkyDescriptor::ApplyCap(const std::array<double, 3>& up) {
+  // Weight w(s) of a sample whose world elevation has sine s: 0 below the cap, a raised
+  // cosine across the taper (in sin-elevation, which keeps it a function of the world
+  // elevation alone and costs no asin per sample), 1 above.
+  const GravityCapOptions& cap = options_.cap;
+  const double s0 = std::sin(cap.elevation_deg * kDegToRad);
+  const double s1 = std::sin((cap.elevation_deg + cap.taper_deg) * kDegToRad);
+  const auto lo = static_cast<float>(s0);
+  const auto hi = static_cast<float>(s1);
+  const float inv_width = hi > lo ? static_cast<float>(kPi / (s1 - s0)) : 0.0f;
+  const auto ux = static_cast<float>(up[0]);
+  const auto uy = static_cast<float>(up[1]);
+  const auto uz = static_cast<float>(up[2]);
+  const std::size_t n_phi = cos_phi_.size();
+  for (std::size_t j = 0; j < n_phi; ++j)
+    along_phi_[j] = ux * cos_phi_[j] + uy * sin_phi_[j];
+  for (std::size_t i = 0; i < ring_sin_.size(); ++i) {
+    float* ring = samples_.data() + i * n_phi;
+    const float st = ring_sin_[i];
+    const float zt = uz * ring_cos_[i];
+    for (std::size_t j = 0; j < n_phi; ++j) {
+      const float s = st * along_phi_[j] + zt;
+      if (s >= hi)
+        continue;
+      ring[j] = s <= lo ? 0.0f : ring[j] * (0.5f - 0.5f * std::cos((s - lo) * inv_width));
+    }
+  }
 }
 
 }  // namespace skyloc::dsp

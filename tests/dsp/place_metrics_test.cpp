@@ -154,5 +154,18 @@ TEST(PlaceMetrics, AGroundTruthFileGivesOneFrame) {
   EXPECT_DOUBLE_EQ(PositionDistance({0, 0, 0}, {2, 3, 6}), 7.0);
 }
 
+// A reference that is one lap of a closed route: its last frames are next to its first.
+TEST(PlaceMetrics, AClosedLoopWrapsFrameDistances) {
+  const MatchTolerance open{5, 0};
+  const MatchTolerance loop{5, 0, 100};
+  EXPECT_FALSE(MatchIsCorrect(99, TruthAtFrame(0), open, {}, {}));
+  EXPECT_TRUE(MatchIsCorrect(99, TruthAtFrame(0), loop, {}, {}));
+  EXPECT_TRUE(MatchIsCorrect(95, TruthAtFrame(0), loop, {}, {}));
+  EXPECT_FALSE(MatchIsCorrect(94, TruthAtFrame(0), loop, {}, {}));
+  EXPECT_TRUE(MatchIsCorrect(2, TruthAtFrame(97), loop, {}, {}));
+  EXPECT_FALSE(MatchIsCorrect(3, TruthAtFrame(97), loop, {}, {}));
+  EXPECT_FALSE(MatchIsCorrect(50, TruthAtFrame(0), loop, {}, {}));
+}
+
 }  // namespace
 }  // namespace skyloc::dsp

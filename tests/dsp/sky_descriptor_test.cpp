@@ -134,6 +134,50 @@ TEST(SkyDescriptor, UnknownTiltReportedAgainstADifferentPlace) {
   }
 }
 
+// The gravity-aligned cap with the true zenith: the camera tilts (drawn through a lens whose
+// mount rotation is the tilt, so the pixels see a tilted sky) and the descriptor is told the
+// zenith. The cap above 60 degrees is in view at every tilt up to 60 (185 degree lens), so
+// its spectrum stays what it is level, to within the grid's aliasing of the mask edge.
+TEST(SkyDescriptor, GravityCapIsTheSameAtAnyTiltUpToItsLimit) {
+  LensParams drawn;
+  drawn.width = drawn.height = 480;
+  drawn.fov_deg = 185.0;
+  Lens upright;
+  ASSERT_EQ(upright.Init(drawn), LensError::kOk);
+  SkyDescriptorOptions options;
+  options.bands = 32;
+  options.grid = DefaultShGridConfig(64);
+  options.cap = {true, CapElevationForTilt(60, 185), 10};
+  SkyDescriptor descriptor;
+  ASSERT_TRUE(descriptor.Init(upright, options).ok());
+  std::vector<float> level(32), tilted(32), other(32);
+  const std::vector<std::uint8_t> f0 = DrawCanyon(upright, 0.0, 4.0);
+  ASSERT_TRUE(descriptor.Compute({f0.data(), 480, 480, 480, PixelFormat::kGrey8}, level).ok());
+  const std::vector<std::uint8_t> place = DrawCanyon(upright, 0.0, 8.0);
+  ASSERT_TRUE(descriptor.Compute({place.data(), 480, 480, 480, PixelFormat::kGrey8}, other).ok());
+  const double other_place = RelativeL2(level, other);
+  std::printf("  cap: different place: relative L2 %.4f\n", other_place);
+  for (const auto& [roll, pitch] : {std::pair{0.0, 10.0}, {0.0, 30.0}, {0.0, 60.0}, {-25.0, 0.0},
+                                    {40.0, -35.0}, {-42.0, 42.0}}) {
+    // Drawn with mount body = Ry(pitch) Rx(roll) * camera (dsp::Lens): in imu.h's convention
+    // (body-to-world Ry(-pitch) Rx(roll)) that is a pitch of -pitch.
+    drawn.roll_deg = roll;
+    drawn.pitch_deg = pitch;
+    Lens tilted_lens;
+    ASSERT_EQ(tilted_lens.Init(drawn), LensError::kOk);
+    const std::vector<std::uint8_t> f = DrawCanyon(tilted_lens, 0.0, 4.0);
+    const Attitude attitude = AttitudeFromRollPitch(0, roll, -pitch);
+    const ImageView view{f.data(), 480, 480, 480, PixelFormat::kGrey8};
+    ASSERT_TRUE(descriptor.Compute(view, tilted, nullptr, &attitude).ok());
+    const double change = RelativeL2(level, tilted);
+    std::vector<float> unaware(32);
+    ASSERT_TRUE(descriptor.Compute(view, unaware).ok());
+    std::printf("  cap: roll %+3.0f pitch %+3.0f: relative L2 %.4f (assumed level: %.4f)\n", roll,
+                pitch, change, RelativeL2(level, unaware));
+    EXPECT_LT(change, other_place / 5);
+  }
+}
+
 TEST(SkyDescriptor, DirectAndViaMaskPathsGiveTheSameDescriptor) {
   const Lens lens = FisheyeLens(320, 240);
   const std::vector<std::uint8_t> frame = DrawCanyon(lens, 0.3);

@@ -10,6 +10,61 @@
 
 namespace skyloc::sim {
 
+const char* AttitudeInputName(AttitudeInput input) {
+  switch (input) {
+    case AttitudeInput::kNone:
+      return "none";
+    case AttitudeInput::kTruth:
+      return "truth";
+    case AttitudeInput::kSimulatedImu:
+      return "imu";
+  }
+  return "?";
+}
+
+namespace {
+
+// The zenith the gravity-aligned cap uses at each frame of a run.
+Status RunAttitudes(const std::vector<TrajectoryPoint>& trajectory, AttitudeInput input,
+                    std::vector<dsp::Attitude>* out) {
+  out->clear();
+  switch (input) {
+    case AttitudeInput::kNone:
+      return Status::Ok();
+    case AttitudeInput::kTruth:
+      for (const TrajectoryPoint& t : trajectory) {
+        out->push_back(dsp::AttitudeFromUp(
+            static_cast<std::int64_t>(t.time_s * 1e9),
+            SimCameraFromBody(dsp::UpFromRollPitch(t.pose.roll_deg, t.pose.pitch_deg))));
+      }
+      return Status::Ok();
+    case AttitudeInput::kSimulatedImu:
+      break;
+  }
+  return Status::Error(StatusCode::kUnimplemented, "the simulated IMU is not wired yet");
+}
+
+// The largest tilt (angle between body z and the world zenith) a run with these manoeuvres
+// reaches: a constant pitch plus roll and pitch bumps, each up to bumps_deg.
+double LargestTiltDeg(double tilt_deg, double bumps_deg) {
+  constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+  const double pitch = (std::fabs(tilt_deg) + bumps_deg) * kDegToRad;
+  const double roll = bumps_deg * kDegToRad;
+  return std::acos(std::cos(pitch) * std::cos(roll)) / kDegToRad;
+}
+
+// The options with the cap on (when attitude is) at the elevation a user expecting tilts up
+// to max_tilt_deg would configure, unless the caller set one.
+ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_deg) {
+  ExperimentOptions o = options;
+  o.cap.enabled = options.attitude != AttitudeInput::kNone;
+  if (o.cap.elevation_deg < 0)
+    o.cap.elevation_deg = dsp::CapElevationForTilt(max_tilt_deg, DefaultSimLens(8, 8).fov_deg);
+  return o;
+}
+
+}  // namespace
+
 Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
                    const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
   MotionConfig motion = spec.motion;
@@ -21,6 +76,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   motion.max_frames = options.max_frames;
   out->label = spec.label;
   SKYLOC_TRY(BuildTrajectory(route, closed, motion, &out->trajectory));
+  out->closed_loop = closed && motion.max_frames == 0;
   Renderer renderer;
   SKYLOC_TRY(renderer.Init(&world, DefaultSimLens(options.width, options.height)));
   dsp::SkyDescriptor sky;
@@ -29,6 +85,17 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   sky_options.grid = dsp::DefaultShGridConfig(options.bands);
   if (const dsp::DescriptorError e = sky.Init(renderer.lens(), sky_options); !e.ok())
     return Status::Error(StatusCode::kInvalidArgument, "sky descriptor: %s", e.message);
+  dsp::SkyDescriptor sky_cap;
+  if (options.cap.enabled) {
+    dsp::SkyDescriptorOptions cap_options = sky_options;
+    cap_options.cap = options.cap;
+    if (const dsp::DescriptorError e = sky_cap.Init(renderer.lens(), cap_options); !e.ok())
+      return Status::Error(StatusCode::kInvalidArgument, "gravity-aligned sky descriptor: %s",
+                           e.message);
+    SKYLOC_TRY(RunAttitudes(out->trajectory, options.attitude, &out->attitude));
+  } else {
+    out->attitude.clear();
+  }
   const auto w = static_cast<std::size_t>(options.width);
   const auto h = static_cast<std::size_t>(options.height);
   std::vector<std::uint8_t> uv(w * h), visible(w * h * 3);
@@ -40,6 +107,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   const auto bands = static_cast<std::size_t>(options.bands);
   out->sky.assign(n * bands, 0.0f);
   out->vanilla.assign(n * dsp::kVanillaDescriptorSize, 0.0f);
+  out->sky_cap.assign(options.cap.enabled ? n * bands : 0, 0.0f);
   double sky_fraction = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const drivers::Pose& pose = out->trajectory[i].pose;
@@ -52,6 +120,14 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
         !e.ok())
       return Status::Error(StatusCode::kInternal, "sky descriptor of frame %zu: %s", i, e.message);
     sky_fraction += segmentation.sky_fraction;
+    if (options.cap.enabled) {
+      if (const dsp::DescriptorError e =
+              sky_cap.Compute(uv_view, std::span<float>(out->sky_cap).subspan(i * bands, bands),
+                              nullptr, &out->attitude[i]);
+          !e.ok())
+        return Status::Error(StatusCode::kInternal,
+                             "gravity-aligned sky descriptor of frame %zu: %s", i, e.message);
+    }
     if (!options.vanilla)
       continue;
     if (const dsp::VanillaError e = dsp::VanillaDescriptor(
@@ -66,12 +142,28 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   return Status::Ok();
 }
 
-Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
-                 const ExperimentOptions& options, MethodScore* out, ExperimentMatcher matcher) {
-  const int dim = use_sky ? options.bands : dsp::kVanillaDescriptorSize;
+Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
+                 RunDescriptor descriptor, const ExperimentOptions& options, MethodScore* out,
+                 ExperimentMatcher matcher) {
+  const int dim =
+      descriptor == RunDescriptor::kVanilla ? dsp::kVanillaDescriptorSize : options.bands;
   const auto n_query = static_cast<int>(query.trajectory.size());
-  const std::vector<float>& ref_descriptors = use_sky ? reference.sky : reference.vanilla;
-  const std::vector<float>& query_descriptors = use_sky ? query.sky : query.vanilla;
+  auto descriptors = [descriptor](const RunDescriptors& run) -> const std::vector<float>& {
+    switch (descriptor) {
+      case RunDescriptor::kSkyCap:
+        return run.sky_cap;
+      case RunDescriptor::kVanilla:
+        return run.vanilla;
+      case RunDescriptor::kSky:
+        break;
+    }
+    return run.sky;
+  };
+  const std::vector<float>& ref_descriptors = descriptors(reference);
+  const std::vector<float>& query_descriptors = descriptors(query);
+  if (ref_descriptors.empty() || query_descriptors.empty())
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "the runs were described without that descriptor");
   std::vector<dsp::SeqSlamMatch> matches(static_cast<std::size_t>(n_query));
   dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
   if (matcher == ExperimentMatcher::kOpenSeqSlam) {
@@ -110,7 +202,10 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, b
   const std::vector<dsp::Position3> query_xyz = positions(query);
   out->truth.assign(static_cast<std::size_t>(n_query), dsp::TruthInterval{});
   dsp::GroundTruthFromPositions(reference_xyz, query_xyz, options.max_offset_m, out->truth);
-  const dsp::MatchTolerance tolerance{options.tolerance_frames, 0};
+  // A full lap of a closed route: its last frame is next to its first.
+  const dsp::MatchTolerance tolerance{
+      options.tolerance_frames, 0,
+      reference.closed_loop ? static_cast<int>(reference.trajectory.size()) : 0};
   out->matched.assign(static_cast<std::size_t>(n_query), -1);
   out->correct.assign(static_cast<std::size_t>(n_query), false);
   std::vector<dsp::EvaluatedMatch> evaluated;
@@ -145,8 +240,11 @@ void Report(ProgressFn progress, void* context, const char* what) {
 
 }  // namespace
 
-Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> differences_deg,
-                         std::vector<TiltRow>* rows, ProgressFn progress, void* context) {
+Status RunTiltExperiment(const ExperimentOptions& tilt_options,
+                         std::span<const int> differences_deg, std::vector<TiltRow>* rows,
+                         ProgressFn progress, void* context) {
+  // Runs pitch up to 30 degrees either way.
+  const ExperimentOptions options = WithCapFor(tilt_options, LargestTiltDeg(30, 0));
   World world;
   SKYLOC_TRY(MakeProceduralWorld(WorldKind::kCity, options.world_seed, &world));
   // Runs by tilt; index 7 is the second alpha = 0 run.
@@ -189,17 +287,25 @@ Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> 
     row.tilt_difference_deg = difference;
     row.reference_tilt_deg = alpha1;
     row.query_tilt_deg = alpha2;
-    SKYLOC_TRY(ScoreRuns(*reference, *query, true, options, &row.sky));
-    SKYLOC_TRY(ScoreRuns(*reference, *query, false, options, &row.vanilla));
-    SKYLOC_TRY(ScoreRuns(*reference, *query, true, options, &row.sky_filter,
+    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSky, options, &row.sky));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kVanilla, options, &row.vanilla));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSky, options, &row.sky_filter,
                          ExperimentMatcher::kRouteFilter));
+    if (options.cap.enabled) {
+      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap));
+      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options,
+                           &row.sky_cap_filter, ExperimentMatcher::kRouteFilter));
+    }
     rows->push_back(std::move(row));
   }
   return Status::Ok();
 }
 
-Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
-                              std::vector<ManoeuvreRow>* rows, ProgressFn progress, void* context) {
+Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
+                              std::span<const int> ds_values, std::vector<ManoeuvreRow>* rows,
+                              ProgressFn progress, void* context) {
+  constexpr double kBumpsDeg = 15;
+  const ExperimentOptions options = WithCapFor(manoeuvre_options, LargestTiltDeg(0, kBumpsDeg));
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
     World world;
@@ -213,7 +319,7 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
     query_spec.motion.seed = 302;
     query_spec.motion.zigzag_deg = 20;
     query_spec.motion.zigzag_period_m = 12;
-    query_spec.motion.bumps_deg = 15;
+    query_spec.motion.bumps_deg = kBumpsDeg;
     LightingPreset("dawn", 402, &query_spec.lighting);
     RunDescriptors reference, query;
     Report(progress, context, reference_spec.label.c_str());
@@ -227,10 +333,15 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
       ManoeuvreRow row;
       row.world = kind;
       row.sequence_length = ds;
-      SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
-      SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
-      SKYLOC_TRY(
-          ScoreRuns(reference, query, true, o, &row.sky_filter, ExperimentMatcher::kRouteFilter));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kVanilla, o, &row.vanilla));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky_filter,
+                           ExperimentMatcher::kRouteFilter));
+      if (o.cap.enabled) {
+        SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap));
+        SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap_filter,
+                             ExperimentMatcher::kRouteFilter));
+      }
       rows->push_back(std::move(row));
     }
   }
@@ -286,10 +397,10 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
       row.query = q.name;
       row.same_ant = q.same_ant;
       row.camera_height_m = height;
-      SKYLOC_TRY(ScoreRuns(reference, query, true, o, &row.sky));
-      SKYLOC_TRY(ScoreRuns(reference, query, false, o, &row.vanilla));
-      SKYLOC_TRY(
-          ScoreRuns(reference, query, true, o, &row.sky_filter, ExperimentMatcher::kRouteFilter));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kVanilla, o, &row.vanilla));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky_filter,
+                           ExperimentMatcher::kRouteFilter));
       const auto with_truth =
           std::count_if(row.sky.truth.begin(), row.sky.truth.end(),
                         [](const dsp::TruthInterval& t) { return t.has_truth(); });
@@ -302,8 +413,10 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
   return Status::Ok();
 }
 
-Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
+Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<const int> ds_values,
                           std::vector<SpeedRow>* rows, ProgressFn progress, void* context) {
+  constexpr double kBumpsDeg = 15;
+  const ExperimentOptions options = WithCapFor(speed_options, LargestTiltDeg(0, kBumpsDeg));
   rows->clear();
   ExperimentOptions base = options;
   base.sampling = Sampling::kTime;
@@ -321,7 +434,7 @@ Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int>
     SKYLOC_TRY(
         DescribeRun(world, world.route, world.route_closed, reference_spec, base, &reference));
     std::uint64_t seed = 510;
-    for (const double bumps : {0.0, 15.0}) {
+    for (const double bumps : {0.0, kBumpsDeg}) {
       for (const bool stops : {true, false}) {
         for (const double ratio : {0.5, 1.0, 2.0}) {
           ++seed;
@@ -356,10 +469,14 @@ Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int>
             row.bumps_deg = bumps;
             row.sequence_length = ds;
             row.query_frames = static_cast<int>(query.trajectory.size());
-            SKYLOC_TRY(ScoreRuns(reference, query, true, scored, &row.openseqslam,
+            SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, scored, &row.openseqslam,
                                  ExperimentMatcher::kOpenSeqSlam));
-            SKYLOC_TRY(ScoreRuns(reference, query, true, scored, &row.filter,
+            SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, scored, &row.filter,
                                  ExperimentMatcher::kRouteFilter));
+            if (scored.cap.enabled) {
+              SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, scored,
+                                   &row.filter_cap, ExperimentMatcher::kRouteFilter));
+            }
             rows->push_back(std::move(row));
           }
         }

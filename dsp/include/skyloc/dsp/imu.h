@@ -1,9 +1,15 @@
 // Inertial samples and the robot's attitude, shared by the attitude sources (drivers/), the
 // attitude filter and the gravity-aligned sky descriptor (dsp/).
 //
-// Frames and angles (the simulator's convention, drivers/sim/src/renderer.cpp BodyToWorld):
-//   body x forward, y left, z up; body-to-world R = Rz(yaw) * Ry(-pitch) * Rx(roll), so a
-//   positive pitch lifts the nose and a positive roll lowers the right (-y) side.
+// The frame: the *body frame of the camera's lens model* (dsp::Lens: body = R_mount *
+// camera, from camera.toml's mount angles), the frame the sky descriptor samples in; an
+// attitude source's mounting rotation takes the IMU's axes into it. On a robot whose camera
+// mount angles describe the camera on the robot, that is the robot's frame (x forward, y
+// left, z up). (The simulator's camera has no mount angles and sits turned on its robot:
+// sim::SimCameraFromBody.)
+// Angles (the simulator's convention, drivers/sim/src/renderer.cpp BodyToWorld):
+//   body-to-world R = Rz(yaw) * Ry(-pitch) * Rx(roll), so a positive pitch lifts the nose
+//   (+x) and a positive roll lowers the right (-y) side.
 //   The world's zenith seen in the body frame is therefore
 //     up = (sin pitch, cos pitch sin roll, cos pitch cos roll)
 //   and an accelerometer at rest reads the specific force f = g * up (+9.81 m/s^2 on z when

@@ -89,9 +89,12 @@ void GroundTruthFromPositions(std::span<const Position3> reference,
 // How a match is judged: within +-frames of the truth interval (the paper: 5), or, with
 // metres > 0, recorded within that distance of the query (the interval then only says
 // whether the query has a truth at all).
+// loop_frames > 0: the reference is one lap of a closed route of that many frames, so its
+// last frame is next to its first and frame distances wrap around (frames mode).
 struct MatchTolerance {
   int frames = 5;
   double metres = 0;
+  int loop_frames = 0;
 };
 
 // `reference` and `query` are needed in distance mode only (pass {} and any position with

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "skyloc/dsp/image.h"
+#include "skyloc/dsp/imu.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/sample_lut.h"
 #include "skyloc/dsp/segmentation.h"
@@ -29,6 +30,26 @@ enum class SamplingPath : std::uint8_t {
   kViaMask,
 };
 
+// The gravity-aligned cap (docs/SKY_DESCRIPTOR.md, "Tilt"). The amplitude spectrum is
+// rotation-invariant only for the whole sphere; a tilted lens crops a different part of the
+// sky, so the hemisphere's spectrum changes with the tilt. With the zenith known (from the
+// attitude), the descriptor keeps only the sky above `elevation_deg` in the *world* frame,
+// weighted by a raised-cosine taper over `taper_deg` (a hard edge on the camera's grid would
+// alias differently at each tilt). That cap is a function of world elevation only, so its
+// spectrum is the same at any tilt as long as the whole cap is in view:
+//   elevation_deg >= max_tilt_deg + 90 - min(90, fov_deg / 2)       (CapElevationForTilt)
+// Cost per frame: one dot product and a compare per sample.
+struct GravityCapOptions {
+  bool enabled = false;
+  double elevation_deg = 60;  // world elevation of the cap's lower edge, 0..85
+  double taper_deg = 10;      // the weight rises from 0 to 1 over this many degrees, 0..30
+};
+
+// The lowest cap elevation that stays in view at tilts up to max_tilt_deg for a lens whose
+// full field of view is fov_deg (the upper hemisphere grid also limits it to 90 degrees
+// from the body zenith). Clamped to 0.
+double CapElevationForTilt(double max_tilt_deg, double fov_deg);
+
 struct SkyDescriptorOptions {
   int bands = 120;
   // Rings 0 = DefaultShGridConfig(bands) (unaliased); PaperShGridConfig() for the paper.
@@ -37,6 +58,7 @@ struct SkyDescriptorOptions {
   SampleLutOptions sampling;
   SamplingPath path = SamplingPath::kDirect;
   AmplitudeNormalisation normalisation = AmplitudeNormalisation::kNone;
+  GravityCapOptions cap;
 };
 
 // Which stage rejected the configuration or the frame, and a sentence saying why.
@@ -53,8 +75,13 @@ class SkyDescriptor {
   DescriptorError Init(const Lens& lens, const SkyDescriptorOptions& options);
 
   // amplitudes: bands() values. segmentation (optional): threshold and sky fraction.
+  // attitude: the body's zenith for the gravity-aligned cap (options.cap.enabled); null
+  // means "assume level" (the cap about the body's own z axis: what a robot without a
+  // working attitude source can still compare with a route taught level). Ignored when the
+  // cap is off.
   DescriptorError Compute(const ImageView& image, std::span<float> amplitudes,
-                          SegmentationResult* segmentation = nullptr);
+                          SegmentationResult* segmentation = nullptr,
+                          const Attitude* attitude = nullptr);
 
   int bands() const { return options_.bands; }
   const ShGrid& grid() const { return grid_; }
@@ -71,8 +98,12 @@ class SkyDescriptor {
   SkySegmenter segmenter_;
   SampleLut lut_;
   ShProjector projector_;
+  void ApplyCap(const std::array<double, 3>& up);
+
   std::vector<float> samples_;
   std::vector<float> coefficients_;
+  // The cap: per longitude (cos phi, sin phi) and per ring (sin theta, cos theta).
+  std::vector<float> cos_phi_, sin_phi_, ring_sin_, ring_cos_, along_phi_;
   std::vector<std::uint8_t> mask_;
   int width_ = 0;
   int height_ = 0;

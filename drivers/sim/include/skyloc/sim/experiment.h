@@ -18,12 +18,22 @@
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
+#include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/sim/motion.h"
 #include "skyloc/sim/renderer.h"
 #include "skyloc/sim/world.h"
 
 namespace skyloc::sim {
+
+// Where the gravity-aligned descriptor's zenith comes from (issue 12).
+enum class AttitudeInput : std::uint8_t {
+  kNone,          // no gravity-aligned descriptor
+  kTruth,         // the true poses (an upper bound)
+  kSimulatedImu,  // the simulated IMU (noise, bias) through the attitude filter: the product
+};
+
+const char* AttitudeInputName(AttitudeInput input);
 
 struct ExperimentOptions {
   int width = 320;
@@ -44,14 +54,22 @@ struct ExperimentOptions {
   bool vanilla = true;            // also render the visible image and its descriptor
   int tolerance_frames = 5;
   double max_offset_m = 3.0;  // farther than this from the reference route: no truth
+  // The gravity-aligned descriptor: every run is also described with the cap (cap.enabled
+  // is set from `attitude`). The cap elevation, when cap.elevation_deg < 0, comes from the
+  // experiment's own largest tilt through dsp::CapElevationForTilt (what a user would set).
+  AttitudeInput attitude = AttitudeInput::kTruth;
+  dsp::GravityCapOptions cap{false, -1, 10};
 };
 
 // One simulated run: its trajectory and the descriptors of every frame.
 struct RunDescriptors {
   std::string label;
   std::vector<TrajectoryPoint> trajectory;
+  bool closed_loop = false;  // one full lap of a closed route (scored with wrap-around)
   std::vector<float> sky;      // frames x bands
   std::vector<float> vanilla;  // frames x dsp::kVanillaDescriptorSize
+  std::vector<float> sky_cap;  // frames x bands: the gravity-aligned cap (empty: attitude off)
+  std::vector<dsp::Attitude> attitude;  // per frame: the zenith the cap used
   double mean_sky_fraction = 0;
 };
 
@@ -76,13 +94,17 @@ struct MethodScore {
   std::vector<bool> correct;               // per query frame: matched and correct
 };
 
+// Which descriptor of a run is scored.
+enum class RunDescriptor : std::uint8_t { kSky, kSkyCap, kVanilla };
+
 // Which matcher scores a pair of runs: OpenSeqSLAM (batch, centred window, as the paper)
 // or the route filter (the firmware's, causal).
 enum class ExperimentMatcher : std::uint8_t { kOpenSeqSlam, kRouteFilter };
 
-// The matcher over `query` against `reference` with descriptors `sky` (use_sky) or
-// `vanilla`, then precision-recall against the position ground truth.
-Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query, bool use_sky,
+// The matcher over `query` against `reference` with the chosen descriptors, then
+// precision-recall against the position ground truth.
+Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
+                 RunDescriptor descriptor,
                  const ExperimentOptions& options, MethodScore* out,
                  ExperimentMatcher matcher = ExperimentMatcher::kOpenSeqSlam);
 
@@ -96,6 +118,8 @@ struct TiltRow {
   double query_tilt_deg = 0;
   MethodScore sky, vanilla;
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
+  // The gravity-aligned cap (options.attitude != kNone): OpenSeqSLAM and the route filter.
+  MethodScore sky_cap, sky_cap_filter;
 };
 
 // Progress: called before each run is rendered (may be null).
@@ -112,6 +136,7 @@ struct ManoeuvreRow {
   int sequence_length = 10;
   MethodScore sky, vanilla;
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
+  MethodScore sky_cap, sky_cap_filter;  // the gravity-aligned cap, as TiltRow
 };
 
 Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
@@ -143,6 +168,7 @@ struct SpeedRow {
   int sequence_length = 10;
   int query_frames = 0;
   MethodScore openseqslam, filter;
+  MethodScore filter_cap;  // the route filter on the gravity-aligned cap (attitude on)
 };
 
 Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int> ds_values,

@@ -17,6 +17,7 @@
 // deterministic: the same world, pose, lighting and frame seed give the same bytes.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "skyloc/drivers/camera.h"
@@ -62,6 +63,14 @@ struct Rotation {
   }
 };
 Rotation BodyToWorld(const drivers::Pose& pose);
+
+// The simulated camera sits on the robot with camera x = body +y, camera y = body -x and
+// camera z = body +z, and DefaultSimLens has no mount angles, so the sky descriptor samples
+// in the camera frame. A vector of the robot's body frame (the zenith, an IMU reading) in
+// that frame, i.e. what an IMU mounted with the camera's axes would read:
+inline std::array<double, 3> SimCameraFromBody(const std::array<double, 3>& v) {
+  return {v[1], -v[0], v[2]};
+}
 
 class Renderer {
  public:
