@@ -277,9 +277,10 @@ constexpr MethodName kDescriptorMethods[] = {
     {"sky_filter", "Route filter (sky)"},
     {"sky_cap", "SeqSLAM (sky, gravity-aligned cap)"},
     {"sky_cap_filter", "Route filter (sky, gravity-aligned cap)"}};
-constexpr MethodName kMatcherMethods[] = {{"openseqslam", "OpenSeqSLAM (sky)"},
-                                          {"filter", "Route filter (sky)"},
-                                          {"filter_cap", "Route filter (sky, gravity-aligned cap)"}};
+constexpr MethodName kMatcherMethods[] = {
+    {"openseqslam", "OpenSeqSLAM (sky)"},
+    {"filter", "Route filter (sky)"},
+    {"filter_cap", "Route filter (sky, gravity-aligned cap)"}};
 // The methods without the gravity-aligned columns (--attitude none, and ants).
 constexpr std::size_t kDescriptorMethodsWithoutCap = 3;
 constexpr std::size_t kMatcherMethodsWithoutCap = 2;

@@ -75,8 +75,7 @@ ImageView SkyDescriptor::mask() const {
 }
 
 DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> amplitudes,
-                                       SegmentationResult* segmentation,
-                                       const Attitude* attitude) {
+                                       SegmentationResult* segmentation, const Attitude* attitude) {
   using Stage = DescriptorError::Stage;
   if (amplitudes.size() != static_cast<std::size_t>(options_.bands))
     return Fail(Stage::kProjection, ShErrorMessage(ShError::kSizeMismatch));

@@ -157,8 +157,12 @@ TEST(SkyDescriptor, GravityCapIsTheSameAtAnyTiltUpToItsLimit) {
   ASSERT_TRUE(descriptor.Compute({place.data(), 480, 480, 480, PixelFormat::kGrey8}, other).ok());
   const double other_place = RelativeL2(level, other);
   std::printf("  cap: different place: relative L2 %.4f\n", other_place);
-  for (const auto& [roll, pitch] : {std::pair{0.0, 10.0}, {0.0, 30.0}, {0.0, 60.0}, {-25.0, 0.0},
-                                    {40.0, -35.0}, {-42.0, 42.0}}) {
+  for (const auto& [roll, pitch] : {std::pair{0.0, 10.0},
+                                    {0.0, 30.0},
+                                    {0.0, 60.0},
+                                    {-25.0, 0.0},
+                                    {40.0, -35.0},
+                                    {-42.0, 42.0}}) {
     // Drawn with mount body = Ry(pitch) Rx(roll) * camera (dsp::Lens): in imu.h's convention
     // (body-to-world Ry(-pitch) Rx(roll)) that is a pitch of -pitch.
     drawn.roll_deg = roll;

@@ -7,6 +7,7 @@
 
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
+#include "skyloc/sim/imu_model.h"
 
 namespace skyloc::sim {
 
@@ -24,24 +25,24 @@ const char* AttitudeInputName(AttitudeInput input) {
 
 namespace {
 
-// The zenith the gravity-aligned cap uses at each frame of a run.
+// The zenith the gravity-aligned cap uses at each frame of a run (body frame: the lens's).
+// The simulated IMU's noise and bias are seeded from the run's own seed.
 Status RunAttitudes(const std::vector<TrajectoryPoint>& trajectory, AttitudeInput input,
-                    std::vector<dsp::Attitude>* out) {
+                    std::uint64_t seed, std::vector<dsp::Attitude>* out) {
   out->clear();
-  switch (input) {
-    case AttitudeInput::kNone:
-      return Status::Ok();
-    case AttitudeInput::kTruth:
-      for (const TrajectoryPoint& t : trajectory) {
-        out->push_back(dsp::AttitudeFromUp(
-            static_cast<std::int64_t>(t.time_s * 1e9),
-            SimCameraFromBody(dsp::UpFromRollPitch(t.pose.roll_deg, t.pose.pitch_deg))));
-      }
-      return Status::Ok();
-    case AttitudeInput::kSimulatedImu:
-      break;
+  if (input == AttitudeInput::kNone)
+    return Status::Ok();
+  if (input == AttitudeInput::kTruth) {
+    for (const TrajectoryPoint& t : trajectory) {
+      out->push_back(dsp::AttitudeFromRollPitch(static_cast<std::int64_t>(t.time_s * 1e9),
+                                                t.pose.roll_deg, t.pose.pitch_deg));
+    }
+  } else {
+    ImuModelConfig imu;
+    imu.seed = seed * 7919 + 17;
+    SKYLOC_TRY(EstimateAttitudes(trajectory, imu, dsp::AttitudeFilterParams{}, out));
   }
-  return Status::Error(StatusCode::kUnimplemented, "the simulated IMU is not wired yet");
+  return Status::Ok();
 }
 
 // The largest tilt (angle between body z and the world zenith) a run with these manoeuvres
@@ -92,7 +93,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
     if (const dsp::DescriptorError e = sky_cap.Init(renderer.lens(), cap_options); !e.ok())
       return Status::Error(StatusCode::kInvalidArgument, "gravity-aligned sky descriptor: %s",
                            e.message);
-    SKYLOC_TRY(RunAttitudes(out->trajectory, options.attitude, &out->attitude));
+    SKYLOC_TRY(RunAttitudes(out->trajectory, options.attitude, motion.seed, &out->attitude));
   } else {
     out->attitude.clear();
   }
@@ -293,8 +294,8 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
                          ExperimentMatcher::kRouteFilter));
     if (options.cap.enabled) {
       SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap));
-      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options,
-                           &row.sky_cap_filter, ExperimentMatcher::kRouteFilter));
+      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap_filter,
+                           ExperimentMatcher::kRouteFilter));
     }
     rows->push_back(std::move(row));
   }

@@ -189,6 +189,10 @@ dsp::LensParams DefaultSimLens(int width, int height) {
   p.width = width;
   p.height = height;
   p.fov_deg = 185.0;
+  // The camera on the robot: camera x = body +y, camera y = body -x (image rows run
+  // backwards), camera z = body +z. With the mount in the lens, the lens's body frame is the
+  // robot's: the sky descriptor and an IMU share it (dsp/imu.h).
+  p.yaw_deg = 90.0;
   return p;
 }
 
@@ -287,28 +291,11 @@ Status Renderer::CheckOutput(const dsp::MutableImageView& out, dsp::PixelFormat 
   return Status::Ok();
 }
 
-namespace {
-
-// world_from_camera = R_world_body * M_body_camera, where camera x = body +y, camera y =
-// body -x, camera z = body +z.
-Rotation WorldFromCamera(const drivers::Pose& pose) {
-  const Rotation r = BodyToWorld(pose);
-  Rotation w;
-  for (int i = 0; i < 3; ++i) {
-    w.m[i][0] = r.m[i][1];
-    w.m[i][1] = -r.m[i][0];
-    w.m[i][2] = r.m[i][2];
-  }
-  return w;
-}
-
-}  // namespace
-
 Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spectrum spectrum,
                         std::uint64_t frame_seed, const dsp::MutableImageView& out) const {
   const bool uv = spectrum == Spectrum::kUv;
   SKYLOC_TRY(CheckOutput(out, uv ? dsp::PixelFormat::kGrey8 : dsp::PixelFormat::kRgb24));
-  const Rotation to_world = WorldFromCamera(pose);
+  const Rotation to_world = BodyToWorld(pose);  // the lens's rays are in the body frame
   const Vec3 origin{static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
                     static_cast<float>(pose.z_m)};
   const Bvh& bvh = world_->bvh();
@@ -327,7 +314,7 @@ Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spe
   fl.cloud_seed = static_cast<std::uint32_t>(lighting.seed * 2654435761u);
   // Flare only when the sun is in the field of view and nothing blocks it.
   if (fl.sun_up && lighting.flare > 0) {
-    // camera = to_world^T * world
+    // body = to_world^T * world
     Vec3 cam;
     for (int i = 0; i < 3; ++i)
       cam[i] =
@@ -436,7 +423,7 @@ Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spe
 
 Status Renderer::RenderSkyMask(const drivers::Pose& pose, const dsp::MutableImageView& out) const {
   SKYLOC_TRY(CheckOutput(out, dsp::PixelFormat::kGrey8));
-  const Rotation to_world = WorldFromCamera(pose);
+  const Rotation to_world = BodyToWorld(pose);  // the lens's rays are in the body frame
   const Vec3 origin{static_cast<float>(pose.x_m), static_cast<float>(pose.y_m),
                     static_cast<float>(pose.z_m)};
   for (int y = 0; y < height_; ++y) {

@@ -10,7 +10,8 @@ namespace skyloc::dsp {
 enum class PixelFormat : std::uint8_t {
   kGrey8,  // one byte a pixel (V4L2 GREY)
   kRgb24,  // R, G, B bytes (V4L2 RGB24, decoded PNG)
-  kBgr24,  // B, G, R bytes in memory (V4L2 BGR24; note libcamera's BGR888 is R, G, B in memory = kRgb24)
+  kBgr24,  // B, G, R bytes in memory (V4L2 BGR24; note libcamera's BGR888 is R, G, B in memory =
+           // kRgb24)
   kYuyv,   // Y0 U Y1 V for two pixels (V4L2 YUYV); Y is the luminance the segmenter uses
 };
 

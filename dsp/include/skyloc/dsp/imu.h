@@ -5,8 +5,7 @@
 // camera, from camera.toml's mount angles), the frame the sky descriptor samples in; an
 // attitude source's mounting rotation takes the IMU's axes into it. On a robot whose camera
 // mount angles describe the camera on the robot, that is the robot's frame (x forward, y
-// left, z up). (The simulator's camera has no mount angles and sits turned on its robot:
-// sim::SimCameraFromBody.)
+// left, z up), as in the simulator (sim::DefaultSimLens carries its camera's mount).
 // Angles (the simulator's convention, drivers/sim/src/renderer.cpp BodyToWorld):
 //   body-to-world R = Rz(yaw) * Ry(-pitch) * Rx(roll), so a positive pitch lifts the nose
 //   (+x) and a positive roll lowers the right (-y) side.

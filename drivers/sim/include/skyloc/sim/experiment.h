@@ -57,7 +57,7 @@ struct ExperimentOptions {
   // The gravity-aligned descriptor: every run is also described with the cap (cap.enabled
   // is set from `attitude`). The cap elevation, when cap.elevation_deg < 0, comes from the
   // experiment's own largest tilt through dsp::CapElevationForTilt (what a user would set).
-  AttitudeInput attitude = AttitudeInput::kTruth;
+  AttitudeInput attitude = AttitudeInput::kSimulatedImu;
   dsp::GravityCapOptions cap{false, -1, 10};
 };
 
@@ -65,7 +65,7 @@ struct ExperimentOptions {
 struct RunDescriptors {
   std::string label;
   std::vector<TrajectoryPoint> trajectory;
-  bool closed_loop = false;  // one full lap of a closed route (scored with wrap-around)
+  bool closed_loop = false;    // one full lap of a closed route (scored with wrap-around)
   std::vector<float> sky;      // frames x bands
   std::vector<float> vanilla;  // frames x dsp::kVanillaDescriptorSize
   std::vector<float> sky_cap;  // frames x bands: the gravity-aligned cap (empty: attitude off)
@@ -104,8 +104,7 @@ enum class ExperimentMatcher : std::uint8_t { kOpenSeqSlam, kRouteFilter };
 // The matcher over `query` against `reference` with the chosen descriptors, then
 // precision-recall against the position ground truth.
 Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
-                 RunDescriptor descriptor,
-                 const ExperimentOptions& options, MethodScore* out,
+                 RunDescriptor descriptor, const ExperimentOptions& options, MethodScore* out,
                  ExperimentMatcher matcher = ExperimentMatcher::kOpenSeqSlam);
 
 // ---- The experiments -------------------------------------------------------------------

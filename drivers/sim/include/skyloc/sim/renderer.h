@@ -17,7 +17,6 @@
 // deterministic: the same world, pose, lighting and frame seed give the same bytes.
 #pragma once
 
-#include <array>
 #include <cstdint>
 
 #include "skyloc/drivers/camera.h"
@@ -50,7 +49,9 @@ struct Lighting {
 // "dawn", "noon", "overcast" -> a preset; false for anything else.
 bool LightingPreset(const char* name, std::uint64_t seed, Lighting* lighting);
 
-// The default lens: equidistant, 185 degrees, centred, circle filling the shorter side.
+// The default lens: equidistant, 185 degrees, centred, circle filling the shorter side,
+// mounted on the robot turned 90 degrees (camera x = body +y): the lens's mount angles say
+// where the camera sits, so rays and the sky descriptor are in the robot's body frame.
 dsp::LensParams DefaultSimLens(int width, int height);
 
 // Rotation from body to world for a pose (row-major 3x3).
@@ -63,14 +64,6 @@ struct Rotation {
   }
 };
 Rotation BodyToWorld(const drivers::Pose& pose);
-
-// The simulated camera sits on the robot with camera x = body +y, camera y = body -x and
-// camera z = body +z, and DefaultSimLens has no mount angles, so the sky descriptor samples
-// in the camera frame. A vector of the robot's body frame (the zenith, an IMU reading) in
-// that frame, i.e. what an IMU mounted with the camera's axes would read:
-inline std::array<double, 3> SimCameraFromBody(const std::array<double, 3>& v) {
-  return {v[1], -v[0], v[2]};
-}
 
 class Renderer {
  public:
