@@ -40,6 +40,10 @@ constexpr EnumName<StatusEncoding> kStatusEncodings[] = {{"per-state", StatusEnc
                                                          {"blink", StatusEncoding::kBlink}};
 constexpr EnumName<Matcher> kMatchers[] = {{"filter", Matcher::kRouteFilter},
                                            {"openseqslam", Matcher::kOpenSeqSlam}};
+constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNone},
+                                                     {"iio", AttitudeKind::kIio},
+                                                     {"dataset", AttitudeKind::kDataset},
+                                                     {"sim", AttitudeKind::kSim}};
 constexpr EnumName<RouteStorage> kRouteStorages[] = {{"float32", RouteStorage::kFloat32},
                                                      {"bfloat16", RouteStorage::kBFloat16}};
 
@@ -284,6 +288,9 @@ const char* StatusOutputKindName(StatusOutputKind kind) {
 const char* StatusEncodingName(StatusEncoding encoding) {
   return NameOf(kStatusEncodings, encoding);
 }
+const char* AttitudeKindName(AttitudeKind kind) {
+  return NameOf(kAttitudeKinds, kind);
+}
 
 Config DefaultConfig() {
   Config c;
@@ -299,7 +306,8 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
 
   constexpr const char* kSections[] = {"camera",  "segmentation", "descriptor",
                                        "seqslam", "capacities",   "state",
-                                       "status",  "realtime",     "route_db"};
+                                       "status",  "realtime",     "route_db",
+                                       "attitude"};
   for (auto&& [k, node] : root) {
     bool known = false;
     for (const char* s : kSections)
@@ -308,7 +316,8 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     if (!known) {
       return Status::Error(StatusCode::kInvalidArgument,
                            "%s:%u: [%s] is not a known section (known: camera, segmentation, "
-                           "descriptor, seqslam, capacities, state, status, realtime, route_db)",
+                           "descriptor, seqslam, capacities, state, status, realtime, route_db, "
+                           "attitude)",
                            source.c_str(), node.source().begin.line, name.c_str());
     }
     if (!node.is_table()) {
@@ -435,6 +444,32 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   {
     SectionReader r(section("route_db"), "route_db", source_name, &error);
     r.Int("flush_every", &c.route_db.flush_every, 1, 100000);
+    r.Finish();
+  }
+  {
+    SectionReader r(section("attitude"), "attitude", source_name, &error);
+    AttitudeConfig& a = c.attitude;
+    r.Enum("kind", &a.kind, kAttitudeKinds);
+    r.String("device", &a.device, true);
+    r.Double("rate_hz", &a.rate_hz, 1.0, 10000.0);
+    r.Double("mount_roll_deg", &a.mount_roll_deg, -180.0, 180.0);
+    r.Double("mount_pitch_deg", &a.mount_pitch_deg, -180.0, 180.0);
+    r.Double("mount_yaw_deg", &a.mount_yaw_deg, -180.0, 180.0);
+    r.Double("max_tilt_deg", &a.max_tilt_deg, 0.0, 75.0);
+    r.Double("cap_taper_deg", &a.cap_taper_deg, 0.0, 30.0);
+    r.Double("filter_kp", &a.filter_kp, 0.0, 100.0);
+    r.Double("filter_ki", &a.filter_ki, 0.0, 100.0);
+    r.Double("accel_gate_mps2", &a.accel_gate_mps2, 0.0, 100.0);
+    r.Int("stale_ms", &a.stale_ms, 1, 60000);
+    if (error.ok() && a.kind == AttitudeKind::kIio && a.device.empty())
+      r.Invalid("device", "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
+                          "name, e.g. \"bmi160\")");
+    if (error.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
+      r.Invalid("kind", "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "
+                        "it needs [camera] kind = \"dataset\"");
+    if (error.ok() && a.kind == AttitudeKind::kSim && c.camera.kind != CameraKind::kSim)
+      r.Invalid("kind", "\"sim\" simulates the IMU of the simulated camera's run: it needs "
+                        "[camera] kind = \"sim\"");
     r.Finish();
   }
   if (!error.ok())

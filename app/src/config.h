@@ -19,6 +19,7 @@ enum class Normalisation : std::uint8_t { kNone, kDivideByA0, kUnitL2 };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
 enum class RouteStorage : std::uint8_t { kFloat32, kBFloat16 };
+enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 
 const char* CameraKindName(CameraKind kind);
 const char* SegmentationMethodName(SegmentationMethod method);
@@ -26,6 +27,7 @@ const char* GridPresetName(GridPreset preset);
 const char* NormalisationName(Normalisation normalisation);
 const char* StatusOutputKindName(StatusOutputKind kind);
 const char* StatusEncodingName(StatusEncoding encoding);
+const char* AttitudeKindName(AttitudeKind kind);
 
 struct CameraConfig {
   CameraKind kind = CameraKind::kSim;
@@ -140,6 +142,34 @@ struct RouteDbConfig {
   int flush_every = 50;  // frames per chunk: at most this many are lost on a crash
 
   bool operator==(const RouteDbConfig&) const = default;
+};
+
+// Where the robot's roll and pitch come from, for the gravity-aligned sky descriptor
+// (docs/ATTITUDE.md, docs/SKY_DESCRIPTOR.md "Tilt").
+struct AttitudeConfig {
+  // none: the whole hemisphere, no cap (the descriptor of every earlier version);
+  // iio: an IMU through the kernel's IIO subsystem; dataset: the roll_deg,pitch_deg columns
+  // of the replayed dataset; sim: the simulated IMU of the simulated camera's run.
+  AttitudeKind kind = AttitudeKind::kNone;
+  std::string device;   // iio: /dev/iio:deviceN or the IIO device name (e.g. "bmi160")
+  double rate_hz = 200;  // iio and sim: IMU samples per second
+  // The IMU's axes in the camera's body frame (the lens's mount frame): body = Rz(yaw) *
+  // Ry(pitch) * Rx(roll) * imu, as camera.toml's mount angles.
+  double mount_roll_deg = 0;
+  double mount_pitch_deg = 0;
+  double mount_yaw_deg = 0;
+  // The largest tilt the robot is expected to reach: the cap's lower edge is set from it
+  // and the lens's field of view (dsp::CapElevationForTilt), and the route records it.
+  double max_tilt_deg = 30;
+  double cap_taper_deg = 10;
+  // The attitude filter (dsp/attitude_filter.h).
+  double filter_kp = 1.0;
+  double filter_ki = 0.08;
+  double accel_gate_mps2 = 0.4;
+  // An attitude older than this at a frame's time is stale: the frame is described as if
+  // level (one warning, counted), never dropped.
+  int stale_ms = 250;
+  bool operator==(const AttitudeConfig&) const = default;
 };
 
 struct Config {

@@ -1,5 +1,7 @@
 #include "pipeline.h"
 
+#include <cmath>
+
 #include <cstring>
 
 #include "skyloc/drivers/camera_file.h"
@@ -128,8 +130,21 @@ Status Pipeline::Init(const Config& config) {
   options.segmentation.fixed_threshold =
       config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold : -1;
   options.normalisation = ToDsp(config.descriptor.normalisation);
+  if (config.attitude.kind != AttitudeKind::kNone) {
+    // The cap from the largest expected tilt and what the lens sees (max_theta: half its
+    // field of view, whatever the model).
+    constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+    options.cap.enabled = true;
+    options.cap.elevation_deg =
+        dsp::CapElevationForTilt(config.attitude.max_tilt_deg, 2 * lens_.max_theta() * kRadToDeg);
+    options.cap.taper_deg = config.attitude.cap_taper_deg;
+  }
+  uses_attitude_ = options.cap.enabled;
   if (const dsp::DescriptorError e = descriptor_.Init(lens_, options); !e.ok())
-    return Status::Error(StatusCode::kInvalidArgument, "[descriptor]: %s", e.message);
+    return Status::Error(StatusCode::kInvalidArgument, "%s: %s",
+                         options.cap.enabled ? "[attitude] max_tilt_deg/cap_taper_deg"
+                                             : "[descriptor]",
+                         e.message);
   SKYLOC_TRY(amplitudes_.Allocate(static_cast<std::size_t>(descriptor_.bands())));
 
   matcher_ = config.seqslam.matcher;
@@ -168,6 +183,12 @@ Status Pipeline::Init(const Config& config) {
   route_settings_.dim = static_cast<std::uint32_t>(descriptor_.bands());
   route_settings_.normalisation = static_cast<std::uint32_t>(config.descriptor.normalisation);
   route_settings_.lens_hash = LensHash(lens_params);
+  if (options.cap.enabled) {
+    route_settings_.gravity_cap_cdeg =
+        static_cast<std::uint32_t>(std::lround(options.cap.elevation_deg * 100));
+    route_settings_.gravity_cap_taper_cdeg =
+        static_cast<std::uint32_t>(std::lround(options.cap.taper_deg * 100));
+  }
 
   latency_ = LatencyTable();
   stage_capture = latency_.AddStage("capture");
@@ -217,10 +238,17 @@ void Pipeline::ResetTracking() {
   state_.Reset();
 }
 
-Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result) {
+Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
+                          const dsp::Attitude* attitude) {
   StageTimer timer(latency_, stage_descriptor, clock_);
   dsp::SegmentationResult segmentation;
-  if (const dsp::DescriptorError e = descriptor_.Compute(image, amplitudes_.span(), &segmentation);
+  result->has_attitude = attitude != nullptr;
+  if (attitude != nullptr) {
+    result->roll_deg = static_cast<float>(attitude->roll_deg);
+    result->pitch_deg = static_cast<float>(attitude->pitch_deg);
+  }
+  if (const dsp::DescriptorError e =
+          descriptor_.Compute(image, amplitudes_.span(), &segmentation, attitude);
       !e.ok()) {
     return Status::Error(StatusCode::kDataLoss, "frame %llu (%dx%d %s): %s",
                          static_cast<unsigned long long>(result->frame), image.width, image.height,
@@ -231,13 +259,14 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result) {
   return Status::Ok();
 }
 
-Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result) {
+Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
+                          const dsp::Attitude* attitude) {
   result->frame = frame.sequence;
   result->timestamp = frame.timestamp;
   result->has_pose = frame.pose.has_value();
   if (frame.pose)
     result->pose = *frame.pose;
-  SKYLOC_TRY(Describe(frame.image, result));
+  SKYLOC_TRY(Describe(frame.image, result, attitude));
   dsp::SeqSlamMatch match;
   {
     StageTimer timer(latency_, stage_seqslam, clock_);

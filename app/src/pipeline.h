@@ -38,6 +38,10 @@ struct FrameResult {
   Nanoseconds latency{0};  // from the frame leaving Capture() to the state being shown
   bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
   drivers::Pose pose;
+  // The attitude the gravity-aligned cap used ([attitude]); false: none, or stale (the
+  // frame was described as if level).
+  bool has_attitude = false;
+  float roll_deg = 0, pitch_deg = 0;
 };
 
 // The descriptor kinds a route database records (RouteDbSettings::descriptor_kind).
@@ -75,12 +79,17 @@ class Pipeline {
   Status SetRoute(const RouteFrames& route);
   std::size_t route_size() const;  // taught frames
 
-  // The descriptor of one frame into descriptor(). Allocates nothing.
-  Status Describe(const dsp::ImageView& image, FrameResult* result);
+  // The descriptor of one frame into descriptor(). Allocates nothing. attitude: the body's
+  // zenith at the frame's time for the gravity-aligned cap ([attitude] kind != none); null
+  // describes the frame as if level. Ignored without an attitude source.
+  Status Describe(const dsp::ImageView& image, FrameResult* result,
+                  const dsp::Attitude* attitude = nullptr);
+  bool uses_attitude() const { return uses_attitude_; }
   std::span<const float> descriptor() const { return amplitudes_.span(); }
 
   // Describe + SeqSLAM step + state machine. Allocates nothing.
-  Status Localise(const drivers::Frame& frame, FrameResult* result);
+  Status Localise(const drivers::Frame& frame, FrameResult* result,
+                  const dsp::Attitude* attitude = nullptr);
   // Forgets the query history (a gap in the frames) and the localisation state.
   void ResetTracking();
 
@@ -99,6 +108,7 @@ class Pipeline {
   LatencyTable latency_;
   MonotonicClock clock_;
   std::uint64_t matched_frames_ = 0;
+  bool uses_attitude_ = false;
 };
 
 }  // namespace skyloc::app

@@ -117,6 +117,8 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
     return Status::FromErrno(saved, "cannot read %s", csv_path.c_str());
 
   const std::string pose_header = std::string(kDatasetCsvHeader) + "," + kDatasetCsvPoseColumns;
+  const std::string attitude_header =
+      std::string(kDatasetCsvHeader) + "," + kDatasetCsvAttitudeColumns;
   std::size_t pos = 0;
   int line_no = 0;
   std::size_t expected_fields = 0;
@@ -136,10 +138,15 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
       } else if (line == pose_header) {
         expected_fields = 3 + kPoseColumns;
         ds->has_poses = true;
+        ds->has_attitude = true;
+      } else if (line == attitude_header) {
+        expected_fields = 5;
+        ds->has_attitude = true;
       } else {
         return Status::Error(StatusCode::kInvalidArgument,
-                             "%s:1: header must be '%s' or '%s', got '%.*s'", csv_path.c_str(),
-                             kDatasetCsvHeader, pose_header.c_str(),
+                             "%s:1: header must be '%s', '%s' or '%s', got '%.*s'",
+                             csv_path.c_str(), kDatasetCsvHeader, pose_header.c_str(),
+                             attitude_header.c_str(),
                              static_cast<int>(std::min<std::size_t>(line.size(), 60)), line.data());
       }
       continue;
@@ -198,7 +205,24 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
         }
       }
       frame.pose = Pose{v[0], v[1], v[2], v[3], v[4], v[5]};
+    } else if (ds->has_attitude) {
+      static constexpr const char* kNames[2] = {"roll_deg", "pitch_deg"};
+      double v[2];
+      for (int i = 0; i < 2; ++i) {
+        const std::string_view field = fields[static_cast<std::size_t>(3 + i)];
+        if (!ParseDouble(field, &v[i])) {
+          return Status::Error(StatusCode::kInvalidArgument, "%s:%d: %s '%.*s' is not a number",
+                               csv_path.c_str(), line_no, kNames[i], static_cast<int>(field.size()),
+                               field.data());
+        }
+      }
+      frame.pose.reset();
+      frame.attitude = dsp::AttitudeFromRollPitch(0, v[0], v[1]);
     }
+    if (frame.pose)
+      frame.attitude = dsp::AttitudeFromRollPitch(0, frame.pose->roll_deg, frame.pose->pitch_deg);
+    if (frame.attitude)
+      frame.attitude->timestamp_ns = static_cast<std::int64_t>(frame.timestamp_s * 1e9 + 0.5);
     const std::string image_path = frames_dir + "/" + frame.file;
     if (!FileExists(image_path)) {
       return Status::Error(StatusCode::kNotFound, "%s:%d: image %s does not exist",
@@ -447,6 +471,7 @@ Result<Frame> DatasetCamera::DoCapture(Nanoseconds /*timeout*/) {
   frame.sequence = static_cast<std::uint64_t>(i);
   frame.timestamp = Nanoseconds(static_cast<std::int64_t>(std::llround(f.timestamp_s * 1e9)));
   frame.pose = f.pose;
+  frame.attitude = f.attitude;
   return frame;
 }
 

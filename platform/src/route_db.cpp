@@ -66,6 +66,8 @@ void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   Put<std::uint32_t>(h + 36, s.normalisation);
   Put<std::uint64_t>(h + 40, s.lens_hash);
   Put<std::uint32_t>(h + 48, static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim)));
+  Put<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
+  Put<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
   Put<std::uint32_t>(h + 60, CrcOf(h, 60));
 }
 
@@ -85,6 +87,24 @@ bool ChunkHeaderIntact(const std::uint8_t* h) {
 }
 
 Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
+  if (file.gravity_cap_cdeg != want.gravity_cap_cdeg ||
+      file.gravity_cap_taper_cdeg != want.gravity_cap_taper_cdeg) {
+    auto describe = [](const RouteDbSettings& s, char* text, std::size_t size) {
+      if (s.gravity_cap_cdeg == kNoGravityCap)
+        std::snprintf(text, size, "no gravity-aligned cap");
+      else
+        std::snprintf(text, size, "the gravity-aligned cap above %.2f degrees (taper %.2f)",
+                      s.gravity_cap_cdeg / 100.0, s.gravity_cap_taper_cdeg / 100.0);
+    };
+    char in_file[96], wanted[96];
+    describe(file, in_file, sizeof in_file);
+    describe(want, wanted, sizeof wanted);
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with %s but this configuration has %s ([attitude] kind and "
+                         "max_tilt_deg): run with the configuration it was taught with, or "
+                         "teach again",
+                         in_file, wanted);
+  }
   struct Field {
     const char* name;
     std::uint64_t in_file, wanted;
@@ -155,11 +175,13 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   if (std::memcmp(b, kMagic, sizeof kMagic) != 0)
     return Status::Error(StatusCode::kInvalidArgument, "not a skyloc route database (no magic)");
   const std::uint32_t version = Get<std::uint32_t>(b + 8);
-  if (version != kRouteDbVersion) {
+  if (version < 1 || version > kRouteDbVersion) {
     return Status::Error(StatusCode::kInvalidArgument,
-                         "route database version %u; this skyloc reads version %u: teach the "
-                         "route again",
-                         version, kRouteDbVersion);
+                         "route database version %u; this skyloc reads versions 1 to %u: %s",
+                         version, kRouteDbVersion,
+                         version > kRouteDbVersion ? "use the skyloc that taught it, or teach "
+                                                     "the route again"
+                                                   : "teach the route again");
   }
   if (!CrcMatches(Get<std::uint32_t>(b + 60), b, 60) ||
       Get<std::uint32_t>(b + 12) != kRouteDbHeaderBytes) {
@@ -175,6 +197,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   s.dim = Get<std::uint32_t>(b + 32);
   s.normalisation = Get<std::uint32_t>(b + 36);
   s.lens_hash = Get<std::uint64_t>(b + 40);
+  s.gravity_cap_cdeg = version >= 2 ? Get<std::uint32_t>(b + 52) : kNoGravityCap;
+  s.gravity_cap_taper_cdeg = version >= 2 ? Get<std::uint32_t>(b + 56) : 0;
   if (s.dim == 0 || s.dim > kMaxDim || Get<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim)) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): descriptor size %u is "

@@ -2,6 +2,8 @@
 // settings checks, and crash safety (a child killed with SIGKILL while teaching).
 #include "skyloc/platform/route_db.h"
 
+#include "skyloc/platform/crc32.h"
+
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -177,6 +179,46 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
   other.lens_hash = 1;
   s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
   EXPECT_NE(std::string(s.message()).find("lens hash"), std::string::npos) << s.message();
+}
+
+TEST_F(RouteDbTest, GravityCapMismatchIsNamed) {
+  Teach(5, 10, true);
+  RouteDbSettings capped = Settings();
+  capped.gravity_cap_cdeg = 3000;
+  capped.gravity_cap_taper_cdeg = 1000;
+  Status s = ParseRouteDb(Bytes(), &capped, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("taught with no gravity-aligned cap but this "
+                                          "configuration has the gravity-aligned cap above "
+                                          "30.00 degrees"),
+            std::string::npos)
+      << s.message();
+}
+
+// Version 1 had no cap (bytes 52..59 reserved, 0): it still loads, as a route without one;
+// a version newer than this skyloc's is refused naming both versions.
+TEST_F(RouteDbTest, ReadsVersionOneAndRefusesANewerVersion) {
+  Teach(5, 10, true);
+  std::vector<std::uint8_t> v1 = Bytes();
+  auto rewrite_header = [](std::vector<std::uint8_t>* b, std::uint32_t version) {
+    std::memcpy(b->data() + 8, &version, 4);
+    std::memset(b->data() + 52, 0, 8);
+    const std::uint32_t crc = Crc32({b->data(), 60});
+    std::memcpy(b->data() + 60, &crc, 4);
+  };
+  rewrite_header(&v1, 1);
+  RouteDbLoadReport report;
+  const RouteDbSettings want = Settings();
+  ASSERT_TRUE(ParseRouteDb(v1, &want, RouteDbLoadPolicy::kStrict, &frames_, &report).ok());
+  EXPECT_EQ(report.settings.gravity_cap_cdeg, kNoGravityCap);
+  ExpectFrames(frames_, 5);
+  std::vector<std::uint8_t> v3 = Bytes();
+  rewrite_header(&v3, 3);
+  const Status s = Parse(v3);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(s.message()).find("version 3; this skyloc reads versions 1 to 2"),
+            std::string::npos)
+      << s.message();
 }
 
 TEST_F(RouteDbTest, CapacityExceededIsReported) {

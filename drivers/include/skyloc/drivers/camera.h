@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "skyloc/dsp/image.h"
+#include "skyloc/dsp/imu.h"
 #include "skyloc/platform/clock.h"
 #include "skyloc/platform/status.h"
 
@@ -29,6 +30,9 @@ struct Frame {
   std::uint64_t sequence = 0;  // counts every frame the source produced, dropped ones too
   Nanoseconds timestamp{0};    // CLOCK_MONOTONIC time the frame was captured
   std::optional<Pose> pose;
+  // The roll and pitch recorded with the frame (a dataset's columns), for
+  // FrameAttitudeSource; live cameras leave it empty (the IMU is a device of its own).
+  std::optional<dsp::Attitude> attitude;
 };
 
 struct CameraInfo {

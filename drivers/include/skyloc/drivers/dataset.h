@@ -28,12 +28,16 @@ struct DatasetFrame {
   std::string file;          // name inside DIR/frames/, e.g. "000042.pgm"
   double timestamp_s = 0;    // seconds since the start of the run (0, 0.1, ... if unknown)
   std::optional<Pose> pose;  // present for every frame or for none
+  // Roll and pitch: from the pose columns, or the attitude-only columns (a recording with
+  // an IMU and no position); present for every frame or for none.
+  std::optional<dsp::Attitude> attitude;
 };
 
 struct Dataset {
   std::string dir;
   std::vector<DatasetFrame> frames;
   bool has_poses = false;
+  bool has_attitude = false;  // every frame has roll and pitch (pose or attitude columns)
   // False when DIR/frames.csv is absent and the frames were listed from DIR/frames/
   // (sorted by name); timestamp_s is then index / 10 (an assumed 10 Hz).
   bool has_timestamps = false;
@@ -45,6 +49,8 @@ struct Dataset {
 // The header line of frames.csv, without and with poses.
 inline constexpr const char* kDatasetCsvHeader = "index,file,timestamp_s";
 inline constexpr const char* kDatasetCsvPoseColumns = "x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg";
+// Attitude only (an IMU's roll and pitch, no position): the third header.
+inline constexpr const char* kDatasetCsvAttitudeColumns = "roll_deg,pitch_deg";
 
 // Reads DIR/frames.csv (or lists DIR/frames/ when there is no frames.csv) and checks that
 // every image file exists. kNotFound for a missing folder or image, kInvalidArgument for a

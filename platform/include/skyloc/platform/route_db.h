@@ -28,6 +28,10 @@ struct RouteDbSettings {
   std::uint32_t dim = 0;  // floats per descriptor
   std::uint32_t normalisation = 0;
   std::uint64_t lens_hash = 0;  // of the lens parameters the sampling table was built from
+  // The gravity-aligned cap the descriptors were computed with (version 2): its lower edge
+  // and taper in hundredths of a degree, or kNoGravityCap (every version-1 file).
+  std::uint32_t gravity_cap_cdeg = 0xffffffffu;
+  std::uint32_t gravity_cap_taper_cdeg = 0;
 
   bool operator==(const RouteDbSettings&) const = default;
 };
@@ -39,7 +43,10 @@ struct RouteFrameMeta {
   std::array<double, 6> pose{};
 };
 
-inline constexpr std::uint32_t kRouteDbVersion = 1;
+inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
+// Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
+// This version reads versions 1 and 2 and writes 2.
+inline constexpr std::uint32_t kRouteDbVersion = 2;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
 inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
 inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
