@@ -50,6 +50,12 @@ Nanoseconds Monotonic() {
   return Nanoseconds(static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec);
 }
 
+Nanoseconds ThreadCpu() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return Nanoseconds(static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec);
+}
+
 // Owns an IMU and what it needs; the hooks let the generic cases drive each kind.
 class ImuUnderTest {
  public:
@@ -422,13 +428,16 @@ TEST_P(ImuCompliance, ReadTimesOutWhenNoSampleComes) {
     r = imu().Read(buf, milliseconds(50));
   const std::uint64_t errors = imu().counters().errors;
   const Nanoseconds t0 = Monotonic();
+  const Nanoseconds cpu0 = ThreadCpu();
   r = imu().Read(buf, milliseconds(200));
   const Nanoseconds waited = Monotonic() - t0;
+  const Nanoseconds cpu = ThreadCpu() - cpu0;
   EXPECT_EQ(r.status().code(), StatusCode::kDeadlineExceeded) << r.status().message();
   EXPECT_EQ(imu().counters().errors, errors + 1);
   if (GetParam().blocks) {
     EXPECT_GE(waited, milliseconds(195));
     EXPECT_LT(waited, seconds(2));
+    EXPECT_LT(cpu, milliseconds(50)) << "Read() spun instead of sleeping in poll()";
   }
   // A restart brings the samples back.
   imu().Stop();
