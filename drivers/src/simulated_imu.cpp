@@ -95,8 +95,8 @@ Result<std::size_t> SimulatedImu::DoRead(std::span<dsp::ImuSample> out, Nanoseco
           stalls_left_ = scheduled->fault.count;
           continue;
         case ImuFault::Kind::kDrop: {
-          const std::uint64_t left = samples_.size() - next_;
-          const std::uint64_t drop = scheduled->fault.count < left ? scheduled->fault.count : left;
+          const std::size_t left = samples_.size() - next_;
+          const std::size_t drop = scheduled->fault.count < left ? scheduled->fault.count : left;
           next_ += drop;
           counters_.dropped += drop;
           continue;

@@ -75,7 +75,7 @@ class SimulatedImu final : public ImuDevice {
   std::array<ScheduledFault, kMaxFaults> faults_{};
   std::size_t fault_count_ = 0;
 
-  std::uint64_t next_ = 0;  // next sample to deliver
+  std::size_t next_ = 0;  // next sample to deliver
   std::uint32_t stalls_left_ = 0;
   bool vanished_ = false;
   Nanoseconds start_{0};       // when samples_[0] would have been due (paced)
