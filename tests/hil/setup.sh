@@ -6,7 +6,8 @@
 #   - Debian's kernel image for ARCH and linux-source, fetched with `apt-get download`
 #     and unpacked in the cache (nothing is installed from them);
 #   - vimc, gpio-sim, gpio-mockup and irq_sim built out-of-tree (Debian's kernel has them
-#     disabled), with the one patch irq_sim needs to build as a module;
+#     disabled), with the one patch irq_sim needs to build as a module; iio_dummy (patched
+#     into a 6-axis IMU), the IIO software device/trigger framework and iio-trig-hrtimer;
 #   - a bootable kernel (amd64: vmlinux extracted from the bzImage, booted through PVH);
 #   - the base initramfs: static busybox and the modules with their dependencies.
 #
@@ -164,7 +165,7 @@ fi
 KVER="$ABI-$ARCH"
 HEADERS=/usr/src/linux-headers-$ABI-amd64
 
-HOST_PKGS=(busybox-static kmod cpio bc make gcc xz-utils "linux-headers-$ABI-amd64")
+HOST_PKGS=(busybox-static kmod cpio bc make gcc xz-utils patch "linux-headers-$ABI-amd64")
 case "$ARCH" in
   amd64)
     HOST_PKGS+=(qemu-system-x86 v4l-utils gpiod libcamera-tools libcamera-ipa)
@@ -182,7 +183,7 @@ mkdir -p "$W/stamps" "$CACHE/debs"
 # A stamp holds a hash of the scripts that make its step: editing setup.sh (a module
 # added, the irq_sim patch changed) or extract-vmlinux.sh redoes the build steps, not
 # the downloads.
-RECIPE=$(cat "$HERE/setup.sh" "$HERE/extract-vmlinux.sh" | sha256sum | cut -c1-16)
+RECIPE=$(cat "$HERE/setup.sh" "$HERE/extract-vmlinux.sh" "$HERE/iio_dummy_imu.patch" | sha256sum | cut -c1-16)
 stamp() { [ -f "$W/stamps/$1" ] && [ "$(cat "$W/stamps/$1")" = "$RECIPE" ]; }
 done_step() { echo "$RECIPE" >"$W/stamps/$1"; }
 # Unpacked downloads depend only on the package, which is in the folder's name.
@@ -205,20 +206,23 @@ download() { # package[=version] -> path of the .deb (for ARCH or arch all)
   printf '%s\n' "$f"
 }
 
-# linux-source: only the files the four modules need are extracted (8 s of xz).
+# linux-source: only the files the out-of-tree modules need are extracted (8 s of xz).
+# The stamp holds the list, so a module added here re-extracts (and re-downloads) once.
+SRC_PATHS=(drivers/media/test-drivers/vimc drivers/gpio/gpio-sim.c drivers/gpio/gpio-mockup.c
+  drivers/gpio/gpiolib.h kernel/irq/irq_sim.c drivers/iio/dummy drivers/iio/industrialio-configfs.c
+  drivers/iio/industrialio-sw-device.c drivers/iio/industrialio-sw-trigger.c
+  drivers/iio/trigger/iio-trig-hrtimer.c)
 SRC="$CACHE/src/linux-source-$SRC_VERSION"
-if [ ! -f "$SRC/.stamp" ]; then
+if [ ! -f "$SRC/.stamp" ] || [ "$(cat "$SRC/.stamp")" != "${SRC_PATHS[*]}" ]; then
   deb=$(download "linux-source-6.1=$SRC_VERSION")
   say "extracting module sources from $(basename "$deb")"
   rm -rf "$SRC" "$SRC.tmp" && mkdir -p "$SRC.tmp"
   dpkg-deb --fsys-tarfile "$deb" | tar -x -C "$SRC.tmp" ./usr/src/linux-source-6.1.tar.xz
   tar -xJf "$SRC.tmp/usr/src/linux-source-6.1.tar.xz" -C "$SRC.tmp" --strip-components=1 \
-    linux-source-6.1/drivers/media/test-drivers/vimc linux-source-6.1/drivers/gpio/gpio-sim.c \
-    linux-source-6.1/drivers/gpio/gpio-mockup.c linux-source-6.1/drivers/gpio/gpiolib.h \
-    linux-source-6.1/kernel/irq/irq_sim.c
+    "${SRC_PATHS[@]/#/linux-source-6.1/}"
   rm -rf "$SRC.tmp/usr"
   mv "$SRC.tmp" "$SRC"
-  touch "$SRC/.stamp"
+  printf '%s\n' "${SRC_PATHS[*]}" >"$SRC/.stamp"
   # The 139 MB source package is not needed again.
   rm -f "$deb"
 fi
@@ -263,7 +267,7 @@ fi
 # only taints the kernel (MODULE_SIG_FORCE is off).
 OOT="$W/oot"
 if ! stamp oot; then
-  say "building vimc, gpio-sim, gpio-mockup, irq_sim out-of-tree"
+  say "building vimc, gpio-sim, gpio-mockup, irq_sim, iio_dummy, iio-trig-hrtimer out-of-tree"
   rm -rf "$OOT" && mkdir -p "$OOT/vimc" "$OOT/gpio"
   cp "$SRC"/drivers/media/test-drivers/vimc/*.[ch] "$SRC"/drivers/media/test-drivers/vimc/Makefile "$OOT/vimc/"
   cp "$SRC"/drivers/gpio/{gpio-sim.c,gpio-mockup.c,gpiolib.h} "$SRC/kernel/irq/irq_sim.c" "$OOT/gpio/"
@@ -279,6 +283,22 @@ if ! stamp oot; then
     >"$OOT/build.log" 2>&1 || die "vimc did not build (log: $OOT/build.log)"
   make -C "$HEADERS" M="$OOT/gpio" "${MAKE_ARGS[@]}" -j"$JOBS" modules \
     >>"$OOT/build.log" 2>&1 || die "gpio-sim/irq_sim did not build (log: $OOT/build.log)"
+  # IIO: Debian has the IIO core and triggered buffers but not the dummy driver, software
+  # devices and triggers (configfs) or the hrtimer trigger. iio_dummy is patched into a
+  # still, level 6-axis IMU (tests/hil/iio_dummy_imu.patch: accel x/y/z with a scale, +1 g
+  # on z, and a 3-axis anglvel, in sysfs and in the buffer); events are left out.
+  mkdir -p "$OOT/iio"
+  cp "$SRC"/drivers/iio/dummy/*.[ch] "$SRC"/drivers/iio/industrialio-{configfs,sw-device,sw-trigger}.c \
+    "$SRC"/drivers/iio/trigger/iio-trig-hrtimer.c "$OOT/iio/"
+  patch -d "$OOT/iio" -p1 --forward --quiet <"$HERE/iio_dummy_imu.patch" >>"$OOT/build.log" 2>&1 ||
+    die "tests/hil/iio_dummy_imu.patch no longer applies to linux-source $SRC_VERSION (log: $OOT/build.log)"
+  cat >"$OOT/iio/Kbuild" <<'KBUILD'
+obj-m := iio_dummy.o industrialio-configfs.o industrialio-sw-device.o industrialio-sw-trigger.o iio-trig-hrtimer.o
+iio_dummy-y := iio_simple_dummy.o iio_simple_dummy_buffer.o
+ccflags-y += -DCONFIG_IIO_SIMPLE_DUMMY_BUFFER
+KBUILD
+  make -C "$HEADERS" M="$OOT/iio" "${MAKE_ARGS[@]}" -j"$JOBS" modules \
+    >>"$OOT/build.log" 2>&1 || die "iio_dummy/iio-trig-hrtimer did not build (log: $OOT/build.log)"
   done_step oot
 fi
 
@@ -300,7 +320,7 @@ fi
 # Base initramfs: static busybox and the modules with everything they depend on. The
 # per-run overlay (init, test programs, their libraries) is appended by run.sh.
 BASE="$W/base.cpio.gz"
-MODULES=(vivid vimc configfs irq_sim gpio-sim gpio-mockup)
+MODULES=(vivid vimc configfs irq_sim gpio-sim gpio-mockup iio_dummy iio-trig-hrtimer)
 if ! stamp base; then
   say "packing the base initramfs"
   R="$W/rootfs"

@@ -36,6 +36,43 @@ finish_scenario() {
   exit 1
 }
 
+# run_suite LABEL FILTER INSTANCES: runs the suite program $T; passes when it exits 0, no test of the
+# listed instances (comma-separated parameter names) was skipped, and each of them passed
+# at least one test.
+run_suite() {
+  label=$1
+  filter=$2
+  instances=$3
+  out=/tmp/suite-$label.log
+  echo "--- $label: $T --gtest_filter=$filter"
+  "$T" --gtest_filter="$filter" --gtest_color=no >"$out" 2>&1
+  rc=$?
+  sed 's/^/    /' "$out"
+  if [ "$rc" -eq 0 ]; then
+    ok "$label: suite exited 0"
+  elif [ "$rc" -gt 128 ]; then
+    # Killed by a signal: the test that was running has no result line.
+    bad "$label: suite killed by signal $((rc - 128)) during $(sed -n 's/^\[ RUN      \] //p' "$out" | tail -1)"
+  else
+    bad "$label: suite exited $rc"
+  fi
+  # Result lines of parameterised tests end in "/<instance> (N ms)" (passed, skipped) or
+  # "/<instance>, where GetParam() = ..." (failed).
+  for inst in $(echo "$instances" | tr ',' ' '); do
+    passed=$(grep -c "^\[       OK \] .*/${inst}[A-Za-z]* (" "$out")
+    failed=$(grep -c "^\[  FAILED  \] .*/${inst}[A-Za-z]*[ ,].*ms)$" "$out")
+    skipped=$(grep -c "^\[  SKIPPED \] .*/${inst}[A-Za-z]* (" "$out")
+    summary="$inst: $passed passed, $failed failed, $skipped skipped"
+    if [ "$skipped" -ne 0 ]; then
+      bad "$label: $summary (nothing may skip inside the VM: is the environment above wrong?)"
+    elif [ "$passed" -eq 0 ] || [ "$failed" -ne 0 ]; then
+      bad "$label: $summary"
+    else
+      ok "$label: $summary"
+    fi
+  done
+}
+
 # vimc's "RGB/YUV Capture" pipeline (Sensor A -> Debayer A -> Scaler -> capture) set to
 # RGB24 WxH. Every enabled link is validated at STREAMON (EPIPE otherwise), including
 # Sensor A -> Raw Capture 0, so that node gets the matching Bayer format too. The links
