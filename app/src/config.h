@@ -182,6 +182,7 @@ struct Config {
   StatusConfig status;
   RealtimeConfig realtime;
   RouteDbConfig route_db;
+  AttitudeConfig attitude;
 
   bool operator==(const Config&) const = default;
 };
