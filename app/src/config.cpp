@@ -451,6 +451,8 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     AttitudeConfig& a = c.attitude;
     r.Enum("kind", &a.kind, kAttitudeKinds);
     r.String("device", &a.device, true);
+    r.String("gyro_device", &a.gyro_device, true);
+    r.String("trigger", &a.trigger, true);
     r.Double("rate_hz", &a.rate_hz, 1.0, 10000.0);
     r.Double("mount_roll_deg", &a.mount_roll_deg, -180.0, 180.0);
     r.Double("mount_pitch_deg", &a.mount_pitch_deg, -180.0, 180.0);

@@ -1,5 +1,6 @@
 #include "frame_loop.h"
 
+#include <cstdio>
 #include <thread>
 
 #include "skyloc/platform/signals.h"
@@ -51,7 +52,7 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
 
 Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
                     RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
-                    LoopSummary* summary) {
+                    LoopSummary* summary, drivers::AttitudeSource* attitude) {
   if (options.mode == LoopMode::kTeach && route == nullptr)
     return Status::Error(StatusCode::kInternal, "teach without a route database");
   MonotonicClock monotonic;
@@ -64,6 +65,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
   Nanoseconds loop_start = clock.Now();
   std::uint64_t last_sequence = 0;
   bool have_sequence = false;
+  bool attitude_outage = false;  // warned about; cleared when an attitude comes back
 
   while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
     if (TakeReportRequest())
@@ -130,8 +132,30 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     FrameResult result;
     result.frame = frame.sequence;
     result.timestamp = frame.timestamp;
+    // The attitude at the frame's time; without one the frame is described as if level
+    // (the cap about the body's z axis), never dropped.
+    dsp::Attitude frame_attitude;
+    const dsp::Attitude* attitude_used = nullptr;
+    if (attitude != nullptr && pipeline.uses_attitude()) {
+      Result<dsp::Attitude> a = attitude->At(frame);
+      if (a.ok()) {
+        frame_attitude = *a;
+        attitude_used = &frame_attitude;
+        if (attitude_outage)
+          std::fprintf(stderr, "skyloc: attitude %s is back at frame %llu\n", attitude->name(),
+                       static_cast<unsigned long long>(frame.sequence));
+        attitude_outage = false;
+      } else {
+        ++s.attitude_missing;
+        if (!attitude_outage)
+          std::fprintf(stderr,
+                       "skyloc: warning: %s: frames are described as if level until it returns\n",
+                       a.status().message());
+        attitude_outage = true;
+      }
+    }
     if (options.mode == LoopMode::kTeach) {
-      SKYLOC_TRY(pipeline.Describe(frame.image, &result));
+      SKYLOC_TRY(pipeline.Describe(frame.image, &result, attitude_used));
       RouteFrameMeta meta;
       meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
       if (frame.pose) {
@@ -144,7 +168,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         SKYLOC_TRY(route->Append(meta, pipeline.descriptor()));
       }
     } else {
-      Status st = pipeline.Localise(frame, &result);
+      Status st = pipeline.Localise(frame, &result, attitude_used);
       if (!st.ok()) {
         // A frame the descriptor rejects (wrong size from a misbehaving driver) is
         // skipped like a corrupt capture; the next frame may be fine.

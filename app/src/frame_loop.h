@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "pipeline.h"
+#include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/status_output.h"
 #include "skyloc/platform/route_db.h"
@@ -78,14 +79,18 @@ struct LoopSummary {
   std::uint64_t state_frames[3] = {};  // frames shown as LOST, SEARCHING, LOCALISED
   bool end_of_source = false;          // a finite source (dataset) ran out
   bool stopped = false;                // SIGINT/SIGTERM or RequestStop()
+  // [attitude]: frames described as if level because the source had no attitude for them
+  // (none yet, stale, or the IMU gone); each outage is warned about once on stderr.
+  std::uint64_t attitude_missing = 0;
 };
 
 // Runs until stopped. `status` and `sink` may be null; `route` is required for teach.
 // A fatal error (the camera gone for good, the route database unwritable) is returned;
 // the caller then flushes what it has and drives the status lines to the safe state.
+// `attitude` (may be null) gives each frame's roll and pitch when the pipeline uses them.
 Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
                     RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
-                    LoopSummary* summary);
+                    LoopSummary* summary, drivers::AttitudeSource* attitude = nullptr);
 
 drivers::LocalisationState ToStatusState(dsp::TrackState state);
 

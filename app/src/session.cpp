@@ -5,7 +5,10 @@
 #include <limits>
 #include <memory>
 
+#include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/iio_imu.h"
+#include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #if SKYLOC_WITH_V4L2
 #include "skyloc/drivers/v4l2_camera.h"
@@ -19,6 +22,7 @@
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/platform/realtime.h"
 #include "skyloc/platform/signals.h"
+#include "skyloc/sim/imu_model.h"
 #include "skyloc/sim/motion.h"
 #include "skyloc/sim/rendered_camera.h"
 #include "skyloc/sim/world.h"
@@ -108,7 +112,74 @@ struct CameraSource {
   std::unique_ptr<drivers::Camera> camera;
   std::size_t frames = 0;   // a finite source's length; 0 = endless
   std::string camera_file;  // a dataset's own camera.toml, if it has one
+  bool dataset_has_attitude = false;
+  std::uint64_t run_seed = 0;  // a simulated run's seed (its IMU's noise and bias)
 };
+
+// [attitude]: the source of the robot's roll and pitch, opened (an IMU found and started).
+struct AttitudeParts {
+  std::vector<dsp::ImuSample> sim_samples;  // kind = sim: the simulated IMU's readings
+  std::unique_ptr<drivers::ImuDevice> imu;
+  std::unique_ptr<drivers::AttitudeSource> source;
+};
+
+Status MakeAttitudeSource(const Config& config, const CameraSource& camera, AttitudeParts* out) {
+  const AttitudeConfig& a = config.attitude;
+  const drivers::ImuMounting mounting{a.mount_roll_deg, a.mount_pitch_deg, a.mount_yaw_deg};
+  drivers::ImuAttitudeConfig imu_config;
+  imu_config.filter.kp = a.filter_kp;
+  imu_config.filter.ki = a.filter_ki;
+  imu_config.filter.accel_gate_mps2 = a.accel_gate_mps2;
+  imu_config.stale = std::chrono::milliseconds(a.stale_ms);
+  switch (a.kind) {
+    case AttitudeKind::kNone:
+      return Status::Ok();
+    case AttitudeKind::kDataset:
+      if (!camera.dataset_has_attitude)
+        return Status::Error(StatusCode::kFailedPrecondition,
+                             "[attitude] kind = \"dataset\": the dataset has no roll_deg,pitch_deg "
+                             "columns (docs/DATASETS.md): record it with its attitude, or set "
+                             "[attitude] kind = \"none\"");
+      out->source = std::make_unique<drivers::FrameAttitudeSource>();
+      break;
+    case AttitudeKind::kSim: {
+      if (camera.trajectory.empty())
+        return Status::Error(StatusCode::kFailedPrecondition,
+                             "[attitude] kind = \"sim\" needs a simulated run with a trajectory "
+                             "([camera] kind = \"sim\", sim_world city, forest or repetitive)");
+      sim::ImuModelConfig model;
+      model.rate_hz = a.rate_hz;
+      model.seed = camera.run_seed * 7919 + 17;
+      SKYLOC_TRY(sim::SimulateImu(camera.trajectory, model, &out->sim_samples));
+      drivers::SimulatedImuConfig c;
+      c.sample_rate_hz = a.rate_hz;
+      // The simulator's IMU reads in the robot's body frame, which the simulated lens's
+      // mount makes the descriptor's: [attitude] mount angles rotate it further, as they
+      // would a real IMU's.
+      out->imu = std::make_unique<drivers::SimulatedImu>(c, out->sim_samples, nullptr, mounting);
+      out->source = std::make_unique<drivers::ImuAttitudeSource>(out->imu.get(), imu_config);
+      break;
+    }
+    case AttitudeKind::kIio: {
+      drivers::IioImuConfig c;
+      std::snprintf(c.device, sizeof c.device, "%s", a.device.c_str());
+      std::snprintf(c.gyro_device, sizeof c.gyro_device, "%s", a.gyro_device.c_str());
+      std::snprintf(c.trigger, sizeof c.trigger, "%s", a.trigger.c_str());
+      c.sample_rate_hz = a.rate_hz;
+      c.mounting = mounting;
+      out->imu = std::make_unique<drivers::IioImu>(c);
+      out->source = std::make_unique<drivers::ImuAttitudeSource>(out->imu.get(), imu_config);
+      break;
+    }
+  }
+  if (Status s = out->source->Open(); !s.ok()) {
+    return s.AddContext("[attitude] kind = \"%s\"%s%s%s", AttitudeKindName(a.kind),
+                        a.kind == AttitudeKind::kIio ? ", device = \"" : "",
+                        a.kind == AttitudeKind::kIio ? a.device.c_str() : "",
+                        a.kind == AttitudeKind::kIio ? "\"" : "");
+  }
+  return Status::Ok();
+}
 
 Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* source) {
   if (config.camera.sim_world == "street") {
@@ -154,6 +225,7 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
     motion.speed_ratio = run.speed_ratio;
   }
   motion.seed = run.run_seed;
+  source->run_seed = run.run_seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));
   sim::RenderedCameraConfig camera;
@@ -176,6 +248,7 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
     SKYLOC_TRY(camera->Open());
     source->frames = camera->dataset().frames.size();
     source->camera_file = camera->dataset().camera_toml;
+    source->dataset_has_attitude = camera->dataset().has_attitude;
     source->camera = std::move(camera);
     return Status::Ok();
   }
@@ -291,6 +364,8 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
 
   Pipeline pipeline;
   SKYLOC_TRY(pipeline.Init(config));
+  AttitudeParts attitude;
+  SKYLOC_TRY(MakeAttitudeSource(config, source, &attitude));
 
   RouteDbWriter writer;
   RouteFrames route;
@@ -369,7 +444,8 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
   const Status loop_status =
       RunFrameLoop(*camera, status.get(), pipeline,
-                   args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop, &report->loop);
+                   args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop, &report->loop,
+                   attitude.source.get());
 
   if (capped && report->loop.frames == route_capacity) {
     std::fprintf(stderr,
@@ -393,6 +469,17 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   }
   camera->Stop();
   camera->Close();
+  if (attitude.source) {
+    const drivers::AttitudeCounters& c = attitude.source->counters();
+    std::fprintf(stderr,
+                 "%s: attitude %s: %llu frames with an attitude, %llu described as level "
+                 "(%llu none or stale, %llu source gone)\n",
+                 label, attitude.source->name(), static_cast<unsigned long long>(c.estimates),
+                 static_cast<unsigned long long>(c.missing + c.unavailable),
+                 static_cast<unsigned long long>(c.missing),
+                 static_cast<unsigned long long>(c.unavailable));
+    attitude.source->Close();
+  }
   pipeline.latency().Print(stderr);
   if (json.write_failed())
     std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", label);
