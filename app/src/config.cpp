@@ -304,10 +304,9 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   Config c;
   Status error;
 
-  constexpr const char* kSections[] = {"camera",  "segmentation", "descriptor",
-                                       "seqslam", "capacities",   "state",
-                                       "status",  "realtime",     "route_db",
-                                       "attitude"};
+  constexpr const char* kSections[] = {"camera",     "segmentation", "descriptor", "seqslam",
+                                       "capacities", "state",        "status",     "realtime",
+                                       "route_db",   "attitude"};
   for (auto&& [k, node] : root) {
     bool known = false;
     for (const char* s : kSections)
@@ -464,14 +463,17 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Double("accel_gate_mps2", &a.accel_gate_mps2, 0.0, 100.0);
     r.Int("stale_ms", &a.stale_ms, 1, 60000);
     if (error.ok() && a.kind == AttitudeKind::kIio && a.device.empty())
-      r.Invalid("device", "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
-                          "name, e.g. \"bmi160\")");
+      r.Invalid("device",
+                "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
+                "name, e.g. \"bmi160\")");
     if (error.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
-      r.Invalid("kind", "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "
-                        "it needs [camera] kind = \"dataset\"");
+      r.Invalid("kind",
+                "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "
+                "it needs [camera] kind = \"dataset\"");
     if (error.ok() && a.kind == AttitudeKind::kSim && c.camera.kind != CameraKind::kSim)
-      r.Invalid("kind", "\"sim\" simulates the IMU of the simulated camera's run: it needs "
-                        "[camera] kind = \"sim\"");
+      r.Invalid("kind",
+                "\"sim\" simulates the IMU of the simulated camera's run: it needs "
+                "[camera] kind = \"sim\"");
     r.Finish();
   }
   if (!error.ok())

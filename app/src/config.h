@@ -151,10 +151,10 @@ struct AttitudeConfig {
   // iio: an IMU through the kernel's IIO subsystem; dataset: the roll_deg,pitch_deg columns
   // of the replayed dataset; sim: the simulated IMU of the simulated camera's run.
   AttitudeKind kind = AttitudeKind::kNone;
-  std::string device;   // iio: /dev/iio:deviceN or the IIO device name (e.g. "bmi160")
+  std::string device;       // iio: /dev/iio:deviceN or the IIO device name (e.g. "bmi160")
   std::string gyro_device;  // iio: the gyroscope's device when separate (LSM6DSx); "": same
   std::string trigger;      // iio: the IIO trigger to attach ("": keep the device's)
-  double rate_hz = 200;  // iio and sim: IMU samples per second
+  double rate_hz = 200;     // iio and sim: IMU samples per second
   // The IMU's axes in the camera's body frame (the lens's mount frame): body = Rz(yaw) *
   // Ry(pitch) * Rx(roll) * imu, as camera.toml's mount angles.
   double mount_roll_deg = 0;

@@ -1,7 +1,6 @@
 #include "pipeline.h"
 
 #include <cmath>
-
 #include <cstring>
 
 #include "skyloc/drivers/camera_file.h"
@@ -141,10 +140,9 @@ Status Pipeline::Init(const Config& config) {
   }
   uses_attitude_ = options.cap.enabled;
   if (const dsp::DescriptorError e = descriptor_.Init(lens_, options); !e.ok())
-    return Status::Error(StatusCode::kInvalidArgument, "%s: %s",
-                         options.cap.enabled ? "[attitude] max_tilt_deg/cap_taper_deg"
-                                             : "[descriptor]",
-                         e.message);
+    return Status::Error(
+        StatusCode::kInvalidArgument, "%s: %s",
+        options.cap.enabled ? "[attitude] max_tilt_deg/cap_taper_deg" : "[descriptor]", e.message);
   SKYLOC_TRY(amplitudes_.Allocate(static_cast<std::size_t>(descriptor_.bands())));
 
   matcher_ = config.seqslam.matcher;

@@ -442,10 +442,9 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   loop.paced = args.paced;
   loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
   loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
-  const Status loop_status =
-      RunFrameLoop(*camera, status.get(), pipeline,
-                   args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop, &report->loop,
-                   attitude.source.get());
+  const Status loop_status = RunFrameLoop(*camera, status.get(), pipeline,
+                                          args.mode == LoopMode::kTeach ? &writer : nullptr, &sink,
+                                          loop, &report->loop, attitude.source.get());
 
   if (capped && report->loop.frames == route_capacity) {
     std::fprintf(stderr,

@@ -15,8 +15,8 @@ Status AttitudeSource::Open() {
 
 Result<dsp::Attitude> AttitudeSource::At(const Frame& frame) {
   if (!open_)
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "attitude source %s: At() before Open()", name_);
+    return Status::Error(StatusCode::kFailedPrecondition, "attitude source %s: At() before Open()",
+                         name_);
   Result<dsp::Attitude> a = DoAt(frame);
   if (a.ok())
     ++counters_.estimates;
@@ -94,8 +94,8 @@ Result<dsp::Attitude> ImuAttitudeSource::DoAt(const Frame& frame) {
           break;
         }
         gone_ = code == StatusCode::kUnavailable;
-        return Status::Error(gone_ ? StatusCode::kUnavailable : StatusCode::kNotFound,
-                             "IMU %s: %s", name_, n.status().message());
+        return Status::Error(gone_ ? StatusCode::kUnavailable : StatusCode::kNotFound, "IMU %s: %s",
+                             name_, n.status().message());
       }
       batch_size_ = *n;
       batch_next_ = 0;

@@ -143,11 +143,10 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
         expected_fields = 5;
         ds->has_attitude = true;
       } else {
-        return Status::Error(StatusCode::kInvalidArgument,
-                             "%s:1: header must be '%s', '%s' or '%s', got '%.*s'",
-                             csv_path.c_str(), kDatasetCsvHeader, pose_header.c_str(),
-                             attitude_header.c_str(),
-                             static_cast<int>(std::min<std::size_t>(line.size(), 60)), line.data());
+        return Status::Error(
+            StatusCode::kInvalidArgument, "%s:1: header must be '%s', '%s' or '%s', got '%.*s'",
+            csv_path.c_str(), kDatasetCsvHeader, pose_header.c_str(), attitude_header.c_str(),
+            static_cast<int>(std::min<std::size_t>(line.size(), 60)), line.data());
       }
       continue;
     }

@@ -67,6 +67,13 @@ cpu_affinity = 3
 [status]
 kind = "gpio"
 encoding = "blink"
+[attitude]
+kind = "iio"
+device = "bmi160"
+trigger = "hrtimer0"
+mount_yaw_deg = -90
+max_tilt_deg = 45
+stale_ms = 100
 )",
                                  "t.toml");
   ASSERT_TRUE(c.ok()) << c.status().message();
@@ -84,6 +91,12 @@ encoding = "blink"
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
   EXPECT_EQ(c->status.kind, StatusOutputKind::kGpio);
   EXPECT_EQ(c->status.encoding, StatusEncoding::kBlink);
+  EXPECT_EQ(c->attitude.kind, AttitudeKind::kIio);
+  EXPECT_EQ(c->attitude.device, "bmi160");
+  EXPECT_EQ(c->attitude.trigger, "hrtimer0");
+  EXPECT_DOUBLE_EQ(c->attitude.mount_yaw_deg, -90.0);
+  EXPECT_DOUBLE_EQ(c->attitude.max_tilt_deg, 45.0);
+  EXPECT_EQ(c->attitude.stale_ms, 100);
 }
 
 struct BadCase {
@@ -153,6 +166,17 @@ const BadCase kBadCases[] = {
     {"[realtime]\nmlockall = \"yes\"\n", "[realtime] mlockall"},
     {"[realtime]\ncpu_affinity = -2\n", "[realtime] cpu_affinity"},
     {"[route_db]\nflush_every = 0\n", "[route_db] flush_every"},
+    {"[attitude]\nkind = \"gps\"\n", "[attitude] kind"},
+    {"[attitude]\nkind = \"iio\"\n", "[attitude] device", ":1:"},
+    {"[attitude]\nkind = \"dataset\"\n", "[attitude] kind"},
+    {"[camera]\nkind = \"dataset\"\ndataset = \"d\"\n[attitude]\nkind = \"sim\"\n",
+     "[attitude] kind", ":5:"},
+    {"[attitude]\nmax_tilt_deg = 80\n", "[attitude] max_tilt_deg"},
+    {"[attitude]\ncap_taper_deg = -1\n", "[attitude] cap_taper_deg"},
+    {"[attitude]\nrate_hz = 0\n", "[attitude] rate_hz"},
+    {"[attitude]\nmount_yaw_deg = 270\n", "[attitude] mount_yaw_deg"},
+    {"[attitude]\nstale_ms = 0\n", "[attitude] stale_ms"},
+    {"[attitude]\nfilter_kp = -1\n", "[attitude] filter_kp"},
 };
 
 class ConfigRejects : public testing::TestWithParam<BadCase> {};

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "recording_status_output.h"
+#include "skyloc/drivers/attitude_source.h"
+#include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
 #include "street_camera.h"
@@ -152,6 +154,56 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_FALSE(json.write_failed());
   std::fclose(null);
+}
+
+// [attitude] on: every frame takes the IMU's attitude at its timestamp through the filter,
+// and the frame path still allocates nothing. The IMU then vanishes mid-run: the frames go
+// on, described as if level, counted; nothing crashes and the loop does not stop.
+TEST(FrameLoop, AttitudeOnAllocatesNothingAndADeadImuLeavesFramesLevel) {
+  ASSERT_TRUE(AllocationCounterActive());
+  ClearSignalFlags();
+  Config config = SmallConfig();
+  config.attitude.kind = AttitudeKind::kSim;
+  Pipeline pipeline;
+  ASSERT_TRUE(pipeline.Init(config).ok());
+  ASSERT_TRUE(pipeline.uses_attitude());
+  EXPECT_NE(pipeline.route_settings().gravity_cap_cdeg, kNoGravityCap);
+  RouteFrames route;
+  Teach(pipeline, 300, &route);
+  ASSERT_TRUE(pipeline.SetRoute(route).ok());
+  // A still, level IMU at 200 Hz over the first 40 s of the street (30 fps frames).
+  std::vector<dsp::ImuSample> samples(8000);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    samples[i].timestamp_ns = static_cast<std::int64_t>(i) * 5'000'000;
+    samples[i].accel_mps2 = {0.0f, 0.0f, static_cast<float>(dsp::kStandardGravity)};
+  }
+  drivers::SimulatedImu imu({}, samples);
+  ASSERT_TRUE(imu.InjectFault({drivers::ImuFault::Kind::kVanish, 4000, 1}).ok());  // at 20 s
+  drivers::ImuAttitudeSource attitude(&imu, {});
+  ASSERT_TRUE(attitude.Open().ok());
+  StreetCamera camera(Repeat(0));
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  options.max_frames = 10;
+  LoopSummary summary;
+  ASSERT_TRUE(
+      RunFrameLoop(camera, nullptr, pipeline, nullptr, nullptr, options, &summary, &attitude).ok());
+  EXPECT_EQ(summary.attitude_missing, 0u);
+
+  options.max_frames = 1000;  // frames 10..1009: 0.33 s to 33.6 s, the IMU dies at 20 s
+  AllocationScope scope;
+  const Status s =
+      RunFrameLoop(camera, nullptr, pipeline, nullptr, nullptr, options, &summary, &attitude);
+  const std::uint64_t allocations = scope.allocations();
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(summary.frames, 1000u);
+  // Frames after 20 s (frame 600 on) have no attitude: 1010 - 600 of them, give or take the
+  // frame at the boundary.
+  EXPECT_NEAR(static_cast<double>(summary.attitude_missing), 410.0, 2.0);
+  EXPECT_GT(attitude.counters().unavailable, 400u);
+  EXPECT_NEAR(static_cast<double>(attitude.counters().estimates), 600.0, 2.0);
 }
 
 TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
