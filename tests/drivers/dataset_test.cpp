@@ -1,6 +1,8 @@
 #include "skyloc/drivers/dataset.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <stdlib.h>
 
 #include <cstdio>
@@ -121,6 +123,10 @@ TEST(Dataset, CsvErrorsNameFileAndLine) {
       {"backwards", "index,file,timestamp_s\n0,a.png,2\n1,b.png,1\n",
        "frames.csv:3: timestamp_s 1.000000 goes backwards"},
       {"pose", pose_header + "0,a.png,0,1,2,3,4,five,6\n", "frames.csv:2: pitch_deg 'five'"},
+      {"attitude", "index,file,timestamp_s,roll_deg,pitch_deg\n0,a.png,0,1,x\n",
+       "frames.csv:2: pitch_deg 'x'"},
+      {"attitude_fields", "index,file,timestamp_s,roll_deg,pitch_deg\n0,a.png,0,1\n",
+       "frames.csv:2: expected 5 fields, got 4"},
       {"missing_image", "index,file,timestamp_s\n0,a.png,0\n1,gone.png,1\n", "frames.csv:3: image"},
       {"extension", "index,file,timestamp_s\n0,a.jpg,0\n", "frames.csv:2: file 'a.jpg'"},
       {"blank_line", "index,file,timestamp_s\n0,a.png,0\n\n1,b.png,1\n",
@@ -141,6 +147,45 @@ TEST(Dataset, CsvErrorsNameFileAndLine) {
     EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
     EXPECT_NE(msg.find(dir), std::string::npos) << c.name << ": " << msg;
   }
+}
+
+// The attitude-only header (an IMU's roll and pitch, no position), and the attitude the pose
+// columns give: both reach the replay camera's frames for [attitude] kind = "dataset".
+TEST(Dataset, RollAndPitchColumnsGiveEachFrameItsAttitude) {
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
+  ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
+  WriteText(dir + "/frames/a.png", "x");
+  WriteText(dir + "/frames/b.png", "x");
+  WriteText(dir + "/frames.csv",
+            "index,file,timestamp_s,roll_deg,pitch_deg\n0,a.png,0,10,-20\n1,b.png,0.5,0,30\n");
+  Result<Dataset> ds = ReadDataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.status().message();
+  EXPECT_TRUE(ds->has_attitude);
+  EXPECT_FALSE(ds->has_poses);
+  ASSERT_TRUE(ds->frames[1].attitude.has_value());
+  EXPECT_FALSE(ds->frames[1].pose.has_value());
+  EXPECT_EQ(ds->frames[1].attitude->timestamp_ns, 500'000'000);
+  EXPECT_DOUBLE_EQ(ds->frames[0].attitude->roll_deg, 10.0);
+  EXPECT_DOUBLE_EQ(ds->frames[0].attitude->pitch_deg, -20.0);
+  // up = (sin p, cos p sin r, cos p cos r) for p = 30 degrees, r = 0.
+  EXPECT_NEAR(ds->frames[1].attitude->up[0], 0.5, 1e-12);
+  EXPECT_NEAR(ds->frames[1].attitude->up[2], std::sqrt(0.75), 1e-12);
+
+  WriteText(dir + "/frames.csv",
+            "index,file,timestamp_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg\n"
+            "0,a.png,0,1,2,3,-5,7,90\n1,b.png,1,1,2,3,0,0,0\n");
+  ds = ReadDataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.status().message();
+  EXPECT_TRUE(ds->has_attitude);
+  EXPECT_DOUBLE_EQ(ds->frames[0].attitude->roll_deg, -5.0);
+  EXPECT_DOUBLE_EQ(ds->frames[0].attitude->pitch_deg, 7.0);
+
+  WriteText(dir + "/frames.csv", "index,file,timestamp_s\n0,a.png,0\n");
+  ds = ReadDataset(dir);
+  ASSERT_TRUE(ds.ok()) << ds.status().message();
+  EXPECT_FALSE(ds->has_attitude);
+  EXPECT_FALSE(ds->frames[0].attitude.has_value());
 }
 
 TEST(Dataset, FolderWithoutCsvIsListedByName) {
