@@ -5,12 +5,15 @@
 // same run is one read of the frame (the memory traffic no pipeline can avoid).
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <numeric>
 #include <vector>
 
 #include "frame_loop.h"
+#include "skyloc/drivers/attitude_source.h"
+#include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/latency.h"
 #include "street_camera.h"
@@ -27,9 +30,11 @@ struct Fixture {
   std::vector<std::vector<std::uint8_t>> images;
   bool ok = false;
 
-  Fixture() {
+  explicit Fixture(bool attitude) {
     Config config = DefaultConfig();
     config.capacities.route_frames = kRouteFrames;
+    if (attitude)
+      config.attitude.kind = AttitudeKind::kSim;  // the pipeline's gravity cap
     if (!pipeline.Init(config).ok())
       return;
     StreetCameraOptions o;
@@ -67,10 +72,29 @@ struct Fixture {
   }
 };
 
-void BM_FrameToState(benchmark::State& state) {
-  static Fixture fixture;
+// attitude: [attitude] on, each frame's attitude from a 200 Hz IMU (the simulated twin of
+// the IIO driver) through the attitude filter, 7 samples a frame at 30 fps, then the
+// descriptor with the gravity cap.
+void FrameToState(benchmark::State& state, bool attitude) {
+  static Fixture plain(false);
+  static Fixture capped(true);
+  Fixture& fixture = attitude ? capped : plain;
   if (!fixture.ok) {
     state.SkipWithError("fixture failed");
+    return;
+  }
+  constexpr std::int64_t kFramePeriodNs = 33'333'333, kImuPeriodNs = 5'000'000;
+  std::vector<dsp::ImuSample> samples(400'000);  // 2,000 s at 200 Hz: 60,000 frames
+  const std::array<double, 3> up = dsp::UpFromRollPitch(8.0, -5.0);
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    samples[k].timestamp_ns = static_cast<std::int64_t>(k) * kImuPeriodNs;
+    for (std::size_t a = 0; a < 3; ++a)
+      samples[k].accel_mps2[a] = static_cast<float>(dsp::kStandardGravity * up[a]);
+  }
+  drivers::SimulatedImu imu({}, samples);
+  drivers::ImuAttitudeSource source(&imu, {});
+  if (attitude && !source.Open().ok()) {
+    state.SkipWithError("attitude source failed");
     return;
   }
   MonotonicClock clock;
@@ -83,10 +107,19 @@ void BM_FrameToState(benchmark::State& state) {
     const std::vector<std::uint8_t>& image = fixture.images[i % kFrames];
     frame.image = {image.data(), kWidth, kHeight, static_cast<std::size_t>(kWidth),
                    dsp::PixelFormat::kGrey8};
+    frame.timestamp = Nanoseconds{static_cast<std::int64_t>(i) * kFramePeriodNs};
     frame.sequence = i++;
     const Nanoseconds t0 = clock.Now();
     FrameResult r;
-    (void)fixture.pipeline.Localise(frame, &r);
+    dsp::Attitude a;
+    const dsp::Attitude* used = nullptr;
+    if (attitude) {
+      if (Result<dsp::Attitude> got = source.At(frame); got.ok()) {
+        a = *got;
+        used = &a;
+      }
+    }
+    (void)fixture.pipeline.Localise(frame, &r, used);
     (void)status.Show(ToStatusState(r.state), r.confidence, clock.Now());
     histogram.Record(clock.Now() - t0);
     benchmark::DoNotOptimize(r);
@@ -96,7 +129,15 @@ void BM_FrameToState(benchmark::State& state) {
   state.counters["p99_us"] = us(histogram.Percentile(99));
   state.counters["max_us"] = us(histogram.max());
 }
+void BM_FrameToState(benchmark::State& state) {
+  FrameToState(state, false);
+}
 BENCHMARK(BM_FrameToState)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+void BM_FrameToStateWithAttitude(benchmark::State& state) {
+  FrameToState(state, true);
+}
+BENCHMARK(BM_FrameToStateWithAttitude)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 // Reference: reading every byte of one frame.
 void BM_ReadFrame(benchmark::State& state) {
