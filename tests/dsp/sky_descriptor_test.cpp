@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "skyloc/platform/alloc_counter.h"
@@ -180,6 +181,35 @@ TEST(SkyDescriptor, GravityCapIsTheSameAtAnyTiltUpToItsLimit) {
                 pitch, change, RelativeL2(level, unaware));
     EXPECT_LT(change, other_place / 5);
   }
+}
+
+// Without the cap (no attitude source) the descriptor is the one of every earlier version:
+// an attitude passed in is ignored bit for bit, and the cap's options are not even checked.
+TEST(SkyDescriptor, WithoutTheCapAnAttitudeChangesNothing) {
+  const Lens lens = FisheyeLens(240, 240);
+  SkyDescriptorOptions options;
+  options.bands = 32;
+  options.cap = {false, 200.0, -5.0};  // nonsense, but off
+  SkyDescriptor descriptor;
+  ASSERT_TRUE(descriptor.Init(lens, options).ok());
+  const std::vector<std::uint8_t> f = DrawCanyon(lens, 0.3);
+  const ImageView view{f.data(), 240, 240, 240, PixelFormat::kGrey8};
+  std::vector<float> plain(32), with_attitude(32);
+  ASSERT_TRUE(descriptor.Compute(view, plain).ok());
+  const Attitude tilted = AttitudeFromRollPitch(0, 30.0, -20.0);
+  ASSERT_TRUE(descriptor.Compute(view, with_attitude, nullptr, &tilted).ok());
+  EXPECT_EQ(plain, with_attitude);
+  // And the cap on changes it (so the comparison above can fail).
+  options.cap = {true, 30.0, 10.0};
+  SkyDescriptor capped;
+  ASSERT_TRUE(capped.Init(lens, options).ok());
+  ASSERT_TRUE(capped.Compute(view, with_attitude, nullptr, &tilted).ok());
+  EXPECT_NE(plain, with_attitude);
+  // A cap outside its range is refused at Init, naming it.
+  options.cap = {true, 85.0, 10.0};
+  const DescriptorError e = capped.Init(lens, options);
+  EXPECT_FALSE(e.ok());
+  EXPECT_NE(std::string(e.message).find("gravity cap"), std::string::npos) << e.message;
 }
 
 TEST(SkyDescriptor, DirectAndViaMaskPathsGiveTheSameDescriptor) {
