@@ -48,7 +48,10 @@ constexpr const char* kUsage =
     "  --data DIR             Seville data folder (default ../shared/data/seville2009)\n"
     "  --attitude A           the gravity-aligned descriptor's zenith (tilt, manoeuvre,\n"
     "                         speed): imu (the simulated IMU with noise and bias through\n"
-    "                         the attitude filter; default), truth (the true poses), none\n"
+    "                         the attitude filter; default), truth (the true poses), none,\n"
+    "                         image (estimated from each frame's sky mask, experimental)\n"
+    "  --zenith M             --attitude image's method: skyline (the skyline's mean plane;\n"
+    "                         default) or centroid (the sky's centroid)\n"
     "  --cap-elevation DEG    the cap's lower edge, 0..80 (default: from the experiment's\n"
     "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n";
 
@@ -122,8 +125,17 @@ int ParseArgs(std::span<char* const> args, Options* o) {
         e.attitude = sim::AttitudeInput::kTruth;
       else if (std::strcmp(v, "imu") == 0)
         e.attitude = sim::AttitudeInput::kSimulatedImu;
+      else if (std::strcmp(v, "image") == 0)
+        e.attitude = sim::AttitudeInput::kImage;
       else
-        return bad("none, truth or imu");
+        return bad("none, truth, imu or image");
+    } else if (std::strcmp(flag, "--zenith") == 0) {
+      if (std::strcmp(v, "skyline") == 0)
+        e.zenith.method = dsp::ZenithMethod::kSkylinePlane;
+      else if (std::strcmp(v, "centroid") == 0)
+        e.zenith.method = dsp::ZenithMethod::kSkyCentroid;
+      else
+        return bad("skyline or centroid");
     } else if (std::strcmp(flag, "--cap-elevation") == 0) {
       if (!ParseNumber(v, 0, 80, &d))
         return bad("degrees within 0..80");
@@ -442,13 +454,37 @@ int RunExperiment(std::span<char* const> args) {
     notes += Format(
         "Gravity-aligned cap (sky_cap columns): zenith from %s; lower edge %s, taper %.3g "
         "degrees.\n",
-        o.experiment.attitude == sim::AttitudeInput::kTruth
-            ? "the true poses"
+        o.experiment.attitude == sim::AttitudeInput::kTruth ? "the true poses"
+        : o.experiment.attitude == sim::AttitudeInput::kImage
+            ? (o.experiment.zenith.method == dsp::ZenithMethod::kSkylinePlane
+                   ? "the image alone (dsp::ZenithEstimator: the skyline's mean plane)"
+                   : "the image alone (dsp::ZenithEstimator: the sky's centroid)")
             : "the simulated IMU (noise and bias on) through the attitude filter",
         o.experiment.cap.elevation_deg < 0
             ? "from the experiment's largest tilt (dsp::CapElevationForTilt)"
             : Format("%.3g degrees", o.experiment.cap.elevation_deg).c_str(),
         o.experiment.cap.taper_deg);
+  }
+  if (cap && (o.name == "tilt" || o.name == "manoeuvre")) {
+    // The cap's zenith against the true poses, per scored pair of runs.
+    std::string table =
+        "\nThe cap's zenith against the true poses (degrees: mean / p95 / max over the run's "
+        "frames; frames with no estimate, then assumed level):\n\n"
+        "| row | reference run | query run | no estimate (ref / query) |\n|---|---|---|---|\n";
+    auto cell = [](const sim::ZenithError& z) {
+      return Format("%.2f / %.2f / %.2f", z.mean_deg, z.p95_deg, z.max_deg);
+    };
+    auto add = [&](const std::string& label, const sim::ZenithError& ref,
+                   const sim::ZenithError& query) {
+      table += Format("| %s | %s | %s | %d / %d |\n", label.c_str(), cell(ref).c_str(),
+                      cell(query).c_str(), ref.no_estimate, query.no_estimate);
+    };
+    for (std::size_t i = 0; i < tilt.size(); ++i)
+      add(rows[i].label, tilt[i].reference_zenith, tilt[i].query_zenith);
+    for (std::size_t i = 0; i < manoeuvre.size(); ++i)
+      add(rows[i].label, manoeuvre[i].reference_zenith, manoeuvre[i].query_zenith);
+    std::fputs(table.c_str(), stdout);
+    notes += table;
   }
   if (o.name == "ants")
     notes += std::string("Reference route ") + sim::kAntsReferenceRoute + ".\n";

@@ -1,6 +1,7 @@
 #include "skyloc/sim/experiment.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -19,6 +20,8 @@ const char* AttitudeInputName(AttitudeInput input) {
       return "truth";
     case AttitudeInput::kSimulatedImu:
       return "imu";
+    case AttitudeInput::kImage:
+      return "image";
   }
   return "?";
 }
@@ -32,6 +35,10 @@ Status RunAttitudes(const std::vector<TrajectoryPoint>& trajectory, AttitudeInpu
   out->clear();
   if (input == AttitudeInput::kNone)
     return Status::Ok();
+  if (input == AttitudeInput::kImage) {  // estimated frame by frame in DescribeRun
+    out->assign(trajectory.size(), dsp::Attitude{});
+    return Status::Ok();
+  }
   if (input == AttitudeInput::kTruth) {
     for (const TrajectoryPoint& t : trajectory) {
       out->push_back(dsp::AttitudeFromRollPitch(static_cast<std::int64_t>(t.time_s * 1e9),
@@ -56,6 +63,34 @@ double LargestTiltDeg(double tilt_deg, double bumps_deg) {
 
 // The options with the cap on (when attitude is) at the elevation a user expecting tilts up
 // to max_tilt_deg would configure, unless the caller set one.
+// The angle between each frame's cap zenith and the true one.
+ZenithError ZenithErrorOf(const std::vector<TrajectoryPoint>& trajectory,
+                          const std::vector<dsp::Attitude>& attitude, int no_estimate) {
+  ZenithError e;
+  e.no_estimate = no_estimate;
+  if (attitude.size() != trajectory.size() || attitude.empty())
+    return e;
+  std::vector<double> errors;
+  errors.reserve(attitude.size());
+  for (std::size_t i = 0; i < attitude.size(); ++i) {
+    const std::array<double, 3> truth =
+        dsp::UpFromRollPitch(trajectory[i].pose.roll_deg, trajectory[i].pose.pitch_deg);
+    const std::array<double, 3>& u = attitude[i].up;
+    const double c = std::clamp(u[0] * truth[0] + u[1] * truth[1] + u[2] * truth[2], -1.0, 1.0);
+    errors.push_back(std::acos(c) * 180.0 / 3.14159265358979323846);
+  }
+  e.frames = static_cast<int>(errors.size());
+  double sum = 0;
+  for (const double x : errors)
+    sum += x;
+  e.mean_deg = sum / static_cast<double>(errors.size());
+  std::sort(errors.begin(), errors.end());
+  e.max_deg = errors.back();
+  e.p95_deg = errors[std::min(errors.size() - 1,
+                              static_cast<std::size_t>(0.95 * static_cast<double>(errors.size())))];
+  return e;
+}
+
 ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_deg) {
   ExperimentOptions o = options;
   o.cap.enabled = options.attitude != AttitudeInput::kNone;
@@ -97,6 +132,12 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   } else {
     out->attitude.clear();
   }
+  // The image's own zenith: from the hemisphere descriptor's samples (the same grid).
+  dsp::ZenithEstimator zenith;
+  const bool from_image = options.cap.enabled && options.attitude == AttitudeInput::kImage;
+  if (from_image && !zenith.Init(sky.grid(), options.zenith))
+    return Status::Error(StatusCode::kInvalidArgument, "zenith estimator: options out of range");
+  int no_estimate = 0;
   const auto w = static_cast<std::size_t>(options.width);
   const auto h = static_cast<std::size_t>(options.height);
   std::vector<std::uint8_t> uv(w * h), visible(w * h * 3);
@@ -121,6 +162,13 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
         !e.ok())
       return Status::Error(StatusCode::kInternal, "sky descriptor of frame %zu: %s", i, e.message);
     sky_fraction += segmentation.sky_fraction;
+    if (from_image) {
+      const auto t_ns = static_cast<std::int64_t>(out->trajectory[i].time_s * 1e9);
+      if (!zenith.Estimate(sky.samples(), t_ns, &out->attitude[i])) {
+        out->attitude[i] = dsp::AttitudeFromRollPitch(t_ns, 0, 0);
+        ++no_estimate;
+      }
+    }
     if (options.cap.enabled) {
       if (const dsp::DescriptorError e =
               sky_cap.Compute(uv_view, std::span<float>(out->sky_cap).subspan(i * bands, bands),
@@ -140,6 +188,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
                            dsp::VanillaErrorMessage(e));
   }
   out->mean_sky_fraction = n > 0 ? sky_fraction / static_cast<double>(n) : 0;
+  out->zenith_error = ZenithErrorOf(out->trajectory, out->attitude, no_estimate);
   return Status::Ok();
 }
 
@@ -297,6 +346,8 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
       SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap_filter,
                            ExperimentMatcher::kRouteFilter));
     }
+    row.reference_zenith = reference->zenith_error;
+    row.query_zenith = query->zenith_error;
     rows->push_back(std::move(row));
   }
   return Status::Ok();
@@ -343,6 +394,8 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
         SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap_filter,
                              ExperimentMatcher::kRouteFilter));
       }
+      row.reference_zenith = reference.zenith_error;
+      row.query_zenith = query.zenith_error;
       rows->push_back(std::move(row));
     }
   }

@@ -19,6 +19,7 @@
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/zenith_estimate.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/sim/motion.h"
 #include "skyloc/sim/renderer.h"
@@ -31,6 +32,8 @@ enum class AttitudeInput : std::uint8_t {
   kNone,          // no gravity-aligned descriptor
   kTruth,         // the true poses (an upper bound)
   kSimulatedImu,  // the simulated IMU (noise, bias) through the attitude filter: the product
+  kImage,         // the image alone (dsp::ZenithEstimator on the frame's sky samples; level
+                  // when it gives no estimate): issue 12 item 3, experimental
 };
 
 const char* AttitudeInputName(AttitudeInput input);
@@ -59,6 +62,14 @@ struct ExperimentOptions {
   // experiment's own largest tilt through dsp::CapElevationForTilt (what a user would set).
   AttitudeInput attitude = AttitudeInput::kSimulatedImu;
   dsp::GravityCapOptions cap{false, -1, 10};
+  dsp::ZenithEstimateOptions zenith;  // AttitudeInput::kImage
+};
+
+// How far the cap's zenith was from the true one over a run's frames (degrees).
+struct ZenithError {
+  double mean_deg = 0, p95_deg = 0, max_deg = 0;
+  int frames = 0;
+  int no_estimate = 0;  // kImage: frames the estimator gave nothing for (the cap assumed level)
 };
 
 // One simulated run: its trajectory and the descriptors of every frame.
@@ -70,6 +81,7 @@ struct RunDescriptors {
   std::vector<float> vanilla;  // frames x dsp::kVanillaDescriptorSize
   std::vector<float> sky_cap;  // frames x bands: the gravity-aligned cap (empty: attitude off)
   std::vector<dsp::Attitude> attitude;  // per frame: the zenith the cap used
+  ZenithError zenith_error;             // of `attitude` against the true poses
   double mean_sky_fraction = 0;
 };
 
@@ -119,6 +131,7 @@ struct TiltRow {
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
   // The gravity-aligned cap (options.attitude != kNone): OpenSeqSLAM and the route filter.
   MethodScore sky_cap, sky_cap_filter;
+  ZenithError reference_zenith, query_zenith;  // the cap's zenith against the truth
 };
 
 // Progress: called before each run is rendered (may be null).
@@ -136,6 +149,7 @@ struct ManoeuvreRow {
   MethodScore sky, vanilla;
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
   MethodScore sky_cap, sky_cap_filter;  // the gravity-aligned cap, as TiltRow
+  ZenithError reference_zenith, query_zenith;
 };
 
 Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
