@@ -1,18 +1,22 @@
-// One suite for every AttitudeSource: the attitude recorded with the frames (datasets) and
-// an IMU through the attitude filter (here the simulated IMU; the IIO driver is the same
-// ImuAttitudeSource over another ImuDevice, whose own compliance suite runs on the kernel's
-// iio_dummy in the HIL VM). Each instance is a robot standing still at a known tilt; the
-// reference is the closed form dsp::UpFromRollPitch.
+// One suite for every AttitudeSource: the attitude recorded with the frames (datasets), an
+// IMU through the attitude filter on the simulated IMU, and the same on the IIO driver over
+// a real device named by SKYLOC_TEST_IIO_DEVICE (the HIL VM's iio_dummy, a still and level
+// IMU: SKIPPED with the reason elsewhere). Each instance is a robot standing still at a
+// known attitude; the reference is the closed form dsp::UpFromRollPitch.
 #include <gtest/gtest.h>
+#include <time.h>
 
 #include <cmath>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "skyloc/drivers/attitude_source.h"
+#include "skyloc/drivers/iio_imu.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/platform/alloc_counter.h"
+#include "test_env.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -26,6 +30,14 @@ constexpr std::int64_t kSamples = 2000;              // 10 s
 struct Instance {
   virtual ~Instance() = default;
   virtual AttitudeSource& source() = 0;
+  // The robot's true attitude and the IMU's gyro bias (which bounds the filter's error).
+  virtual std::array<double, 2> roll_pitch_deg() const { return {kRollDeg, kPitchDeg}; }
+  virtual double gyro_bias_radps() const { return 0.0023; }
+  // How long the tilt case follows the robot, and a wait until the source can know time
+  // t (a real device delivers samples in real time; the others have them at once).
+  virtual std::int64_t span_ns() const { return 9'000'000'000; }
+  virtual void WaitUntil(std::int64_t t_ns) { (void)t_ns; }
+  std::string skip;  // non-empty: no such device here, and why
   // A frame at time t (ns). `recorded` false: a frame that came without an attitude.
   virtual Frame MakeFrame(std::int64_t t_ns, bool recorded = true) {
     Frame f;
@@ -34,7 +46,7 @@ struct Instance {
     (void)recorded;
     return f;
   }
-  // The time before which the source cannot know anything.
+  // The time before which the source cannot know anything (after Open()).
   virtual std::int64_t first_known_ns() const = 0;
 };
 
@@ -72,6 +84,54 @@ struct SimulatedImuFiltered final : Instance {
   std::int64_t first_known_ns() const override { return 1'000'000'000; }
 };
 
+std::int64_t MonotonicNs() {
+  timespec t{};
+  ::clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+// The IIO driver on a real IMU, buffered (the HIL VM's iio_dummy: still and level, gyro
+// raw (10, -20, 30) x 0.001 rad/s). Frames are stamped with CLOCK_MONOTONIC, as the
+// camera drivers stamp theirs, and the case waits for real time to pass.
+struct IioFiltered final : Instance {
+  std::unique_ptr<IioImu> imu;
+  std::unique_ptr<ImuAttitudeSource> filtered;
+  mutable std::int64_t t0 = 0;
+  IioFiltered() {
+    const char* device = testing::Env("SKYLOC_TEST_IIO_DEVICE");
+    if (device == nullptr) {
+      skip =
+          "no IIO IMU: set SKYLOC_TEST_IIO_DEVICE (the HIL VM does, with iio_dummy) and "
+          "SKYLOC_TEST_IIO_TRIGGER";
+      return;
+    }
+    IioImuConfig c;
+    std::snprintf(c.device, sizeof c.device, "%s", device);
+    if (const char* trigger = testing::Env("SKYLOC_TEST_IIO_TRIGGER"))
+      std::snprintf(c.trigger, sizeof c.trigger, "%s", trigger);
+    c.sample_rate_hz = 100.0;
+    imu = std::make_unique<IioImu>(c);
+    filtered = std::make_unique<ImuAttitudeSource>(imu.get(), ImuAttitudeConfig{});
+  }
+  AttitudeSource& source() override { return *filtered; }
+  std::array<double, 2> roll_pitch_deg() const override { return {0.0, 0.0}; }
+  double gyro_bias_radps() const override { return std::hypot(0.010, 0.020); }
+  std::int64_t span_ns() const override { return 1'500'000'000; }
+  // Samples begin when the source opens; the first frame it can know comes 300 ms later.
+  std::int64_t first_known_ns() const override {
+    if (t0 == 0)
+      t0 = MonotonicNs() + 300'000'000;
+    return t0;
+  }
+  void WaitUntil(std::int64_t t_ns) override {
+    // The sample stamped t is in the kernel's buffer a trigger period or two later.
+    const std::int64_t due = t_ns + 50'000'000;
+    const std::int64_t now = MonotonicNs();
+    if (due > now)
+      std::this_thread::sleep_for(std::chrono::nanoseconds(due - now));
+  }
+};
+
 using Factory = std::unique_ptr<Instance> (*)();
 
 struct Param {
@@ -81,7 +141,11 @@ struct Param {
 
 class AttitudeSourceSuite : public ::testing::TestWithParam<Param> {
  protected:
-  void SetUp() override { instance_ = GetParam().make(); }
+  void SetUp() override {
+    instance_ = GetParam().make();
+    if (!instance_->skip.empty())
+      GTEST_SKIP() << instance_->skip;
+  }
   std::unique_ptr<Instance> instance_;
 };
 
@@ -93,20 +157,26 @@ double AngleDeg(const std::array<double, 3>& a, const std::array<double, 3>& b) 
 TEST_P(AttitudeSourceSuite, AStillTiltedRobotReadsItsTiltAtEveryFrame) {
   AttitudeSource& source = instance_->source();
   ASSERT_TRUE(source.Open().ok());
-  const std::array<double, 3> truth = dsp::UpFromRollPitch(kRollDeg, kPitchDeg);
-  // The IMU's gyro bias |b| = 0.0023 rad/s tilts a Mahony filter's estimate by at most
-  // asin(|b| / kp) = 0.13 degrees (kp = 1/s) while its integral term learns the bias.
-  const double tolerance_deg = std::asin(0.0023 / dsp::AttitudeFilterParams{}.kp) * 57.3 + 0.01;
-  for (std::int64_t t = instance_->first_known_ns();
-       t < instance_->first_known_ns() + 9'000'000'000; t += 100'000'000) {
+  const auto [roll, pitch] = instance_->roll_pitch_deg();
+  const std::array<double, 3> truth = dsp::UpFromRollPitch(roll, pitch);
+  // A gyro bias |b| (its horizontal part) tilts a Mahony filter's estimate by at most
+  // asin(|b| / kp) (kp = 1/s) while the integral term learns it: 0.13 degrees for the
+  // simulated IMU's bias, 1.3 for iio_dummy's.
+  const double tolerance_deg =
+      std::asin(instance_->gyro_bias_radps() / dsp::AttitudeFilterParams{}.kp) * 57.3 + 0.01;
+  const std::int64_t first = instance_->first_known_ns();
+  std::uint64_t frames = 0;
+  for (std::int64_t t = first; t < first + instance_->span_ns(); t += 100'000'000) {
+    instance_->WaitUntil(t);
     Result<dsp::Attitude> a = source.At(instance_->MakeFrame(t));
+    ++frames;
     ASSERT_TRUE(a.ok()) << t << ": " << a.status().message();
     EXPECT_LE(a->timestamp_ns, t);  // never an estimate from after the frame
     EXPECT_LT(AngleDeg(a->up, truth), tolerance_deg) << t;
-    EXPECT_NEAR(a->roll_deg, kRollDeg, 2 * tolerance_deg);
-    EXPECT_NEAR(a->pitch_deg, kPitchDeg, tolerance_deg);
+    EXPECT_NEAR(a->roll_deg, roll, 2 * tolerance_deg);
+    EXPECT_NEAR(a->pitch_deg, pitch, tolerance_deg);
   }
-  EXPECT_EQ(source.counters().estimates, 90u);
+  EXPECT_EQ(source.counters().estimates, frames);
   EXPECT_EQ(source.counters().missing, 0u);
   source.Close();
 }
@@ -128,6 +198,7 @@ TEST_P(AttitudeSourceSuite, AFrameTheSourceKnowsNothingOfIsNotFoundAndCounted) {
   const Frame early = instance_->MakeFrame(instance_->first_known_ns() - 500'000'000, false);
   EXPECT_EQ(source.At(early).status().code(), StatusCode::kNotFound);
   EXPECT_EQ(source.counters().missing, 1u);
+  instance_->WaitUntil(instance_->first_known_ns() + 1'000'000);
   EXPECT_TRUE(source.At(instance_->MakeFrame(instance_->first_known_ns() + 1'000'000)).ok());
   EXPECT_EQ(source.counters().estimates, 1u);
   source.Close();
@@ -138,12 +209,14 @@ TEST_P(AttitudeSourceSuite, AtAllocatesNothing) {
   AttitudeSource& source = instance_->source();
   ASSERT_TRUE(source.Open().ok());
   std::vector<Frame> frames;
-  for (std::int64_t t = instance_->first_known_ns();
-       t < instance_->first_known_ns() + 9'000'000'000; t += 33'333'333)
+  const std::int64_t first = instance_->first_known_ns();
+  for (std::int64_t t = first; t < first + instance_->span_ns(); t += 33'333'333)
     frames.push_back(instance_->MakeFrame(t));
   AllocationScope scope;
-  for (const Frame& f : frames)
+  for (const Frame& f : frames) {
+    instance_->WaitUntil(f.timestamp.count());
     ASSERT_TRUE(source.At(f).ok());
+  }
   EXPECT_EQ(scope.allocations(), 0u);
   source.Close();
 }
@@ -153,7 +226,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Param{"RecordedFrames",
                             [] { return std::unique_ptr<Instance>(new RecordedFrames); }},
                       Param{"SimulatedImuFiltered",
-                            [] { return std::unique_ptr<Instance>(new SimulatedImuFiltered); }}),
+                            [] { return std::unique_ptr<Instance>(new SimulatedImuFiltered); }},
+                      Param{"Iio", [] { return std::unique_ptr<Instance>(new IioFiltered); }}),
     [](const ::testing::TestParamInfo<Param>& p) { return std::string(p.param.name); });
 
 // The IMU's own failure modes, which a recorded attitude does not have.
