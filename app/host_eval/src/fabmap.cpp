@@ -201,29 +201,41 @@ Result<double> FabMap2::NewPlaceLogLikelihood(std::span<const std::uint32_t> que
   return LogSumExp(l) - std::log(static_cast<double>(l.size()));
 }
 
-Status FabMap2::Localise(std::span<const std::uint32_t> query, std::span<double> place_probability,
-                         double* new_place) const {
-  SKYLOC_TRY(PlaceLogLikelihoods(query, place_probability));
+Status FabMap2::LogPosterior(std::span<const std::uint32_t> query, std::span<double> out,
+                             double* log_new) const {
+  SKYLOC_TRY(PlaceLogLikelihoods(query, out));
   SKYLOC_TRY_ASSIGN(const double l_new, NewPlaceLogLikelihood(query));
-  const std::size_t n = place_probability.size();
-  // Log posterior up to a constant: likelihood x prior (FabMap::normaliseDistribution, with
-  // the new-place prior described in fabmap.h).
+  const std::size_t n = out.size();
+  // Likelihood x prior, normalised (FabMap::normaliseDistribution, with the new-place prior
+  // described in fabmap.h).
   const double log_place_prior =
       n > 0 ? std::log((1.0 - params_.new_place_prior) / static_cast<double>(n)) : 0.0;
   const double a_new = l_new + std::log(params_.new_place_prior);
   double m = a_new;
-  for (double& x : place_probability) {
+  for (double& x : out) {
     x += log_place_prior;
     m = std::max(m, x);
   }
   double sum = std::exp(a_new - m);
-  for (const double x : place_probability)
+  for (const double x : out)
     sum += std::exp(x - m);
+  const double log_total = m + std::log(sum);
+  for (double& x : out)
+    x -= log_total;
+  *log_new = a_new - log_total;
+  return Status::Ok();
+}
+
+Status FabMap2::Localise(std::span<const std::uint32_t> query, std::span<double> place_probability,
+                         double* new_place) const {
+  double log_new = 0;
+  SKYLOC_TRY(LogPosterior(query, place_probability, &log_new));
+  const std::size_t n = place_probability.size();
   const double s = params_.smoothing;
   const double uniform = (1.0 - s) / static_cast<double>(n + 1);
   for (double& x : place_probability)
-    x = s * std::exp(x - m) / sum + uniform;
-  *new_place = s * std::exp(a_new - m) / sum + uniform;
+    x = s * std::exp(x) + uniform;
+  *new_place = s * std::exp(log_new) + uniform;
   return Status::Ok();
 }
 

@@ -63,6 +63,11 @@ class FabMap2 {
   // log p(Z | new place) - log p(Z | L_empty): log of the mean likelihood over the samples.
   Result<double> NewPlaceLogLikelihood(std::span<const std::uint32_t> query) const;
 
+  // The log posterior before smoothing: out[i] = log p(L_i | Z) (out.size() == places()),
+  // *log_new = log p(new place | Z); their exponentials sum to 1. In the log domain a
+  // confident match keeps its distance from the runner-up (1 - p does not round to 0).
+  Status LogPosterior(std::span<const std::uint32_t> query, std::span<double> out,
+                      double* log_new) const;
   // The posterior over the places and a new place, smoothed: place_probability[i] for each
   // reference place (out.size() == places()), *new_place for the new place. They sum to 1.
   Status Localise(std::span<const std::uint32_t> query, std::span<double> place_probability,
