@@ -29,6 +29,7 @@ die() {
 HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest libgtest-dev
   libbenchmark-dev libeigen3-dev libtomlplusplus-dev libstb-dev libgpiod-dev gpiod
   libboost-math-dev
+  libopencv-dev  # host-only evaluation tools: SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md)
   libcamera-dev
   clang-14 libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (tests/fuzz)
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's

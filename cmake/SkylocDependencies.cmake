@@ -24,6 +24,22 @@ target_include_directories(skyloc_tomlpp SYSTEM INTERFACE ${SKYLOC_TOMLPP_INCLUD
 target_compile_definitions(skyloc_tomlpp INTERFACE TOML_HEADER_ONLY=1 TOML_EXCEPTIONS=0)
 add_library(skyloc::tomlpp ALIAS skyloc_tomlpp)
 
+# OpenCV (Debian's libopencv-dev) for the host-only evaluation tools only: SIFT features and
+# k-means for the FAB-MAP baseline. Never linked into dsp/, drivers/ or the ARM firmware.
+if(SKYLOC_HOST_EVAL)
+  find_package(OpenCV 4 QUIET COMPONENTS core imgproc features2d)
+  if(NOT OpenCV_FOUND)
+    message(FATAL_ERROR "skyloc: SKYLOC_HOST_EVAL is ON but OpenCV 4 (core, imgproc, "
+                        "features2d) was not found. Install it with 'apt-get install "
+                        "libopencv-dev' (./skyloc.sh deps does), or configure with "
+                        "-DSKYLOC_HOST_EVAL=OFF to leave the evaluation tools out.")
+  endif()
+  message(STATUS "skyloc: host evaluation tools (FAB-MAP): built, OpenCV ${OpenCV_VERSION}")
+else()
+  message(STATUS "skyloc: host evaluation tools (FAB-MAP): LEFT OUT (SKYLOC_HOST_EVAL=OFF, "
+                 "the default when cross-compiling)")
+endif()
+
 # Optional drivers: each is built only when its library is installed for the target.
 pkg_check_modules(LIBGPIOD IMPORTED_TARGET libgpiodcxx>=1.6)
 pkg_check_modules(LIBCAMERA IMPORTED_TARGET libcamera>=0.0.3)

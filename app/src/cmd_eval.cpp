@@ -1,6 +1,7 @@
 // `skyloc eval`: place recognition of a query run against a reference run (two dataset
 // folders), with SeqSLAM over the sky descriptor and/or the vanilla (patch-normalised
-// greyscale) descriptor, at one or more sequence lengths. Writes matches.csv,
+// greyscale) descriptor, at one or more sequence lengths, and FAB-MAP 2.0 (SIFT words, a
+// vocabulary from `skyloc fabmap-train`; host builds only, docs/FABMAP.md). Writes matches.csv,
 // metrics.json, pr.svg and correspondence.svg into --out (docs/SEQSLAM.md, "Evaluation").
 #include <algorithm>
 #include <cerrno>
@@ -30,6 +31,9 @@
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/platform/status.h"
 #include "svg_plot.h"
+#if SKYLOC_WITH_HOST_EVAL
+#include "skyloc/host_eval/fabmap_eval.h"
+#endif
 
 namespace skyloc::app {
 namespace {
@@ -40,7 +44,11 @@ constexpr const char* kUsage =
     "Matches every query frame against the reference route and scores the matches\n"
     "against the ground truth. DIRs are dataset folders (docs/DATASETS.md).\n"
     "\n"
-    "  --method sky|vanilla   descriptor (repeat to compare; default: sky and vanilla)\n"
+    "  --method sky|vanilla|fabmap  descriptor (repeat to compare; default: sky and\n"
+    "                         vanilla, and fabmap too when --vocab is given). fabmap is\n"
+    "                         FAB-MAP 2.0 on SIFT words (docs/FABMAP.md): one run, no\n"
+    "                         matcher or sequence length; host builds only\n"
+    "  --vocab FILE           fabmap: the vocabulary from skyloc fabmap-train\n"
     "  --matcher filter|openseqslam  the matcher (repeat to compare; default: filter, the\n"
     "                         firmware's route filter; docs/SEQSLAM.md)\n"
     "  --ds N                 sequence length in frames (repeat; default: 1 10 20)\n"
@@ -71,10 +79,18 @@ constexpr const char* kUsage =
     "its matches: matches.csv gives each frame's state, metrics.json the share of\n"
     "LOCALISED frames that are correct.\n";
 
-enum class Method : std::uint8_t { kSky, kVanilla };
+enum class Method : std::uint8_t { kSky, kVanilla, kFabmap };
 
 const char* MethodName(Method m) {
-  return m == Method::kSky ? "sky" : "vanilla";
+  switch (m) {
+    case Method::kSky:
+      return "sky";
+    case Method::kVanilla:
+      return "vanilla";
+    case Method::kFabmap:
+      return "fabmap";
+  }
+  return "?";
 }
 
 const char* MatcherName(Matcher m) {
@@ -96,6 +112,7 @@ struct EvalOptions {
   std::string config_file;
   Config config = DefaultConfig();  // --config FILE, then the flags above
   bool streaming = false;
+  std::string vocab;   // --vocab FILE (fabmap)
   std::string camera;  // --camera FILE
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
@@ -164,9 +181,13 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
         o->methods.push_back(Method::kSky);
       } else if (std::strcmp(v, "vanilla") == 0) {
         o->methods.push_back(Method::kVanilla);
+      } else if (std::strcmp(v, "fabmap") == 0) {
+        o->methods.push_back(Method::kFabmap);
       } else {
-        return fail("--method '%s': use sky or vanilla", v);
+        return fail("--method '%s': use sky, vanilla or fabmap", v);
       }
+    } else if (a == "--vocab") {
+      o->vocab = v;
     } else if (a == "--matcher") {
       if (std::strcmp(v, "filter") == 0) {
         o->matchers.push_back(Matcher::kRouteFilter);
@@ -221,8 +242,15 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
     return fail("%s", "--batch and --streaming exclude each other");
   if (!o->gt_file.empty() && o->tolerance_m > 0)
     return fail("%s", "--gt and --tolerance-m exclude each other");
-  if (o->methods.empty())
+  const bool fabmap_asked =
+      std::find(o->methods.begin(), o->methods.end(), Method::kFabmap) != o->methods.end();
+  if (fabmap_asked && o->vocab.empty())
+    return fail("%s", "--method fabmap needs --vocab FILE (write one with skyloc fabmap-train)");
+  if (o->methods.empty()) {
     o->methods = {Method::kSky, Method::kVanilla};
+    if (!o->vocab.empty())
+      o->methods.push_back(Method::kFabmap);
+  }
   if (o->matchers.empty()) {
     o->matchers = {(batch || o->streaming) ? Matcher::kOpenSeqSlam : Matcher::kRouteFilter};
   } else if ((batch || o->streaming) && std::find(o->matchers.begin(), o->matchers.end(),
@@ -444,6 +472,7 @@ Result<GroundTruth> MakeGroundTruth(const EvalOptions& o, const drivers::Dataset
 struct Run {
   Method method = Method::kVanilla;
   Matcher matcher = Matcher::kRouteFilter;
+  std::string matcher_name;  // MatcherName(matcher), or "fabmap2" for FAB-MAP's own inference
   int ds = 0;
   std::vector<dsp::SeqSlamMatch> matches;  // per query frame
   std::vector<dsp::TrackState> states;     // per query frame: the state machine replayed
@@ -498,6 +527,46 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
   return Status::Ok();
 }
 
+// FAB-MAP 2.0: each query's most probable reference place, with uniqueness = 1 - its
+// posterior (lower = more distinct, as SeqSLAM's ratio, so the same PR sweep applies:
+// accepting uniqueness <= u is accepting p(place | query) >= 1 - u).
+Status RunFabmap(const EvalOptions& o, Run* run) {
+  run->method = Method::kFabmap;
+  run->matcher_name = "fabmap2";
+  run->ds = 1;
+#if SKYLOC_WITH_HOST_EVAL
+  std::fprintf(stderr, "skyloc eval: fabmap: SIFT words of both runs (vocabulary %s)...\n",
+               o.vocab.c_str());
+  host_eval::FabmapEvalTiming timing;
+  SKYLOC_TRY_ASSIGN(const std::vector<host_eval::FabmapQueryMatch> found,
+                    host_eval::MatchWithFabmap(o.vocab, o.reference, o.query,
+                                               host_eval::FabMapParams{}, &timing));
+  std::fprintf(stderr,
+               "skyloc eval: fabmap: features %.2f s, inference %.3f ms per query over %d "
+               "places\n",
+               timing.features_s,
+               timing.queries > 0 ? 1e3 * timing.inference_s / timing.queries : 0.0, timing.places);
+  run->matches.assign(found.size(), dsp::SeqSlamMatch{});
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    const host_eval::FabmapQueryMatch& f = found[i];
+    dsp::SeqSlamMatch& m = run->matches[i];
+    if (f.reference < 0)
+      continue;
+    m.valid = true;
+    m.reference = m.row = m.start = f.reference;
+    m.score = static_cast<float>(-std::log(std::max(f.p_reference, 1e-300)));
+    m.uniqueness = static_cast<float>(f.uniqueness);
+    m.confidence = 1.0f - m.uniqueness;
+  }
+  return Status::Ok();
+#else
+  (void)o;
+  return Status::Error(StatusCode::kUnimplemented,
+                       "--method fabmap is not in this build: the host evaluation tools are "
+                       "left out of cross builds; use a host build (SKYLOC_HOST_EVAL=ON)");
+#endif
+}
+
 bool IsCorrect(const GroundTruth& gt, int q, int matched) {
   const auto i = static_cast<std::size_t>(q);
   return dsp::MatchIsCorrect(matched, gt.reference[i], gt.tolerance, gt.ref_xyz,
@@ -527,7 +596,7 @@ void Score(const GroundTruth& gt, Run* run) {
       run->localised_correct += run->evaluated[k].correct ? 1 : 0;
     }
   }
-  run->label = std::string(MethodName(run->method)) + " " + MatcherName(run->matcher) +
+  run->label = std::string(MethodName(run->method)) + " " + run->matcher_name +
                " ds=" + std::to_string(run->ds);
 }
 
@@ -593,7 +662,7 @@ Status WriteMatchesCsv(const std::string& path, const std::vector<Run>& runs) {
       const dsp::SeqSlamMatch& m = run.matches[static_cast<std::size_t>(q)];
       std::fprintf(f.get(), "%s,%d,%d,%d,%.6g,%.6g,%d,%s,%s\n", MethodName(run.method), run.ds, q,
                    m.reference, static_cast<double>(m.score), static_cast<double>(m.uniqueness),
-                   run.evaluated[i].correct ? 1 : 0, MatcherName(run.matcher),
+                   run.evaluated[i].correct ? 1 : 0, run.matcher_name.c_str(),
                    dsp::TrackStateName(run.states[static_cast<std::size_t>(q)]));
     }
   }
@@ -620,9 +689,8 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
     std::fprintf(out,
                  "    {\"method\": %s, \"matcher\": %s, \"ds\": %d, \"evaluated\": %d, "
                  "\"with_ground_truth\": %d, \"correct\": %d,\n",
-                 JsonString(MethodName(r.method)).c_str(),
-                 JsonString(MatcherName(r.matcher)).c_str(), r.ds, s.evaluated, s.with_ground_truth,
-                 s.correct);
+                 JsonString(MethodName(r.method)).c_str(), JsonString(r.matcher_name).c_str(), r.ds,
+                 s.evaluated, s.with_ground_truth, s.correct);
     std::fprintf(out, "     \"localised\": %d, \"localised_correct\": %d,\n", r.localised,
                  r.localised_correct);
     std::fprintf(out,
@@ -704,6 +772,14 @@ Status Evaluate(EvalOptions o) {
   const int n_ref = static_cast<int>(ref.frames.size());
   const int n_query = static_cast<int>(query.frames.size());
   for (const Method method : o.methods) {
+    if (method == Method::kFabmap) {
+      Run run;
+      SKYLOC_TRY(RunFabmap(o, &run));
+      run.states = ReplayStateMachine(o.config, run.matches);
+      Score(gt, &run);
+      runs.push_back(std::move(run));
+      continue;
+    }
     std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
                  n_ref, n_query);
     SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o));
@@ -714,6 +790,7 @@ Status Evaluate(EvalOptions o) {
         run.method = method;
         run.matcher = matcher;
         run.ds = ds;
+        run.matcher_name = MatcherName(matcher);
         SKYLOC_TRY(RunMatcher(rd, qd, o, &run));
         Config config = o.config;
         config.seqslam.matcher = matcher;
@@ -732,7 +809,7 @@ Status Evaluate(EvalOptions o) {
               "correct", "P@100%recall", "R@100%prec", "AUC", "LOCALISED correct");
   for (const Run& r : runs) {
     std::printf("%-8s %-12s %4d %9d %8d %13.3f %13.3f %7.3f %8d of %6d\n", MethodName(r.method),
-                MatcherName(r.matcher), r.ds, r.summary.evaluated, r.summary.correct,
+                r.matcher_name.c_str(), r.ds, r.summary.evaluated, r.summary.correct,
                 r.summary.precision_at_full_recall, r.summary.recall_at_full_precision,
                 r.summary.area_under_curve, r.localised_correct, r.localised);
   }

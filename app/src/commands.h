@@ -24,6 +24,7 @@ int RunEval(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);
 int RunSimulate(std::span<char* const> args);
 int RunExperiment(std::span<char* const> args);
+int RunFabmapTrain(std::span<char* const> args);
 
 // True for the flags that ask a command for its usage text.
 inline bool IsHelpFlag(const char* arg) {

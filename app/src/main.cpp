@@ -18,12 +18,14 @@ constexpr Command kCommands[] = {
      RunDescribe},
     {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
     {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
+    {"fabmap-train", "train the FAB-MAP 2.0 vocabulary for eval --method fabmap (host builds)",
+     RunFabmapTrain},
 };
 
 void PrintUsage(std::FILE* out) {
   std::fprintf(out, "usage: skyloc COMMAND [ARGS...]\n\ncommands:\n");
   for (const Command& c : kCommands)
-    std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+    std::fprintf(out, "  %-12s %s\n", c.name, c.summary);
   std::fprintf(out, "\n'skyloc COMMAND --help' describes a command.\n");
 }
 

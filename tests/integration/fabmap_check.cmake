@@ -1,0 +1,47 @@
+# `skyloc fabmap-train` + `skyloc eval --method fabmap` end to end on small simulated
+# visible-light runs: the vocabulary from a forest run, evaluated on two city runs.
+#   -DCMD=skyloc -DWORK=dir
+file(REMOVE_RECURSE ${WORK})
+function(run)
+  execute_process(COMMAND ${CMD} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "skyloc ${ARGN} failed (${rc}):\n${out}\n${err}")
+  endif()
+  set(last_out "${out}" PARENT_SCOPE)
+endfunction()
+run(simulate --world forest --seed 2 --mode visible --frames 60 --out ${WORK}/train)
+run(simulate --world city --run 1 --mode visible --frames 60 --out ${WORK}/ref)
+run(simulate --world city --run 2 --mode visible --frames 60 --out ${WORK}/query)
+run(fabmap-train --train ${WORK}/train --out ${WORK}/v.fabmap --words 150 --max-features 300)
+run(eval --reference ${WORK}/ref --query ${WORK}/query --vocab ${WORK}/v.fabmap
+    --method fabmap --out ${WORK}/out)
+message(STATUS "${last_out}")
+file(READ ${WORK}/out/metrics.json json)
+string(JSON method GET "${json}" runs 0 method)
+string(JSON matcher GET "${json}" runs 0 matcher)
+string(JSON correct GET "${json}" runs 0 correct)
+string(JSON evaluated GET "${json}" runs 0 evaluated)
+if(NOT method STREQUAL "fabmap" OR NOT matcher STREQUAL "fabmap2" OR NOT evaluated EQUAL 60)
+  message(FATAL_ERROR "metrics.json: run 0 is ${method}/${matcher} with ${evaluated} matches")
+endif()
+# Measured 2026-11-25: 43 of 60 correct within +-5 frames; a random match is right for
+# about 11 of 60 (+-5 of 60 reference frames).
+if(correct LESS 30)
+  message(FATAL_ERROR "fabmap matched only ${correct} of 60 query frames correctly")
+endif()
+foreach(f matches.csv pr.svg correspondence.svg)
+  if(NOT EXISTS ${WORK}/out/${f})
+    message(FATAL_ERROR "skyloc eval did not write ${f}")
+  endif()
+endforeach()
+# A file that is not a vocabulary: one error naming the file, exit 1 (the unit tests
+# damage real vocabularies byte by byte: tests/host_eval/fabmap_vocabulary_test.cpp).
+file(WRITE ${WORK}/foreign.fabmap "not a vocabulary at all\n")
+execute_process(COMMAND ${CMD} eval --reference ${WORK}/ref --query ${WORK}/query
+                --vocab ${WORK}/foreign.fabmap --method fabmap --out ${WORK}/out2
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "foreign.fabmap is not a skyloc FAB-MAP vocabulary")
+  message(FATAL_ERROR "a foreign vocabulary: exit ${rc}, stderr:\n${err}")
+endif()
+message(STATUS "all fabmap checks passed")
