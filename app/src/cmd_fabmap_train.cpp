@@ -33,7 +33,7 @@ constexpr const char* kUsage =
     "  --cluster-max N    descriptors k-means sees, evenly subsampled (default 40000)\n"
     "  --seed N           k-means++ seed (default 1)\n";
 
-bool ParsePositive(const char* s, int* out) {
+[[maybe_unused]] bool ParsePositive(const char* s, int* out) {
   const char* end = s + std::strlen(s);
   auto [p, ec] = std::from_chars(s, end, *out);
   return ec == std::errc() && p == end && end != s && *out > 0;
