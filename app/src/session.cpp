@@ -149,7 +149,7 @@ Status MakeAttitudeSource(const Config& config, const CameraSource& camera, Atti
                              "([camera] kind = \"sim\", sim_world city, forest or repetitive)");
       sim::ImuModelConfig model;
       model.rate_hz = a.rate_hz;
-      model.seed = camera.run_seed * 7919 + 17;
+      model.seed = sim::ImuSeedForRun(camera.run_seed);
       SKYLOC_TRY(sim::SimulateImu(camera.trajectory, model, &out->sim_samples));
       drivers::SimulatedImuConfig c;
       c.sample_rate_hz = a.rate_hz;

@@ -57,7 +57,6 @@ ImuAttitudeSource::ImuAttitudeSource(ImuDevice* imu, const ImuAttitudeConfig& co
 Status ImuAttitudeSource::DoOpen() {
   if (imu_ == nullptr)
     return Status::Error(StatusCode::kInvalidArgument, "attitude source: no IMU");
-  std::snprintf(name_, sizeof name_, "%s", imu_->info().name);
   if (const dsp::AttitudeError e = filter_.Init(config_.filter); e != dsp::AttitudeError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[attitude] filter: %s",
                          dsp::AttitudeErrorMessage(e));

@@ -46,7 +46,7 @@ Status RunAttitudes(const std::vector<TrajectoryPoint>& trajectory, AttitudeInpu
     }
   } else {
     ImuModelConfig imu;
-    imu.seed = seed * 7919 + 17;
+    imu.seed = ImuSeedForRun(seed);
     SKYLOC_TRY(EstimateAttitudes(trajectory, imu, dsp::AttitudeFilterParams{}, out));
   }
   return Status::Ok();

@@ -82,6 +82,12 @@ struct ImuTruth {
 Status ImuTruthAt(std::span<const TrajectoryPoint> trajectory, double t, double gravity_mps2,
                   ImuTruth* out);
 
+// The IMU noise and bias seed of a simulated run, from the run's own seed (its stops,
+// bumps and clouds): one rule for the experiments and the firmware's [attitude] kind = "sim".
+inline std::uint64_t ImuSeedForRun(std::uint64_t run_seed) {
+  return run_seed * 7919 + 17;
+}
+
 // Runs the simulated IMU through dsp::AttitudeFilter and returns, for each frame, the
 // filter's latest estimate at or before the frame's timestamp (frame and attitude matched
 // by timestamp; the estimate's own timestamp is the IMU sample's). `at_frames` gets one
