@@ -319,7 +319,8 @@ Result<std::string> ReadText(const std::string& path) {
 }
 
 // DIR/camera.toml in the camera-file format (docs/CAMERA_FILE.md): a copy of --camera, or
-// the default lens written out.
+// the default lens written out, its mount included (sim::DefaultSimLens sits turned 90
+// degrees on the robot: a replay and its recorded attitude need that frame).
 Status WriteCameraFile(const std::string& dir, const Options& o, const dsp::Lens& lens) {
   const std::string path = dir + "/camera.toml";
   if (!o.camera_file.empty()) {
@@ -331,9 +332,10 @@ Status WriteCameraFile(const std::string& dir, const Options& o, const dsp::Lens
                 "# Written by skyloc simulate: the simulated camera (docs/CAMERA_FILE.md).\n"
                 "[image]\nwidth = %d\nheight = %d\n\n"
                 "[lens]\nmodel = \"%s\"\nfov_deg = %.6f\ncentre = [%.6f, %.6f]\n"
-                "radius_px = %.6f\n\n[mount]\nroll_deg = 0.0\npitch_deg = 0.0\nyaw_deg = 0.0\n",
+                "radius_px = %.6f\n\n[mount]\nroll_deg = %.6f\npitch_deg = %.6f\nyaw_deg = %.6f\n",
                 lens.params().width, lens.params().height, dsp::LensModelName(lens.params().model),
-                lens.params().fov_deg, lens.centre_x(), lens.centre_y(), lens.radius_px());
+                lens.params().fov_deg, lens.centre_x(), lens.centre_y(), lens.radius_px(),
+                lens.params().roll_deg, lens.params().pitch_deg, lens.params().yaw_deg);
   return WriteText(path, text);
 }
 

@@ -240,11 +240,6 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
                           const dsp::Attitude* attitude) {
   StageTimer timer(latency_, stage_descriptor, clock_);
   dsp::SegmentationResult segmentation;
-  result->has_attitude = attitude != nullptr;
-  if (attitude != nullptr) {
-    result->roll_deg = static_cast<float>(attitude->roll_deg);
-    result->pitch_deg = static_cast<float>(attitude->pitch_deg);
-  }
   if (const dsp::DescriptorError e =
           descriptor_.Compute(image, amplitudes_.span(), &segmentation, attitude);
       !e.ok()) {

@@ -38,10 +38,6 @@ struct FrameResult {
   Nanoseconds latency{0};  // from the frame leaving Capture() to the state being shown
   bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
   drivers::Pose pose;
-  // The attitude the gravity-aligned cap used ([attitude]); false: none, or stale (the
-  // frame was described as if level).
-  bool has_attitude = false;
-  float roll_deg = 0, pitch_deg = 0;
 };
 
 // The descriptor kinds a route database records (RouteDbSettings::descriptor_kind).

@@ -93,8 +93,9 @@ Result<dsp::Attitude> ImuAttitudeSource::DoAt(const Frame& frame) {
           break;
         }
         gone_ = code == StatusCode::kUnavailable;
-        return Status::Error(gone_ ? StatusCode::kUnavailable : StatusCode::kNotFound, "IMU %s: %s",
-                             name_, n.status().message());
+        // The device's message already names it.
+        return Status::Error(gone_ ? StatusCode::kUnavailable : StatusCode::kNotFound, "%s",
+                             n.status().message());
       }
       batch_size_ = *n;
       batch_next_ = 0;

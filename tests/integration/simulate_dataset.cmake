@@ -19,6 +19,12 @@ foreach(mode uv visible)
   if(NOT n EQUAL 5)
     message(FATAL_ERROR "${mode}/frames.csv has ${n} lines, expected a header and 4 rows")
   endif()
+  # The camera file records the simulated camera's turn on the robot (DefaultSimLens's
+  # mount), so a replay describes in the frame the recorded roll and pitch are in.
+  file(READ ${dir}/${mode}/camera.toml camera)
+  if(NOT camera MATCHES "yaw_deg = 90\\.0")
+    message(FATAL_ERROR "${mode}/camera.toml does not record the mount yaw of 90:\n${camera}")
+  endif()
   list(GET rows 0 header)
   if(NOT header STREQUAL "index,file,timestamp_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg")
     message(FATAL_ERROR "unexpected header: ${header}")
