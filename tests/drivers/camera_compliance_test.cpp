@@ -17,6 +17,7 @@
 #include "skyloc/drivers/simulated_camera.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/clock.h"
+#include "support/status_assertions.h"
 #include "test_env.h"
 #if SKYLOC_WITH_V4L2
 #include "fake_v4l2_device.h"
@@ -31,15 +32,6 @@ namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
-
-// Passes for an OK Status; otherwise fails with its message, which names the device
-// and the fix.
-::testing::AssertionResult IsOk(const Status& status) {
-  if (status.ok())
-    return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << StatusCodeName(status.code()) << ": " << status.message();
-}
-#define ASSERT_OK(expr) ASSERT_TRUE(IsOk(expr))
 
 // Owns a camera and whatever it needs (a frame source, a clock).
 class CameraUnderTest {

@@ -29,6 +29,7 @@
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/clock.h"
 #include "support/scratch_dir.h"
+#include "support/status_assertions.h"
 #include "test_env.h"
 
 namespace skyloc::drivers {
@@ -36,13 +37,6 @@ namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
-
-::testing::AssertionResult IsOk(const Status& status) {
-  if (status.ok())
-    return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << StatusCodeName(status.code()) << ": " << status.message();
-}
-#define ASSERT_OK(expr) ASSERT_TRUE(IsOk(expr))
 
 Nanoseconds Monotonic() {
   timespec t{};

@@ -22,6 +22,7 @@
 #include "skyloc/drivers/status_pattern.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/clock.h"
+#include "support/status_assertions.h"
 #include "test_env.h"
 #if SKYLOC_WITH_GPIOD
 #include "gpio_sim.h"
@@ -32,13 +33,6 @@ namespace skyloc::drivers {
 namespace {
 
 using std::chrono::milliseconds;
-
-::testing::AssertionResult IsOk(const Status& status) {
-  if (status.ok())
-    return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << StatusCodeName(status.code()) << ": " << status.message();
-}
-#define ASSERT_OK(expr) ASSERT_TRUE(IsOk(expr))
 
 class OutputUnderTest {
  public:
