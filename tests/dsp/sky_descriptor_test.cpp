@@ -96,19 +96,31 @@ TEST(SkyDescriptor, YawChangesTheSpectrumByUnderOnePercent) {
   EXPECT_GT(DescriptorDistance(a0, other), 5 * DescriptorDistance(a0, a1));
 }
 
+// The tilt tests: a 480x480 185-degree fisheye whose mount angles draw a tilted camera,
+// and a 32-band descriptor on the grid for 64 bands (the mask edge does not alias).
+LensParams TiltDrawingLens() {
+  LensParams p;
+  p.width = p.height = 480;
+  p.fov_deg = 185.0;
+  return p;
+}
+
+SkyDescriptorOptions TiltTestOptions() {
+  SkyDescriptorOptions options;
+  options.bands = 32;
+  options.grid = DefaultShGridConfig(64);
+  return options;
+}
+
 // The camera tilts but the descriptor does not know (mount angles 0): the hemisphere it
 // sees changes, so the spectrum changes. Reported next to the distance to another place,
 // as the issue asks; asserted only where the answer is clear (10 degrees is much closer
 // than another place, and the change grows with the tilt).
 TEST(SkyDescriptor, UnknownTiltReportedAgainstADifferentPlace) {
-  LensParams drawn;
-  drawn.width = drawn.height = 480;
-  drawn.fov_deg = 185.0;
+  LensParams drawn = TiltDrawingLens();
   Lens upright;
   ASSERT_EQ(upright.Init(drawn), LensError::kOk);
-  SkyDescriptorOptions options;
-  options.bands = 32;
-  options.grid = DefaultShGridConfig(64);
+  const SkyDescriptorOptions options = TiltTestOptions();
   SkyDescriptor descriptor;
   ASSERT_TRUE(descriptor.Init(upright, options).ok());
   std::vector<float> level(32), tilted(32), other(32);
@@ -140,14 +152,10 @@ TEST(SkyDescriptor, UnknownTiltReportedAgainstADifferentPlace) {
 // zenith. The cap above 60 degrees is in view at every tilt up to 60 (185 degree lens), so
 // its spectrum stays what it is level, to within the grid's aliasing of the mask edge.
 TEST(SkyDescriptor, GravityCapIsTheSameAtAnyTiltUpToItsLimit) {
-  LensParams drawn;
-  drawn.width = drawn.height = 480;
-  drawn.fov_deg = 185.0;
+  LensParams drawn = TiltDrawingLens();
   Lens upright;
   ASSERT_EQ(upright.Init(drawn), LensError::kOk);
-  SkyDescriptorOptions options;
-  options.bands = 32;
-  options.grid = DefaultShGridConfig(64);
+  SkyDescriptorOptions options = TiltTestOptions();
   options.cap = {true, CapElevationForTilt(60, 185), 10};
   SkyDescriptor descriptor;
   ASSERT_TRUE(descriptor.Init(upright, options).ok());
