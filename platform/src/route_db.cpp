@@ -91,19 +91,19 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
       file.gravity_cap_taper_cdeg != want.gravity_cap_taper_cdeg) {
     auto describe = [](const RouteDbSettings& s, char* text, std::size_t size) {
       if (s.gravity_cap_cdeg == kNoGravityCap)
-        std::snprintf(text, size, "no gravity-aligned cap");
+        std::snprintf(text, size, "no gravity cap");
       else
-        std::snprintf(text, size, "the gravity-aligned cap above %.2f degrees (taper %.2f)",
-                      s.gravity_cap_cdeg / 100.0, s.gravity_cap_taper_cdeg / 100.0);
+        std::snprintf(text, size, "a gravity cap above %.2f deg", s.gravity_cap_cdeg / 100.0);
     };
-    char in_file[96], wanted[96];
+    // Short: the Status message holds 240 characters and the caller prefixes the path.
+    char in_file[48], wanted[48];
     describe(file, in_file, sizeof in_file);
     describe(want, wanted, sizeof wanted);
     return Status::Error(StatusCode::kFailedPrecondition,
-                         "taught with %s but this configuration has %s ([attitude] kind and "
-                         "max_tilt_deg): run with the configuration it was taught with, or "
-                         "teach again",
-                         in_file, wanted);
+                         "taught with %s, this configuration has %s (taper %.2f/%.2f deg): set "
+                         "[attitude] as taught, or teach again",
+                         in_file, wanted, file.gravity_cap_taper_cdeg / 100.0,
+                         want.gravity_cap_taper_cdeg / 100.0);
   }
   struct Field {
     const char* name;

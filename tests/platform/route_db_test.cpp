@@ -2,8 +2,6 @@
 // settings checks, and crash safety (a child killed with SIGKILL while teaching).
 #include "skyloc/platform/route_db.h"
 
-#include "skyloc/platform/crc32.h"
-
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -21,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "skyloc/platform/crc32.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc {
@@ -188,9 +187,9 @@ TEST_F(RouteDbTest, GravityCapMismatchIsNamed) {
   capped.gravity_cap_taper_cdeg = 1000;
   Status s = ParseRouteDb(Bytes(), &capped, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(std::string(s.message()).find("taught with no gravity-aligned cap but this "
-                                          "configuration has the gravity-aligned cap above "
-                                          "30.00 degrees"),
+  EXPECT_NE(std::string(s.message())
+                .find("taught with no gravity cap, this configuration has a gravity cap above "
+                      "30.00 deg"),
             std::string::npos)
       << s.message();
 }
