@@ -71,6 +71,12 @@ constexpr const char* kUsage =
     "                         (equirectangular for 2:1 images), as skyloc describe\n"
     "  --lens MODEL, --fov DEG  sky: override the lens model / field of view\n"
     "  --bands N              sky: spherical-harmonic bands (default 120)\n"
+    "  --attitude none|dataset  sky: dataset describes the sky above the gravity-aligned\n"
+    "                         cap, each frame levelled by the roll and pitch recorded\n"
+    "                         with it (as the firmware's [attitude] kind = \"dataset\";\n"
+    "                         docs/SKY_DESCRIPTOR.md, \"Tilt\"); default none\n"
+    "  --max-tilt DEG         with --attitude dataset: the largest tilt the cap must\n"
+    "                         survive, 0..80 (default: [attitude] max_tilt_deg of --config)\n"
     "\n"
     "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
     "reference recorded nearest to it, correct within --frame-tolerance frames.\n"
@@ -117,6 +123,8 @@ struct EvalOptions {
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
   int bands = 120;
+  bool attitude_from_dataset = false;  // --attitude dataset
+  std::optional<double> max_tilt_deg;  // --max-tilt
 };
 
 bool ParseIntArg(const char* s, int* out) {
@@ -229,6 +237,18 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
       if (!ParseDoubleArg(v, &fov) || fov <= 0 || fov > 360)
         return fail("--fov '%s': give a field of view in (0, 360] degrees", v);
       o->fov_deg = fov;
+    } else if (a == "--attitude") {
+      if (std::strcmp(v, "dataset") == 0)
+        o->attitude_from_dataset = true;
+      else if (std::strcmp(v, "none") == 0)
+        o->attitude_from_dataset = false;
+      else
+        return fail("--attitude '%s': give none or dataset", v);
+    } else if (a == "--max-tilt") {
+      double t = 0;
+      if (!ParseDoubleArg(v, &t) || t < 0 || t > 80)
+        return fail("--max-tilt '%s': give a tilt of 0..80 degrees", v);
+      o->max_tilt_deg = t;
     } else if (a == "--bands") {
       if (!ParseIntArg(v, &o->bands) || o->bands < 1 || o->bands > 512)
         return fail("--bands '%s': give 1..512", v);
@@ -246,6 +266,8 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
       std::find(o->methods.begin(), o->methods.end(), Method::kFabmap) != o->methods.end();
   if (fabmap_asked && o->vocab.empty())
     return fail("%s", "--method fabmap needs --vocab FILE (write one with skyloc fabmap-train)");
+  if (o->max_tilt_deg && !o->attitude_from_dataset)
+    return fail("%s", "--max-tilt sets the gravity-aligned cap: add --attitude dataset");
   if (o->methods.empty()) {
     o->methods = {Method::kSky, Method::kVanilla};
     if (!o->vocab.empty())
@@ -317,6 +339,16 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
     SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens));
     dsp::SkyDescriptorOptions so;
     so.bands = o.bands;
+    if (o.attitude_from_dataset) {
+      // The firmware's rule (app/src/pipeline.cpp): the cap from the largest tilt and what
+      // the lens sees.
+      constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+      so.cap.enabled = true;
+      so.cap.elevation_deg =
+          dsp::CapElevationForTilt(o.max_tilt_deg.value_or(o.config.attitude.max_tilt_deg),
+                                   2 * lens.max_theta() * kRadToDeg);
+      so.cap.taper_deg = o.config.attitude.cap_taper_deg;
+    }
     const dsp::DescriptorError de = sky.Init(lens, so);
     if (!de.ok()) {
       return Status::Error(StatusCode::kInvalidArgument, "sky descriptor for %s: %s", dir.c_str(),
@@ -335,7 +367,14 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
     std::span<float> out(d.values.data() + i * static_cast<std::size_t>(d.dim),
                          static_cast<std::size_t>(d.dim));
     if (method == Method::kSky) {
-      const dsp::DescriptorError de = sky.Compute(frame->image, out);
+      if (o.attitude_from_dataset && !frame->attitude) {
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "%s has no roll and pitch recorded (frames.csv): --attitude dataset "
+                             "needs the attitude or pose columns (docs/DATASETS.md), or drop it",
+                             camera.dataset().FramePath(i).c_str());
+      }
+      const dsp::DescriptorError de = sky.Compute(
+          frame->image, out, nullptr, o.attitude_from_dataset ? &*frame->attitude : nullptr);
       if (!de.ok()) {
         return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
                              camera.dataset().FramePath(i).c_str(), de.message);
