@@ -12,6 +12,7 @@
 
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
+#include "skyloc/dsp/strip_alignment.h"
 #include "skyloc/platform/alloc_counter.h"
 
 namespace skyloc::dsp {
@@ -287,6 +288,37 @@ TEST(Surf1dTest, RecoversTheYawOfAFisheyeSceneThroughTheLens) {
     EXPECT_GE(m.inliers, 8) << "yaw " << yaw;
     std::printf("yaw %+7.1f deg: recovered %+7.2f deg, %zu/%zu features, %d matches, %d inliers\n",
                 yaw, m.heading_offset_deg, stored.size(), test.size(), m.matches, m.inliers);
+  }
+}
+
+// The second heading method on the same rendered fisheye frames: circular correlation of
+// the whole strips (strip_alignment.h) agrees with the true yaw as 1D SURF does.
+TEST(Surf1dTest, StripCorrelationRecoversTheSameYawThroughTheLens) {
+  LensParams params;
+  params.model = LensModel::kEquidistant;
+  params.width = 640;
+  params.height = 480;
+  params.fov_deg = 185.0;
+  Lens lens;
+  ASSERT_EQ(lens.Init(params), LensError::kOk);
+  HorizonStrip strip;
+  ASSERT_EQ(strip.Init(lens, HorizonStripOptions{}), HorizonStripError::kOk);
+  const Place place = RandomPlace(5);
+  const auto strip_for = [&](double yaw_deg) {
+    const std::vector<std::uint8_t> grey = RenderFisheye(lens, place, yaw_deg * kPi / 180.0);
+    std::vector<float> values(static_cast<std::size_t>(strip.n_azimuth()));
+    EXPECT_EQ(strip.Extract({grey.data(), 640, 480, 640, PixelFormat::kGrey8}, values),
+              HorizonStripError::kOk);
+    return values;
+  };
+  const std::vector<float> stored = strip_for(0.0);
+  for (const double yaw : {23.5, -71.2, 178.4, -163.0}) {
+    StripAlignment a;
+    ASSERT_EQ(AlignStrips(stored, strip_for(yaw), &a), StripAlignmentError::kOk);
+    double error = a.heading_offset_deg - yaw;
+    error -= 360.0 * std::round(error / 360.0);
+    EXPECT_LE(std::abs(error), 1.0) << "yaw " << yaw << " recovered " << a.heading_offset_deg;
+    EXPECT_GT(a.correlation, 0.9f);
   }
 }
 

@@ -1,0 +1,95 @@
+#include "skyloc/dsp/strip_alignment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+namespace skyloc::dsp {
+
+const char* StripAlignmentErrorMessage(StripAlignmentError error) {
+  switch (error) {
+    case StripAlignmentError::kOk:
+      return "ok";
+    case StripAlignmentError::kSizeMismatch:
+      return "the two horizon strips differ in length (or are shorter than 3 columns): "
+             "extract both with the same HorizonStripOptions";
+    case StripAlignmentError::kFlat:
+      return "a horizon strip is constant, so no turn can be read from it: check the "
+             "strip's elevation band sees the skyline";
+  }
+  return "unknown strip alignment error";
+}
+
+StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const float> test,
+                                StripAlignment* result, int min_peak_separation) {
+  const std::size_t n = stored.size();
+  if (n < 3 || test.size() != n)
+    return StripAlignmentError::kSizeMismatch;
+  // Means and deviations in double: the strips are sums of many pixels.
+  double mean_a = 0, mean_b = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    mean_a += static_cast<double>(stored[j]);
+    mean_b += static_cast<double>(test[j]);
+  }
+  mean_a /= static_cast<double>(n);
+  mean_b /= static_cast<double>(n);
+  double var_a = 0, var_b = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const double da = static_cast<double>(stored[j]) - mean_a;
+    var_a += da * da;
+    const double db = static_cast<double>(test[j]) - mean_b;
+    var_b += db * db;
+  }
+  if (!(var_a > 0) || !(var_b > 0))
+    return StripAlignmentError::kFlat;
+  const double norm = 1.0 / std::sqrt(var_a * var_b);
+
+  // c(s) for s = 0..n-1, kept only as the three values the parabola needs and the peak;
+  // a second pass finds the runner-up (no buffer: allocation-free for any n).
+  auto correlation = [&](std::size_t s) {
+    double sum = 0;
+    for (std::size_t j = 0; j < n; ++j)
+      sum += (static_cast<double>(stored[j]) - mean_a) *
+             (static_cast<double>(test[(j + s) % n]) - mean_b);
+    return sum * norm;
+  };
+  std::size_t best = 0;
+  double best_c = -2;
+  for (std::size_t s = 0; s < n; ++s) {
+    const double c = correlation(s);
+    if (c > best_c) {
+      best_c = c;
+      best = s;
+    }
+  }
+  const std::size_t separation =
+      static_cast<std::size_t>(min_peak_separation < 1 ? 1 : min_peak_separation);
+  double runner_up = -1;
+  for (std::size_t s = 0; s < n; ++s) {
+    const std::size_t d = s > best ? s - best : best - s;
+    if (std::min(d, n - d) <= separation)
+      continue;
+    runner_up = std::max(runner_up, correlation(s));
+  }
+  const double left = correlation((best + n - 1) % n);
+  const double right = correlation((best + 1) % n);
+  const double curvature = left - 2 * best_c + right;
+  double offset = 0;
+  if (curvature < 0)
+    offset = std::clamp(0.5 * (left - right) / curvature, -0.5, 0.5);
+  double shift = static_cast<double>(best) + offset;
+  if (shift > static_cast<double>(n) / 2)
+    shift -= static_cast<double>(n);
+  double degrees = shift * 360.0 / static_cast<double>(n);
+  if (degrees >= 180)
+    degrees -= 360;
+  if (degrees < -180)
+    degrees += 360;
+  result->shift_columns = shift;
+  result->heading_offset_deg = degrees;
+  result->correlation = static_cast<float>(best_c);
+  result->runner_up = static_cast<float>(runner_up);
+  return StripAlignmentError::kOk;
+}
+
+}  // namespace skyloc::dsp

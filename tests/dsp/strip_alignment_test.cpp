@@ -1,0 +1,118 @@
+#include "skyloc/dsp/strip_alignment.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "skyloc/platform/alloc_counter.h"
+
+namespace skyloc::dsp {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// A smooth skyline-like strip from a few harmonics, evaluated at column j - shift: the
+// same content turned by +shift columns (shift may be fractional: the analytic answer).
+std::vector<float> Harmonics(int n, double shift, unsigned seed, double noise_sd = 0.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> phase(0.0, 2 * kPi);
+  std::uniform_real_distribution<double> amplitude(5.0, 30.0);
+  double a[6], p[6];
+  for (int k = 0; k < 6; ++k) {
+    a[k] = amplitude(rng) / (k + 1);
+    p[k] = phase(rng);
+  }
+  std::mt19937 noise_rng(seed + 1000);
+  std::normal_distribution<double> noise(0.0, noise_sd > 0 ? noise_sd : 1.0);
+  std::vector<float> s(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) {
+    double v = 100;
+    for (int k = 0; k < 6; ++k)
+      v += a[k] * std::sin(2 * kPi * (k + 1) * (j - shift) / n + p[k]);
+    if (noise_sd > 0)
+      v += noise(noise_rng);
+    s[static_cast<std::size_t>(j)] = static_cast<float>(v);
+  }
+  return s;
+}
+
+TEST(StripAlignmentTest, RecoversWholeAndFractionalTurnsOfASmoothStrip) {
+  const int n = 360;
+  const std::vector<float> stored = Harmonics(n, 0.0, 7);
+  for (const double shift : {0.0, 12.0, -40.0, 7.3, -101.6, 179.0, -179.5}) {
+    StripAlignment r;
+    ASSERT_EQ(AlignStrips(stored, Harmonics(n, shift, 7), &r), StripAlignmentError::kOk);
+    // The parabola through three samples of a smooth peak: within 0.1 column.
+    EXPECT_NEAR(r.shift_columns, shift, 0.1) << "shift " << shift;
+    double degrees = shift * 360.0 / n;
+    double error = r.heading_offset_deg - degrees;
+    error -= 360.0 * std::round(error / 360.0);
+    EXPECT_LE(std::abs(error), 0.1) << "shift " << shift;
+    EXPECT_GT(r.correlation, 0.999f);
+  }
+}
+
+TEST(StripAlignmentTest, NoiseLowersTheCorrelationNotTheTurn) {
+  const int n = 360;
+  const std::vector<float> stored = Harmonics(n, 0.0, 3);
+  StripAlignment r;
+  ASSERT_EQ(AlignStrips(stored, Harmonics(n, 55.0, 3, 8.0), &r), StripAlignmentError::kOk);
+  EXPECT_NEAR(r.shift_columns, 55.0, 0.5);
+  EXPECT_LT(r.correlation, 0.99f);
+  EXPECT_GT(r.correlation, 0.5f);
+  EXPECT_LT(r.runner_up, r.correlation);
+}
+
+TEST(StripAlignmentTest, UnrelatedStripsCorrelateWeakly) {
+  const int n = 360;
+  StripAlignment related, unrelated;
+  ASSERT_EQ(AlignStrips(Harmonics(n, 0.0, 1), Harmonics(n, 30.0, 1, 4.0), &related),
+            StripAlignmentError::kOk);
+  ASSERT_EQ(AlignStrips(Harmonics(n, 0.0, 1), Harmonics(n, 30.0, 2, 4.0), &unrelated),
+            StripAlignmentError::kOk);
+  EXPECT_GT(related.correlation, unrelated.correlation + 0.1f);
+}
+
+TEST(StripAlignmentTest, APeriodicSkylineIsAmbiguous) {
+  // Four identical buildings: the turn is known only modulo 90 degrees, and the runner-up
+  // peak says so by equalling the best.
+  const int n = 360;
+  std::vector<float> stored(n), test(n);
+  for (int j = 0; j < n; ++j) {
+    stored[static_cast<std::size_t>(j)] = static_cast<float>(std::sin(2 * kPi * 4 * j / n));
+    test[static_cast<std::size_t>(j)] = static_cast<float>(std::sin(2 * kPi * 4 * (j - 10) / n));
+  }
+  StripAlignment r;
+  ASSERT_EQ(AlignStrips(stored, test, &r), StripAlignmentError::kOk);
+  EXPECT_NEAR(std::fmod(r.shift_columns + 900.0, 90.0), 10.0, 0.1);
+  EXPECT_NEAR(r.runner_up, r.correlation, 1e-4f);
+}
+
+TEST(StripAlignmentTest, RefusesFlatAndMismatchedStrips) {
+  StripAlignment r;
+  const std::vector<float> flat(360, 5.0f);
+  const std::vector<float> smooth = Harmonics(360, 0.0, 1);
+  EXPECT_EQ(AlignStrips(flat, smooth, &r), StripAlignmentError::kFlat);
+  EXPECT_EQ(AlignStrips(smooth, flat, &r), StripAlignmentError::kFlat);
+  EXPECT_EQ(AlignStrips(smooth, Harmonics(180, 0.0, 1), &r), StripAlignmentError::kSizeMismatch);
+  EXPECT_EQ(AlignStrips(std::vector<float>{1, 2}, std::vector<float>{1, 2}, &r),
+            StripAlignmentError::kSizeMismatch);
+  EXPECT_NE(std::string(StripAlignmentErrorMessage(StripAlignmentError::kFlat)).find("constant"),
+            std::string::npos);
+}
+
+TEST(StripAlignmentTest, AllocatesNothing) {
+  const std::vector<float> a = Harmonics(360, 0.0, 9);
+  const std::vector<float> b = Harmonics(360, 20.0, 9);
+  StripAlignment r;
+  AllocationScope scope;
+  ASSERT_EQ(AlignStrips(a, b, &r), StripAlignmentError::kOk);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
+}  // namespace
+}  // namespace skyloc::dsp
