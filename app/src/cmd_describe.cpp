@@ -158,20 +158,14 @@ Result<dsp::LensParams> LensFor(const Options& o, const dsp::LensParams* camera,
                            "'%s' is %dx%d but camera file '%s' describes %dx%d images: use the "
                            "camera file made for this camera",
                            image_path, width, height, o.camera, p.width, p.height);
+  } else if (Result<dsp::LensParams> guess = drivers::GuessLensForImage(width, height, image_path);
+             guess.ok()) {
+    p = *guess;
+  } else if (!o.lens) {
+    return Status::Error(StatusCode::kInvalidArgument, "%s or --lens", guess.status().message());
   } else {
-    p.width = width;
+    p.width = width;  // --lens says what the shape could not
     p.height = height;
-    const double aspect = static_cast<double>(width) / height;
-    if (std::fabs(aspect - 2.0) < 0.05) {
-      p.model = dsp::LensModel::kEquirectangular;
-    } else if (aspect > 0.74 && aspect < 1.35) {
-      p.model = dsp::LensModel::kEquidistant;  // 185 degrees, circle touching the short side
-    } else if (!o.lens) {
-      return Status::Error(StatusCode::kInvalidArgument,
-                           "cannot guess the lens of '%s' (%dx%d is neither square-ish nor 2:1): "
-                           "pass --camera FILE.toml or --lens",
-                           image_path, width, height);
-    }
   }
   if (o.lens)
     p.model = *o.lens;

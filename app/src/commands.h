@@ -22,6 +22,7 @@ int RunReplay(std::span<char* const> args);
 int RunRoute(std::span<char* const> args);
 int RunEval(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);
+int RunSurf1d(std::span<char* const> args);
 int RunSimulate(std::span<char* const> args);
 int RunExperiment(std::span<char* const> args);
 int RunFabmapTrain(std::span<char* const> args);

@@ -16,6 +16,8 @@ constexpr Command kCommands[] = {
     {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
     {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",
      RunDescribe},
+    {"surf1d", "1D SURF between two images: features, matches, scores and relative heading",
+     RunSurf1d},
     {"simulate", "render a run through a simulated world into a dataset folder", RunSimulate},
     {"experiment", "run one of the paper's experiments on simulated runs", RunExperiment},
     {"fabmap-train", "train the FAB-MAP 2.0 vocabulary for eval --method fabmap (host builds)",

@@ -225,6 +225,24 @@ Status ParseLens(const toml::table& lens, const char* source, const char* base_d
 
 }  // namespace
 
+Result<dsp::LensParams> GuessLensForImage(int width, int height, const char* image) {
+  dsp::LensParams p;
+  p.width = width;
+  p.height = height;
+  const double aspect = height > 0 ? static_cast<double>(width) / height : 0.0;
+  if (std::fabs(aspect - 2.0) < 0.05) {
+    p.model = dsp::LensModel::kEquirectangular;
+  } else if (aspect > 0.74 && aspect < 1.35) {
+    p.model = dsp::LensModel::kEquidistant;  // LensParams' defaults: 185 degrees, centred
+  } else {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "cannot guess the lens of '%s' (%dx%d is neither square-ish nor 2:1): "
+                         "pass --camera FILE.toml",
+                         image, width, height);
+  }
+  return p;
+}
+
 Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* lens) {
   const dsp::LensError e = lens->Init(params);
   if (e == dsp::LensError::kOk)

@@ -243,6 +243,8 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
                                    std::span<const Surf1dFeature> test, int n,
                                    LandmarkMatch* result) {
   *result = LandmarkMatch{};
+  last_pairs_ = 0;
+  last_model_ = false;
   if (capacity_ == 0)
     return Surf1dError::kNotInitialised;
   if (n < 1)
@@ -276,6 +278,7 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     result->score += 1.0 / static_cast<double>(std::max(best, options_.min_distance));
   }
   result->matches = matches;
+  last_pairs_ = matches;
   if (matches < 2)
     return Surf1dError::kOk;
 
@@ -327,6 +330,7 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
   }
   if (best_inliers < 2)
     return Surf1dError::kOk;
+  last_model_ = true;
 
   // Circular mean of the inliers' displacement, unwrapped around the first inlier's.
   double reference = 0.0;
@@ -355,6 +359,14 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     degrees -= 360.0;
   result->heading_offset_deg = degrees;
   return Surf1dError::kOk;
+}
+
+LandmarkMatcher::MatchedPair LandmarkMatcher::last_pair(int i) const {
+  if (i < 0 || i >= last_pairs_)
+    return {};
+  const Pair& p = pairs_[static_cast<std::size_t>(i)];
+  return {static_cast<int>(p.x_stored), static_cast<int>(p.x_test), p.distance,
+          last_model_ && best_inlier_[static_cast<std::size_t>(i)] != 0};
 }
 
 }  // namespace skyloc::dsp

@@ -286,6 +286,12 @@ TEST(Surf1dTest, RecoversTheYawOfAFisheyeSceneThroughTheLens) {
     error -= 360.0 * std::round(error / 360.0);
     EXPECT_LE(std::abs(error), 2.0) << "yaw " << yaw << " recovered " << m.heading_offset_deg;
     EXPECT_GE(m.inliers, 8) << "yaw " << yaw;
+    // The pairs a tool draws are the ones RANSAC counted.
+    ASSERT_EQ(matcher.last_pair_count(), m.matches);
+    int flagged = 0;
+    for (int i = 0; i < matcher.last_pair_count(); ++i)
+      flagged += matcher.last_pair(i).inlier ? 1 : 0;
+    EXPECT_EQ(flagged, m.inliers) << "yaw " << yaw;
     std::printf("yaw %+7.1f deg: recovered %+7.2f deg, %zu/%zu features, %d matches, %d inliers\n",
                 yaw, m.heading_offset_deg, stored.size(), test.size(), m.matches, m.inliers);
   }

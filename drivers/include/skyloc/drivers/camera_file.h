@@ -26,6 +26,12 @@ Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* sourc
 // and optionally the image size "height width"; '#' lines are comments.
 Result<dsp::OCamCalibModel> LoadOCamCalibFile(const char* path);
 
+// The lens of an image that comes without a camera file, guessed from its shape (what
+// describe, eval and surf1d assume): a 2:1 image is an equirectangular panorama, a
+// square-ish one (aspect 0.74..1.35) an equidistant 185-degree fisheye whose image circle
+// touches the short side; any other shape is an error naming `image` and the fix.
+Result<dsp::LensParams> GuessLensForImage(int width, int height, const char* image);
+
 // dsp::Lens::Init with its error turned into a Status naming `source` and the fix.
 Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* lens);
 

@@ -142,6 +142,17 @@ class LandmarkMatcher {
   Surf1dError Match(std::span<const Surf1dFeature> stored, std::span<const Surf1dFeature> test,
                     int n, LandmarkMatch* result);
 
+  // The last Match's pairs that passed the ratio test, with RANSAC's verdict on each
+  // (inlier is false for all when no model was found): for tools that draw the matches.
+  struct MatchedPair {
+    int x_stored = 0;  // columns
+    int x_test = 0;
+    float distance = 0.0f;
+    bool inlier = false;
+  };
+  int last_pair_count() const { return last_pairs_; }
+  MatchedPair last_pair(int i) const;
+
  private:
   struct Pair {
     double x_stored;  // positions, columns
@@ -154,6 +165,8 @@ class LandmarkMatcher {
   std::vector<Pair> pairs_;
   std::vector<std::uint8_t> inlier_;
   std::vector<std::uint8_t> best_inlier_;
+  int last_pairs_ = 0;
+  bool last_model_ = false;
 };
 
 }  // namespace skyloc::dsp
