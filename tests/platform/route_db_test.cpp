@@ -5,6 +5,9 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -304,6 +307,131 @@ TEST_F(RouteDbTest, EveryBitFlipIsRejectedNamingTheChunk) {
       ExpectFrames(frames_, 10);
     }
   }
+}
+
+// Junk appended after a complete route is trailing bytes, not an interrupted teach: the
+// strict load says so, info-style loading reports the route as committed, recover cuts
+// the junk off.
+TEST_F(RouteDbTest, TrailingBytesAfterTheCommitRecordAreNamedAsSuch) {
+  Teach(25, 10, true);
+  std::vector<std::uint8_t> bytes = Bytes();
+  const std::size_t committed_size = bytes.size();
+  bytes.insert(bytes.end(), 8, 0x5a);
+  Status strict = Parse(bytes);
+  ASSERT_FALSE(strict.ok());
+  const std::string m = strict.message();
+  EXPECT_NE(m.find("8 trailing bytes after the commit record at offset " +
+                   std::to_string(committed_size)),
+            std::string::npos)
+      << m;
+  EXPECT_EQ(m.find("interrupted"), std::string::npos) << m;
+  RouteDbLoadReport report;
+  ASSERT_TRUE(Parse(bytes, RouteDbLoadPolicy::kRecoverInterrupted, &report).ok());
+  EXPECT_TRUE(report.committed);
+  EXPECT_EQ(report.trailing_bytes, 8u);
+  EXPECT_EQ(report.dropped_bytes, 0u);
+
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<long>(bytes.size()));
+  }
+  ASSERT_TRUE(RecoverRouteDb(path_.c_str(), &report).ok());
+  EXPECT_EQ(Bytes().size(), committed_size);
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 25);
+}
+
+// Damage in the middle (an intact chunk follows) names the chunk and its offset in one
+// readable sentence and points at --salvage, which keeps the chunks before the damage
+// (and the damaged original beside it); plain recover refuses and changes nothing.
+TEST_F(RouteDbTest, MidFileDamageIsNamedAndSalvageKeepsTheChunksBefore) {
+  Teach(30, 10, true);
+  std::vector<std::uint8_t> bytes = Bytes();
+  const std::size_t chunk2 = ChunkOffset(2, 10, 30);
+  bytes[chunk2 + kRouteDbChunkHeaderBytes + 5] ^= 0x10;
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<long>(bytes.size()));
+  }
+  Status s = LoadRouteDb(path_.c_str(), nullptr, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  ASSERT_FALSE(s.ok());
+  std::string m = s.message();
+  EXPECT_NE(m.find("chunk 2 at offset " + std::to_string(chunk2) + ": checksum mismatch"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("damaged mid-file"), std::string::npos) << m;
+  EXPECT_NE(m.find("--salvage"), std::string::npos) << m;
+  EXPECT_EQ(m.find(";:"), std::string::npos) << m;
+
+  RouteDbLoadReport report;
+  s = RecoverRouteDb(path_.c_str(), &report);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.message()).find("--salvage"), std::string::npos) << s.message();
+  EXPECT_EQ(Bytes(), bytes) << "a refused recovery changed the file";
+
+  s = RecoverRouteDb(path_.c_str(), &report, true);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_TRUE(report.damaged_mid_file);
+  EXPECT_EQ(report.frames, 10u);
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 10);
+  std::ifstream kept(path_ + ".damaged", std::ios::binary);
+  EXPECT_EQ(std::vector<std::uint8_t>(std::istreambuf_iterator<char>(kept),
+                                      std::istreambuf_iterator<char>()),
+            bytes);
+}
+
+// recover must not cut the chunk a running teach is appending: the writer holds a lock.
+TEST_F(RouteDbTest, RecoverRefusesAFileATeachIsWriting) {
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, false).ok());
+    for (std::size_t i = 0; i < 15; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      ASSERT_TRUE(w.Append(meta, d).ok());
+    }
+    const std::size_t size = Bytes().size();
+    RouteDbLoadReport report;
+    const Status s = RecoverRouteDb(path_.c_str(), &report);
+    EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();
+    EXPECT_NE(std::string(s.message()).find("running teach"), std::string::npos) << s.message();
+    EXPECT_EQ(Bytes().size(), size);
+  }
+  // The writer closed without committing: now recovery may run.
+  RouteDbLoadReport report;
+  ASSERT_TRUE(RecoverRouteDb(path_.c_str(), &report).ok());
+  EXPECT_EQ(report.frames, 10u);
+}
+
+// A FIFO (or device) as the route path is refused at once; opening it must not wait for
+// a writer that never comes.
+TEST_F(RouteDbTest, AFifoIsRefusedWithoutWaiting) {
+  ASSERT_EQ(::mkfifo(path_.c_str(), 0600), 0);
+  ::alarm(10);  // a hang fails the test instead of blocking ctest
+  RouteDbLoadReport report;
+  Status s =
+      LoadRouteDb(path_.c_str(), nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &report);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.message()).find("is a FIFO"), std::string::npos) << s.message();
+  s = RecoverRouteDb(path_.c_str(), &report);
+  EXPECT_NE(std::string(s.message()).find("is a FIFO"), std::string::npos) << s.message();
+  ::alarm(0);
+}
+
+// Nothing intact to keep is a failure, not a "recovered: 0 frames" success.
+TEST_F(RouteDbTest, RecoverWithNoIntactFrameIsAnError) {
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, false).ok());
+  }
+  const std::vector<std::uint8_t> before = Bytes();
+  RouteDbLoadReport report;
+  const Status s = RecoverRouteDb(path_.c_str(), &report);
+  EXPECT_EQ(s.code(), StatusCode::kDataLoss) << s.message();
+  EXPECT_NE(std::string(s.message()).find("no intact frame"), std::string::npos) << s.message();
+  EXPECT_EQ(Bytes(), before);
 }
 
 // The writer is killed with SIGKILL at a random moment while teaching, 20 times. The child
