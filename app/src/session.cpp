@@ -404,6 +404,12 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     if (created.code() == StatusCode::kFailedPrecondition)
       created.AddContext("(pass --force to replace it)");
     SKYLOC_TRY(created);
+    if (writer.replacing()) {
+      std::fprintf(stderr,
+                   "%s: replacing route %s when this teach commits; until then the old route "
+                   "is kept and the frames go to %s\n",
+                   label, args.route_path.c_str(), writer.write_path());
+    }
   }
 
   ResultRecorder recorder;

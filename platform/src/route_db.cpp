@@ -530,18 +530,41 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
     return Status::Error(StatusCode::kInvalidArgument, "flush_every %zu is invalid", flush_every);
   if (std::strlen(path) + 5 >= sizeof path_)
     return Status::Error(StatusCode::kInvalidArgument, "path too long: %s", path);
-  if (!overwrite && ::access(path, F_OK) == 0) {
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "%s already exists: not replacing a taught route", path);
+  // An existing route is replaced only with `overwrite`, and only if it is a regular file:
+  // a symlink, device node or FIFO at the path is not ours to replace.
+  bool replacing = false;
+  struct stat existing {};
+  if (::lstat(path, &existing) == 0) {
+    if (!S_ISREG(existing.st_mode)) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s is %s, not a route database file: teach does not replace it; "
+                           "give --route the path of a regular file",
+                           path, FileKind(existing.st_mode));
+    }
+    if (!overwrite) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s already exists: not replacing a taught route", path);
+    }
+    replacing = true;
+  } else if (errno != ENOENT) {
+    return Status::FromErrno(errno, "cannot check %s", path);
   }
   const std::size_t record_bytes = RouteDbRecordBytes(settings.dim);
   SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
 
-  char tmp[sizeof path_ + 8];
+  char tmp[sizeof write_path_];
   std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  UniqueFd fd(::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  // O_NOFOLLOW/O_NONBLOCK + the check below: a symlink or FIFO planted at FILE.tmp is
+  // refused, not followed or waited on.
+  UniqueFd fd(
+      ::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
   if (!fd.is_valid())
     return Status::FromErrno(errno, "cannot create %s", tmp);
+  struct stat created {};
+  if (::fstat(fd.get(), &created) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", tmp);
+  if (!S_ISREG(created.st_mode))
+    return NotARegularFile(tmp, created.st_mode);
   // Held until the writer closes: `route recover` refuses the file meanwhile.
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
     return Status::FromErrno(errno, "cannot lock %s", tmp);
@@ -551,15 +574,22 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
     return w.AddContext("%s", tmp);
   if (::fsync(fd.get()) != 0)
     return Status::FromErrno(errno, "cannot sync %s", tmp);
-  if (::rename(tmp, path) != 0) {
-    const int e = errno;
-    ::unlink(tmp);
-    return Status::FromErrno(e, "cannot rename %s to %s", tmp, path);
+  if (!replacing) {
+    // A new route: it appears under its name at once, so a crash leaves a recoverable
+    // FILE.db. A route being replaced stays untouched until Commit() renames FILE.db.tmp
+    // over it: a teach killed early must not cost the old route.
+    if (::rename(tmp, path) != 0) {
+      const int e = errno;
+      ::unlink(tmp);
+      return Status::FromErrno(e, "cannot rename %s to %s", tmp, path);
+    }
+    SKYLOC_TRY(SyncDirectoryOf(path));
   }
-  SKYLOC_TRY(SyncDirectoryOf(path));
 
   fd_ = std::move(fd);
   std::snprintf(path_, sizeof path_, "%s", path);
+  std::snprintf(write_path_, sizeof write_path_, "%s", replacing ? tmp : path);
+  replacing_ = replacing;
   settings_ = settings;
   flush_every_ = flush_every;
   pending_ = 0;
@@ -603,7 +633,7 @@ Status RouteDbWriter::WriteChunk(std::uint32_t type, std::uint64_t first, std::u
     // data (a torn chunk in the middle would make the file unloadable).
     if (before >= 0 && ::ftruncate(fd_.get(), before) == 0)
       (void)::lseek(fd_.get(), before, SEEK_SET);
-    return s.AddContext("route database %s", path_);
+    return s.AddContext("route database %s", write_path_);
   }
   return Status::Ok();
 }
@@ -623,6 +653,14 @@ Status RouteDbWriter::Flush() {
 Status RouteDbWriter::Commit() {
   SKYLOC_TRY(Flush());
   SKYLOC_TRY(WriteChunk(kChunkCommit, durable_, 0, 0));
+  if (replacing_) {
+    // The new route is complete and durable: now, atomically, it replaces the old one.
+    if (::rename(write_path_, path_) != 0)
+      return Status::FromErrno(errno, "cannot rename %s to %s (the new route is complete in %s)",
+                               write_path_, path_, write_path_);
+    SKYLOC_TRY(SyncDirectoryOf(path_));
+    replacing_ = false;
+  }
   fd_.reset();
   return Status::Ok();
 }

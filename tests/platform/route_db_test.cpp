@@ -152,6 +152,72 @@ TEST_F(RouteDbTest, RefusesToReplaceATaughtRoute) {
   EXPECT_EQ(frames_.size(), 3u);
 }
 
+// teach --force: the old route stays whole (loadable, every frame) until the new one is
+// committed; a teach killed before that costs nothing. The frames go to FILE.tmp, which
+// the commit renames over the old route.
+TEST_F(RouteDbTest, ForceKeepsTheOldRouteUntilTheNewOneCommits) {
+  Teach(25, 10, true);
+  const std::vector<std::uint8_t> old_route = Bytes();
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, true).ok());
+    EXPECT_TRUE(w.replacing());
+    EXPECT_EQ(std::string(w.write_path()), path_ + ".tmp");
+    for (std::size_t i = 0; i < 15; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      ASSERT_TRUE(w.Append(meta, d).ok());
+    }
+    EXPECT_EQ(Bytes(), old_route) << "the old route changed before the new one committed";
+  }  // closed without a commit: a killed teach
+  EXPECT_EQ(Bytes(), old_route);
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 25);
+
+  RouteDbWriter w;
+  ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, true).ok());
+  for (std::size_t i = 0; i < 7; ++i) {
+    RouteFrameMeta meta;
+    float d[kDim];
+    FrameContent(i, &meta, d);
+    ASSERT_TRUE(w.Append(meta, d).ok());
+  }
+  ASSERT_TRUE(w.Commit().ok());
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 7);
+  EXPECT_NE(::access((path_ + ".tmp").c_str(), F_OK), 0) << "FILE.tmp left behind";
+}
+
+// A symlink, FIFO (or device node) at the route path is refused even with --force; it is
+// left as it was, never replaced by a regular file.
+TEST_F(RouteDbTest, RefusesToReplaceASymlinkOrFifo) {
+  const std::string target = dir_ + "/target.db";
+  {
+    std::ofstream out(target);
+    out << "not ours";
+  }
+  ASSERT_EQ(::symlink(target.c_str(), path_.c_str()), 0);
+  RouteDbWriter w;
+  Status s = w.Create(path_.c_str(), Settings(), 10, true);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("is a symbolic link"), std::string::npos) << s.message();
+  struct stat st {};
+  ASSERT_EQ(::lstat(path_.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+  std::ifstream in(target);
+  std::string content;
+  std::getline(in, content);
+  EXPECT_EQ(content, "not ours");
+
+  const std::string fifo = dir_ + "/fifo.db";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  s = w.Create(fifo.c_str(), Settings(), 10, true);
+  EXPECT_NE(std::string(s.message()).find("is a FIFO"), std::string::npos) << s.message();
+  ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+}
+
 TEST_F(RouteDbTest, UncommittedFileNeedsRecovery) {
   Teach(25, 10, false);
   Status strict = Parse(Bytes());

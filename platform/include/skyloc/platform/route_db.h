@@ -135,7 +135,10 @@ class RouteDbWriter {
   RouteDbWriter& operator=(const RouteDbWriter&) = delete;
 
   // Creates `path` atomically (path.tmp, fsync, rename, fsync of the directory). An
-  // existing file is kept and reported unless `overwrite`. The open file holds an
+  // existing file is kept and reported unless `overwrite`; with it, the frames go to
+  // path.tmp and Commit() renames that over the old route, so the old route stays whole
+  // until the new one is committed. A path that is a symlink, device node, FIFO or
+  // directory is refused, `overwrite` or not. The open file holds an
   // exclusive flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
@@ -146,6 +149,9 @@ class RouteDbWriter {
   Status Commit();
 
   bool is_open() const { return fd_.is_valid(); }
+  // The file the frames go to: the route's path, or path.tmp while replacing a route.
+  const char* write_path() const { return write_path_; }
+  bool replacing() const { return replacing_; }
   std::uint64_t frames_appended() const { return appended_; }
   // Frames known to be on the disk.
   std::uint64_t frames_durable() const { return durable_; }
@@ -156,6 +162,8 @@ class RouteDbWriter {
 
   UniqueFd fd_;
   char path_[256] = {};
+  char write_path_[264] = {};
+  bool replacing_ = false;
   RouteDbSettings settings_;
   FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
   std::size_t flush_every_ = 0;
