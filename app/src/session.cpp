@@ -463,10 +463,26 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   if (args.mode == LoopMode::kTeach && writer.is_open()) {
     shutdown = writer.Commit();
     report->route_frames = writer.frames_durable();
+    const auto kept = static_cast<unsigned long long>(writer.frames_durable());
     if (shutdown.ok()) {
       std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
-                   static_cast<unsigned long long>(writer.frames_durable()));
+                   kept);
+    } else if (writer.committed()) {
+      // Disk full: what was on the disk is committed, the last chunk is not.
+      std::fprintf(stderr,
+                   "%s: route %s: %llu frames kept and committed; the last %llu did not fit: "
+                   "%s\n",
+                   label, args.route_path.c_str(), kept,
+                   static_cast<unsigned long long>(writer.frames_lost()), shutdown.message());
+    } else {
+      std::fprintf(stderr,
+                   "%s: route %s: %llu frames kept on the disk but NOT committed (%s): free "
+                   "some space, then run 'skyloc route recover %s'\n",
+                   label, writer.write_path(), kept, shutdown.message(), writer.write_path());
     }
+    // The loop's own error (the failed write) is printed at the end; this was said.
+    if (!shutdown.ok() && !loop_status.ok())
+      shutdown = Status::Ok();
   }
   if (status) {
     PrintWarning(label, status->SafeState());

@@ -587,6 +587,8 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
   }
 
   fd_ = std::move(fd);
+  committed_ = false;
+  lost_ = 0;
   std::snprintf(path_, sizeof path_, "%s", path);
   std::snprintf(write_path_, sizeof write_path_, "%s", replacing ? tmp : path);
   replacing_ = replacing;
@@ -651,8 +653,18 @@ Status RouteDbWriter::Flush() {
 }
 
 Status RouteDbWriter::Commit() {
-  SKYLOC_TRY(Flush());
-  SKYLOC_TRY(WriteChunk(kChunkCommit, durable_, 0, 0));
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  // The last chunk may not fit (disk full, RLIMIT_FSIZE); WriteChunk has cut it off again.
+  // The 32-byte commit record may still fit: commit the frames already on the disk.
+  Status flushed = Flush();
+  lost_ = pending_;
+  pending_ = 0;
+  if (Status c = WriteChunk(kChunkCommit, durable_, 0, 0); !c.ok()) {
+    fd_.reset();  // closed uncommitted: `route recover` keeps the durable frames
+    return c;
+  }
+  committed_ = true;
   if (replacing_) {
     // The new route is complete and durable: now, atomically, it replaces the old one.
     if (::rename(write_path_, path_) != 0)
@@ -662,7 +674,7 @@ Status RouteDbWriter::Commit() {
     replacing_ = false;
   }
   fd_.reset();
-  return Status::Ok();
+  return flushed;
 }
 
 }  // namespace skyloc

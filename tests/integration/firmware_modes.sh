@@ -128,6 +128,16 @@ expect_rc 0 "teach up to the capacity" -- "${RUN[@]}" teach --route "$WORK/full.
 expect_err "the route is full" "teach capacity"
 expect_err "50 frames committed" "teach capacity"
 
+# 11. disk full during teach (RLIMIT_FSIZE: 20 KiB): the chunk that does not fit is lost,
+# the frames before it are committed and said so; the route loads strictly.
+(ulimit -f 20 && exec "${RUN[@]}" teach --route "$WORK/fsize.db" --config "$CONFIG" --frames 300) \
+  >/dev/null 2>"$WORK/err"
+rc=$?
+[ $rc -eq 1 ] || fail "teach on a full disk exited $rc, expected 1: $(cat "$WORK/err")"
+expect_err "120 frames kept and committed; the last 10 did not fit" "teach on a full disk"
+expect_rc 0 "route info after a full disk" -- "${RUN[@]}" route info "$WORK/fsize.db"
+grep -q "120 frames in 12 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
+
 if [ $failures -ne 0 ]; then
   echo "$failures check(s) failed" >&2
   exit 1

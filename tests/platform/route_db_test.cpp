@@ -500,6 +500,46 @@ TEST_F(RouteDbTest, RecoverWithNoIntactFrameIsAnError) {
   EXPECT_EQ(Bytes(), before);
 }
 
+// A full disk during teach, simulated with RLIMIT_FSIZE in a child (no root, no mount):
+// the 4th chunk does not fit, but the 32-byte commit record does, so the 30 frames already
+// on the disk are committed and the 10 of the last chunk reported lost.
+TEST_F(RouteDbTest, DiskFullDuringTeachCommitsTheFramesOnTheDisk) {
+  constexpr std::size_t kFlush = 10;
+  const std::size_t limit = ChunkOffset(4, kFlush, 1000) + 100;  // 3 chunks + 100 bytes
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);  // EFBIG instead of death, as skyloc's handlers set it
+    const rlimit lim{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
+    if (::setrlimit(RLIMIT_FSIZE, &lim) != 0)
+      ::_exit(2);
+    RouteDbWriter w;
+    if (!w.Create(path_.c_str(), Settings(), kFlush, false).ok())
+      ::_exit(3);
+    std::size_t i = 0;
+    for (; i < 1000; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      if (!w.Append(meta, d).ok())
+        break;
+    }
+    if (i != 39)  // the 40th frame's flush failed
+      ::_exit(4);
+    const Status s = w.Commit();
+    if (s.ok() || !w.committed() || w.frames_durable() != 30 || w.frames_lost() != 10)
+      ::_exit(5);
+    ::_exit(0);
+  }
+  int wstatus = 0;
+  ASSERT_EQ(::waitpid(child, &wstatus, 0), child);
+  ASSERT_TRUE(WIFEXITED(wstatus)) << wstatus;
+  ASSERT_EQ(WEXITSTATUS(wstatus), 0);
+  const Status strict = Parse(Bytes());
+  ASSERT_TRUE(strict.ok()) << strict.message();
+  ExpectFrames(frames_, 30);
+}
+
 // The writer is killed with SIGKILL at a random moment while teaching, 20 times. The child
 // reports through a pipe how many frames each completed Flush() made durable; after the
 // kill the file must load (recovering the interrupted tail) with at least those frames,

@@ -145,8 +145,14 @@ class RouteDbWriter {
   Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor);
   // Writes the buffered frames as one chunk and waits until they are on the disk.
   Status Flush();
-  // Flush, append the commit record, sync, close. After this the writer is closed.
+  // Flush, append the commit record, sync, close. After this the writer is closed. When
+  // the last chunk cannot be written (disk full), the commit record is still appended for
+  // the frames already on the disk: the error is returned, committed() is true and
+  // frames_lost() says how many frames did not fit. When even the commit record cannot
+  // be written, committed() is false and `skyloc route recover` keeps frames_durable().
   Status Commit();
+  bool committed() const { return committed_; }
+  std::uint64_t frames_lost() const { return lost_; }
 
   bool is_open() const { return fd_.is_valid(); }
   // The file the frames go to: the route's path, or path.tmp while replacing a route.
@@ -164,6 +170,8 @@ class RouteDbWriter {
   char path_[256] = {};
   char write_path_[264] = {};
   bool replacing_ = false;
+  bool committed_ = false;
+  std::uint64_t lost_ = 0;
   RouteDbSettings settings_;
   FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
   std::size_t flush_every_ = 0;
