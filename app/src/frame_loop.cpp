@@ -87,6 +87,10 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       if (status != nullptr)
         (void)status->SafeState();
       pipeline.ResetTracking();
+      if (code == StatusCode::kDataLoss && options.recorded) {
+        *summary = s;
+        return captured.status();
+      }
       if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
           ++errors_in_a_row < options.max_consecutive_errors) {
         ++s.capture_errors;
@@ -172,7 +176,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       if (!st.ok()) {
         // A frame the descriptor rejects (wrong size from a misbehaving driver) is
         // skipped like a corrupt capture; the next frame may be fine.
-        if (++errors_in_a_row >= options.max_consecutive_errors) {
+        if (options.recorded || ++errors_in_a_row >= options.max_consecutive_errors) {
           *summary = s;
           return st;
         }

@@ -446,6 +446,7 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   if (capped)
     loop.max_frames = route_capacity;
   loop.paced = args.paced;
+  loop.recorded = !args.dataset.empty() || config.camera.kind == CameraKind::kDataset;
   loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
   loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
   const Status loop_status = RunFrameLoop(*camera, status.get(), pipeline,

@@ -110,6 +110,20 @@ if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/ref" --frames 60 -
   expect_err "precision at 100% recall" "replay evaluation"
   expect_rc 1 "replay of a missing dataset" -- "${RUN[@]}" replay "$WORK/nothing" --route "$WORK/ds.db"
   expect_err "nothing" "replay of a missing dataset"
+  # a frame of another size in a recording: a data-loss error naming the file, exit 1
+  # (teach and replay), not a silently skipped frame.
+  cp -r "$WORK/qry" "$WORK/odd"
+  if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/small" --frames 2 --width 64 \
+    --height 64 >/dev/null 2>&1; then
+    odd=$(sed -n '12p' "$WORK/odd/frames.csv" | cut -d, -f2)
+    cp "$WORK/small/frames/$(sed -n '2p' "$WORK/small/frames.csv" | cut -d, -f2)" "$WORK/odd/frames/$odd"
+    expect_rc 1 "replay with a frame of another size" -- "${RUN[@]}" replay "$WORK/odd" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
+    expect_err "$odd) is 64x64 .*, expected 96x96" "replay with a frame of another size"
+    expect_rc 1 "teach with a frame of another size" -- "${RUN[@]}" teach --route "$WORK/odd.db" --config "$CONFIG" --dataset "$WORK/odd"
+    expect_err "$odd) is 64x64 .*, expected 96x96" "teach with a frame of another size"
+  else
+    fail "skyloc simulate could not write the 64x64 dataset"
+  fi
 else
   fail "skyloc simulate could not write the replay datasets"
 fi
