@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -352,8 +353,10 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     config.camera.width = info.width;  // a recorded or simulated source fixes the size
     config.camera.height = info.height;
     // A dataset recorded with its camera file: use that lens unless the config names one.
-    if (config.camera.lens_file.empty() && !source.camera_file.empty())
+    if (config.camera.lens_file.empty() && !source.camera_file.empty()) {
       config.camera.lens_file = source.camera_file;
+      config.camera.lens_file_from_dataset = true;
+    }
   } else if (info.width != config.camera.width || info.height != config.camera.height) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
@@ -401,8 +404,8 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     Status created =
         writer.Create(args.route_path.c_str(), pipeline.route_settings(),
                       static_cast<std::size_t>(config.route_db.flush_every), args.force);
-    if (created.code() == StatusCode::kFailedPrecondition)
-      created.AddContext("(pass --force to replace it)");
+    if (!args.force && std::strstr(created.message(), "already exists") != nullptr)  // problem, fix
+      created = Status::Error(created.code(), "%s; pass --force to replace it", created.message());
     SKYLOC_TRY(created);
     if (writer.replacing()) {
       std::fprintf(stderr,

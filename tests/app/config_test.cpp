@@ -4,9 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <string>
 
+#include "pipeline.h"
 #include "skyloc/dsp/sh_grid.h"
+#include "support/scratch_dir.h"
 
 namespace skyloc::app {
 namespace {
@@ -15,6 +18,8 @@ TEST(Config, ShippedFileStatesTheDefaults) {
   const std::string path = std::string(SKYLOC_SOURCE_DIR) + "/config/skyloc.toml";
   Result<Config> c = LoadConfigFile(path.c_str());
   ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(c->source, path);
+  c->source.clear();
   EXPECT_TRUE(*c == DefaultConfig()) << "config/skyloc.toml no longer matches the defaults "
                                         "in config.h";
 }
@@ -179,7 +184,7 @@ const BadCase kBadCases[] = {
     {"[attitude]\nfilter_kp = -1\n", "[attitude] filter_kp"},
 };
 
-class ConfigRejects : public testing::TestWithParam<BadCase> {};
+class ConfigRejects : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(ConfigRejects, NamingTheKeyAndLine) {
   Result<Config> c = ParseConfig(GetParam().text, "robot.toml");
@@ -191,7 +196,7 @@ TEST_P(ConfigRejects, NamingTheKeyAndLine) {
       << message;
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryBadValue, ConfigRejects, testing::ValuesIn(kBadCases));
+INSTANTIATE_TEST_SUITE_P(EveryBadValue, ConfigRejects, ::testing::ValuesIn(kBadCases));
 
 TEST(Config, RejectsUnknownSection) {
   Result<Config> c = ParseConfig("[camera]\nfps = 10\n[gps]\nport = 1\n", "robot.toml");
@@ -204,6 +209,59 @@ TEST(Config, RejectsSectionThatIsNotATable) {
   Result<Config> c = ParseConfig("camera = 3\n", "robot.toml");
   ASSERT_FALSE(c.ok());
   EXPECT_NE(std::string(c.status().message()).find("camera"), std::string::npos);
+}
+
+// A key above the first [section] header is a misplaced key, not an unknown section.
+TEST(Config, AKeyOutsideEverySectionIsNamedAsAKey) {
+  Result<Config> c = ParseConfig("kind = \"v4l2\"\n[camera]\nfps = 10\n", "robot.toml");
+  ASSERT_FALSE(c.ok());
+  const std::string m = c.status().message();
+  EXPECT_NE(m.find("robot.toml:1: key kind is not known at the top level"), std::string::npos) << m;
+  EXPECT_EQ(m.find("is not a known section"), std::string::npos) << m;
+}
+
+// A key in the wrong section: "key X is not known in [section]".
+TEST(Config, AKeyInTheWrongSectionIsNamedWithItsSection) {
+  Result<Config> c = ParseConfig("[status]\nfps = 10\n", "robot.toml");
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(
+      std::string(c.status().message()).find("robot.toml:2: key fps is not known in [status]"),
+      std::string::npos)
+      << c.status().message();
+}
+
+// lens_file is relative to the config file (systemd runs skyloc in /), and a missing one
+// is named with the config file and key.
+TEST(Config, LensFileIsRelativeToTheConfigFile) {
+  skyloc::testing::ScratchDir dir("skyloc_config_");
+  const std::string path = dir.path() + "/robot.toml";
+  std::ofstream(path) << "[camera]\nlens_file = \"lens.toml\"\n";
+  Result<Config> c = LoadConfigFile(path.c_str());
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(c->camera.lens_file, dir.path() + "/lens.toml");
+  Result<dsp::LensParams> lens = LensFromConfig(*c);
+  ASSERT_FALSE(lens.ok());
+  const std::string m = lens.status().message();
+  EXPECT_NE(m.find("[camera] lens_file in " + path), std::string::npos) << m;
+  EXPECT_NE(m.find(dir.path() + "/lens.toml"), std::string::npos) << m;
+}
+
+// A dataset's own camera.toml for another frame size is named as that file, not as
+// "[camera] width x height" (which the dataset overrides).
+TEST(Config, ADatasetCameraFileOfAnotherSizeIsNamed) {
+  Config c = DefaultConfig();
+  c.camera.width = 96;
+  c.camera.height = 96;
+  c.camera.lens_file = std::string(SKYLOC_SOURCE_DIR) + "/config/camera-equidistant-185.toml";
+  c.camera.lens_file_from_dataset = true;
+  Result<dsp::LensParams> lens = LensFromConfig(c);
+  ASSERT_FALSE(lens.ok());
+  const std::string m = lens.status().message();
+  EXPECT_NE(m.find("the dataset's camera file " + c.camera.lens_file +
+                   " is for 640x480 images but its frames are 96x96"),
+            std::string::npos)
+      << m;
+  EXPECT_EQ(m.find("[camera] width x height"), std::string::npos) << m;
 }
 
 TEST(Config, RejectsBrokenTomlWithPosition) {

@@ -37,8 +37,7 @@ grep -q "150 frames in 15 chunks, committed" "$WORK/out" || fail "route info: $(
 
 # 2. a taught route is never replaced silently.
 expect_rc 1 "teach over an existing route" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 5
-expect_err "already exists" "teach over an existing route"
-expect_err "--force" "teach over an existing route"
+expect_err "already exists: not replacing a taught route; pass --force to replace it" "teach over an existing route"
 
 # 3. repeat the same street: one JSON line per frame with every key; it localises.
 expect_rc 0 "repeat" -- "${RUN[@]}" repeat --route "$DB" --config "$CONFIG" --frames 150
