@@ -1,5 +1,6 @@
 #include "config.h"
 
+#include <sys/stat.h>
 #include <toml++/toml.h>
 
 #include <cerrno>
@@ -492,6 +493,14 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
 }
 
 Result<Config> LoadConfigFile(const char* path) {
+  // A directory opens and reads as empty: it would pass for a config of defaults.
+  struct stat st {};
+  if (::stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "config %s is %s, not a file: --config takes the configuration file "
+                         "(e.g. /etc/skyloc/skyloc.toml, a copy of config/skyloc.toml)",
+                         path, S_ISDIR(st.st_mode) ? "a directory" : "not a regular file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     return Status::FromErrno(errno,
@@ -501,6 +510,9 @@ Result<Config> LoadConfigFile(const char* path) {
   }
   std::ostringstream text;
   text << in.rdbuf();
+  if (in.bad()) {
+    return Status::Error(StatusCode::kInvalidArgument, "cannot read config %s: read error", path);
+  }
   Result<Config> c = ParseConfig(text.str(), path);
   if (!c.ok())
     return c;

@@ -333,6 +333,75 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
                        "(libgpiod-dev was missing at build time); use \"sim\" or \"none\"");
 }
 
+// The one start-up line: what the run reads, shows and writes, so a simulated or wrong
+// device cannot go unnoticed; then a loud warning for a live mode on a simulation.
+void PrintStartup(const SessionArgs& args, const Config& config, const drivers::CameraInfo& info,
+                  const RouteDbWriter& writer, std::size_t loaded_frames) {
+  const CameraConfig& cam = config.camera;
+  const bool dataset = !args.dataset.empty() || cam.kind == CameraKind::kDataset;
+  char camera[400];
+  const char* format = dsp::PixelFormatName(info.format);
+  if (dataset) {
+    std::snprintf(camera, sizeof camera, "camera dataset %s (recorded), %s %dx%d",
+                  args.dataset.empty() ? cam.dataset.c_str() : args.dataset.c_str(), format,
+                  info.width, info.height);
+  } else if (cam.kind == CameraKind::kSim) {
+    std::snprintf(camera, sizeof camera,
+                  "camera sim (SIMULATED world \"%s\", seed %lld), %s %dx%d @ %g fps",
+                  cam.sim_world.c_str(), static_cast<long long>(cam.sim_seed), format, info.width,
+                  info.height, cam.fps);
+  } else {
+    std::snprintf(
+        camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", CameraKindName(cam.kind),
+        cam.kind == CameraKind::kLibcamera && cam.device == "/dev/video0" ? "(the first camera)"
+                                                                          : cam.device.c_str(),
+        format, info.width, info.height, cam.fps);
+  }
+  char status[160];
+  switch (config.status.kind) {
+    case StatusOutputKind::kGpio:
+      if (config.status.encoding == StatusEncoding::kBlink)
+        std::snprintf(status, sizeof status, "status gpio %s line %d (blink)",
+                      config.status.chip.c_str(), config.status.line_localised);
+      else
+        std::snprintf(status, sizeof status, "status gpio %s lines %d/%d/%d (per-state)",
+                      config.status.chip.c_str(), config.status.line_lost,
+                      config.status.line_searching, config.status.line_localised);
+      break;
+    case StatusOutputKind::kSim:
+      std::snprintf(status, sizeof status, "status sim (SIMULATED, no GPIO line)");
+      break;
+    case StatusOutputKind::kNone:
+      std::snprintf(status, sizeof status, "status none");
+      break;
+  }
+  char route[80];
+  if (args.mode == LoopMode::kTeach)
+    std::snprintf(route, sizeof route, "%s", writer.replacing() ? "replacing it at commit" : "new");
+  else
+    std::snprintf(route, sizeof route, "%zu frames", loaded_frames);
+  std::fprintf(stderr, "%s: %s; %s; route %s (%s); config %s\n", args.label, camera, status,
+               args.route_path.c_str(), route,
+               config.source.empty() ? "built-in defaults" : config.source.c_str());
+
+  if (args.simulation_expected || dataset)
+    return;
+  const char* from = config.source.empty() ? "the built-in defaults" : config.source.c_str();
+  if (cam.kind == CameraKind::kSim) {
+    std::fprintf(stderr,
+                 "%s: WARNING: the camera is SIMULATED ([camera] kind = \"sim\" in %s): this %s "
+                 "uses a rendered world, not what the robot sees; set [camera] kind = \"v4l2\" "
+                 "or \"libcamera\"\n",
+                 args.label, from, args.mode == LoopMode::kTeach ? "teach" : "repeat");
+  }
+  if (args.mode == LoopMode::kRepeat && config.status.kind == StatusOutputKind::kSim) {
+    std::fprintf(stderr,
+                 "%s: WARNING: the status output is SIMULATED ([status] kind = \"sim\" in %s): "
+                 "no GPIO line will change; set [status] kind = \"gpio\"\n",
+                 args.label, from);
+  }
+}
+
 void PrintWarning(const char* label, const Status& s) {
   if (!s.ok())
     std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
@@ -414,6 +483,8 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
                    label, args.route_path.c_str(), writer.write_path());
     }
   }
+
+  PrintStartup(args, config, info, writer, route.size());
 
   ResultRecorder recorder;
   // A finite run (a dataset, a simulated trajectory, --frames) keeps every result for the

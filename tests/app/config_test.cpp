@@ -20,6 +20,10 @@ TEST(Config, ShippedFileStatesTheDefaults) {
   ASSERT_TRUE(c.ok()) << c.status().message();
   EXPECT_EQ(c->source, path);
   c->source.clear();
+  // The installed file names a real camera; the built-in defaults simulate one (the only
+  // difference, and teach/repeat warn about it).
+  EXPECT_EQ(c->camera.kind, CameraKind::kV4l2);
+  c->camera.kind = CameraKind::kSim;
   EXPECT_TRUE(*c == DefaultConfig()) << "config/skyloc.toml no longer matches the defaults "
                                         "in config.h";
 }
@@ -294,6 +298,16 @@ TEST(Config, NonAsciiOnlyInStringsAndComments) {
   ASSERT_FALSE(header.ok());
   EXPECT_NE(std::string(header.status().message()).find("robot.toml:1:3:"), std::string::npos)
       << header.status().message();
+}
+
+// --config DIR is an error naming it, not an empty configuration of defaults.
+TEST(Config, ADirectoryIsNotAConfigFile) {
+  skyloc::testing::ScratchDir dir("skyloc_config_dir_");
+  Result<Config> c = LoadConfigFile(dir.path().c_str());
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(std::string(c.status().message()).find(dir.path() + " is a directory"),
+            std::string::npos)
+      << c.status().message();
 }
 
 TEST(Config, MissingFileNamesThePath) {

@@ -32,6 +32,10 @@ expect_rc 0 "teach" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --fram
 [ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "teach printed $(wc -l <"$WORK/out") JSON lines, expected 150"
 grep -q '"route_frames":150' "$WORK/out" || fail "teach JSON lacks route_frames 150"
 expect_err "150 frames committed" "teach summary"
+# one start-up line names the camera, the status output and the route; a simulated camera
+# in a live mode is a loud warning
+expect_err "skyloc teach: camera sim (SIMULATED world \"street\", seed 1), GREY 96x96 @ 200 fps; status sim (SIMULATED, no GPIO line); route $DB (new); config $CONFIG" "start-up line"
+expect_err "WARNING: the camera is SIMULATED" "teach on the simulated camera"
 expect_rc 0 "route info" -- "${RUN[@]}" route info "$DB"
 grep -q "150 frames in 15 chunks, committed" "$WORK/out" || fail "route info: $(cat "$WORK/out")"
 
@@ -48,6 +52,8 @@ done
 grep -q '"state":"LOCALISED"' "$WORK/out" || fail "repeat never localised"
 expect_err "p99_us" "repeat latency table at exit"
 expect_err "precision at 100% recall" "repeat evaluation"
+expect_err "route $DB (150 frames)" "repeat start-up line"
+expect_err "WARNING: the status output is SIMULATED" "repeat with the simulated status output"
 
 # 4. settings that differ from the taught ones are refused, naming the setting.
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
@@ -59,6 +65,8 @@ printf '[seqslam]\nds = 0\n' >"$WORK/bad.toml"
 expect_rc 1 "bad config" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/bad.toml"
 expect_err "bad.toml:2: \[seqslam\] ds" "bad config"
 expect_rc 2 "missing --route" -- "${RUN[@]}" repeat --config "$CONFIG"
+expect_rc 1 "--config DIR" -- "${RUN[@]}" teach --route "$WORK/dir.db" --config "$WORK" --frames 5
+expect_err "config $WORK is a directory" "--config DIR"
 
 # 6. SIGTERM during an endless teach: exit 0, every frame so far committed.
 "${RUN[@]}" teach --route "$WORK/term.db" --config "$CONFIG" >"$WORK/term.out" 2>"$WORK/term.err" &
