@@ -68,8 +68,11 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
   bool attitude_outage = false;  // warned about; cleared when an attitude comes back
 
   while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
-    if (TakeReportRequest())
+    if (TakeReportRequest()) {
+      std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
+                   static_cast<unsigned long long>(s.frames));
       latency.Print(stderr);
+    }
     const Nanoseconds t0 = clock.Now();
     Result<drivers::Frame> captured = camera.Capture(options.capture_timeout);
     const Nanoseconds t1 = clock.Now();

@@ -92,6 +92,7 @@ kill -0 $pid 2>/dev/null || fail "repeat died on SIGUSR1"
 kill -TERM $pid
 wait $pid || fail "repeat after SIGTERM exited non-zero"
 [ "$(grep -c p99_us "$WORK/usr1.err")" -ge 2 ] || fail "SIGUSR1 table missing: $(cat "$WORK/usr1.err")"
+grep -q "latency after [0-9]* frames (SIGUSR1" "$WORK/usr1.err" || fail "SIGUSR1 table has no label: $(cat "$WORK/usr1.err")"
 
 # 8. kill -9 during teach: the file is refused as interrupted, recovered, then usable.
 "${RUN[@]}" teach --route "$WORK/kill.db" --config "$CONFIG" >/dev/null 2>&1 &
