@@ -118,6 +118,7 @@ int RunDemo(std::span<char* const> args) {
   teach.config_path = config_path;
   teach.json = nullptr;
   teach.label = "teach";
+  teach.simulation_expected = true;
   teach.max_frames = quick ? 300 : 1200;
   ProgressLine teach_progress("teach");
   teach.extra_sink = &teach_progress;
@@ -137,6 +138,7 @@ int RunDemo(std::span<char* const> args) {
     repeat.config_path = config_path;
     repeat.json = nullptr;
     repeat.label = "repeat";
+    repeat.simulation_expected = true;
     // Within the stretch the teach run covered (1.5x faster, so fewer frames).
     repeat.max_frames = quick ? 160 : 700;
     repeat.sim.speed_ratio = 1.5;

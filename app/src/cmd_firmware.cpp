@@ -30,9 +30,11 @@ constexpr const char* kReplayUsage =
     "  Runs a recorded dataset folder through the same pipeline as repeat; with poses,\n"
     "  prints precision/recall (a match within X metres, default 2, is correct).\n";
 constexpr const char* kRouteUsage =
-    "usage: skyloc route info FILE.db | skyloc route recover FILE.db\n"
+    "usage: skyloc route info FILE.db | skyloc route recover [--salvage] FILE.db\n"
     "  info: what the file holds. recover: make an interrupted teach loadable (keeps every\n"
-    "  intact chunk, cuts a torn tail, appends the commit record).\n";
+    "  intact chunk, cuts a torn tail or trailing bytes, appends the commit record); it\n"
+    "  refuses a file a running teach is writing. --salvage: also for damage in the middle:\n"
+    "  keeps the intact chunks before it (the original is kept as FILE.db.damaged).\n";
 
 bool ParseCount(const char* text, std::uint64_t* out) {
   char* end = nullptr;
@@ -174,16 +176,18 @@ int RunRoute(std::span<char* const> args) {
     std::fputs(kRouteUsage, stdout);
     return kExitOk;
   }
-  if (args.size() != 2 ||
+  const bool recover = !args.empty() && std::strcmp(args[0], "recover") == 0;
+  const bool salvage = recover && args.size() == 3 && std::strcmp(args[1], "--salvage") == 0;
+  if ((args.size() != 2 && !salvage) ||
       (std::strcmp(args[0], "info") != 0 && std::strcmp(args[0], "recover") != 0)) {
     std::fputs(kRouteUsage, stderr);
     return kExitUsage;
   }
-  const char* path = args[1];
+  const char* path = args[args.size() - 1];
   RouteDbLoadReport report;
   Status s;
-  if (std::strcmp(args[0], "recover") == 0) {
-    s = RecoverRouteDb(path, &report);
+  if (recover) {
+    s = RecoverRouteDb(path, &report, salvage);
   } else {
     s = LoadRouteDb(path, nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &report);
   }
@@ -199,12 +203,21 @@ int RunRoute(std::span<char* const> args) {
       report.committed ? "committed" : "NOT committed (teach was interrupted)", st.descriptor_kind,
       st.bands, st.rings, st.longitudes, st.normalisation,
       static_cast<unsigned long long>(st.lens_hash));
-  if (report.dropped_bytes > 0) {
-    std::printf("%s: %zu bytes of a torn final chunk after offset %zu %s\n", path,
-                report.dropped_bytes, report.valid_bytes,
-                std::strcmp(args[0], "recover") == 0 ? "were cut off" : "would be cut off");
+  if (report.trailing_bytes > 0) {
+    std::printf(
+        "%s: %zu trailing bytes after the commit record at offset %zu (not part of the "
+        "route) %s\n",
+        path, report.trailing_bytes, report.valid_bytes,
+        recover ? "were cut off" : "would be cut off by 'skyloc route recover'");
   }
-  if (std::strcmp(args[0], "recover") == 0 && !report.committed)
+  if (report.dropped_bytes > 0) {
+    std::printf("%s: %zu bytes %s after offset %zu %s\n", path, report.dropped_bytes,
+                report.damaged_mid_file ? "from the damage on" : "of a torn final chunk",
+                report.valid_bytes, recover ? "were cut off" : "would be cut off");
+  }
+  if (report.damaged_mid_file)
+    std::printf("%s: the damaged original was kept as %s.damaged\n", path, path);
+  if (recover && !report.committed)
     std::printf("%s: recovered: %zu frames, now committed\n", path, report.frames);
   return kExitOk;
 }

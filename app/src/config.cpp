@@ -1,5 +1,6 @@
 #include "config.h"
 
+#include <sys/stat.h>
 #include <toml++/toml.h>
 
 #include <cerrno>
@@ -198,11 +199,13 @@ class SectionReader {
       for (std::size_t i = 0; i < known_count_; ++i)
         known = known || k.str() == known_[i];
       if (!known) {
-        std::string name(k.str());
-        Fail(&node, name.c_str(),
-             "is not a known key of [%s]: check the spelling against "
-             "config/skyloc.toml",
-             section_);
+        const std::string name(k.str());
+        const int line = static_cast<int>(node.source().begin.line);
+        const std::string source(source_);
+        *error_ = Status::Error(StatusCode::kInvalidArgument,
+                                "%s:%d: key %s is not known in [%s]: check its spelling and "
+                                "section against config/skyloc.toml",
+                                source.c_str(), line, name.c_str(), section_);
         return;
       }
     }
@@ -308,6 +311,14 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
                                        "capacities", "state",        "status",     "realtime",
                                        "route_db",   "attitude"};
   for (auto&& [k, node] : root) {
+    if (!node.is_table()) {
+      // A key above every [section] header (or a section written as a key).
+      const std::string key(k.str());
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%u: key %s is not known at the top level: every key belongs in "
+                           "a [section] (see config/skyloc.toml for where %s goes)",
+                           source.c_str(), node.source().begin.line, key.c_str(), key.c_str());
+    }
     bool known = false;
     for (const char* s : kSections)
       known = known || k.str() == s;
@@ -482,6 +493,14 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
 }
 
 Result<Config> LoadConfigFile(const char* path) {
+  // A directory opens and reads as empty: it would pass for a config of defaults.
+  struct stat st {};
+  if (::stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "config %s is %s, not a file: --config takes the configuration file "
+                         "(e.g. /etc/skyloc/skyloc.toml, a copy of config/skyloc.toml)",
+                         path, S_ISDIR(st.st_mode) ? "a directory" : "not a regular file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     return Status::FromErrno(errno,
@@ -491,7 +510,23 @@ Result<Config> LoadConfigFile(const char* path) {
   }
   std::ostringstream text;
   text << in.rdbuf();
-  return ParseConfig(text.str(), path);
+  if (in.bad()) {
+    return Status::Error(StatusCode::kInvalidArgument, "cannot read config %s: read error", path);
+  }
+  Result<Config> c = ParseConfig(text.str(), path);
+  if (!c.ok())
+    return c;
+  c->source = path;
+  // A relative lens_file is the config file's neighbour, whatever the working directory
+  // (systemd starts skyloc in /).
+  std::string& lens = c->camera.lens_file;
+  if (!lens.empty() && lens[0] != '/') {
+    const std::string dir(path);
+    const std::size_t slash = dir.rfind('/');
+    if (slash != std::string::npos)
+      lens = dir.substr(0, slash + 1) + lens;
+  }
+  return c;
 }
 
 }  // namespace skyloc::app

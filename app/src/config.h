@@ -33,8 +33,11 @@ struct CameraConfig {
   CameraKind kind = CameraKind::kSim;
   std::string device = "/dev/video0";  // v4l2: path or "driver:card"; libcamera: camera id
   std::string dataset;                 // kind = dataset: the dataset folder
-  std::string lens_file;               // camera/lens TOML; empty: 185-degree equidistant
-  std::string sim_world = "city";      // kind = sim: city | forest | repetitive
+  std::string
+      lens_file;  // camera/lens TOML (relative: to the config file); empty: 185° equidistant
+  // Not a key: lens_file is a replayed dataset's own camera.toml (set by the session).
+  bool lens_file_from_dataset = false;
+  std::string sim_world = "city";  // kind = sim: city | forest | repetitive
   std::int64_t sim_seed = 1;
   // kind = sim (not "street"): "distance" (a frame every metre, the demo's) or "time" (a
   // frame every 1/fps seconds along a speed profile with stops; docs/SIMULATOR.md).
@@ -175,6 +178,7 @@ struct AttitudeConfig {
 };
 
 struct Config {
+  std::string source;  // the file it was read from; empty: the built-in defaults
   CameraConfig camera;
   SegmentationConfig segmentation;
   DescriptorConfig descriptor;

@@ -68,8 +68,11 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
   bool attitude_outage = false;  // warned about; cleared when an attitude comes back
 
   while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
-    if (TakeReportRequest())
+    if (TakeReportRequest()) {
+      std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
+                   static_cast<unsigned long long>(s.frames));
       latency.Print(stderr);
+    }
     const Nanoseconds t0 = clock.Now();
     Result<drivers::Frame> captured = camera.Capture(options.capture_timeout);
     const Nanoseconds t1 = clock.Now();
@@ -87,6 +90,10 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       if (status != nullptr)
         (void)status->SafeState();
       pipeline.ResetTracking();
+      if (code == StatusCode::kDataLoss && options.recorded) {
+        *summary = s;
+        return captured.status();
+      }
       if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
           ++errors_in_a_row < options.max_consecutive_errors) {
         ++s.capture_errors;
@@ -172,7 +179,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       if (!st.ok()) {
         // A frame the descriptor rejects (wrong size from a misbehaving driver) is
         // skipped like a corrupt capture; the next frame may be fine.
-        if (++errors_in_a_row >= options.max_consecutive_errors) {
+        if (options.recorded || ++errors_in_a_row >= options.max_consecutive_errors) {
           *summary = s;
           return st;
         }

@@ -65,6 +65,11 @@ struct LoopOptions {
   Nanoseconds capture_timeout = std::chrono::seconds(1);
   // Capture errors in a row (timeouts, corrupt frames) before the loop gives up.
   int max_consecutive_errors = 30;
+  // The source is a recording (a dataset): a frame it cannot deliver as recorded (another
+  // size or format, kDataLoss) or the pipeline rejects is fatal at once, the error naming
+  // the file. A live camera's corrupt frame is skipped and counted instead; the next one
+  // may be fine, while a recording's frame stays wrong.
+  bool recorded = false;
   // How long a camera may stay unavailable (unplugged; the V4L2 driver reopens it with
   // backoff) before the loop gives up; 0: at once.
   Nanoseconds reconnect_timeout = std::chrono::seconds(30);

@@ -35,16 +35,28 @@ void Hash(std::uint64_t* h, const T& v) {
 }  // namespace
 
 Result<dsp::LensParams> LensFromConfig(const Config& config) {
-  if (!config.camera.lens_file.empty()) {
-    Result<dsp::LensParams> p = drivers::LoadCameraFile(config.camera.lens_file.c_str());
-    if (!p.ok())
-      return p;
-    if (p->width != config.camera.width || p->height != config.camera.height) {
+  const CameraConfig& cam = config.camera;
+  if (!cam.lens_file.empty()) {
+    Result<dsp::LensParams> p = drivers::LoadCameraFile(cam.lens_file.c_str());
+    if (!p.ok()) {
+      Status s = p.status();
+      if (cam.lens_file_from_dataset)
+        return s.AddContext("the dataset's camera file");
+      return s.AddContext("[camera] lens_file in %s",
+                          config.source.empty() ? "the built-in defaults" : config.source.c_str());
+    }
+    if (p->width != cam.width || p->height != cam.height) {
+      if (cam.lens_file_from_dataset) {
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "the dataset's camera file %s is for %dx%d images but its frames "
+                             "are %dx%d: correct that camera.toml, or set [camera] lens_file",
+                             cam.lens_file.c_str(), p->width, p->height, cam.width, cam.height);
+      }
       return Status::Error(StatusCode::kInvalidArgument,
-                           "camera file %s is for %dx%d images but [camera] width x height is "
+                           "%s: [camera] lens_file %s is for %dx%d images but the frames are "
                            "%dx%d: make them agree",
-                           config.camera.lens_file.c_str(), p->width, p->height,
-                           config.camera.width, config.camera.height);
+                           config.source.empty() ? "built-in defaults" : config.source.c_str(),
+                           cam.lens_file.c_str(), p->width, p->height, cam.width, cam.height);
     }
     return p;
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -332,6 +333,75 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
                        "(libgpiod-dev was missing at build time); use \"sim\" or \"none\"");
 }
 
+// The one start-up line: what the run reads, shows and writes, so a simulated or wrong
+// device cannot go unnoticed; then a loud warning for a live mode on a simulation.
+void PrintStartup(const SessionArgs& args, const Config& config, const drivers::CameraInfo& info,
+                  const RouteDbWriter& writer, std::size_t loaded_frames) {
+  const CameraConfig& cam = config.camera;
+  const bool dataset = !args.dataset.empty() || cam.kind == CameraKind::kDataset;
+  char camera[400];
+  const char* format = dsp::PixelFormatName(info.format);
+  if (dataset) {
+    std::snprintf(camera, sizeof camera, "camera dataset %s (recorded), %s %dx%d",
+                  args.dataset.empty() ? cam.dataset.c_str() : args.dataset.c_str(), format,
+                  info.width, info.height);
+  } else if (cam.kind == CameraKind::kSim) {
+    std::snprintf(camera, sizeof camera,
+                  "camera sim (SIMULATED world \"%s\", seed %lld), %s %dx%d @ %g fps",
+                  cam.sim_world.c_str(), static_cast<long long>(cam.sim_seed), format, info.width,
+                  info.height, cam.fps);
+  } else {
+    std::snprintf(
+        camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", CameraKindName(cam.kind),
+        cam.kind == CameraKind::kLibcamera && cam.device == "/dev/video0" ? "(the first camera)"
+                                                                          : cam.device.c_str(),
+        format, info.width, info.height, cam.fps);
+  }
+  char status[160];
+  switch (config.status.kind) {
+    case StatusOutputKind::kGpio:
+      if (config.status.encoding == StatusEncoding::kBlink)
+        std::snprintf(status, sizeof status, "status gpio %s line %d (blink)",
+                      config.status.chip.c_str(), config.status.line_localised);
+      else
+        std::snprintf(status, sizeof status, "status gpio %s lines %d/%d/%d (per-state)",
+                      config.status.chip.c_str(), config.status.line_lost,
+                      config.status.line_searching, config.status.line_localised);
+      break;
+    case StatusOutputKind::kSim:
+      std::snprintf(status, sizeof status, "status sim (SIMULATED, no GPIO line)");
+      break;
+    case StatusOutputKind::kNone:
+      std::snprintf(status, sizeof status, "status none");
+      break;
+  }
+  char route[80];
+  if (args.mode == LoopMode::kTeach)
+    std::snprintf(route, sizeof route, "%s", writer.replacing() ? "replacing it at commit" : "new");
+  else
+    std::snprintf(route, sizeof route, "%zu frames", loaded_frames);
+  std::fprintf(stderr, "%s: %s; %s; route %s (%s); config %s\n", args.label, camera, status,
+               args.route_path.c_str(), route,
+               config.source.empty() ? "built-in defaults" : config.source.c_str());
+
+  if (args.simulation_expected || dataset)
+    return;
+  const char* from = config.source.empty() ? "the built-in defaults" : config.source.c_str();
+  if (cam.kind == CameraKind::kSim) {
+    std::fprintf(stderr,
+                 "%s: WARNING: the camera is SIMULATED ([camera] kind = \"sim\" in %s): this %s "
+                 "uses a rendered world, not what the robot sees; set [camera] kind = \"v4l2\" "
+                 "or \"libcamera\"\n",
+                 args.label, from, args.mode == LoopMode::kTeach ? "teach" : "repeat");
+  }
+  if (args.mode == LoopMode::kRepeat && config.status.kind == StatusOutputKind::kSim) {
+    std::fprintf(stderr,
+                 "%s: WARNING: the status output is SIMULATED ([status] kind = \"sim\" in %s): "
+                 "no GPIO line will change; set [status] kind = \"gpio\"\n",
+                 args.label, from);
+  }
+}
+
 void PrintWarning(const char* label, const Status& s) {
   if (!s.ok())
     std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
@@ -352,8 +422,10 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     config.camera.width = info.width;  // a recorded or simulated source fixes the size
     config.camera.height = info.height;
     // A dataset recorded with its camera file: use that lens unless the config names one.
-    if (config.camera.lens_file.empty() && !source.camera_file.empty())
+    if (config.camera.lens_file.empty() && !source.camera_file.empty()) {
       config.camera.lens_file = source.camera_file;
+      config.camera.lens_file_from_dataset = true;
+    }
   } else if (info.width != config.camera.width || info.height != config.camera.height) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
@@ -401,10 +473,18 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     Status created =
         writer.Create(args.route_path.c_str(), pipeline.route_settings(),
                       static_cast<std::size_t>(config.route_db.flush_every), args.force);
-    if (created.code() == StatusCode::kFailedPrecondition)
-      created.AddContext("(pass --force to replace it)");
+    if (!args.force && std::strstr(created.message(), "already exists") != nullptr)  // problem, fix
+      created = Status::Error(created.code(), "%s; pass --force to replace it", created.message());
     SKYLOC_TRY(created);
+    if (writer.replacing()) {
+      std::fprintf(stderr,
+                   "%s: replacing route %s when this teach commits; until then the old route "
+                   "is kept and the frames go to %s\n",
+                   label, args.route_path.c_str(), writer.write_path());
+    }
   }
+
+  PrintStartup(args, config, info, writer, route.size());
 
   ResultRecorder recorder;
   // A finite run (a dataset, a simulated trajectory, --frames) keeps every result for the
@@ -440,6 +520,7 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   if (capped)
     loop.max_frames = route_capacity;
   loop.paced = args.paced;
+  loop.recorded = !args.dataset.empty() || config.camera.kind == CameraKind::kDataset;
   loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
   loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
   const Status loop_status = RunFrameLoop(*camera, status.get(), pipeline,
@@ -457,10 +538,26 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   if (args.mode == LoopMode::kTeach && writer.is_open()) {
     shutdown = writer.Commit();
     report->route_frames = writer.frames_durable();
+    const auto kept = static_cast<unsigned long long>(writer.frames_durable());
     if (shutdown.ok()) {
       std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
-                   static_cast<unsigned long long>(writer.frames_durable()));
+                   kept);
+    } else if (writer.committed()) {
+      // Disk full: what was on the disk is committed, the last chunk is not.
+      std::fprintf(stderr,
+                   "%s: route %s: %llu frames kept and committed; the last %llu did not fit: "
+                   "%s\n",
+                   label, args.route_path.c_str(), kept,
+                   static_cast<unsigned long long>(writer.frames_lost()), shutdown.message());
+    } else {
+      std::fprintf(stderr,
+                   "%s: route %s: %llu frames kept on the disk but NOT committed (%s): free "
+                   "some space, then run 'skyloc route recover %s'\n",
+                   label, writer.write_path(), kept, shutdown.message(), writer.write_path());
     }
+    // The loop's own error (the failed write) is printed at the end; this was said.
+    if (!shutdown.ok() && !loop_status.ok())
+      shutdown = Status::Ok();
   }
   if (status) {
     PrintWarning(label, status->SafeState());

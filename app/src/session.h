@@ -36,6 +36,8 @@ struct SessionArgs {
   std::string dataset;      // replay: frames from this dataset folder
   bool paced = false;       // replay at the recorded pace
   bool force = false;       // teach: replace an existing route database
+  // The demo: a simulated camera and status output are the point, not a mistake to warn of.
+  bool simulation_expected = false;
   std::uint64_t max_frames = 0;
   std::FILE* json = stdout;  // one line per frame; null for none
   FrameSink* extra_sink = nullptr;

@@ -460,7 +460,8 @@ Result<Frame> DatasetCamera::DoCapture(Nanoseconds /*timeout*/) {
   if (current_.width() != info_.width || current_.height() != info_.height ||
       current_.format() != info_.format) {
     return Status::Error(StatusCode::kDataLoss,
-                         "dataset %s: frame %zu (%s) is %dx%d %s but the first frame is %dx%d %s",
+                         "dataset %s: frame %zu (%s) is %dx%d %s, expected %dx%d %s like the "
+                         "first frame: re-record it or remove it from frames.csv",
                          dataset_.dir.c_str(), i, f.file.c_str(), current_.width(),
                          current_.height(), dsp::PixelFormatName(current_.format()), info_.width,
                          info_.height, dsp::PixelFormatName(info_.format));

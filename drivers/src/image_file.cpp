@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -26,6 +27,8 @@
 
 namespace skyloc::drivers {
 namespace {
+
+constexpr int kMaxImageSide = 65535;  // OwnedImage::Allocate's limit
 
 struct StbFree {
   void operator()(void* p) const { stbi_image_free(p); }
@@ -93,10 +96,11 @@ Result<OwnedImage> ReadPnm(std::FILE* f, const PnmHeader& h, const char* path) {
   std::size_t done = 0;
   while (done < count) {
     const std::size_t samples = std::min(count - done, sizeof chunk / sample_bytes);
-    if (std::fread(chunk, sample_bytes, samples, f) != samples)
+    const std::size_t got = std::fread(chunk, sample_bytes, samples, f);
+    if (got != samples)
       return Status::Error(StatusCode::kInvalidArgument,
-                           "PNM image '%s' is truncated: %zu of %zu samples present", path, done,
-                           count);
+                           "PNM image '%s' is truncated: %zu of %zu samples present", path,
+                           done + got, count);
     for (std::size_t i = 0; i < samples; ++i) {
       unsigned v = sample_bytes == 2 ? (unsigned{chunk[2 * i]} << 8) | chunk[2 * i + 1] : chunk[i];
       if (v > maxval)
@@ -142,6 +146,30 @@ Result<OwnedImage> LoadImage(const char* path) {
     return image;
   }
   std::rewind(f);
+  // A PNG's size is in its IHDR chunk (bytes 16..23, big-endian): one larger than skyloc
+  // reads is said to be too large, not "not a PNG" (stb refuses it as corrupt).
+  {
+    constexpr unsigned char kPngMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    unsigned char head[24];
+    if (std::fread(head, 1, sizeof head, f) == sizeof head &&
+        std::memcmp(head, kPngMagic, sizeof kPngMagic) == 0 &&
+        std::memcmp(head + 12, "IHDR", 4) == 0) {
+      auto be32 = [](const unsigned char* p) {
+        return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
+               (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
+      };
+      const std::uint32_t w = be32(head + 16), h = be32(head + 20);
+      if (w > kMaxImageSide || h > kMaxImageSide) {
+        std::fclose(f);
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "PNG '%s' is %ux%u pixels: too large, skyloc reads images up to "
+                             "%dx%d; scale it down",
+                             path, static_cast<unsigned>(w), static_cast<unsigned>(h),
+                             kMaxImageSide, kMaxImageSide);
+      }
+    }
+    std::rewind(f);
+  }
   int width = 0, height = 0, channels = 0;
   if (stbi_info_from_file(f, &width, &height, &channels) == 0) {
     const char* why = stbi_failure_reason();

@@ -1,6 +1,7 @@
 #include "skyloc/platform/route_db.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -254,14 +255,9 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
         break;
       }
       offset += kRouteDbChunkHeaderBytes;
-      if (offset != size) {
-        problem = Status::Error(StatusCode::kDataLoss,
-                                "%zu unexpected bytes after the commit "
-                                "record at offset %zu",
-                                size - offset, offset);
-        break;
-      }
       r.committed = true;
+      r.valid_bytes = offset;
+      r.trailing_bytes = size - offset;
       break;
     }
     if (type != kChunkFrames || count == 0 ||
@@ -314,24 +310,34 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   }
   if (r.valid_bytes == 0)
     r.valid_bytes = kRouteDbHeaderBytes;
-  if (r.committed)
-    r.valid_bytes = size;
 
   if (!problem.ok()) {
-    if (policy == RouteDbLoadPolicy::kStrict)
-      return problem;
-    // Recovery accepts damage only at the tail: if an intact chunk header follows, the
-    // damage is in the middle of the route and dropping it would hide it.
+    // Damage followed by an intact chunk header is in the middle of the route: dropping
+    // the tail would hide the frames after it, so only --salvage does that.
+    std::size_t intact_after = 0;
     for (std::size_t o = offset + 4; o + kRouteDbChunkHeaderBytes <= size; o += 4) {
       if (ChunkHeaderIntact(b + o)) {
-        problem.AddContext(
-            "an intact chunk follows at offset %zu, so this is corruption, "
-            "not an interrupted teach;",
-            o);
-        return problem;
+        intact_after = o;
+        break;
       }
     }
+    if (intact_after != 0 && policy != RouteDbLoadPolicy::kSalvage) {
+      // Short: the Status holds 240 characters and the caller puts the path in front.
+      return Status::Error(StatusCode::kDataLoss,
+                           "%s; intact data follows at offset %zu: damaged mid-file, not cut "
+                           "short; 'route recover --salvage' keeps the %zu frames before it",
+                           problem.message(), intact_after, r.frames);
+    }
+    if (policy == RouteDbLoadPolicy::kStrict)
+      return problem;
     r.dropped_bytes = size - r.valid_bytes;
+    r.damaged_mid_file = intact_after != 0;
+  } else if (r.trailing_bytes > 0 && policy == RouteDbLoadPolicy::kStrict) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu trailing bytes after the commit record at offset %zu: the %zu "
+                         "frames are complete but something was appended; 'skyloc route "
+                         "recover' cuts the trailing bytes off",
+                         r.trailing_bytes, r.valid_bytes, r.frames);
   } else if (!r.committed && policy == RouteDbLoadPolicy::kStrict) {
     return Status::Error(StatusCode::kDataLoss,
                          "no commit record after chunk %zu (offset %zu): teach was interrupted "
@@ -345,17 +351,49 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
 
 namespace {
 
-Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
-  UniqueFd fd(::open(path, O_RDONLY | O_CLOEXEC));
+const char* FileKind(mode_t mode) {
+  if (S_ISFIFO(mode))
+    return "a FIFO";
+  if (S_ISCHR(mode) || S_ISBLK(mode))
+    return "a device node";
+  if (S_ISDIR(mode))
+    return "a directory";
+  if (S_ISLNK(mode))
+    return "a symbolic link";
+  if (S_ISSOCK(mode))
+    return "a socket";
+  return "not a regular file";
+}
+
+Status NotARegularFile(const char* path, mode_t mode) {
+  return Status::Error(StatusCode::kInvalidArgument,
+                       "%s is %s, not a route database file: name a regular file", path,
+                       FileKind(mode));
+}
+
+// Opens an existing route file. O_NONBLOCK: opening a FIFO must not wait for a writer;
+// anything but a regular file is refused before it is read.
+Status OpenRegularFile(const char* path, int flags, UniqueFd* out) {
+  UniqueFd fd(::open(path, flags | O_NONBLOCK | O_CLOEXEC));
   if (!fd.is_valid())
     return Status::FromErrno(errno, "cannot open %s", path);
   struct stat st {};
   if (::fstat(fd.get(), &st) != 0)
     return Status::FromErrno(errno, "cannot stat %s", path);
+  if (!S_ISREG(st.st_mode))
+    return NotARegularFile(path, st.st_mode);
+  *out = std::move(fd);
+  return Status::Ok();
+}
+
+Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", path);
   bytes->resize(static_cast<std::size_t>(st.st_size));
   std::size_t done = 0;
   while (done < bytes->size()) {
-    const ssize_t n = ::read(fd.get(), bytes->data() + done, bytes->size() - done);
+    const ssize_t n = ::read(fd, bytes->data() + done, bytes->size() - done);
     if (n < 0 && errno == EINTR)
       continue;
     if (n < 0)
@@ -366,6 +404,12 @@ Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
   }
   bytes->resize(done);
   return Status::Ok();
+}
+
+Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, &fd));
+  return ReadAll(path, fd.get(), bytes);
 }
 
 Status WriteAll(int fd, const std::uint8_t* p, std::size_t n) {
@@ -410,28 +454,62 @@ Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoa
   return s;
 }
 
-Status RecoverRouteDb(const char* path, RouteDbLoadReport* report) {
+Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage) {
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDWR, &fd));
+  // A running teach holds this lock while it writes: recovering under it would cut the
+  // chunk it is appending.
+  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    if (e == EWOULDBLOCK)
+      return Status::Error(StatusCode::kUnavailable,
+                           "%s is being written by a running teach (it holds the file's lock): "
+                           "stop that teach (SIGINT commits it) instead of recovering",
+                           path);
+    return Status::FromErrno(e, "cannot lock %s", path);
+  }
   std::vector<std::uint8_t> bytes;
-  SKYLOC_TRY(ReadWholeFile(path, &bytes));
+  SKYLOC_TRY(ReadAll(path, fd.get(), &bytes));
   RouteDbLoadReport r;
-  Status s = ParseRouteDb(bytes, nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &r);
+  Status s = ParseRouteDb(
+      bytes, nullptr,
+      salvage ? RouteDbLoadPolicy::kSalvage : RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &r);
   if (!s.ok())
     return s.AddContext("route database %s", path);
-  if (!r.committed) {
-    UniqueFd fd(::open(path, O_WRONLY | O_CLOEXEC));
-    if (!fd.is_valid())
-      return Status::FromErrno(errno, "cannot open %s for writing", path);
+  if (!r.committed && r.frames == 0) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "route database %s: no intact frame to recover (%zu bytes after the "
+                         "header are damaged or torn); the file is left as it was: teach the "
+                         "route again",
+                         path, r.dropped_bytes);
+  }
+  if (r.damaged_mid_file) {
+    // Salvage drops intact data after the damage: keep the original beside it first.
+    char copy[300];
+    std::snprintf(copy, sizeof copy, "%s.damaged", path);
+    UniqueFd out(::open(copy, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
+    if (!out.is_valid())
+      return Status::FromErrno(errno, "cannot keep the damaged original as %s (remove or move it)",
+                               copy);
+    if (Status w = WriteAll(out.get(), bytes.data(), bytes.size()); !w.ok())
+      return w.AddContext("%s", copy);
+    if (::fsync(out.get()) != 0)
+      return Status::FromErrno(errno, "cannot sync %s", copy);
+  }
+  if (!r.committed || r.trailing_bytes > 0) {
     if (::ftruncate(fd.get(), static_cast<off_t>(r.valid_bytes)) != 0 ||
         ::lseek(fd.get(), 0, SEEK_END) < 0)
       return Status::FromErrno(errno, "cannot cut the torn tail of %s", path);
+  }
+  if (!r.committed) {
     std::uint8_t commit[kRouteDbChunkHeaderBytes];
     EncodeChunkHeader(kChunkCommit, r.frames, 0, 0, Crc32({}), commit);
     // Not SKYLOC_TRY(x.AddContext()): that binds a reference to a destroyed temporary.
     if (Status w = WriteAll(fd.get(), commit, sizeof commit); !w.ok())
       return w.AddContext("%s", path);
-    if (::fdatasync(fd.get()) != 0)
-      return Status::FromErrno(errno, "cannot sync %s", path);
   }
+  if ((!r.committed || r.trailing_bytes > 0) && ::fdatasync(fd.get()) != 0)
+    return Status::FromErrno(errno, "cannot sync %s", path);
   if (report != nullptr)
     *report = r;
   return Status::Ok();
@@ -452,33 +530,68 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
     return Status::Error(StatusCode::kInvalidArgument, "flush_every %zu is invalid", flush_every);
   if (std::strlen(path) + 5 >= sizeof path_)
     return Status::Error(StatusCode::kInvalidArgument, "path too long: %s", path);
-  if (!overwrite && ::access(path, F_OK) == 0) {
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "%s already exists: not replacing a taught route", path);
+  // An existing route is replaced only with `overwrite`, and only if it is a regular file:
+  // a symlink, device node or FIFO at the path is not ours to replace.
+  bool replacing = false;
+  struct stat existing {};
+  if (::lstat(path, &existing) == 0) {
+    if (!S_ISREG(existing.st_mode)) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s is %s, not a route database file: teach does not replace it; "
+                           "give --route the path of a regular file",
+                           path, FileKind(existing.st_mode));
+    }
+    if (!overwrite) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s already exists: not replacing a taught route", path);
+    }
+    replacing = true;
+  } else if (errno != ENOENT) {
+    return Status::FromErrno(errno, "cannot check %s", path);
   }
   const std::size_t record_bytes = RouteDbRecordBytes(settings.dim);
   SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
 
-  char tmp[sizeof path_ + 8];
+  char tmp[sizeof write_path_];
   std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  UniqueFd fd(::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  // O_NOFOLLOW/O_NONBLOCK + the check below: a symlink or FIFO planted at FILE.tmp is
+  // refused, not followed or waited on.
+  UniqueFd fd(
+      ::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
   if (!fd.is_valid())
     return Status::FromErrno(errno, "cannot create %s", tmp);
+  struct stat created {};
+  if (::fstat(fd.get(), &created) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", tmp);
+  if (!S_ISREG(created.st_mode))
+    return NotARegularFile(tmp, created.st_mode);
+  // Held until the writer closes: `route recover` refuses the file meanwhile.
+  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
+    return Status::FromErrno(errno, "cannot lock %s", tmp);
   std::uint8_t header[kRouteDbHeaderBytes];
   EncodeHeader(settings, header);
   if (Status w = WriteAll(fd.get(), header, sizeof header); !w.ok())
     return w.AddContext("%s", tmp);
   if (::fsync(fd.get()) != 0)
     return Status::FromErrno(errno, "cannot sync %s", tmp);
-  if (::rename(tmp, path) != 0) {
-    const int e = errno;
-    ::unlink(tmp);
-    return Status::FromErrno(e, "cannot rename %s to %s", tmp, path);
+  if (!replacing) {
+    // A new route: it appears under its name at once, so a crash leaves a recoverable
+    // FILE.db. A route being replaced stays untouched until Commit() renames FILE.db.tmp
+    // over it: a teach killed early must not cost the old route.
+    if (::rename(tmp, path) != 0) {
+      const int e = errno;
+      ::unlink(tmp);
+      return Status::FromErrno(e, "cannot rename %s to %s", tmp, path);
+    }
+    SKYLOC_TRY(SyncDirectoryOf(path));
   }
-  SKYLOC_TRY(SyncDirectoryOf(path));
 
   fd_ = std::move(fd);
+  committed_ = false;
+  lost_ = 0;
   std::snprintf(path_, sizeof path_, "%s", path);
+  std::snprintf(write_path_, sizeof write_path_, "%s", replacing ? tmp : path);
+  replacing_ = replacing;
   settings_ = settings;
   flush_every_ = flush_every;
   pending_ = 0;
@@ -522,7 +635,7 @@ Status RouteDbWriter::WriteChunk(std::uint32_t type, std::uint64_t first, std::u
     // data (a torn chunk in the middle would make the file unloadable).
     if (before >= 0 && ::ftruncate(fd_.get(), before) == 0)
       (void)::lseek(fd_.get(), before, SEEK_SET);
-    return s.AddContext("route database %s", path_);
+    return s.AddContext("route database %s", write_path_);
   }
   return Status::Ok();
 }
@@ -540,10 +653,28 @@ Status RouteDbWriter::Flush() {
 }
 
 Status RouteDbWriter::Commit() {
-  SKYLOC_TRY(Flush());
-  SKYLOC_TRY(WriteChunk(kChunkCommit, durable_, 0, 0));
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  // The last chunk may not fit (disk full, RLIMIT_FSIZE); WriteChunk has cut it off again.
+  // The 32-byte commit record may still fit: commit the frames already on the disk.
+  Status flushed = Flush();
+  lost_ = pending_;
+  pending_ = 0;
+  if (Status c = WriteChunk(kChunkCommit, durable_, 0, 0); !c.ok()) {
+    fd_.reset();  // closed uncommitted: `route recover` keeps the durable frames
+    return c;
+  }
+  committed_ = true;
+  if (replacing_) {
+    // The new route is complete and durable: now, atomically, it replaces the old one.
+    if (::rename(write_path_, path_) != 0)
+      return Status::FromErrno(errno, "cannot rename %s to %s (the new route is complete in %s)",
+                               write_path_, path_, write_path_);
+    SKYLOC_TRY(SyncDirectoryOf(path_));
+    replacing_ = false;
+  }
   fd_.reset();
-  return Status::Ok();
+  return flushed;
 }
 
 }  // namespace skyloc

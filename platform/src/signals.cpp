@@ -33,8 +33,10 @@ Status Install(int signal_number, void (*handler)(int), const char* name) {
 Status InstallSignalHandlers() {
   SKYLOC_TRY(Install(SIGINT, OnStopSignal, "SIGINT"));
   SKYLOC_TRY(Install(SIGTERM, OnStopSignal, "SIGTERM"));
+  SKYLOC_TRY(Install(SIGHUP, OnStopSignal, "SIGHUP"));
   SKYLOC_TRY(Install(SIGUSR1, OnReportSignal, "SIGUSR1"));
   SKYLOC_TRY(Install(SIGPIPE, SIG_IGN, "SIGPIPE"));
+  SKYLOC_TRY(Install(SIGXFSZ, SIG_IGN, "SIGXFSZ"));
   return Status::Ok();
 }
 

@@ -4,9 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <string>
 
+#include "pipeline.h"
 #include "skyloc/dsp/sh_grid.h"
+#include "support/scratch_dir.h"
 
 namespace skyloc::app {
 namespace {
@@ -15,6 +18,12 @@ TEST(Config, ShippedFileStatesTheDefaults) {
   const std::string path = std::string(SKYLOC_SOURCE_DIR) + "/config/skyloc.toml";
   Result<Config> c = LoadConfigFile(path.c_str());
   ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(c->source, path);
+  c->source.clear();
+  // The installed file names a real camera; the built-in defaults simulate one (the only
+  // difference, and teach/repeat warn about it).
+  EXPECT_EQ(c->camera.kind, CameraKind::kV4l2);
+  c->camera.kind = CameraKind::kSim;
   EXPECT_TRUE(*c == DefaultConfig()) << "config/skyloc.toml no longer matches the defaults "
                                         "in config.h";
 }
@@ -125,7 +134,7 @@ const BadCase kBadCases[] = {
     {"[camera]\nframe_timeout_ms = 0\n", "[camera] frame_timeout_ms"},
     {"[camera]\nreconnect_timeout_ms = -1\n", "[camera] reconnect_timeout_ms"},
     {"[camera]\nkind = \"dataset\"\n", "[camera] dataset", ":1:"},
-    {"[camera]\nresolution = 3\n", "[camera] resolution"},
+    {"[camera]\nresolution = 3\n", "key resolution is not known in [camera]"},
     {"[segmentation]\nmethod = \"kmeans\"\n", "[segmentation] method"},
     {"[segmentation]\nthreshold = 255\n", "[segmentation] threshold"},
     {"[descriptor]\nbands = 0\n", "[descriptor] bands"},
@@ -134,7 +143,7 @@ const BadCase kBadCases[] = {
     {"[descriptor]\nrings = 10\n", "[descriptor] rings"},
     {"[descriptor]\ngrid = \"custom\"\n", "[descriptor] rings", ":1:"},
     {"[descriptor]\nbands = 64\ngrid = \"paper\"\n", "[descriptor] bands"},
-    {"[descriptor]\ndistance = \"l1\"\n", "[descriptor] distance"},
+    {"[descriptor]\ndistance = \"l1\"\n", "key distance is not known in [descriptor]"},
     {"[descriptor]\nnormalisation = \"max\"\n", "[descriptor] normalisation"},
     {"[seqslam]\nds = 0\n", "[seqslam] ds"},
     {"[capacities]\nroute_storage = \"float16\"\n", "[capacities] route_storage"},
@@ -145,7 +154,7 @@ const BadCase kBadCases[] = {
     {"[seqslam]\nvstep = 0\n", "[seqslam] vstep"},
     {"[seqslam]\nrwindow = -1\n", "[seqslam] rwindow"},
     {"[seqslam]\ncontrast_r = 1001\n", "[seqslam] contrast_r"},
-    {"[seqslam]\nmode = \"batch\"\n", "[seqslam] mode"},
+    {"[seqslam]\nmode = \"batch\"\n", "key mode is not known in [seqslam]"},
     {"[capacities]\nroute_frames = 0\n", "[capacities] route_frames"},
     {"[capacities]\nroute_frames = 1000001\n", "[capacities] route_frames"},
     {"[state]\nenter_confidence = 1.5\n", "[state] enter_confidence"},
@@ -179,7 +188,7 @@ const BadCase kBadCases[] = {
     {"[attitude]\nfilter_kp = -1\n", "[attitude] filter_kp"},
 };
 
-class ConfigRejects : public testing::TestWithParam<BadCase> {};
+class ConfigRejects : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(ConfigRejects, NamingTheKeyAndLine) {
   Result<Config> c = ParseConfig(GetParam().text, "robot.toml");
@@ -191,7 +200,7 @@ TEST_P(ConfigRejects, NamingTheKeyAndLine) {
       << message;
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryBadValue, ConfigRejects, testing::ValuesIn(kBadCases));
+INSTANTIATE_TEST_SUITE_P(EveryBadValue, ConfigRejects, ::testing::ValuesIn(kBadCases));
 
 TEST(Config, RejectsUnknownSection) {
   Result<Config> c = ParseConfig("[camera]\nfps = 10\n[gps]\nport = 1\n", "robot.toml");
@@ -204,6 +213,59 @@ TEST(Config, RejectsSectionThatIsNotATable) {
   Result<Config> c = ParseConfig("camera = 3\n", "robot.toml");
   ASSERT_FALSE(c.ok());
   EXPECT_NE(std::string(c.status().message()).find("camera"), std::string::npos);
+}
+
+// A key above the first [section] header is a misplaced key, not an unknown section.
+TEST(Config, AKeyOutsideEverySectionIsNamedAsAKey) {
+  Result<Config> c = ParseConfig("kind = \"v4l2\"\n[camera]\nfps = 10\n", "robot.toml");
+  ASSERT_FALSE(c.ok());
+  const std::string m = c.status().message();
+  EXPECT_NE(m.find("robot.toml:1: key kind is not known at the top level"), std::string::npos) << m;
+  EXPECT_EQ(m.find("is not a known section"), std::string::npos) << m;
+}
+
+// A key in the wrong section: "key X is not known in [section]".
+TEST(Config, AKeyInTheWrongSectionIsNamedWithItsSection) {
+  Result<Config> c = ParseConfig("[status]\nfps = 10\n", "robot.toml");
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(
+      std::string(c.status().message()).find("robot.toml:2: key fps is not known in [status]"),
+      std::string::npos)
+      << c.status().message();
+}
+
+// lens_file is relative to the config file (systemd runs skyloc in /), and a missing one
+// is named with the config file and key.
+TEST(Config, LensFileIsRelativeToTheConfigFile) {
+  skyloc::testing::ScratchDir dir("skyloc_config_");
+  const std::string path = dir.path() + "/robot.toml";
+  std::ofstream(path) << "[camera]\nlens_file = \"lens.toml\"\n";
+  Result<Config> c = LoadConfigFile(path.c_str());
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(c->camera.lens_file, dir.path() + "/lens.toml");
+  Result<dsp::LensParams> lens = LensFromConfig(*c);
+  ASSERT_FALSE(lens.ok());
+  const std::string m = lens.status().message();
+  EXPECT_NE(m.find("[camera] lens_file in " + path), std::string::npos) << m;
+  EXPECT_NE(m.find(dir.path() + "/lens.toml"), std::string::npos) << m;
+}
+
+// A dataset's own camera.toml for another frame size is named as that file, not as
+// "[camera] width x height" (which the dataset overrides).
+TEST(Config, ADatasetCameraFileOfAnotherSizeIsNamed) {
+  Config c = DefaultConfig();
+  c.camera.width = 96;
+  c.camera.height = 96;
+  c.camera.lens_file = std::string(SKYLOC_SOURCE_DIR) + "/config/camera-equidistant-185.toml";
+  c.camera.lens_file_from_dataset = true;
+  Result<dsp::LensParams> lens = LensFromConfig(c);
+  ASSERT_FALSE(lens.ok());
+  const std::string m = lens.status().message();
+  EXPECT_NE(m.find("the dataset's camera file " + c.camera.lens_file +
+                   " is for 640x480 images but its frames are 96x96"),
+            std::string::npos)
+      << m;
+  EXPECT_EQ(m.find("[camera] width x height"), std::string::npos) << m;
 }
 
 TEST(Config, RejectsBrokenTomlWithPosition) {
@@ -236,6 +298,16 @@ TEST(Config, NonAsciiOnlyInStringsAndComments) {
   ASSERT_FALSE(header.ok());
   EXPECT_NE(std::string(header.status().message()).find("robot.toml:1:3:"), std::string::npos)
       << header.status().message();
+}
+
+// --config DIR is an error naming it, not an empty configuration of defaults.
+TEST(Config, ADirectoryIsNotAConfigFile) {
+  skyloc::testing::ScratchDir dir("skyloc_config_dir_");
+  Result<Config> c = LoadConfigFile(dir.path().c_str());
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(std::string(c.status().message()).find(dir.path() + " is a directory"),
+            std::string::npos)
+      << c.status().message();
 }
 
 TEST(Config, MissingFileNamesThePath) {

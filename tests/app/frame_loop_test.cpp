@@ -379,6 +379,37 @@ TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
   EXPECT_NE(status_.last_state(), drivers::LocalisationState::kLocalised);
 }
 
+// A recording's frame of another size or format (the dataset camera's kDataLoss) is a
+// fatal error naming it, not one more skipped "capture error" with exit 0.
+TEST_F(FrameLoopFaults, ARecordedFrameThatIsWrongIsFatal) {
+  FlakyCamera camera(12, 1, StatusCode::kDataLoss);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  options.recorded = true;
+  options.max_frames = 50;
+  LoopSummary summary;
+  const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
+  EXPECT_EQ(s.code(), StatusCode::kDataLoss);
+  EXPECT_NE(std::string(s.message()).find("injected fault at call 12"), std::string::npos)
+      << s.message();
+  EXPECT_EQ(summary.frames, 12u);
+  EXPECT_TRUE(status_.is_safe());
+}
+
+// The same fault from a live camera is skipped and counted: its next frame may be fine.
+TEST_F(FrameLoopFaults, ALiveCamerasCorruptFrameIsSkipped) {
+  FlakyCamera camera(12, 1, StatusCode::kDataLoss);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  LoopOptions options;
+  options.max_frames = 50;
+  LoopSummary summary;
+  ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
+  EXPECT_EQ(summary.capture_errors, 1u);
+  EXPECT_EQ(summary.frames, 50u);
+}
+
 TEST_F(FrameLoopFaults, AStalledCameraIsFatalAndNamed) {
   FlakyCamera camera(5, 1000, StatusCode::kDeadlineExceeded);
   ASSERT_TRUE(camera.Open().ok());

@@ -143,6 +143,28 @@ TEST_F(ImageFileTest, ErrorsNameTheFileAndTheProblem) {
   auto s = LoadImage(Path("short.pgm").c_str());
   ASSERT_FALSE(s.ok());
   EXPECT_NE(std::string(s.status().message()).find("short.pgm"), std::string::npos);
+  // The samples that are there are counted (not the whole 4 KiB blocks read so far).
+  EXPECT_NE(std::string(s.status().message()).find("2 of 16 samples present"), std::string::npos)
+      << s.status().message();
+}
+
+// A PNG larger than skyloc reads is "too large" with the limit, not "not a PNG".
+TEST_F(ImageFileTest, APngTooLargeIsSaidToBeTooLarge) {
+  for (const std::uint32_t width : {70000u, 1u << 25}) {
+    std::string png("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16);
+    for (const std::uint32_t v : {width, 10u})
+      for (int shift = 24; shift >= 0; shift -= 8)
+        png += static_cast<char>((v >> shift) & 0xff);
+    png += std::string("\x08\0\0\0\0\0\0\0\0", 9);  // grey 8-bit; CRC not checked here
+    WriteBytes(Path("huge.png"), png);
+    auto r = LoadImage(Path("huge.png").c_str());
+    ASSERT_FALSE(r.ok());
+    const std::string m = r.status().message();
+    EXPECT_NE(m.find("huge.png"), std::string::npos) << m;
+    EXPECT_NE(m.find(std::to_string(width) + "x10 pixels: too large"), std::string::npos) << m;
+    EXPECT_NE(m.find("65535x65535"), std::string::npos) << m;
+    EXPECT_EQ(m.find("not a PNG"), std::string::npos) << m;
+  }
 }
 
 }  // namespace

@@ -73,7 +73,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
 
   for (RouteDbLoadPolicy policy :
-       {RouteDbLoadPolicy::kStrict, RouteDbLoadPolicy::kRecoverInterrupted}) {
+       {RouteDbLoadPolicy::kStrict, RouteDbLoadPolicy::kRecoverInterrupted,
+        RouteDbLoadPolicy::kSalvage}) {
     RouteDbLoadReport report;
     const Status s = ParseRouteDb(bytes, nullptr, policy, &frames, &report);
     if (!s.ok()) {

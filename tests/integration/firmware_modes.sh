@@ -32,13 +32,16 @@ expect_rc 0 "teach" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --fram
 [ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "teach printed $(wc -l <"$WORK/out") JSON lines, expected 150"
 grep -q '"route_frames":150' "$WORK/out" || fail "teach JSON lacks route_frames 150"
 expect_err "150 frames committed" "teach summary"
+# one start-up line names the camera, the status output and the route; a simulated camera
+# in a live mode is a loud warning
+expect_err "skyloc teach: camera sim (SIMULATED world \"street\", seed 1), GREY 96x96 @ 200 fps; status sim (SIMULATED, no GPIO line); route $DB (new); config $CONFIG" "start-up line"
+expect_err "WARNING: the camera is SIMULATED" "teach on the simulated camera"
 expect_rc 0 "route info" -- "${RUN[@]}" route info "$DB"
 grep -q "150 frames in 15 chunks, committed" "$WORK/out" || fail "route info: $(cat "$WORK/out")"
 
 # 2. a taught route is never replaced silently.
 expect_rc 1 "teach over an existing route" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 5
-expect_err "already exists" "teach over an existing route"
-expect_err "--force" "teach over an existing route"
+expect_err "already exists: not replacing a taught route; pass --force to replace it" "teach over an existing route"
 
 # 3. repeat the same street: one JSON line per frame with every key; it localises.
 expect_rc 0 "repeat" -- "${RUN[@]}" repeat --route "$DB" --config "$CONFIG" --frames 150
@@ -49,6 +52,8 @@ done
 grep -q '"state":"LOCALISED"' "$WORK/out" || fail "repeat never localised"
 expect_err "p99_us" "repeat latency table at exit"
 expect_err "precision at 100% recall" "repeat evaluation"
+expect_err "route $DB (150 frames)" "repeat start-up line"
+expect_err "WARNING: the status output is SIMULATED" "repeat with the simulated status output"
 
 # 4. settings that differ from the taught ones are refused, naming the setting.
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
@@ -60,6 +65,8 @@ printf '[seqslam]\nds = 0\n' >"$WORK/bad.toml"
 expect_rc 1 "bad config" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/bad.toml"
 expect_err "bad.toml:2: \[seqslam\] ds" "bad config"
 expect_rc 2 "missing --route" -- "${RUN[@]}" repeat --config "$CONFIG"
+expect_rc 1 "--config DIR" -- "${RUN[@]}" teach --route "$WORK/dir.db" --config "$WORK" --frames 5
+expect_err "config $WORK is a directory" "--config DIR"
 
 # 6. SIGTERM during an endless teach: exit 0, every frame so far committed.
 "${RUN[@]}" teach --route "$WORK/term.db" --config "$CONFIG" >"$WORK/term.out" 2>"$WORK/term.err" &
@@ -85,6 +92,7 @@ kill -0 $pid 2>/dev/null || fail "repeat died on SIGUSR1"
 kill -TERM $pid
 wait $pid || fail "repeat after SIGTERM exited non-zero"
 [ "$(grep -c p99_us "$WORK/usr1.err")" -ge 2 ] || fail "SIGUSR1 table missing: $(cat "$WORK/usr1.err")"
+grep -q "latency after [0-9]* frames (SIGUSR1" "$WORK/usr1.err" || fail "SIGUSR1 table has no label: $(cat "$WORK/usr1.err")"
 
 # 8. kill -9 during teach: the file is refused as interrupted, recovered, then usable.
 "${RUN[@]}" teach --route "$WORK/kill.db" --config "$CONFIG" >/dev/null 2>&1 &
@@ -110,6 +118,20 @@ if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/ref" --frames 60 -
   expect_err "precision at 100% recall" "replay evaluation"
   expect_rc 1 "replay of a missing dataset" -- "${RUN[@]}" replay "$WORK/nothing" --route "$WORK/ds.db"
   expect_err "nothing" "replay of a missing dataset"
+  # a frame of another size in a recording: a data-loss error naming the file, exit 1
+  # (teach and replay), not a silently skipped frame.
+  cp -r "$WORK/qry" "$WORK/odd"
+  if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/small" --frames 2 --width 64 \
+    --height 64 >/dev/null 2>&1; then
+    odd=$(sed -n '12p' "$WORK/odd/frames.csv" | cut -d, -f2)
+    cp "$WORK/small/frames/$(sed -n '2p' "$WORK/small/frames.csv" | cut -d, -f2)" "$WORK/odd/frames/$odd"
+    expect_rc 1 "replay with a frame of another size" -- "${RUN[@]}" replay "$WORK/odd" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
+    expect_err "$odd) is 64x64 .*, expected 96x96" "replay with a frame of another size"
+    expect_rc 1 "teach with a frame of another size" -- "${RUN[@]}" teach --route "$WORK/odd.db" --config "$CONFIG" --dataset "$WORK/odd"
+    expect_err "$odd) is 64x64 .*, expected 96x96" "teach with a frame of another size"
+  else
+    fail "skyloc simulate could not write the 64x64 dataset"
+  fi
 else
   fail "skyloc simulate could not write the replay datasets"
 fi
@@ -127,6 +149,16 @@ sed 's/^route_frames = 5000/route_frames = 50/' "$CONFIG" >"$WORK/cap.toml"
 expect_rc 0 "teach up to the capacity" -- "${RUN[@]}" teach --route "$WORK/full.db" --config "$WORK/cap.toml" --frames 60
 expect_err "the route is full" "teach capacity"
 expect_err "50 frames committed" "teach capacity"
+
+# 11. disk full during teach (RLIMIT_FSIZE: 20 KiB): the chunk that does not fit is lost,
+# the frames before it are committed and said so; the route loads strictly.
+(ulimit -f 20 && exec "${RUN[@]}" teach --route "$WORK/fsize.db" --config "$CONFIG" --frames 300) \
+  >/dev/null 2>"$WORK/err"
+rc=$?
+[ $rc -eq 1 ] || fail "teach on a full disk exited $rc, expected 1: $(cat "$WORK/err")"
+expect_err "120 frames kept and committed; the last 10 did not fit" "teach on a full disk"
+expect_rc 0 "route info after a full disk" -- "${RUN[@]}" route info "$WORK/fsize.db"
+grep -q "120 frames in 12 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
 
 if [ $failures -ne 0 ]; then
   echo "$failures check(s) failed" >&2

@@ -5,6 +5,9 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -147,6 +150,72 @@ TEST_F(RouteDbTest, RefusesToReplaceATaughtRoute) {
   EXPECT_NE(std::string(s.message()).find("already exists"), std::string::npos);
   EXPECT_TRUE(Parse(Bytes()).ok());
   EXPECT_EQ(frames_.size(), 3u);
+}
+
+// teach --force: the old route stays whole (loadable, every frame) until the new one is
+// committed; a teach killed before that costs nothing. The frames go to FILE.tmp, which
+// the commit renames over the old route.
+TEST_F(RouteDbTest, ForceKeepsTheOldRouteUntilTheNewOneCommits) {
+  Teach(25, 10, true);
+  const std::vector<std::uint8_t> old_route = Bytes();
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, true).ok());
+    EXPECT_TRUE(w.replacing());
+    EXPECT_EQ(std::string(w.write_path()), path_ + ".tmp");
+    for (std::size_t i = 0; i < 15; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      ASSERT_TRUE(w.Append(meta, d).ok());
+    }
+    EXPECT_EQ(Bytes(), old_route) << "the old route changed before the new one committed";
+  }  // closed without a commit: a killed teach
+  EXPECT_EQ(Bytes(), old_route);
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 25);
+
+  RouteDbWriter w;
+  ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, true).ok());
+  for (std::size_t i = 0; i < 7; ++i) {
+    RouteFrameMeta meta;
+    float d[kDim];
+    FrameContent(i, &meta, d);
+    ASSERT_TRUE(w.Append(meta, d).ok());
+  }
+  ASSERT_TRUE(w.Commit().ok());
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 7);
+  EXPECT_NE(::access((path_ + ".tmp").c_str(), F_OK), 0) << "FILE.tmp left behind";
+}
+
+// A symlink, FIFO (or device node) at the route path is refused even with --force; it is
+// left as it was, never replaced by a regular file.
+TEST_F(RouteDbTest, RefusesToReplaceASymlinkOrFifo) {
+  const std::string target = dir_ + "/target.db";
+  {
+    std::ofstream out(target);
+    out << "not ours";
+  }
+  ASSERT_EQ(::symlink(target.c_str(), path_.c_str()), 0);
+  RouteDbWriter w;
+  Status s = w.Create(path_.c_str(), Settings(), 10, true);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("is a symbolic link"), std::string::npos) << s.message();
+  struct stat st {};
+  ASSERT_EQ(::lstat(path_.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+  std::ifstream in(target);
+  std::string content;
+  std::getline(in, content);
+  EXPECT_EQ(content, "not ours");
+
+  const std::string fifo = dir_ + "/fifo.db";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  s = w.Create(fifo.c_str(), Settings(), 10, true);
+  EXPECT_NE(std::string(s.message()).find("is a FIFO"), std::string::npos) << s.message();
+  ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
 }
 
 TEST_F(RouteDbTest, UncommittedFileNeedsRecovery) {
@@ -304,6 +373,171 @@ TEST_F(RouteDbTest, EveryBitFlipIsRejectedNamingTheChunk) {
       ExpectFrames(frames_, 10);
     }
   }
+}
+
+// Junk appended after a complete route is trailing bytes, not an interrupted teach: the
+// strict load says so, info-style loading reports the route as committed, recover cuts
+// the junk off.
+TEST_F(RouteDbTest, TrailingBytesAfterTheCommitRecordAreNamedAsSuch) {
+  Teach(25, 10, true);
+  std::vector<std::uint8_t> bytes = Bytes();
+  const std::size_t committed_size = bytes.size();
+  bytes.insert(bytes.end(), 8, 0x5a);
+  Status strict = Parse(bytes);
+  ASSERT_FALSE(strict.ok());
+  const std::string m = strict.message();
+  EXPECT_NE(m.find("8 trailing bytes after the commit record at offset " +
+                   std::to_string(committed_size)),
+            std::string::npos)
+      << m;
+  EXPECT_EQ(m.find("interrupted"), std::string::npos) << m;
+  RouteDbLoadReport report;
+  ASSERT_TRUE(Parse(bytes, RouteDbLoadPolicy::kRecoverInterrupted, &report).ok());
+  EXPECT_TRUE(report.committed);
+  EXPECT_EQ(report.trailing_bytes, 8u);
+  EXPECT_EQ(report.dropped_bytes, 0u);
+
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<long>(bytes.size()));
+  }
+  ASSERT_TRUE(RecoverRouteDb(path_.c_str(), &report).ok());
+  EXPECT_EQ(Bytes().size(), committed_size);
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 25);
+}
+
+// Damage in the middle (an intact chunk follows) names the chunk and its offset in one
+// readable sentence and points at --salvage, which keeps the chunks before the damage
+// (and the damaged original beside it); plain recover refuses and changes nothing.
+TEST_F(RouteDbTest, MidFileDamageIsNamedAndSalvageKeepsTheChunksBefore) {
+  Teach(30, 10, true);
+  std::vector<std::uint8_t> bytes = Bytes();
+  const std::size_t chunk2 = ChunkOffset(2, 10, 30);
+  bytes[chunk2 + kRouteDbChunkHeaderBytes + 5] ^= 0x10;
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<long>(bytes.size()));
+  }
+  Status s = LoadRouteDb(path_.c_str(), nullptr, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  ASSERT_FALSE(s.ok());
+  std::string m = s.message();
+  EXPECT_NE(m.find("chunk 2 at offset " + std::to_string(chunk2) + ": checksum mismatch"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("damaged mid-file"), std::string::npos) << m;
+  EXPECT_NE(m.find("--salvage"), std::string::npos) << m;
+  EXPECT_EQ(m.find(";:"), std::string::npos) << m;
+
+  RouteDbLoadReport report;
+  s = RecoverRouteDb(path_.c_str(), &report);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.message()).find("--salvage"), std::string::npos) << s.message();
+  EXPECT_EQ(Bytes(), bytes) << "a refused recovery changed the file";
+
+  s = RecoverRouteDb(path_.c_str(), &report, true);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_TRUE(report.damaged_mid_file);
+  EXPECT_EQ(report.frames, 10u);
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 10);
+  std::ifstream kept(path_ + ".damaged", std::ios::binary);
+  EXPECT_EQ(std::vector<std::uint8_t>(std::istreambuf_iterator<char>(kept),
+                                      std::istreambuf_iterator<char>()),
+            bytes);
+}
+
+// recover must not cut the chunk a running teach is appending: the writer holds a lock.
+TEST_F(RouteDbTest, RecoverRefusesAFileATeachIsWriting) {
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, false).ok());
+    for (std::size_t i = 0; i < 15; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      ASSERT_TRUE(w.Append(meta, d).ok());
+    }
+    const std::size_t size = Bytes().size();
+    RouteDbLoadReport report;
+    const Status s = RecoverRouteDb(path_.c_str(), &report);
+    EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();
+    EXPECT_NE(std::string(s.message()).find("running teach"), std::string::npos) << s.message();
+    EXPECT_EQ(Bytes().size(), size);
+  }
+  // The writer closed without committing: now recovery may run.
+  RouteDbLoadReport report;
+  ASSERT_TRUE(RecoverRouteDb(path_.c_str(), &report).ok());
+  EXPECT_EQ(report.frames, 10u);
+}
+
+// A FIFO (or device) as the route path is refused at once; opening it must not wait for
+// a writer that never comes.
+TEST_F(RouteDbTest, AFifoIsRefusedWithoutWaiting) {
+  ASSERT_EQ(::mkfifo(path_.c_str(), 0600), 0);
+  ::alarm(10);  // a hang fails the test instead of blocking ctest
+  RouteDbLoadReport report;
+  Status s =
+      LoadRouteDb(path_.c_str(), nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &report);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.message()).find("is a FIFO"), std::string::npos) << s.message();
+  s = RecoverRouteDb(path_.c_str(), &report);
+  EXPECT_NE(std::string(s.message()).find("is a FIFO"), std::string::npos) << s.message();
+  ::alarm(0);
+}
+
+// Nothing intact to keep is a failure, not a "recovered: 0 frames" success.
+TEST_F(RouteDbTest, RecoverWithNoIntactFrameIsAnError) {
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, false).ok());
+  }
+  const std::vector<std::uint8_t> before = Bytes();
+  RouteDbLoadReport report;
+  const Status s = RecoverRouteDb(path_.c_str(), &report);
+  EXPECT_EQ(s.code(), StatusCode::kDataLoss) << s.message();
+  EXPECT_NE(std::string(s.message()).find("no intact frame"), std::string::npos) << s.message();
+  EXPECT_EQ(Bytes(), before);
+}
+
+// A full disk during teach, simulated with RLIMIT_FSIZE in a child (no root, no mount):
+// the 4th chunk does not fit, but the 32-byte commit record does, so the 30 frames already
+// on the disk are committed and the 10 of the last chunk reported lost.
+TEST_F(RouteDbTest, DiskFullDuringTeachCommitsTheFramesOnTheDisk) {
+  constexpr std::size_t kFlush = 10;
+  const std::size_t limit = ChunkOffset(4, kFlush, 1000) + 100;  // 3 chunks + 100 bytes
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);  // EFBIG instead of death, as skyloc's handlers set it
+    const rlimit lim{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
+    if (::setrlimit(RLIMIT_FSIZE, &lim) != 0)
+      ::_exit(2);
+    RouteDbWriter w;
+    if (!w.Create(path_.c_str(), Settings(), kFlush, false).ok())
+      ::_exit(3);
+    std::size_t i = 0;
+    for (; i < 1000; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      if (!w.Append(meta, d).ok())
+        break;
+    }
+    if (i != 39)  // the 40th frame's flush failed
+      ::_exit(4);
+    const Status s = w.Commit();
+    if (s.ok() || !w.committed() || w.frames_durable() != 30 || w.frames_lost() != 10)
+      ::_exit(5);
+    ::_exit(0);
+  }
+  int wstatus = 0;
+  ASSERT_EQ(::waitpid(child, &wstatus, 0), child);
+  ASSERT_TRUE(WIFEXITED(wstatus)) << wstatus;
+  ASSERT_EQ(WEXITSTATUS(wstatus), 0);
+  const Status strict = Parse(Bytes());
+  ASSERT_TRUE(strict.ok()) << strict.message();
+  ExpectFrames(frames_, 30);
 }
 
 // The writer is killed with SIGKILL at a random moment while teaching, 20 times. The child

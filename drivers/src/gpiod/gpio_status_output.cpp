@@ -40,7 +40,7 @@ Status GpioStatusOutput::Open() {
     const int saved = errno != 0 ? errno : ENOENT;
     return Status::FromErrno(saved,
                              "GPIO chip '%s' cannot be opened (list chips with gpiodetect; set "
-                             "status.gpio.chip in the configuration)",
+                             "[status] chip in the configuration)",
                              config_.chip);
   }
 

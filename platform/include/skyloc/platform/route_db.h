@@ -86,6 +86,10 @@ enum class RouteDbLoadPolicy : std::uint8_t {
   // damaged or incomplete tail is dropped and reported. Damage followed by an intact
   // chunk is still an error: that is corruption, not an interrupted write.
   kRecoverInterrupted,
+  // Like kRecoverInterrupted, but damage in the middle of the file is accepted too: every
+  // intact chunk before the first damage is kept, everything from the damage on is
+  // dropped (`skyloc route recover --salvage`).
+  kSalvage,
 };
 
 struct RouteDbLoadReport {
@@ -94,7 +98,12 @@ struct RouteDbLoadReport {
   std::size_t chunks = 0;  // intact frame chunks
   bool committed = false;
   std::size_t valid_bytes = 0;    // the intact prefix (header + chunks [+ commit])
-  std::size_t dropped_bytes = 0;  // kRecoverInterrupted: bytes of the torn tail
+  std::size_t dropped_bytes = 0;  // kRecoverInterrupted/kSalvage: bytes of the torn tail
+  // kSalvage: the damage was in the middle (intact chunks followed it and were dropped).
+  bool damaged_mid_file = false;
+  // Bytes after a valid commit record (something appended to a complete route): the
+  // route is committed; a strict load refuses the file, recovery cuts them off.
+  std::size_t trailing_bytes = 0;
 };
 
 // Parses a whole file's bytes (the loader and the fuzz target share this). `expected`
@@ -108,9 +117,12 @@ Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoa
                    RouteFrames* out, RouteDbLoadReport* report);
 
 // Makes an interrupted file loadable strictly again: keeps the intact chunks, cuts the
-// torn tail and appends the commit record. Fails (changing nothing) if the file is
-// corrupt in a way recovery must not hide.
-Status RecoverRouteDb(const char* path, RouteDbLoadReport* report);
+// torn tail and appends the commit record; a committed file with trailing bytes loses
+// them. Fails (changing nothing) if the file is corrupt in a way recovery must not hide
+// (unless `salvage`: then the intact chunks before mid-file damage are kept, and the
+// original is first copied to FILE.damaged), if no frame is intact, if the path is not a
+// regular file, or if a running teach holds the file's lock.
+Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage = false);
 
 // Writes a route database during teach. Append() copies into a chunk buffer allocated by
 // Create(); every `flush_every` frames the chunk is written with one write() and made
@@ -123,16 +135,29 @@ class RouteDbWriter {
   RouteDbWriter& operator=(const RouteDbWriter&) = delete;
 
   // Creates `path` atomically (path.tmp, fsync, rename, fsync of the directory). An
-  // existing file is kept and reported unless `overwrite`.
+  // existing file is kept and reported unless `overwrite`; with it, the frames go to
+  // path.tmp and Commit() renames that over the old route, so the old route stays whole
+  // until the new one is committed. A path that is a symlink, device node, FIFO or
+  // directory is refused, `overwrite` or not. The open file holds an
+  // exclusive flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
   Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor);
   // Writes the buffered frames as one chunk and waits until they are on the disk.
   Status Flush();
-  // Flush, append the commit record, sync, close. After this the writer is closed.
+  // Flush, append the commit record, sync, close. After this the writer is closed. When
+  // the last chunk cannot be written (disk full), the commit record is still appended for
+  // the frames already on the disk: the error is returned, committed() is true and
+  // frames_lost() says how many frames did not fit. When even the commit record cannot
+  // be written, committed() is false and `skyloc route recover` keeps frames_durable().
   Status Commit();
+  bool committed() const { return committed_; }
+  std::uint64_t frames_lost() const { return lost_; }
 
   bool is_open() const { return fd_.is_valid(); }
+  // The file the frames go to: the route's path, or path.tmp while replacing a route.
+  const char* write_path() const { return write_path_; }
+  bool replacing() const { return replacing_; }
   std::uint64_t frames_appended() const { return appended_; }
   // Frames known to be on the disk.
   std::uint64_t frames_durable() const { return durable_; }
@@ -143,6 +168,10 @@ class RouteDbWriter {
 
   UniqueFd fd_;
   char path_[256] = {};
+  char write_path_[264] = {};
+  bool replacing_ = false;
+  bool committed_ = false;
+  std::uint64_t lost_ = 0;
   RouteDbSettings settings_;
   FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
   std::size_t flush_every_ = 0;
