@@ -4,6 +4,7 @@
 // vocabulary from `skyloc fabmap-train`; host builds only, docs/FABMAP.md). Writes matches.csv,
 // metrics.json, pr.svg and correspondence.svg into --out (docs/SEQSLAM.md, "Evaluation").
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -11,6 +12,8 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,14 +22,18 @@
 
 #include "commands.h"
 #include "config.h"
+#include "parallel.h"
 #include "pipeline.h"
+#include "progress.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
+#include "skyloc/dsp/seqslam_batch.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/platform/status.h"
@@ -71,6 +78,11 @@ constexpr const char* kUsage =
     "                         (equirectangular for 2:1 images), as skyloc describe\n"
     "  --lens MODEL, --fov DEG  sky: override the lens model / field of view\n"
     "  --bands N              sky: spherical-harmonic bands (default 120)\n"
+    "  --jobs N               threads for the descriptors and the batch matcher (default:\n"
+    "                         all cores); the results do not depend on it\n"
+    "  --vanilla-precision float|byte  vanilla with the batch matcher: the descriptor's\n"
+    "                         values as floats, or in 8 bits (steps of 1/16, summed with\n"
+    "                         SSE2/NEON byte instructions; docs/SEQSLAM.md) (default float)\n"
     "\n"
     "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
     "reference recorded nearest to it, correct within --frame-tolerance frames.\n"
@@ -117,6 +129,8 @@ struct EvalOptions {
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
   int bands = 120;
+  int jobs = DefaultJobs();
+  bool vanilla_bytes = false;  // --vanilla-precision byte
 };
 
 bool ParseIntArg(const char* s, int* out) {
@@ -229,6 +243,17 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
       if (!ParseDoubleArg(v, &fov) || fov <= 0 || fov > 360)
         return fail("--fov '%s': give a field of view in (0, 360] degrees", v);
       o->fov_deg = fov;
+    } else if (a == "--jobs") {
+      if (!ParseIntArg(v, &o->jobs) || o->jobs < 1 || o->jobs > 1024)
+        return fail("--jobs '%s': give a number of threads, 1..1024", v);
+    } else if (a == "--vanilla-precision") {
+      if (std::strcmp(v, "float") == 0) {
+        o->vanilla_bytes = false;
+      } else if (std::strcmp(v, "byte") == 0) {
+        o->vanilla_bytes = true;
+      } else {
+        return fail("--vanilla-precision '%s': use float or byte", v);
+      }
     } else if (a == "--bands") {
       if (!ParseIntArg(v, &o->bands) || o->bands < 1 || o->bands > 512)
         return fail("--bands '%s': give 1..512", v);
@@ -272,7 +297,8 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
 struct Descriptors {
   int dim = 0;
   int count = 0;
-  std::vector<float> values;  // count x dim
+  std::vector<float> values;        // count x dim
+  std::vector<std::uint8_t> bytes;  // count x dim, dsp::QuantiseToBytes (vanilla, batch)
   std::span<const float> all() const { return values; }
 };
 
@@ -282,7 +308,8 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
   SKYLOC_TRY(camera.Open());
   SKYLOC_TRY(camera.Start());
   Descriptors d;
-  dsp::SkyDescriptor sky;
+  dsp::Lens lens_of_run;
+  dsp::SkyDescriptorOptions options_of_run;
   if (method == Method::kSky) {
     // The lens: --camera, else the dataset's camera.toml, else describe's default for a
     // square-ish image (equidistant, 185 degrees); --lens/--fov override any of them.
@@ -313,41 +340,86 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
       lp.model = *o.lens;
     if (o.fov_deg)
       lp.fov_deg = *o.fov_deg;
-    dsp::Lens lens;
-    SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens));
-    dsp::SkyDescriptorOptions so;
-    so.bands = o.bands;
-    const dsp::DescriptorError de = sky.Init(lens, so);
-    if (!de.ok()) {
-      return Status::Error(StatusCode::kInvalidArgument, "sky descriptor for %s: %s", dir.c_str(),
-                           de.message);
-    }
+    SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens_of_run));
+    options_of_run.bands = o.bands;
     d.dim = o.bands;
   } else {
     d.dim = dsp::kVanillaDescriptorSize;
   }
-  const std::size_t n = camera.dataset().frames.size();
+  // The frames are decoded and described on --jobs threads, each with its own sky
+  // descriptor (it holds scratch); a frame's descriptor does not depend on the thread.
+  const drivers::Dataset& dataset = camera.dataset();
+  const drivers::CameraInfo info = camera.info();
+  const std::size_t n = dataset.frames.size();
   d.values.resize(n * static_cast<std::size_t>(d.dim));
-  for (std::size_t i = 0; i < n; ++i) {
-    Result<drivers::Frame> frame = camera.Capture(Nanoseconds(0));
-    if (!frame.ok())
-      return frame.status();
-    std::span<float> out(d.values.data() + i * static_cast<std::size_t>(d.dim),
-                         static_cast<std::size_t>(d.dim));
-    if (method == Method::kSky) {
-      const dsp::DescriptorError de = sky.Compute(frame->image, out);
+  const int workers = std::clamp(o.jobs, 1, std::max(1, static_cast<int>(n)));
+  std::vector<std::unique_ptr<dsp::SkyDescriptor>> skies;
+  if (method == Method::kSky) {
+    for (int w = 0; w < workers; ++w) {
+      skies.push_back(std::make_unique<dsp::SkyDescriptor>());
+      const dsp::DescriptorError de = skies.back()->Init(lens_of_run, options_of_run);
       if (!de.ok()) {
-        return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
-                             camera.dataset().FramePath(i).c_str(), de.message);
-      }
-    } else {
-      const dsp::VanillaError ve = dsp::VanillaDescriptor(frame->image, out);
-      if (ve != dsp::VanillaError::kOk) {
-        return Status::Error(StatusCode::kDataLoss, "%s: %s", camera.dataset().FramePath(i).c_str(),
-                             dsp::VanillaErrorMessage(ve));
+        return Status::Error(StatusCode::kInvalidArgument, "sky descriptor for %s: %s", dir.c_str(),
+                             de.message);
       }
     }
   }
+  std::mutex failure_mutex;
+  std::size_t failed_at = n;  // the first frame (in order) that failed, and why
+  Status failure;
+  std::atomic<long> described{0};
+  Progress progress(std::string(MethodName(method)) + " descriptors of " + dir, "frames",
+                    static_cast<long>(n));
+  const auto describe = [&](std::size_t i, int worker) -> Status {
+    SKYLOC_TRY_ASSIGN(const drivers::OwnedImage image,
+                      drivers::LoadImage(dataset.FramePath(i).c_str()));
+    if (image.width() != info.width || image.height() != info.height ||
+        image.format() != info.format) {
+      return Status::Error(StatusCode::kDataLoss,
+                           "dataset %s: frame %zu (%s) is %dx%d %s but the first frame is %dx%d %s",
+                           dataset.dir.c_str(), i, dataset.frames[i].file.c_str(), image.width(),
+                           image.height(), dsp::PixelFormatName(image.format()), info.width,
+                           info.height, dsp::PixelFormatName(info.format));
+    }
+    std::span<float> out(d.values.data() + i * static_cast<std::size_t>(d.dim),
+                         static_cast<std::size_t>(d.dim));
+    if (method == Method::kSky) {
+      const dsp::DescriptorError de =
+          skies[static_cast<std::size_t>(worker)]->Compute(image.view(), out);
+      if (!de.ok()) {
+        return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
+                             dataset.FramePath(i).c_str(), de.message);
+      }
+    } else {
+      const dsp::VanillaError ve = dsp::VanillaDescriptor(image.view(), out);
+      if (ve != dsp::VanillaError::kOk) {
+        return Status::Error(StatusCode::kDataLoss, "%s: %s", dataset.FramePath(i).c_str(),
+                             dsp::VanillaErrorMessage(ve));
+      }
+    }
+    return Status::Ok();
+  };
+  ParallelFor(workers, static_cast<int>(n), [&](int task, int worker) {
+    const auto i = static_cast<std::size_t>(task);
+    {
+      const std::lock_guard<std::mutex> lock(failure_mutex);
+      if (failed_at < i)
+        return;  // an earlier frame failed: that is the error to report
+    }
+    const Status s = describe(i, worker);
+    if (!s.ok()) {
+      const std::lock_guard<std::mutex> lock(failure_mutex);
+      if (i < failed_at) {
+        failed_at = i;
+        failure = s;
+      }
+    }
+    const long done = described.fetch_add(1) + 1;
+    if (worker == 0)
+      progress.Update(done);
+  });
+  SKYLOC_TRY(failure);
+  progress.Finish();
   d.count = static_cast<int>(n);
   camera.Close();
   return d;
@@ -491,6 +563,10 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
     return d.all().subspan(static_cast<std::size_t>(i * d.dim), static_cast<std::size_t>(d.dim));
   };
   dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
+  char what[96];
+  std::snprintf(what, sizeof what, "%s %s ds %d", MethodName(run->method),
+                MatcherName(run->matcher), run->ds);
+  Progress progress(what, "query frames matched", query.count);
   if (run->matcher == Matcher::kRouteFilter) {
     // The firmware's engine, as repeat runs it: causal, one query at a time.
     Config config = o.config;
@@ -502,8 +578,10 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
       e = engine.AddReference(row(ref, r));
     if (e == dsp::SeqSlamError::kOk)
       e = engine.FinishRoute();
-    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t)
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
       e = engine.Step(row(query, t), &run->matches[static_cast<std::size_t>(t)]);
+      progress.Update(t + 1);
+    }
   } else if (o.streaming) {
     dsp::SeqSlamParams p;
     p.sequence_length = run->ds;
@@ -511,14 +589,30 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
     e = engine.Init(p, ref.dim, std::max(1, ref.count));
     for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
       e = engine.AddReference(row(ref, r));
-    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t)
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
       e = engine.Step(row(query, t), &run->matches[static_cast<std::size_t>(t)]);
+      progress.Update(t + 1);
+    }
   } else {
+    // OpenSeqSLAM's batch engine, blocked: n_ref x (block + ds - 1) floats instead of the
+    // whole matrix, on --jobs threads, the same matches bit for bit (docs/SEQSLAM.md).
     dsp::SeqSlamParams p;
     p.sequence_length = run->ds;
-    e = dsp::BatchSeqSlam(ref.all(), query.all(), ref.dim, p, dsp::SeqSlamWindow::kCentred,
-                          run->matches);
+    const bool bytes = !ref.bytes.empty();
+    const auto rows = [&](const Descriptors& d) {
+      return bytes ? dsp::DescriptorRows::Bytes(d.bytes, d.dim)
+                   : dsp::DescriptorRows::Floats(d.values, d.dim);
+    };
+    dsp::BlockedSeqSlamOptions bo;
+    // Enough column groups per block to keep every thread busy; the result does not
+    // depend on the block size.
+    bo.block_columns = std::max(256, 4 * o.jobs * dsp::BlockedSeqSlam::kColumnGroup);
+    dsp::BlockedSeqSlam engine;
+    e = engine.Init(rows(ref), rows(query), p, dsp::SeqSlamWindow::kCentred, bo, run->matches);
+    if (e == dsp::SeqSlamError::kOk)
+      RunBlockedSeqSlam(engine, o.jobs, [&](int done) { progress.Update(done); });
   }
+  progress.Finish();
   if (e != dsp::SeqSlamError::kOk) {
     return Status::Error(StatusCode::kInvalidArgument, "%s (%s, ds %d): %s",
                          MatcherName(run->matcher), MethodName(run->method), run->ds,
@@ -782,8 +876,17 @@ Status Evaluate(EvalOptions o) {
     }
     std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
                  n_ref, n_query);
-    SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o));
-    SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o));
+    SKYLOC_TRY_ASSIGN(Descriptors rd, ComputeDescriptors(method, o.reference, o));
+    SKYLOC_TRY_ASSIGN(Descriptors qd, ComputeDescriptors(method, o.query, o));
+    const bool batch_openseqslam =
+        !o.streaming &&
+        std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();
+    if (method == Method::kVanilla && o.vanilla_bytes && batch_openseqslam) {
+      for (Descriptors* d : {&rd, &qd}) {
+        d->bytes.resize(d->values.size());
+        dsp::QuantiseToBytes(d->values, d->bytes);
+      }
+    }
     for (const Matcher matcher : o.matchers) {
       for (const int ds : o.ds_list) {
         Run run;
