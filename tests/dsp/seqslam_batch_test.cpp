@@ -201,6 +201,11 @@ TEST(SeqSlamBatchBlocked, RejectsMismatchedInputs) {
   EXPECT_EQ(BlockedBatchSeqSlam(DescriptorRows::Floats(f, 10), DescriptorRows::Floats(f, 10), p,
                                 SeqSlamWindow::kCentred, o, wrong),
             SeqSlamError::kSizeMismatch);
+  // An empty route: runs, and nothing is valid (as BatchSeqSlam).
+  EXPECT_EQ(BlockedBatchSeqSlam(DescriptorRows::Floats({}, 10), DescriptorRows::Floats(f, 10), p,
+                                SeqSlamWindow::kCentred, o, m),
+            SeqSlamError::kOk);
+  EXPECT_FALSE(m[0].valid);
   // Fewer query frames than ds: runs, and nothing is valid.
   EXPECT_EQ(BlockedBatchSeqSlam(DescriptorRows::Floats(f, 10), DescriptorRows::Floats(f, 10), p,
                                 SeqSlamWindow::kCentred, o, m),

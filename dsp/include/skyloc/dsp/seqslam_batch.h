@@ -31,19 +31,23 @@ inline constexpr float kByteDescriptorScale = 16.0f;
 
 void QuantiseToBytes(std::span<const float> values, std::span<std::uint8_t> out);
 
-// Descriptors row by row, as floats or as bytes (exactly one of the two spans is used).
+// Descriptors row by row, as floats or as bytes (made by Floats() or Bytes(); the other
+// span stays empty).
 struct DescriptorRows {
   std::span<const float> floats;
   std::span<const std::uint8_t> bytes;
   int dim = 0;
+  bool byte_rows = false;
 
-  bool is_bytes() const { return !bytes.empty() || floats.empty(); }
+  bool is_bytes() const { return byte_rows; }
   int count() const {
     const std::size_t n = is_bytes() ? bytes.size() : floats.size();
     return dim > 0 ? static_cast<int>(n / static_cast<std::size_t>(dim)) : 0;
   }
-  static DescriptorRows Floats(std::span<const float> v, int dim) { return {v, {}, dim}; }
-  static DescriptorRows Bytes(std::span<const std::uint8_t> v, int dim) { return {{}, v, dim}; }
+  static DescriptorRows Floats(std::span<const float> v, int dim) { return {v, {}, dim, false}; }
+  static DescriptorRows Bytes(std::span<const std::uint8_t> v, int dim) {
+    return {{}, v, dim, true};
+  }
 };
 
 // The difference tile of reference rows [r0, r1) against query rows [q0, q1):
