@@ -54,7 +54,8 @@ struct DescriptorRows {
 // out[(q - q0) * out_stride + (r - r0)]. Both sets must be floats, or both bytes. For
 // floats every entry is bit for bit DifferenceColumn's (the same eight partial sums per
 // pair, added in the same order); the tile only changes which pairs share a load. Two
-// references x two queries per pass, references in tiles that stay in L2.
+// references x two queries (floats) or x four queries (bytes) per pass; references in
+// 16 KiB tiles that stay in L1 while every query of [q0, q1) passes over them.
 void DifferenceTile(const DescriptorRows& reference, const DescriptorRows& query, int r0, int r1,
                     int q0, int q1, float* out, std::size_t out_stride);
 
