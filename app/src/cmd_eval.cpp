@@ -303,8 +303,15 @@ struct Descriptors {
   std::span<const float> all() const { return values; }
 };
 
-Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
-                                       const EvalOptions& o) {
+// Which forms of the descriptors the runs read: floats (every matcher), bytes (vanilla in
+// the batch matcher, --vanilla-precision byte), or both.
+struct DescriptorForms {
+  bool floats = true;
+  bool bytes = false;
+};
+
+Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, const EvalOptions& o,
+                                       DescriptorForms forms) {
   drivers::DatasetCamera camera(dir);
   SKYLOC_TRY(camera.Open());
   SKYLOC_TRY(camera.Start());
@@ -352,8 +359,15 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
   const drivers::Dataset& dataset = camera.dataset();
   const drivers::CameraInfo info = camera.info();
   const std::size_t n = dataset.frames.size();
-  d.values.resize(n * static_cast<std::size_t>(d.dim));
+  const auto dim = static_cast<std::size_t>(d.dim);
+  // Only the forms some run reads are kept: a bytes-only run holds a quarter of the
+  // floats' memory (2 kB a vanilla frame instead of 8 kB).
+  if (forms.floats)
+    d.values.resize(n * dim);
+  if (forms.bytes)
+    d.bytes.resize(n * dim);
   const int workers = std::clamp(o.jobs, 1, std::max(1, static_cast<int>(n)));
+  std::vector<std::vector<float>> rows(static_cast<std::size_t>(workers), std::vector<float>(dim));
   std::vector<std::unique_ptr<dsp::SkyDescriptor>> skies;
   if (method == Method::kSky) {
     for (int w = 0; w < workers; ++w) {
@@ -382,8 +396,9 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
                            image.height(), dsp::PixelFormatName(image.format()), info.width,
                            info.height, dsp::PixelFormatName(info.format));
     }
-    std::span<float> out(d.values.data() + i * static_cast<std::size_t>(d.dim),
-                         static_cast<std::size_t>(d.dim));
+    const std::span<float> out = forms.floats
+                                     ? std::span<float>(d.values.data() + i * dim, dim)
+                                     : std::span<float>(rows[static_cast<std::size_t>(worker)]);
     if (method == Method::kSky) {
       const dsp::DescriptorError de =
           skies[static_cast<std::size_t>(worker)]->Compute(image.view(), out);
@@ -398,6 +413,8 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
                              dsp::VanillaErrorMessage(ve));
       }
     }
+    if (forms.bytes)
+      dsp::QuantiseToBytes(out, std::span<std::uint8_t>(d.bytes.data() + i * dim, dim));
     return Status::Ok();
   };
   ParallelFor(workers, static_cast<int>(n), [&](int task, int worker) {
@@ -879,17 +896,16 @@ Status Evaluate(EvalOptions o) {
     }
     std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
                  n_ref, n_query);
-    SKYLOC_TRY_ASSIGN(Descriptors rd, ComputeDescriptors(method, o.reference, o));
-    SKYLOC_TRY_ASSIGN(Descriptors qd, ComputeDescriptors(method, o.query, o));
+    // Vanilla in bytes is read only by OpenSeqSLAM's batch engine; the route filter and
+    // the streaming engine read floats.
     const bool batch_openseqslam =
         !o.streaming &&
         std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();
-    if (method == Method::kVanilla && o.vanilla_bytes && batch_openseqslam) {
-      for (Descriptors* d : {&rd, &qd}) {
-        d->bytes.resize(d->values.size());
-        dsp::QuantiseToBytes(d->values, d->bytes);
-      }
-    }
+    DescriptorForms forms;
+    forms.bytes = method == Method::kVanilla && o.vanilla_bytes && batch_openseqslam;
+    forms.floats = !forms.bytes || o.matchers.size() > 1 || !batch_openseqslam;
+    SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o, forms));
+    SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o, forms));
     for (const Matcher matcher : o.matchers) {
       for (const int ds : o.ds_list) {
         Run run;
