@@ -256,7 +256,7 @@ SeqSlamError BlockedSeqSlam::Init(const DescriptorRows& reference, const Descrip
   if (matches.size() != Sz(n_query_))
     return SeqSlamError::kSizeMismatch;
   matches_ = matches;
-  block_ = options.block_columns;
+  block_ = std::min(options.block_columns, std::max(1, n_query_));  // no overflow below
   block_count_ = (n_query_ + block_ - 1) / block_;
   slots_ = std::min(n_query_, block_ + params.sequence_length - 1);
   store_.assign(n_ref_ > 0 ? Sz(slots_) * Sz(n_ref_) : 0, 0.0f);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -128,7 +129,7 @@ TEST(SeqSlamBatchBlocked, EqualsWholeMatrixEngineForEveryBlockSize) {
       for (const SeqSlamMatch& m : whole)
         valid += m.valid ? 1 : 0;
       EXPECT_EQ(valid, n_query - ds + 1);
-      for (const int block : {1, 3, 7, 32, 89, 90, 1000}) {
+      for (const int block : {1, 3, 7, 32, 89, 90, 1000, std::numeric_limits<int>::max()}) {
         BlockedSeqSlamOptions o;
         o.block_columns = block;
         std::vector<SeqSlamMatch> blocked(n_query);
