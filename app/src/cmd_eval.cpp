@@ -4,6 +4,7 @@
 // vocabulary from `skyloc fabmap-train`; host builds only, docs/FABMAP.md). Writes matches.csv,
 // metrics.json, pr.svg and correspondence.svg into --out (docs/SEQSLAM.md, "Evaluation").
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -11,6 +12,8 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,14 +22,18 @@
 
 #include "commands.h"
 #include "config.h"
+#include "parallel.h"
 #include "pipeline.h"
+#include "progress.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
+#include "skyloc/dsp/seqslam_batch.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/platform/status.h"
@@ -71,6 +78,12 @@ constexpr const char* kUsage =
     "                         (equirectangular for 2:1 images), as skyloc describe\n"
     "  --lens MODEL, --fov DEG  sky: override the lens model / field of view\n"
     "  --bands N              sky: spherical-harmonic bands (default 120)\n"
+    "  --jobs N               threads for the descriptors and the batch matcher (default:\n"
+    "                         all cores); the results do not depend on it\n"
+    "  --vanilla-precision byte|float  vanilla with the batch matcher: the descriptor in\n"
+    "                         8 bits (steps of 1/16 of a patch's std, summed with SSE2/NEON\n"
+    "                         byte instructions; as accurate, measured: docs/SEQSLAM.md)\n"
+    "                         or as floats (default byte)\n"
     "  --attitude none|dataset  sky: dataset describes the sky above the gravity-aligned\n"
     "                         cap, each frame levelled by the roll and pitch recorded\n"
     "                         with it (as the firmware's [attitude] kind = \"dataset\";\n"
@@ -123,6 +136,8 @@ struct EvalOptions {
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
   int bands = 120;
+  int jobs = DefaultJobs();
+  bool vanilla_bytes = true;           // --vanilla-precision byte (the default) or float
   bool attitude_from_dataset = false;  // --attitude dataset
   std::optional<double> max_tilt_deg;  // --max-tilt
 };
@@ -249,6 +264,17 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
       if (!ParseDoubleArg(v, &t) || t < 0 || t > 80)
         return fail("--max-tilt '%s': give a tilt of 0..80 degrees", v);
       o->max_tilt_deg = t;
+    } else if (a == "--jobs") {
+      if (!ParseIntArg(v, &o->jobs) || o->jobs < 1 || o->jobs > 1024)
+        return fail("--jobs '%s': give a number of threads, 1..1024", v);
+    } else if (a == "--vanilla-precision") {
+      if (std::strcmp(v, "float") == 0) {
+        o->vanilla_bytes = false;
+      } else if (std::strcmp(v, "byte") == 0) {
+        o->vanilla_bytes = true;
+      } else {
+        return fail("--vanilla-precision '%s': use float or byte", v);
+      }
     } else if (a == "--bands") {
       if (!ParseIntArg(v, &o->bands) || o->bands < 1 || o->bands > 512)
         return fail("--bands '%s': give 1..512", v);
@@ -294,17 +320,26 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
 struct Descriptors {
   int dim = 0;
   int count = 0;
-  std::vector<float> values;  // count x dim
+  std::vector<float> values;        // count x dim
+  std::vector<std::uint8_t> bytes;  // count x dim, dsp::QuantiseToBytes (vanilla, batch)
   std::span<const float> all() const { return values; }
 };
 
-Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
-                                       const EvalOptions& o) {
+// Which forms of the descriptors the runs read: floats (every matcher), bytes (vanilla in
+// the batch matcher, --vanilla-precision byte), or both.
+struct DescriptorForms {
+  bool floats = true;
+  bool bytes = false;
+};
+
+Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, const EvalOptions& o,
+                                       DescriptorForms forms) {
   drivers::DatasetCamera camera(dir);
   SKYLOC_TRY(camera.Open());
   SKYLOC_TRY(camera.Start());
   Descriptors d;
-  dsp::SkyDescriptor sky;
+  dsp::Lens lens_of_run;
+  dsp::SkyDescriptorOptions options_of_run;
   if (method == Method::kSky) {
     // The lens: --camera, else the dataset's camera.toml, else describe's default for a
     // square-ish image (equidistant, 185 degrees); --lens/--fov override any of them.
@@ -335,58 +370,113 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir,
       lp.model = *o.lens;
     if (o.fov_deg)
       lp.fov_deg = *o.fov_deg;
-    dsp::Lens lens;
-    SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens));
-    dsp::SkyDescriptorOptions so;
-    so.bands = o.bands;
+    SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens_of_run));
+    options_of_run.bands = o.bands;
     if (o.attitude_from_dataset) {
       // The firmware's rule (app/src/pipeline.cpp): the cap from the largest tilt and what
       // the lens sees.
       constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-      so.cap.enabled = true;
-      so.cap.elevation_deg =
+      options_of_run.cap.enabled = true;
+      options_of_run.cap.elevation_deg =
           dsp::CapElevationForTilt(o.max_tilt_deg.value_or(o.config.attitude.max_tilt_deg),
-                                   2 * lens.max_theta() * kRadToDeg);
-      so.cap.taper_deg = o.config.attitude.cap_taper_deg;
-    }
-    const dsp::DescriptorError de = sky.Init(lens, so);
-    if (!de.ok()) {
-      return Status::Error(StatusCode::kInvalidArgument, "sky descriptor for %s: %s", dir.c_str(),
-                           de.message);
+                                   2 * lens_of_run.max_theta() * kRadToDeg);
+      options_of_run.cap.taper_deg = o.config.attitude.cap_taper_deg;
     }
     d.dim = o.bands;
   } else {
     d.dim = dsp::kVanillaDescriptorSize;
   }
-  const std::size_t n = camera.dataset().frames.size();
-  d.values.resize(n * static_cast<std::size_t>(d.dim));
-  for (std::size_t i = 0; i < n; ++i) {
-    Result<drivers::Frame> frame = camera.Capture(Nanoseconds(0));
-    if (!frame.ok())
-      return frame.status();
-    std::span<float> out(d.values.data() + i * static_cast<std::size_t>(d.dim),
-                         static_cast<std::size_t>(d.dim));
-    if (method == Method::kSky) {
-      if (o.attitude_from_dataset && !frame->attitude) {
-        return Status::Error(StatusCode::kInvalidArgument,
-                             "%s has no roll and pitch recorded (frames.csv): --attitude dataset "
-                             "needs the attitude or pose columns (docs/DATASETS.md), or drop it",
-                             camera.dataset().FramePath(i).c_str());
-      }
-      const dsp::DescriptorError de = sky.Compute(
-          frame->image, out, nullptr, o.attitude_from_dataset ? &*frame->attitude : nullptr);
+  // The frames are decoded and described on --jobs threads, each with its own sky
+  // descriptor (it holds scratch); a frame's descriptor does not depend on the thread.
+  const drivers::Dataset& dataset = camera.dataset();
+  const drivers::CameraInfo info = camera.info();
+  const std::size_t n = dataset.frames.size();
+  const auto dim = static_cast<std::size_t>(d.dim);
+  // Only the forms some run reads are kept: a bytes-only run holds a quarter of the
+  // floats' memory (2 kB a vanilla frame instead of 8 kB).
+  if (forms.floats)
+    d.values.resize(n * dim);
+  if (forms.bytes)
+    d.bytes.resize(n * dim);
+  const int workers = std::clamp(o.jobs, 1, std::max(1, static_cast<int>(n)));
+  std::vector<std::vector<float>> rows(static_cast<std::size_t>(workers), std::vector<float>(dim));
+  std::vector<std::unique_ptr<dsp::SkyDescriptor>> skies;
+  if (method == Method::kSky) {
+    for (int w = 0; w < workers; ++w) {
+      skies.push_back(std::make_unique<dsp::SkyDescriptor>());
+      const dsp::DescriptorError de = skies.back()->Init(lens_of_run, options_of_run);
       if (!de.ok()) {
-        return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
-                             camera.dataset().FramePath(i).c_str(), de.message);
-      }
-    } else {
-      const dsp::VanillaError ve = dsp::VanillaDescriptor(frame->image, out);
-      if (ve != dsp::VanillaError::kOk) {
-        return Status::Error(StatusCode::kDataLoss, "%s: %s", camera.dataset().FramePath(i).c_str(),
-                             dsp::VanillaErrorMessage(ve));
+        return Status::Error(StatusCode::kInvalidArgument, "sky descriptor for %s: %s", dir.c_str(),
+                             de.message);
       }
     }
   }
+  std::mutex failure_mutex;
+  std::size_t failed_at = n;  // the first frame (in order) that failed, and why
+  Status failure;
+  std::atomic<long> described{0};
+  Progress progress(std::string(MethodName(method)) + " descriptors of " + dir, "frames",
+                    static_cast<long>(n));
+  const auto describe = [&](std::size_t i, int worker) -> Status {
+    SKYLOC_TRY_ASSIGN(const drivers::OwnedImage image,
+                      drivers::LoadImage(dataset.FramePath(i).c_str()));
+    if (image.width() != info.width || image.height() != info.height ||
+        image.format() != info.format) {
+      return Status::Error(StatusCode::kDataLoss,
+                           "dataset %s: frame %zu (%s) is %dx%d %s but the first frame is %dx%d %s",
+                           dataset.dir.c_str(), i, dataset.frames[i].file.c_str(), image.width(),
+                           image.height(), dsp::PixelFormatName(image.format()), info.width,
+                           info.height, dsp::PixelFormatName(info.format));
+    }
+    const std::span<float> out = forms.floats
+                                     ? std::span<float>(d.values.data() + i * dim, dim)
+                                     : std::span<float>(rows[static_cast<std::size_t>(worker)]);
+    if (method == Method::kSky) {
+      const std::optional<dsp::Attitude>& attitude = dataset.frames[i].attitude;
+      if (o.attitude_from_dataset && !attitude) {
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "%s has no roll and pitch recorded (frames.csv): --attitude dataset "
+                             "needs the attitude or pose columns (docs/DATASETS.md), or drop it",
+                             dataset.FramePath(i).c_str());
+      }
+      const dsp::DescriptorError de = skies[static_cast<std::size_t>(worker)]->Compute(
+          image.view(), out, nullptr, o.attitude_from_dataset ? &*attitude : nullptr);
+      if (!de.ok()) {
+        return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
+                             dataset.FramePath(i).c_str(), de.message);
+      }
+    } else {
+      const dsp::VanillaError ve = dsp::VanillaDescriptor(image.view(), out);
+      if (ve != dsp::VanillaError::kOk) {
+        return Status::Error(StatusCode::kDataLoss, "%s: %s", dataset.FramePath(i).c_str(),
+                             dsp::VanillaErrorMessage(ve));
+      }
+    }
+    if (forms.bytes)
+      dsp::QuantiseToBytes(out, std::span<std::uint8_t>(d.bytes.data() + i * dim, dim));
+    return Status::Ok();
+  };
+  ParallelFor(workers, static_cast<int>(n), [&](int task, int worker) {
+    const auto i = static_cast<std::size_t>(task);
+    {
+      const std::lock_guard<std::mutex> lock(failure_mutex);
+      if (failed_at < i)
+        return;  // an earlier frame failed: that is the error to report
+    }
+    const Status s = describe(i, worker);
+    if (!s.ok()) {
+      const std::lock_guard<std::mutex> lock(failure_mutex);
+      if (i < failed_at) {
+        failed_at = i;
+        failure = s;
+      }
+    }
+    const long done = described.fetch_add(1) + 1;
+    if (worker == 0)
+      progress.Update(done);
+  });
+  SKYLOC_TRY(failure);
+  progress.Finish();
   d.count = static_cast<int>(n);
   camera.Close();
   return d;
@@ -530,6 +620,10 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
     return d.all().subspan(static_cast<std::size_t>(i * d.dim), static_cast<std::size_t>(d.dim));
   };
   dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
+  char what[96];
+  std::snprintf(what, sizeof what, "%s %s ds %d", MethodName(run->method),
+                MatcherName(run->matcher), run->ds);
+  Progress progress(what, "query frames matched", query.count);
   if (run->matcher == Matcher::kRouteFilter) {
     // The firmware's engine, as repeat runs it: causal, one query at a time.
     Config config = o.config;
@@ -541,8 +635,10 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
       e = engine.AddReference(row(ref, r));
     if (e == dsp::SeqSlamError::kOk)
       e = engine.FinishRoute();
-    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t)
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
       e = engine.Step(row(query, t), &run->matches[static_cast<std::size_t>(t)]);
+      progress.Update(t + 1);
+    }
   } else if (o.streaming) {
     dsp::SeqSlamParams p;
     p.sequence_length = run->ds;
@@ -550,14 +646,30 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
     e = engine.Init(p, ref.dim, std::max(1, ref.count));
     for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
       e = engine.AddReference(row(ref, r));
-    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t)
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
       e = engine.Step(row(query, t), &run->matches[static_cast<std::size_t>(t)]);
+      progress.Update(t + 1);
+    }
   } else {
+    // OpenSeqSLAM's batch engine, blocked: n_ref x (block + ds - 1) floats instead of the
+    // whole matrix, on --jobs threads, the same matches bit for bit (docs/SEQSLAM.md).
     dsp::SeqSlamParams p;
     p.sequence_length = run->ds;
-    e = dsp::BatchSeqSlam(ref.all(), query.all(), ref.dim, p, dsp::SeqSlamWindow::kCentred,
-                          run->matches);
+    const bool bytes = !ref.bytes.empty();
+    const auto rows = [&](const Descriptors& d) {
+      return bytes ? dsp::DescriptorRows::Bytes(d.bytes, d.dim)
+                   : dsp::DescriptorRows::Floats(d.values, d.dim);
+    };
+    dsp::BlockedSeqSlamOptions bo;
+    // Enough column groups per block to keep every thread busy; the result does not
+    // depend on the block size.
+    bo.block_columns = std::max(256, 4 * o.jobs * dsp::BlockedSeqSlam::kColumnGroup);
+    dsp::BlockedSeqSlam engine;
+    e = engine.Init(rows(ref), rows(query), p, dsp::SeqSlamWindow::kCentred, bo, run->matches);
+    if (e == dsp::SeqSlamError::kOk)
+      RunBlockedSeqSlam(engine, o.jobs, [&](int done) { progress.Update(done); });
   }
+  progress.Finish();
   if (e != dsp::SeqSlamError::kOk) {
     return Status::Error(StatusCode::kInvalidArgument, "%s (%s, ds %d): %s",
                          MatcherName(run->matcher), MethodName(run->method), run->ds,
@@ -719,6 +831,8 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
   std::fprintf(
       out, "  \"openseqslam_engine\": %s,\n",
       JsonString(o.streaming ? "streaming (trailing window)" : "batch (centred window)").c_str());
+  std::fprintf(out, "  \"vanilla_precision_batch\": %s,\n",
+               JsonString(o.vanilla_bytes ? "byte" : "float").c_str());
   std::fprintf(out, "  \"ground_truth\": %s,\n  \"frame_tolerance\": %d,\n",
                JsonString(gt.description).c_str(), o.frame_tolerance);
   std::fprintf(out, "  \"runs\": [\n");
@@ -821,8 +935,16 @@ Status Evaluate(EvalOptions o) {
     }
     std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
                  n_ref, n_query);
-    SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o));
-    SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o));
+    // Vanilla in bytes is read only by OpenSeqSLAM's batch engine; the route filter and
+    // the streaming engine read floats.
+    const bool batch_openseqslam =
+        !o.streaming &&
+        std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();
+    DescriptorForms forms;
+    forms.bytes = method == Method::kVanilla && o.vanilla_bytes && batch_openseqslam;
+    forms.floats = !forms.bytes || o.matchers.size() > 1 || !batch_openseqslam;
+    SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o, forms));
+    SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o, forms));
     for (const Matcher matcher : o.matchers) {
       for (const int ds : o.ds_list) {
         Run run;
