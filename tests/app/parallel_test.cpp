@@ -16,7 +16,19 @@
 namespace skyloc::app {
 namespace {
 
+// Debian 12's qemu-user (7.2) hangs in pthread_create when it runs a dynamically linked
+// ARM binary with -L (a bare std::thread never starts; a static binary is fine), so the
+// cross builds' tests, which run under it, cannot start threads. The host build runs
+// these tests; on a real ARM board they run as they are.
+#define SKIP_UNDER_EMULATION()                                                              \
+  do {                                                                                      \
+    if (SKYLOC_TESTS_UNDER_EMULATION)                                                       \
+      GTEST_SKIP() << "threads cannot start under qemu-user 7.2 (dynamic binary with -L); " \
+                      "tested by the host build";                                           \
+  } while (false)
+
 TEST(ParallelFor, RunsEveryTaskOnceWithWorkerIndicesInRange) {
+  SKIP_UNDER_EMULATION();
   for (const int jobs : {1, 2, 3, 8}) {
     std::vector<std::atomic<int>> runs(100);
     std::atomic<int> bad_worker{0};
@@ -52,6 +64,7 @@ void ExpectSame(const std::vector<dsp::SeqSlamMatch>& a, const std::vector<dsp::
 // The acceptance test of issue 17: block size and thread count do not change a bit of the
 // result, for float and for byte descriptors.
 TEST(BlockedSeqSlamThreads, BitIdenticalToTheUnblockedOneThreadEngine) {
+  SKIP_UNDER_EMULATION();
   testing::SyntheticRoute route;
   // 512 values (a quarter of the vanilla descriptor's, so the 32 runs stay quick under
   // qemu on the ARM builds); the kernels' tails are covered by tests/dsp.

@@ -18,8 +18,13 @@ else()
   # Ground truth from the recorded poses (nearest reference, +-5 frames).
   set(args --batch --method vanilla)
 endif()
+# Under qemu-user (cross builds) eval runs on one thread: Debian 12's qemu 7.2 hangs in
+# pthread_create for a dynamic binary run with -L (tests/app/parallel_test.cpp).
+if(EMULATOR)
+  set(jobs --jobs 1)
+endif()
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/reference
-                --query ${WORK}/query --ds 1 --ds 10 --out ${WORK}/out ${args}
+                --query ${WORK}/query --ds 1 --ds 10 --out ${WORK}/out ${args} ${jobs}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval failed (${rc}):\n${out}\n${err}")
