@@ -197,12 +197,16 @@ int RunRoute(std::span<char* const> args) {
   }
   const RouteDbSettings& st = report.settings;
   std::printf(
-      "%s: %zu frames in %zu chunks, %s; descriptor kind %u, %u bands, grid %u x %u, "
-      "normalisation %u, lens hash %016llx\n",
+      "%s: %zu frames in %zu chunks, %s; format version %u, descriptor kind %u, %u bands, grid "
+      "%u x %u, normalisation %u, lens hash %016llx\n",
       path, report.frames, report.chunks,
-      report.committed ? "committed" : "NOT committed (teach was interrupted)", st.descriptor_kind,
-      st.bands, st.rings, st.longitudes, st.normalisation,
+      report.committed ? "committed" : "NOT committed (teach was interrupted)", report.version,
+      st.descriptor_kind, st.bands, st.rings, st.longitudes, st.normalisation,
       static_cast<unsigned long long>(st.lens_hash));
+  char lens[320];
+  FormatRouteDbLens(st.lens, lens, sizeof lens);
+  std::printf("%s: lens %s%s\n", path, lens,
+              st.lens.known ? "" : "; repeat checks the lens hash only (teach again to store it)");
   if (report.trailing_bytes > 0) {
     std::printf(
         "%s: %zu trailing bytes after the commit record at offset %zu (not part of the "

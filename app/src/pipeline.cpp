@@ -85,6 +85,41 @@ std::uint64_t LensHash(const dsp::LensParams& p) {
   return h;
 }
 
+RouteDbLens RouteLensFrom(const dsp::Lens& lens) {
+  const dsp::LensParams& p = lens.params();
+  RouteDbLens l;
+  l.known = true;
+  l.model = static_cast<std::uint32_t>(p.model);
+  l.width = static_cast<std::uint32_t>(p.width);
+  l.height = static_cast<std::uint32_t>(p.height);
+  // The effective values (an unset centre or radius resolved as the lens resolved it).
+  l.centre_x = lens.centre_x();
+  l.centre_y = lens.centre_y();
+  l.radius_px = lens.radius_px();
+  l.fov_deg = p.fov_deg;
+  if (p.model == dsp::LensModel::kKannalaBrandt) {
+    l.fx = p.fx;
+    l.fy = p.fy;
+    l.k = p.k;
+  }
+  l.roll_deg = p.roll_deg;
+  l.pitch_deg = p.pitch_deg;
+  l.yaw_deg = p.yaw_deg;
+  if (p.model == dsp::LensModel::kOCamCalib) {
+    // Too large for the fixed record: a hash of what defines the mapping. The unused
+    // polynomial terms are zero, so a file written out and read back hashes the same.
+    std::uint64_t h = 0xcbf29ce484222325ull;
+    Hash(&h, p.ocam.ss_count);
+    Hash(&h, p.ocam.invpol_count);
+    HashBytes(&h, p.ocam.ss.data(), sizeof p.ocam.ss);
+    HashBytes(&h, p.ocam.invpol.data(), sizeof p.ocam.invpol);
+    for (double v : {p.ocam.row_centre, p.ocam.column_centre, p.ocam.c, p.ocam.d, p.ocam.e})
+      Hash(&h, v);
+    l.ocam_hash = h == 0 ? 1 : h;  // 0 means "no OCamCalib hash"
+  }
+  return l;
+}
+
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
   dsp::StateMachineParams sm;
   sm.enter_confidence = static_cast<float>(config.state.enter_confidence);
@@ -193,6 +228,7 @@ Status Pipeline::Init(const Config& config) {
   route_settings_.dim = static_cast<std::uint32_t>(descriptor_.bands());
   route_settings_.normalisation = static_cast<std::uint32_t>(config.descriptor.normalisation);
   route_settings_.lens_hash = LensHash(lens_params);
+  route_settings_.lens = RouteLensFrom(lens_);
   if (options.cap.enabled) {
     route_settings_.gravity_cap_cdeg =
         static_cast<std::uint32_t>(std::lround(options.cap.elevation_deg * 100));

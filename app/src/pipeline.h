@@ -46,8 +46,12 @@ inline constexpr std::uint32_t kDescriptorSkyShAmplitudes = 1;
 // The lens the configuration describes: the lens file's, or a 185-degree equidistant
 // fisheye filling the image circle of a camera.width x camera.height frame.
 Result<dsp::LensParams> LensFromConfig(const Config& config);
-// A hash of everything in the lens parameters that changes which pixel a sample reads.
+// A hash of everything in the lens parameters that changes which pixel a sample reads, as
+// configured (unset values stay NaN). Only version-1/2 route files are checked with it.
 std::uint64_t LensHash(const dsp::LensParams& lens);
+// The lens as a route database stores it (format version 3): the effective centre and
+// radius, the model's coefficients; OCamCalib's polynomials as a hash.
+RouteDbLens RouteLensFrom(const dsp::Lens& lens);
 
 // The state machine's parameters from [state] and the matcher's motion limits.
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config);

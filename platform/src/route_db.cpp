@@ -5,10 +5,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
+#include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <vector>
 
 #include "skyloc/platform/crc32.h"
@@ -54,11 +58,52 @@ bool CrcMatches(std::uint32_t stored, const std::uint8_t* p, std::size_t n) {
   return !kVerifyChecksums || stored == CrcOf(p, n);
 }
 
+// Lens record flags (offset 12 of the record).
+constexpr std::uint32_t kLensKnown = 1u;     // the record describes the lens
+constexpr std::uint32_t kLensOcamHash = 2u;  // ocam_hash holds the OCamCalib polynomials' hash
+constexpr std::size_t kLensCrcOffset = kRouteDbLensRecordBytes - 4;
+
+// The lens record (docs/ROUTE_DB.md): h points just after the 64-byte header.
+void EncodeLensRecord(const RouteDbLens& l, std::uint8_t* h) {
+  std::memset(h, 0, kRouteDbLensRecordBytes);
+  if (l.known) {
+    Put<std::uint32_t>(h + 0, l.model);
+    Put<std::uint32_t>(h + 4, l.width);
+    Put<std::uint32_t>(h + 8, l.height);
+    Put<std::uint32_t>(h + 12, kLensKnown | (l.ocam_hash != 0 ? kLensOcamHash : 0u));
+    const double values[] = {l.centre_x, l.centre_y,  l.radius_px, l.fov_deg, l.fx,
+                             l.fy,       l.k[0],      l.k[1],      l.k[2],    l.k[3],
+                             l.roll_deg, l.pitch_deg, l.yaw_deg};
+    for (std::size_t i = 0; i < std::size(values); ++i)
+      Put<double>(h + 16 + 8 * i, values[i]);
+    Put<std::uint64_t>(h + 120, l.ocam_hash);
+  }
+  Put<std::uint32_t>(h + kLensCrcOffset, CrcOf(h, kLensCrcOffset));
+}
+
+RouteDbLens DecodeLensRecord(const std::uint8_t* h) {
+  RouteDbLens l;
+  const std::uint32_t flags = Get<std::uint32_t>(h + 12);
+  if ((flags & kLensKnown) == 0)
+    return l;
+  l.known = true;
+  l.model = Get<std::uint32_t>(h + 0);
+  l.width = Get<std::uint32_t>(h + 4);
+  l.height = Get<std::uint32_t>(h + 8);
+  double* values[] = {&l.centre_x, &l.centre_y,  &l.radius_px, &l.fov_deg, &l.fx,
+                      &l.fy,       &l.k[0],      &l.k[1],      &l.k[2],    &l.k[3],
+                      &l.roll_deg, &l.pitch_deg, &l.yaw_deg};
+  for (std::size_t i = 0; i < std::size(values); ++i)
+    *values[i] = Get<double>(h + 16 + 8 * i);
+  l.ocam_hash = (flags & kLensOcamHash) != 0 ? Get<std::uint64_t>(h + 120) : 0;
+  return l;
+}
+
 void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   std::memset(h, 0, kRouteDbHeaderBytes);
   std::memcpy(h, kMagic, sizeof kMagic);
   Put<std::uint32_t>(h + 8, kRouteDbVersion);
-  Put<std::uint32_t>(h + 12, static_cast<std::uint32_t>(kRouteDbHeaderBytes));
+  Put<std::uint32_t>(h + 12, static_cast<std::uint32_t>(RouteDbDataOffset(kRouteDbVersion)));
   Put<std::uint32_t>(h + 16, s.descriptor_kind);
   Put<std::uint32_t>(h + 20, s.bands);
   Put<std::uint32_t>(h + 24, s.rings);
@@ -70,6 +115,7 @@ void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   Put<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
   Put<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
   Put<std::uint32_t>(h + 60, CrcOf(h, 60));
+  EncodeLensRecord(s.lens, h + kRouteDbHeaderBytes);
 }
 
 void EncodeChunkHeader(std::uint32_t type, std::uint64_t first, std::uint32_t count,
@@ -115,8 +161,7 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
                           {"rings", file.rings, want.rings},
                           {"longitudes", file.longitudes, want.longitudes},
                           {"descriptor size", file.dim, want.dim},
-                          {"normalisation", file.normalisation, want.normalisation},
-                          {"lens hash", file.lens_hash, want.lens_hash}};
+                          {"normalisation", file.normalisation, want.normalisation}};
   for (const Field& f : fields) {
     if (f.in_file != f.wanted) {
       return Status::Error(StatusCode::kFailedPrecondition,
@@ -126,10 +171,135 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
                            static_cast<unsigned long long>(f.wanted));
     }
   }
+  if (file.lens.known && want.lens.known)
+    return CheckRouteDbLens(file.lens, want.lens);
+  if (file.lens_hash != want.lens_hash) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with lens hash %016llx, this configuration has %016llx; the "
+                         "file is older than version 3 and stores no lens parameters: use the "
+                         "camera file it was taught with, or teach again",
+                         static_cast<unsigned long long>(file.lens_hash),
+                         static_cast<unsigned long long>(want.lens_hash));
+  }
   return Status::Ok();
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------
+// The lens record
+
+namespace {
+
+struct LensDiff {
+  // Whole items only, short enough that the fix and the caller's path still fit the
+  // 240-character Status message; the rest is counted.
+  static constexpr std::size_t kRoom = 100;
+  char text[kRoom + 1] = {};
+  std::size_t used = 0;
+  int count = 0;
+  int left_out = 0;
+};
+
+// Appends "; " and one difference if it fits whole, else counts it as left out.
+[[gnu::format(printf, 2, 3)]] void AddLensDiff(LensDiff* d, const char* format, ...) {
+  ++d->count;
+  char item[96];
+  std::va_list args;
+  va_start(args, format);
+  const int n = std::vsnprintf(item, sizeof item, format, args);
+  va_end(args);
+  const std::size_t separator = d->used > 0 ? 2 : 0;
+  if (n < 0 || d->used + separator + static_cast<std::size_t>(n) > LensDiff::kRoom) {
+    ++d->left_out;
+    return;
+  }
+  std::snprintf(d->text + d->used, sizeof d->text - d->used, "%s%s", separator > 0 ? "; " : "",
+                item);
+  d->used += separator + static_cast<std::size_t>(n);
+}
+
+}  // namespace
+
+const char* RouteDbLensModelName(std::uint32_t model) {
+  static constexpr const char* kNames[] = {"equidistant", "equisolid", "kannala_brandt",
+                                           "ocamcalib", "equirectangular"};
+  return model < std::size(kNames) ? kNames[model] : "unknown";
+}
+
+Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now) {
+  // What differs, in words, taught value first; as much as fits the Status message.
+  LensDiff d;
+  auto near = [](double a, double b, double tolerance) {
+    return std::fabs(a - b) <= tolerance;  // false for NaN
+  };
+  auto near_relative = [](double a, double b) {
+    return std::fabs(a - b) <=
+           kRouteDbLensRelativeTolerance * std::max(std::fabs(a), std::fabs(b)) + 1e-12;
+  };
+  if (taught.model != now.model)
+    AddLensDiff(&d, "model %s vs %s", RouteDbLensModelName(taught.model),
+                RouteDbLensModelName(now.model));
+  if (taught.width != now.width || taught.height != now.height)
+    AddLensDiff(&d, "image size %ux%u vs %ux%u", taught.width, taught.height, now.width,
+                now.height);
+  if (!near(taught.fov_deg, now.fov_deg, kRouteDbLensDegreeTolerance))
+    AddLensDiff(&d, "fov %.2f vs %.2f degrees", taught.fov_deg, now.fov_deg);
+  if (!near(taught.centre_x, now.centre_x, kRouteDbLensPixelTolerance))
+    AddLensDiff(&d, "centre x %.2f vs %.2f px", taught.centre_x, now.centre_x);
+  if (!near(taught.centre_y, now.centre_y, kRouteDbLensPixelTolerance))
+    AddLensDiff(&d, "centre y %.2f vs %.2f px", taught.centre_y, now.centre_y);
+  if (!near(taught.radius_px, now.radius_px, kRouteDbLensPixelTolerance))
+    AddLensDiff(&d, "radius %.2f vs %.2f px", taught.radius_px, now.radius_px);
+  if (!near_relative(taught.fx, now.fx) || !near_relative(taught.fy, now.fy))
+    AddLensDiff(&d, "fx/fy %g/%g vs %g/%g px", taught.fx, taught.fy, now.fx, now.fy);
+  for (std::size_t i = 0; i < taught.k.size(); ++i) {
+    if (!near_relative(taught.k[i], now.k[i]))
+      AddLensDiff(&d, "k%zu %g vs %g", i + 1, taught.k[i], now.k[i]);
+  }
+  if (taught.ocam_hash != now.ocam_hash)
+    AddLensDiff(&d, "OCamCalib polynomials (hash %016llx vs %016llx)",
+                static_cast<unsigned long long>(taught.ocam_hash),
+                static_cast<unsigned long long>(now.ocam_hash));
+  const double taught_mount[] = {taught.roll_deg, taught.pitch_deg, taught.yaw_deg};
+  const double now_mount[] = {now.roll_deg, now.pitch_deg, now.yaw_deg};
+  const char* mount_names[] = {"roll", "pitch", "yaw"};
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!near(taught_mount[i], now_mount[i], kRouteDbLensDegreeTolerance))
+      AddLensDiff(&d, "mount %s %.2f vs %.2f degrees", mount_names[i], taught_mount[i],
+                  now_mount[i]);
+  }
+  if (d.count == 0)
+    return Status::Ok();
+  // Short: the Status holds 240 characters and the caller puts the path in front.
+  return Status::Error(StatusCode::kFailedPrecondition,
+                       "lens differs (taught vs now): %s%s: use the camera file it was taught "
+                       "with, or teach again",
+                       d.text, d.left_out > 0 ? "; and more" : "");
+}
+
+void FormatRouteDbLens(const RouteDbLens& l, char* out, std::size_t size) {
+  if (!l.known) {
+    std::snprintf(out, size, "not stored (format older than version 3: only the lens hash)");
+    return;
+  }
+  const int n = std::snprintf(
+      out, size,
+      "%s %ux%u, fov %.2f degrees, centre %.2f %.2f px, radius %.2f px, mount roll %.2f "
+      "pitch %.2f yaw %.2f degrees",
+      RouteDbLensModelName(l.model), l.width, l.height, l.fov_deg, l.centre_x, l.centre_y,
+      l.radius_px, l.roll_deg, l.pitch_deg, l.yaw_deg);
+  if (n < 0 || static_cast<std::size_t>(n) >= size)
+    return;
+  const auto used = static_cast<std::size_t>(n);
+  if (l.fx != 0 || l.fy != 0) {
+    std::snprintf(out + used, size - used, ", fx %.6g fy %.6g, k %.6g %.6g %.6g %.6g", l.fx, l.fy,
+                  l.k[0], l.k[1], l.k[2], l.k[3]);
+  } else if (l.ocam_hash != 0) {
+    std::snprintf(out + used, size - used, ", OCamCalib polynomials hash %016llx",
+                  static_cast<unsigned long long>(l.ocam_hash));
+  }
+}
 
 // ---------------------------------------------------------------------------------------
 // RouteFrames
@@ -184,12 +354,26 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                                                      "the route again"
                                                    : "teach the route again");
   }
-  if (!CrcMatches(Get<std::uint32_t>(b + 60), b, 60) ||
-      Get<std::uint32_t>(b + 12) != kRouteDbHeaderBytes) {
+  const std::size_t data_offset = RouteDbDataOffset(version);
+  if (!CrcMatches(Get<std::uint32_t>(b + 60), b, 60) || Get<std::uint32_t>(b + 12) != data_offset) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): checksum mismatch, the file "
                          "is corrupt");
   }
+  if (size < data_offset) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu bytes, shorter than the header and lens record (%zu bytes): "
+                         "truncated",
+                         size, data_offset);
+  }
+  const std::uint8_t* lens_record = b + kRouteDbHeaderBytes;
+  if (version >= 3 &&
+      !CrcMatches(Get<std::uint32_t>(lens_record + kLensCrcOffset), lens_record, kLensCrcOffset)) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "lens record (offset %zu): checksum mismatch, the file is corrupt",
+                         kRouteDbHeaderBytes);
+  }
+  r.version = version;
   RouteDbSettings& s = r.settings;
   s.descriptor_kind = Get<std::uint32_t>(b + 16);
   s.bands = Get<std::uint32_t>(b + 20);
@@ -200,6 +384,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   s.lens_hash = Get<std::uint64_t>(b + 40);
   s.gravity_cap_cdeg = version >= 2 ? Get<std::uint32_t>(b + 52) : kNoGravityCap;
   s.gravity_cap_taper_cdeg = version >= 2 ? Get<std::uint32_t>(b + 56) : 0;
+  if (version >= 3)
+    s.lens = DecodeLensRecord(lens_record);
   if (s.dim == 0 || s.dim > kMaxDim || Get<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim)) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): descriptor size %u is "
@@ -217,7 +403,7 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   }
   const std::size_t record_bytes = RouteDbRecordBytes(s.dim);
 
-  std::size_t offset = kRouteDbHeaderBytes;
+  std::size_t offset = data_offset;
   std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
   Status problem;
   while (offset < size) {
@@ -309,7 +495,7 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
     r.valid_bytes = offset;
   }
   if (r.valid_bytes == 0)
-    r.valid_bytes = kRouteDbHeaderBytes;
+    r.valid_bytes = data_offset;
 
   if (!problem.ok()) {
     // Damage followed by an intact chunk header is in the middle of the route: dropping
@@ -568,7 +754,7 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
   // Held until the writer closes: `route recover` refuses the file meanwhile.
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
     return Status::FromErrno(errno, "cannot lock %s", tmp);
-  std::uint8_t header[kRouteDbHeaderBytes];
+  std::uint8_t header[kRouteDbHeaderBytes + kRouteDbLensRecordBytes];
   EncodeHeader(settings, header);
   if (Status w = WriteAll(fd.get(), header, sizeof header); !w.ok())
     return w.AddContext("%s", tmp);

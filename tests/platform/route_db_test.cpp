@@ -39,7 +39,39 @@ RouteDbSettings Settings() {
   s.dim = kDim;
   s.normalisation = 0;
   s.lens_hash = 0x1234567890abcdefull;
+  s.lens.known = true;
+  s.lens.model = 0;  // equidistant
+  s.lens.width = 320;
+  s.lens.height = 240;
+  s.lens.centre_x = 159.5;
+  s.lens.centre_y = 119.5;
+  s.lens.radius_px = 120;
+  s.lens.fov_deg = 185;
+  s.lens.fx = 100.25;
+  s.lens.fy = 100.5;
+  s.lens.k = {0.01, -0.002, 0.0003, 0};
+  s.lens.pitch_deg = 1.5;
   return s;
+}
+
+// Where the first chunk starts in a file this skyloc writes (header + lens record).
+constexpr std::size_t kDataOffset = RouteDbDataOffset(kRouteDbVersion);
+
+// The file rewritten as an older version: the header says `version` and, below version 3,
+// the lens record is cut out (those versions have none); version 1 also loses the cap.
+std::vector<std::uint8_t> AsVersion(std::vector<std::uint8_t> b, std::uint32_t version) {
+  std::memcpy(b.data() + 8, &version, 4);
+  if (version < 3) {
+    b.erase(b.begin() + static_cast<long>(kRouteDbHeaderBytes),
+            b.begin() + static_cast<long>(kDataOffset));
+    const auto header = static_cast<std::uint32_t>(kRouteDbHeaderBytes);
+    std::memcpy(b.data() + 12, &header, 4);
+  }
+  if (version < 2)
+    std::memset(b.data() + 52, 0, 8);
+  const std::uint32_t crc = Crc32({b.data(), 60});
+  std::memcpy(b.data() + 60, &crc, 4);
+  return b;
 }
 
 // Frame i's content: every value depends on i, so a misplaced record is noticed.
@@ -112,7 +144,7 @@ class RouteDbTest : public ::testing::Test {
 // written with flush_every f (every frame chunk holds f frames but the last; the commit
 // record is the chunk after them).
 std::size_t ChunkOffset(std::size_t k, std::size_t f, std::size_t n) {
-  std::size_t offset = kRouteDbHeaderBytes;
+  std::size_t offset = kDataOffset;
   for (std::size_t j = 1; j < k; ++j) {
     const std::size_t frames = std::min(f, n - (j - 1) * f);
     offset += kRouteDbChunkHeaderBytes + frames * RouteDbRecordBytes(kDim);
@@ -129,11 +161,12 @@ TEST_F(RouteDbTest, RoundTrip) {
   EXPECT_TRUE(report.committed);
   EXPECT_EQ(report.frames, 137u);
   EXPECT_EQ(report.chunks, 14u);
-  EXPECT_EQ(report.settings, Settings());
+  EXPECT_EQ(report.settings, Settings());  // the lens record too
+  EXPECT_EQ(report.version, 3u);
   ExpectFrames(frames_, 137);
   // The size follows from the format alone.
-  EXPECT_EQ(Bytes().size(),
-            kRouteDbHeaderBytes + 15 * kRouteDbChunkHeaderBytes + 137 * RouteDbRecordBytes(kDim));
+  EXPECT_EQ(Bytes().size(), kRouteDbHeaderBytes + kRouteDbLensRecordBytes +
+                                15 * kRouteDbChunkHeaderBytes + 137 * RouteDbRecordBytes(kDim));
 }
 
 TEST_F(RouteDbTest, EmptyCommittedRouteLoads) {
@@ -243,10 +276,11 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
   Status s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(std::string(s.message()).find("bands = 5"), std::string::npos) << s.message();
+  // A version-3 file compares the lens parameters, not the hash.
   other = Settings();
   other.lens_hash = 1;
   s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
-  EXPECT_NE(std::string(s.message()).find("lens hash"), std::string::npos) << s.message();
+  EXPECT_TRUE(s.ok()) << s.message();
 }
 
 TEST_F(RouteDbTest, GravityCapMismatchIsNamed) {
@@ -267,26 +301,118 @@ TEST_F(RouteDbTest, GravityCapMismatchIsNamed) {
 // a version newer than this skyloc's is refused naming both versions.
 TEST_F(RouteDbTest, ReadsVersionOneAndRefusesANewerVersion) {
   Teach(5, 10, true);
-  std::vector<std::uint8_t> v1 = Bytes();
-  auto rewrite_header = [](std::vector<std::uint8_t>* b, std::uint32_t version) {
-    std::memcpy(b->data() + 8, &version, 4);
-    std::memset(b->data() + 52, 0, 8);
-    const std::uint32_t crc = Crc32({b->data(), 60});
-    std::memcpy(b->data() + 60, &crc, 4);
-  };
-  rewrite_header(&v1, 1);
+  const std::vector<std::uint8_t> v1 = AsVersion(Bytes(), 1);
   RouteDbLoadReport report;
   const RouteDbSettings want = Settings();
-  ASSERT_TRUE(ParseRouteDb(v1, &want, RouteDbLoadPolicy::kStrict, &frames_, &report).ok());
+  Status s = ParseRouteDb(v1, &want, RouteDbLoadPolicy::kStrict, &frames_, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(report.version, 1u);
   EXPECT_EQ(report.settings.gravity_cap_cdeg, kNoGravityCap);
+  EXPECT_FALSE(report.settings.lens.known);
   ExpectFrames(frames_, 5);
-  std::vector<std::uint8_t> v3 = Bytes();
-  rewrite_header(&v3, 3);
-  const Status s = Parse(v3);
+  std::vector<std::uint8_t> v4 = Bytes();
+  const std::uint32_t four = 4;
+  std::memcpy(v4.data() + 8, &four, 4);
+  s = Parse(v4);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(s.message()).find("version 3; this skyloc reads versions 1 to 2"),
+  EXPECT_NE(std::string(s.message()).find("version 4; this skyloc reads versions 1 to 3"),
             std::string::npos)
       << s.message();
+}
+
+// A version-2 file has no lens record: it loads, the lens is unknown, and the check falls
+// back to the hash, saying so in hex.
+TEST_F(RouteDbTest, VersionTwoFallsBackToTheLensHash) {
+  Teach(12, 5, true);
+  const std::vector<std::uint8_t> v2 = AsVersion(Bytes(), 2);
+  RouteDbLoadReport report;
+  RouteDbSettings want = Settings();
+  Status s = ParseRouteDb(v2, &want, RouteDbLoadPolicy::kStrict, &frames_, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(report.version, 2u);
+  EXPECT_FALSE(report.settings.lens.known);
+  EXPECT_EQ(report.settings.lens_hash, Settings().lens_hash);
+  ExpectFrames(frames_, 12);
+  char text[200];
+  FormatRouteDbLens(report.settings.lens, text, sizeof text);
+  EXPECT_NE(std::string(text).find("not stored"), std::string::npos) << text;
+
+  want.lens_hash = 0xabcull;
+  s = ParseRouteDb(v2, &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message())
+                .find("lens hash 1234567890abcdef, this configuration has 0000000000000abc; the "
+                      "file is older than version 3 and stores no lens parameters"),
+            std::string::npos)
+      << s.message();
+  // Recovery keeps an old file's version (it only cuts and appends).
+  ASSERT_EQ(std::remove(path_.c_str()), 0);
+  Teach(7, 5, false);
+  std::vector<std::uint8_t> v2_torn = AsVersion(Bytes(), 2);
+  {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(v2_torn.data()), static_cast<long>(v2_torn.size()));
+  }
+  ASSERT_TRUE(RecoverRouteDb(path_.c_str(), &report).ok());
+  want = Settings();
+  s = ParseRouteDb(Bytes(), &want, RouteDbLoadPolicy::kStrict, &frames_, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(report.version, 2u);
+  ExpectFrames(frames_, 7);
+}
+
+// Version 3 compares the lens parameters within tolerances and names what differs.
+TEST_F(RouteDbTest, LensMismatchSaysWhatDiffers) {
+  Teach(5, 10, true);
+  RouteDbSettings want = Settings();
+  // Within the tolerances: what a camera file written out with a few digits reads back as.
+  want.lens.centre_x += 0.004;
+  want.lens.fov_deg -= 0.005;
+  want.lens.fx *= 1 + 1e-7;
+  want.lens.k[0] *= 1 - 1e-7;
+  Status s = ParseRouteDb(Bytes(), &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_TRUE(s.ok()) << s.message();
+
+  want = Settings();
+  want.lens.width = 160;
+  want.lens.height = 120;
+  want.lens.fov_deg = 180;
+  want.lens.centre_x = 160;
+  s = ParseRouteDb(Bytes(), &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  const std::string m = s.message();
+  EXPECT_NE(m.find("lens differs (taught vs now): image size 320x240 vs 160x120; fov 185.00 vs "
+                   "180.00 degrees; centre x 159.50 vs 160.00 px"),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("use the camera file it was taught with, or teach again"), std::string::npos)
+      << m;
+
+  want = Settings();
+  want.lens.model = 2;
+  want.lens.k[1] = 0.5;
+  want.lens.yaw_deg = 90;
+  s = ParseRouteDb(Bytes(), &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_NE(std::string(s.message())
+                .find("model equidistant vs kannala_brandt; k2 -0.002 vs 0.5; mount yaw 0.00 vs "
+                      "90.00 degrees"),
+            std::string::npos)
+      << s.message();
+}
+
+// Every difference at once still fits the message, which keeps its fix.
+TEST_F(RouteDbTest, LensMismatchMessageFitsWithEverythingDifferent) {
+  RouteDbLens a = Settings().lens, b;
+  b.known = true;
+  b.model = 3;
+  b.width = 1;
+  b.ocam_hash = 5;
+  b.roll_deg = b.pitch_deg = b.yaw_deg = 1e300;
+  const Status s = CheckRouteDbLens(a, b);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(std::string(s.message()).find("model equidistant vs ocamcalib"), std::string::npos)
+      << s.message();
+  EXPECT_NE(std::string(s.message()).find("teach again"), std::string::npos) << s.message();
 }
 
 TEST_F(RouteDbTest, CapacityExceededIsReported) {
@@ -315,7 +441,7 @@ TEST_F(RouteDbTest, EveryTruncationIsRejectedNamingTheChunk) {
     Status s = Parse(cut);
     ASSERT_FALSE(s.ok()) << "loaded a file cut to " << len << " bytes";
     const std::string m = s.message();
-    if (len < kRouteDbHeaderBytes) {
+    if (len < kDataOffset) {
       EXPECT_NE(m.find("header"), std::string::npos) << len << ": " << m;
       continue;
     }
@@ -350,6 +476,11 @@ TEST_F(RouteDbTest, EveryBitFlipIsRejectedNamingTheChunk) {
     if (byte < kRouteDbHeaderBytes) {
       EXPECT_TRUE(m.find("header") != std::string::npos || m.find("magic") != std::string::npos ||
                   m.find("version") != std::string::npos)
+          << byte << ": " << m;
+      continue;
+    }
+    if (byte < kDataOffset) {
+      EXPECT_NE(m.find("lens record (offset 64): checksum mismatch"), std::string::npos)
           << byte << ": " << m;
       continue;
     }

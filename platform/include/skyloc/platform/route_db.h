@@ -19,6 +19,42 @@
 
 namespace skyloc {
 
+// The lens a route was taught with (version 3: the lens record after the header). Effective
+// values: the centre and radius are what the lens used, never "unset". Numbers only; app/
+// fills it from dsp::LensParams and dsp::Lens.
+struct RouteDbLens {
+  bool known = false;       // false: a version-1/2 file (only lens_hash), or not filled in
+  std::uint32_t model = 0;  // dsp::LensModel's number (RouteDbLensModelName spells it)
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  double centre_x = 0, centre_y = 0, radius_px = 0;  // pixels
+  double fov_deg = 0;
+  double fx = 0, fy = 0;      // Kannala-Brandt focal lengths, pixels (0 for other models)
+  std::array<double, 4> k{};  // Kannala-Brandt k1..k4
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;  // camera-to-body mount
+  // OCamCalib only: its polynomials (up to 2 x 32 terms), centre and affine part do not fit
+  // a fixed record, so a hash of them is stored instead (0 for the other models).
+  std::uint64_t ocam_hash = 0;
+
+  bool operator==(const RouteDbLens&) const = default;
+};
+
+// Tolerances of CheckRouteDbLens: a lens written out to a camera file and read back
+// compares equal to the one in memory.
+inline constexpr double kRouteDbLensPixelTolerance = 0.01;     // centre, radius
+inline constexpr double kRouteDbLensDegreeTolerance = 0.01;    // fov, mount angles
+inline constexpr double kRouteDbLensRelativeTolerance = 1e-6;  // fx, fy, k1..k4
+
+// "equidistant", "equisolid", "kannala_brandt", "ocamcalib", "equirectangular" (the
+// camera-file spelling of dsp::LensModel), "unknown" otherwise.
+const char* RouteDbLensModelName(std::uint32_t model);
+// Compares the taught lens with the running one within the tolerances above. The error
+// says in words what differs ("image size 320x240 vs 160x120", taught value first) and
+// the fix.
+Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now);
+// One line for `route info`: "equidistant 320x240, centre 159.50 119.50 px, ...".
+void FormatRouteDbLens(const RouteDbLens& lens, char* out, std::size_t size);
+
 // What produced the descriptors; a route loads only into a pipeline with equal settings.
 struct RouteDbSettings {
   std::uint32_t descriptor_kind = 0;
@@ -27,7 +63,10 @@ struct RouteDbSettings {
   std::uint32_t longitudes = 0;
   std::uint32_t dim = 0;  // floats per descriptor
   std::uint32_t normalisation = 0;
-  std::uint64_t lens_hash = 0;  // of the lens parameters the sampling table was built from
+  // A hash of the lens parameters as configured (app::LensHash). Compared only when the
+  // file is version 1 or 2 (no lens record); version 3 compares `lens` instead.
+  std::uint64_t lens_hash = 0;
+  RouteDbLens lens;  // version 3; when both sides know it, it replaces the hash check
   // The gravity-aligned cap the descriptors were computed with (version 2): its lower edge
   // and taper in hundredths of a degree, or kNoGravityCap (every version-1 file).
   std::uint32_t gravity_cap_cdeg = 0xffffffffu;
@@ -45,9 +84,14 @@ struct RouteFrameMeta {
 
 inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
-// This version reads versions 1 and 2 and writes 2.
-inline constexpr std::uint32_t kRouteDbVersion = 2;
+// Version 3 added the lens record after the header. This version reads 1 to 3, writes 3.
+inline constexpr std::uint32_t kRouteDbVersion = 3;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
+inline constexpr std::size_t kRouteDbLensRecordBytes = 144;  // version 3, after the header
+// Where the first chunk starts: after the header (versions 1, 2) and the lens record (3).
+constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
+  return version >= 3 ? kRouteDbHeaderBytes + kRouteDbLensRecordBytes : kRouteDbHeaderBytes;
+}
 inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
 inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
 constexpr std::size_t RouteDbRecordBytes(std::size_t dim) {
@@ -93,7 +137,8 @@ enum class RouteDbLoadPolicy : std::uint8_t {
 };
 
 struct RouteDbLoadReport {
-  RouteDbSettings settings;  // as stored in the file
+  RouteDbSettings settings;   // as stored in the file
+  std::uint32_t version = 0;  // the file's format version
   std::size_t frames = 0;
   std::size_t chunks = 0;  // intact frame chunks
   bool committed = false;
