@@ -235,6 +235,74 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   EXPECT_EQ(loaded.size(), 1000u);
 }
 
+// A route taught with the default lens, then run with the same lens written out to a
+// camera file (what a route taught from a recording meets live): the parameters compare
+// equal although the old hash of the parameter text differs. A lens that differs is named.
+TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
+  const skyloc::testing::ScratchDir scratch("skyloc_lens_");
+  const std::string path = scratch.path() + "/route.db";
+  Pipeline taught;
+  ASSERT_TRUE(taught.Init(SmallConfig()).ok());
+  {
+    RouteDbWriter writer;
+    ASSERT_TRUE(writer.Create(path.c_str(), taught.route_settings(), 25, false).ok());
+    const std::vector<float> d(static_cast<std::size_t>(taught.dim()), 0.5f);
+    ASSERT_TRUE(writer.Append(RouteFrameMeta{}, d).ok());
+    ASSERT_TRUE(writer.Commit().ok());
+  }
+  auto write_camera_file = [&](const char* name, double fov, double centre_x, int size) {
+    const std::string file = scratch.path() + "/" + name;
+    std::FILE* f = std::fopen(file.c_str(), "w");
+    EXPECT_NE(f, nullptr);
+    if (f == nullptr)
+      return file;
+    std::fprintf(f,
+                 "[image]\nwidth = %d\nheight = %d\n[lens]\nmodel = \"equidistant\"\n"
+                 "fov_deg = %.1f\ncentre = [%.1f, 31.5]\nradius_px = 32.0\n",
+                 size, size, fov, centre_x);
+    std::fclose(f);
+    return file;
+  };
+  auto load_with = [&](const std::string& camera_file, int size, RouteDbSettings* settings) {
+    Config c = SmallConfig();
+    c.camera.width = c.camera.height = size;
+    c.camera.lens_file = camera_file;
+    Pipeline now;
+    const Status init = now.Init(c);
+    EXPECT_TRUE(init.ok()) << init.message();
+    *settings = now.route_settings();
+    RouteFrames loaded;
+    EXPECT_TRUE(loaded.Allocate(10, static_cast<std::size_t>(now.dim())).ok());
+    return LoadRouteDb(path.c_str(), settings, RouteDbLoadPolicy::kStrict, &loaded, nullptr);
+  };
+
+  RouteDbSettings same;
+  Status s = load_with(write_camera_file("same.toml", 185.0, 31.5, 64), 64, &same);
+  EXPECT_TRUE(s.ok()) << s.message();
+  EXPECT_NE(same.lens_hash, taught.route_settings().lens_hash);  // the old check refused it
+
+  RouteDbSettings other;
+  s = load_with(write_camera_file("other.toml", 180.0, 32.0, 64), 64, &other);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("route database " + path), std::string::npos)
+      << s.message();
+  EXPECT_NE(
+      std::string(s.message()).find("fov 185.00 vs 180.00 degrees; centre x 31.50 vs 32.00 px"),
+      std::string::npos)
+      << s.message();
+  EXPECT_NE(std::string(s.message()).find("camera file it was taught with, or teach again"),
+            std::string::npos)
+      << s.message();
+}
+
+// The platform spells the lens models as dsp does (the record stores dsp's numbers).
+TEST(RouteLens, ModelNamesMatchDsp) {
+  for (auto m :
+       {dsp::LensModel::kEquidistant, dsp::LensModel::kEquisolid, dsp::LensModel::kKannalaBrandt,
+        dsp::LensModel::kOCamCalib, dsp::LensModel::kEquirectangular})
+    EXPECT_STREQ(RouteDbLensModelName(static_cast<std::uint32_t>(m)), dsp::LensModelName(m));
+}
+
 TEST(FrameLoop, StopsOnRequestedStop) {
   ClearSignalFlags();
   Pipeline pipeline;
