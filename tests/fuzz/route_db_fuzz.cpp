@@ -29,6 +29,10 @@ std::vector<std::uint8_t> ValidRouteFile() {
   settings.descriptor_kind = 1;
   settings.bands = 4;
   settings.dim = 4;
+  settings.lens.known = true;  // a version-3 lens record for the edits to reach
+  settings.lens.width = 64;
+  settings.lens.height = 48;
+  settings.lens.fov_deg = 185;
   RouteDbWriter writer;
   if (!writer.Create(path.c_str(), settings, 3, true).ok())
     std::abort();

@@ -38,6 +38,8 @@ expect_err "skyloc teach: camera sim (SIMULATED world \"street\", seed 1), GREY 
 expect_err "WARNING: the camera is SIMULATED" "teach on the simulated camera"
 expect_rc 0 "route info" -- "${RUN[@]}" route info "$DB"
 grep -q "150 frames in 15 chunks, committed" "$WORK/out" || fail "route info: $(cat "$WORK/out")"
+grep -q "lens equidistant 96x96, fov 185.00 degrees, centre 47.50 47.50 px, radius 48.00 px" "$WORK/out" ||
+  fail "route info lacks the lens: $(cat "$WORK/out")"
 
 # 2. a taught route is never replaced silently.
 expect_rc 1 "teach over an existing route" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 5
@@ -59,6 +61,17 @@ expect_err "WARNING: the status output is SIMULATED" "repeat with the simulated 
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
 expect_rc 1 "repeat with other bands" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/other.toml" --frames 5
 expect_err "taught with bands = 24 but this configuration has 16" "settings mismatch"
+# the default lens written out to a camera file is the same lens; another one is named
+write_lens() {  # write_lens FILE FOV CENTRE_X
+  printf '[image]\nwidth = 96\nheight = 96\n[lens]\nmodel = "equidistant"\nfov_deg = %s\ncentre = [%s, 47.5]\nradius_px = 48.0\n' "$2" "$3" >"$1"
+}
+write_lens "$WORK/same_lens.toml" 185.0 47.5
+write_lens "$WORK/other_lens.toml" 180.0 47.5
+sed "s|^height = 96|height = 96\nlens_file = \"$WORK/same_lens.toml\"|" "$CONFIG" >"$WORK/same.toml"
+sed "s|^height = 96|height = 96\nlens_file = \"$WORK/other_lens.toml\"|" "$CONFIG" >"$WORK/other.toml"
+expect_rc 0 "repeat with the default lens from a camera file" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/same.toml" --frames 5
+expect_rc 1 "repeat with another lens" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/other.toml" --frames 5
+expect_err "route database $DB: lens differs (taught vs now): fov 185.00 vs 180.00 degrees: use the camera file it was taught with, or teach again" "lens mismatch"
 
 # 5. a bad configuration value: one error naming file:line and key.
 printf '[seqslam]\nds = 0\n' >"$WORK/bad.toml"
