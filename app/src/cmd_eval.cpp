@@ -3,11 +3,15 @@
 // greyscale) descriptor, at one or more sequence lengths, and FAB-MAP 2.0 (SIFT words, a
 // vocabulary from `skyloc fabmap-train`; host builds only, docs/FABMAP.md). Writes matches.csv,
 // metrics.json, pr.svg and correspondence.svg into --out (docs/SEQSLAM.md, "Evaluation").
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -93,7 +97,12 @@ constexpr const char* kUsage =
     "\n"
     "Without --gt and --tolerance-m, both datasets need poses: the truth of a query is the\n"
     "reference recorded nearest to it, correct within --frame-tolerance frames.\n"
-    "Writes OUT/matches.csv, OUT/metrics.json, OUT/pr.svg, OUT/correspondence.svg.\n"
+    "  --force                write into an --out folder that is not empty (its\n"
+    "                         matches.csv, metrics.json and SVGs are replaced)\n"
+    "\n"
+    "Writes OUT/matches.csv, OUT/metrics.json, OUT/pr.svg, OUT/correspondence.svg, each\n"
+    "to a temporary file renamed into place once complete: a full disk leaves the\n"
+    "previous file (or none), never a truncated one.\n"
     "Every run also replays the firmware's state machine ([state] of --config) over\n"
     "its matches: matches.csv gives each frame's state, metrics.json the share of\n"
     "LOCALISED frames that are correct.\n";
@@ -120,6 +129,7 @@ struct EvalOptions {
   std::string reference;
   std::string query;
   std::string out;
+  bool force = false;  // --force: --out may hold files already
   std::string gt_file;
   double tolerance_m = -1.0;  // < 0: not given
   int frame_tolerance = 5;
@@ -180,6 +190,10 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
     }
     if (a == "--streaming") {
       o->streaming = true;
+      continue;
+    }
+    if (a == "--force") {
+      o->force = true;
       continue;
     }
     const char* v = value();
@@ -753,36 +767,96 @@ void Score(const GroundTruth& gt, Run* run) {
 
 // ---- Output files ------------------------------------------------------------------------
 
+// An output file written to a temporary file in the same folder and renamed into place only
+// after write + fflush + fsync + fclose succeeded: a full disk or a crash leaves the
+// previous file (or none), never a truncated one. Errors name the file and errno's text.
 class OutFile {
  public:
   Status Open(const std::string& path) {
     path_ = path;
-    f_ = std::fopen(path.c_str(), "w");
+    const std::size_t slash = path.rfind('/');
+    const std::size_t name_at = slash == std::string::npos ? 0 : slash + 1;
+    tmp_ = path.substr(0, name_at) + "." + path.substr(name_at) + ".tmp.XXXXXX";
+    const int fd = ::mkstemp(tmp_.data());
+    if (fd < 0) {
+      const int saved = errno;
+      tmp_.clear();
+      return Status::FromErrno(saved, "cannot create a temporary file for %s", path.c_str());
+    }
+    ::fchmod(fd, 0644);  // mkstemp's 0600 is not what a result file needs
+    f_ = ::fdopen(fd, "w");
     if (f_ == nullptr) {
       const int saved = errno;
-      return Status::FromErrno(saved, "cannot create %s", path.c_str());
+      ::close(fd);
+      Discard();
+      return Status::FromErrno(saved, "cannot open %s", tmp_.c_str());
     }
     return Status::Ok();
   }
   std::FILE* get() { return f_; }
   Status Close() {
-    const bool error = std::ferror(f_) != 0;
+    int saved = 0;
+    // Every step, errno saved at once; the first failure is the one reported.
+    if (std::ferror(f_) != 0)
+      saved = errno != 0 ? errno : EIO;
+    if (saved == 0 && std::fflush(f_) != 0)
+      saved = errno;
+    if (saved == 0 && ::fsync(::fileno(f_)) != 0)
+      saved = errno;
     const int closed = std::fclose(f_);
-    const int saved = errno;
+    if (saved == 0 && closed != 0)
+      saved = errno;
     f_ = nullptr;
-    if (error || closed != 0)
-      return Status::FromErrno(saved, "cannot write %s", path_.c_str());
+    if (saved != 0) {
+      Discard();
+      return Status::FromErrno(saved, "cannot write %s (the previous file, if any, is kept)",
+                               path_.c_str());
+    }
+    if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
+      saved = errno;
+      Discard();
+      return Status::FromErrno(saved, "cannot rename the new %s into place", path_.c_str());
+    }
+    tmp_.clear();
     return Status::Ok();
   }
   ~OutFile() {
     if (f_ != nullptr)
       std::fclose(f_);
+    Discard();
   }
 
  private:
+  void Discard() {
+    if (!tmp_.empty())
+      ::unlink(tmp_.c_str());
+    tmp_.clear();
+  }
+
   std::string path_;
+  std::string tmp_;
   std::FILE* f_ = nullptr;
 };
+
+// --out must be new or empty unless --force: an earlier evaluation is not replaced
+// silently. Checked before any work is done.
+Status CheckOutFolder(const EvalOptions& o) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(o.out, ec);
+  if (ec || !std::filesystem::exists(st) || !std::filesystem::is_directory(st) || o.force)
+    return Status::Ok();  // new, or not a folder: creating it reports that
+  std::filesystem::directory_iterator it(o.out, ec);
+  if (ec) {
+    return Status::Error(StatusCode::kUnavailable, "cannot read output folder %s: %s",
+                         o.out.c_str(), ec.message().c_str());
+  }
+  if (it == std::filesystem::directory_iterator())
+    return Status::Ok();
+  return Status::Error(StatusCode::kFailedPrecondition,
+                       "--out %s is not empty (it holds %s): pass --force to replace its "
+                       "results, or give a new or empty folder",
+                       o.out.c_str(), it->path().filename().c_str());
+}
 
 std::string JsonString(const std::string& s) {
   std::string out = "\"";
@@ -865,7 +939,12 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
 Status WriteText(const std::string& path, const std::string& text) {
   OutFile f;
   SKYLOC_TRY(f.Open(path));
-  std::fwrite(text.data(), 1, text.size(), f.get());
+  if (std::fwrite(text.data(), 1, text.size(), f.get()) != text.size()) {
+    const int saved = errno;
+    (void)f.Close();  // discards the temporary file
+    return Status::FromErrno(saved, "cannot write %s (the previous file, if any, is kept)",
+                             path.c_str());
+  }
   return f.Close();
 }
 
@@ -994,6 +1073,13 @@ int RunEval(std::span<char* const> args) {
   }
   if (rc != kExitOk)
     return rc;
+  // A file past RLIMIT_FSIZE is then a write error (EFBIG) reported naming the file, not a
+  // silent death by signal.
+  std::signal(SIGXFSZ, SIG_IGN);
+  if (const Status out = CheckOutFolder(options); !out.ok()) {
+    std::fprintf(stderr, "skyloc eval: %s\n", out.message());
+    return kExitUsage;
+  }
   const Status s = Evaluate(options);
   if (!s.ok()) {
     std::fprintf(stderr, "skyloc eval: %s\n", s.message());
