@@ -13,17 +13,26 @@ namespace {
 
 constexpr const char* kTeachUsage =
     "usage: skyloc teach --route FILE.db [--config FILE] [--dataset DIR] [--frames N]\n"
-    "                    [--force] [SIM]\n"
+    "                    [--force] [--record DIR] [SIM]\n"
     "  Records the sky descriptors of a route into FILE.db until SIGINT/SIGTERM, the end\n"
     "  of the camera's run or N frames; prints one JSON line per frame. --dataset: teach\n"
-    "  from a recorded dataset folder instead of the configured camera.\n"
+    "  from a recorded dataset folder instead of the configured camera. --record DIR: also\n"
+    "  write every frame into the dataset folder DIR (for replay and eval).\n"
     "  SIM (camera.kind = \"sim\" only): --tilt DEG --zigzag DEG --bumps DEG --yaw DEG\n"
     "  --lighting noon|dawn|overcast --run N (jitter, clouds, noise seed)\n";
 constexpr const char* kRepeatUsage =
-    "usage: skyloc repeat --route FILE.db [--config FILE] [--frames N] [SIM]\n"
+    "usage: skyloc repeat --route FILE.db [--config FILE] [--frames N] [--record DIR] [SIM]\n"
     "  Localises live against a taught route; one JSON line per frame (frame, timestamp,\n"
     "  best_index, uniqueness, confidence, state, latency_us) until SIGINT/SIGTERM.\n"
-    "  SIM: as for teach. A finite run with poses ends with precision/recall.\n";
+    "  SIM: as for teach. A finite run with poses ends with precision/recall. --record DIR:\n"
+    "  also write every frame into the dataset folder DIR.\n";
+constexpr const char* kRecordUsage =
+    "usage: skyloc record DIR [--config FILE] [--frames N] [SIM]\n"
+    "  Records the configured camera into the dataset folder DIR (docs/DATASETS.md):\n"
+    "  frames/NNNNNN.png, frames.csv with timestamps (and roll/pitch when [attitude] gives\n"
+    "  them), camera.toml. A writer thread keeps up with the camera or drops frames (counted);\n"
+    "  a full disk stops the recording and keeps what was written. Until SIGINT/SIGTERM/\n"
+    "  SIGHUP or N frames; one JSON line per frame. replay and eval read DIR.\n";
 constexpr const char* kReplayUsage =
     "usage: skyloc replay DATASET --route FILE.db [--config FILE] [--pace recorded|fast]\n"
     "                     [--frames N] [--tolerance-m X]\n"
@@ -100,6 +109,12 @@ int ParseModeArgs(const char* name, const char* usage, std::span<char* const> ar
       if (!need(a))
         return kExitUsage;
       s->dataset = args[++i];
+    } else if (std::strcmp(a, "--record") == 0 && !replay && s->mode != LoopMode::kRecord) {
+      if (!need(a))
+        return kExitUsage;
+      s->record_dir = args[++i];
+    } else if (s->mode == LoopMode::kRecord && a[0] != '-' && s->record_dir.empty()) {
+      s->record_dir = a;
     } else if (std::strcmp(a, "--force") == 0 && s->mode == LoopMode::kTeach) {
       s->force = true;
     } else if (replay && std::strcmp(a, "--pace") == 0) {
@@ -131,7 +146,13 @@ int ParseModeArgs(const char* name, const char* usage, std::span<char* const> ar
       return kExitUsage;
     }
   }
-  if (s->route_path.empty()) {
+  if (s->mode == LoopMode::kRecord) {
+    if (s->record_dir.empty()) {
+      std::fprintf(stderr, "skyloc %s: name the dataset folder DIR to record into\n%s", name,
+                   usage);
+      return kExitUsage;
+    }
+  } else if (s->route_path.empty()) {
     std::fprintf(stderr, "skyloc %s: --route FILE.db is required\n%s", name, usage);
     return kExitUsage;
   }
@@ -158,6 +179,15 @@ int RunRepeat(std::span<char* const> args) {
   s.mode = LoopMode::kRepeat;
   s.label = "skyloc repeat";
   if (const int rc = ParseModeArgs("repeat", kRepeatUsage, args, &s, false); rc >= 0)
+    return rc;
+  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+}
+
+int RunRecord(std::span<char* const> args) {
+  SessionArgs s;
+  s.mode = LoopMode::kRecord;
+  s.label = "skyloc record";
+  if (const int rc = ParseModeArgs("record", kRecordUsage, args, &s, false); rc >= 0)
     return rc;
   return RunSession(s) == 0 ? kExitOk : kExitFailure;
 }

@@ -338,15 +338,10 @@ Status WriteCameraFile(const std::string& dir, const Options& o, const dsp::Lens
     SKYLOC_TRY_ASSIGN(const std::string text, ReadText(o.camera_file));
     return WriteText(path, "# Copied by skyloc simulate from " + o.camera_file + "\n" + text);
   }
-  char text[512];
-  std::snprintf(text, sizeof text,
-                "# Written by skyloc simulate: the simulated camera (docs/CAMERA_FILE.md).\n"
-                "[image]\nwidth = %d\nheight = %d\n\n"
-                "[lens]\nmodel = \"%s\"\nfov_deg = %.6f\ncentre = [%.6f, %.6f]\n"
-                "radius_px = %.6f\n\n[mount]\nroll_deg = %.6f\npitch_deg = %.6f\nyaw_deg = %.6f\n",
-                lens.params().width, lens.params().height, dsp::LensModelName(lens.params().model),
-                lens.params().fov_deg, lens.centre_x(), lens.centre_y(), lens.radius_px(),
-                lens.params().roll_deg, lens.params().pitch_deg, lens.params().yaw_deg);
+  SKYLOC_TRY_ASSIGN(
+      const std::string text,
+      drivers::CameraFileText(
+          lens, "Written by skyloc simulate: the simulated camera (docs/CAMERA_FILE.md)."));
   return WriteText(path, text);
 }
 

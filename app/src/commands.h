@@ -19,6 +19,7 @@ int RunDemo(std::span<char* const> args);
 int RunTeach(std::span<char* const> args);
 int RunRepeat(std::span<char* const> args);
 int RunReplay(std::span<char* const> args);
+int RunRecord(std::span<char* const> args);
 int RunRoute(std::span<char* const> args);
 int RunEval(std::span<char* const> args);
 int RunDescribe(std::span<char* const> args);

@@ -24,7 +24,11 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
   const double t = static_cast<double>(r.timestamp.count()) * 1e-9;
   const long long latency_us = static_cast<long long>(r.latency.count() / 1000);
   int n;
-  if (mode == LoopMode::kTeach) {
+  if (mode == LoopMode::kRecord) {
+    n = std::snprintf(line, sizeof line,
+                      "{\"frame\":%llu,\"timestamp\":%.6f,\"latency_us\":%lld}\n",
+                      static_cast<unsigned long long>(r.frame), t, latency_us);
+  } else if (mode == LoopMode::kTeach) {
     n = std::snprintf(line, sizeof line,
                       "{\"frame\":%llu,\"timestamp\":%.6f,\"route_frames\":%llu,\"threshold\":%d,"
                       "\"sky_fraction\":%.4f,\"latency_us\":%lld}\n",
@@ -161,7 +165,11 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         attitude_outage = true;
       }
     }
-    if (options.mode == LoopMode::kTeach) {
+    if (options.recorder != nullptr)
+      (void)options.recorder->Submit(frame, attitude_used);  // dropped frames are counted
+    if (options.mode == LoopMode::kRecord) {
+      result.matched = false;  // the recorder has the frame; nothing else to do
+    } else if (options.mode == LoopMode::kTeach) {
       SKYLOC_TRY(pipeline.Describe(frame.image, &result, attitude_used));
       RouteFrameMeta meta;
       meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "frame_recorder.h"
 #include "pipeline.h"
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/camera.h"
@@ -15,7 +16,8 @@
 
 namespace skyloc::app {
 
-enum class LoopMode : std::uint8_t { kTeach, kRepeat };
+// kRecord: frames only go to LoopOptions::recorder (`skyloc record`), nothing is described.
+enum class LoopMode : std::uint8_t { kTeach, kRepeat, kRecord };
 
 // Receives every frame's result. Implementations must not allocate.
 class FrameSink {
@@ -76,6 +78,9 @@ struct LoopOptions {
   // What the reconnect time, pacing and latencies are measured with; null: CLOCK_MONOTONIC.
   // Tests pass a ManualClock their camera advances, so time-outs are exact, not timed.
   const Clock* clock = nullptr;
+  // --record: every captured frame (with its attitude when there is one) is offered to the
+  // recorder, which copies it and never blocks; null: no recording.
+  FrameRecorder* recorder = nullptr;
 };
 
 struct LoopSummary {

@@ -12,6 +12,7 @@ constexpr Command kCommands[] = {
     {"teach", "record a route's sky descriptors into a route database", RunTeach},
     {"repeat", "localise live against a taught route (one JSON line per frame)", RunRepeat},
     {"replay", "run a recorded dataset through the repeat pipeline", RunReplay},
+    {"record", "record the camera into a dataset folder for replay and eval", RunRecord},
     {"route", "inspect or recover a route database file", RunRoute},
     {"eval", "match a query run against a reference run and score it (PR, plots)", RunEval},
     {"describe", "print the sky descriptor (threshold, sky fraction, SH amplitudes) of images",

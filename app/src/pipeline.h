@@ -85,6 +85,7 @@ class Pipeline {
   Status Describe(const dsp::ImageView& image, FrameResult* result,
                   const dsp::Attitude* attitude = nullptr);
   bool uses_attitude() const { return uses_attitude_; }
+  const dsp::Lens& lens() const { return lens_; }  // the lens the frames are read through
   std::span<const float> descriptor() const { return amplitudes_.span(); }
 
   // Describe + SeqSLAM step + state machine. Allocates nothing.

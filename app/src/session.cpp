@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "skyloc/drivers/attitude_source.h"
+#include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
 #include "skyloc/drivers/iio_imu.h"
 #include "skyloc/drivers/simulated_imu.h"
@@ -380,9 +381,15 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
     std::snprintf(route, sizeof route, "%s", writer.replacing() ? "replacing it at commit" : "new");
   else
     std::snprintf(route, sizeof route, "%zu frames", loaded_frames);
-  std::fprintf(stderr, "%s: %s; %s; route %s (%s); config %s\n", args.label, camera, status,
-               args.route_path.c_str(), route,
-               config.source.empty() ? "built-in defaults" : config.source.c_str());
+  if (args.mode == LoopMode::kRecord) {
+    std::fprintf(stderr, "%s: %s; %s; recording into %s; config %s\n", args.label, camera, status,
+                 args.record_dir.c_str(),
+                 config.source.empty() ? "built-in defaults" : config.source.c_str());
+  } else {
+    std::fprintf(stderr, "%s: %s; %s; route %s (%s); config %s\n", args.label, camera, status,
+                 args.route_path.c_str(), route,
+                 config.source.empty() ? "built-in defaults" : config.source.c_str());
+  }
 
   if (args.simulation_expected || dataset)
     return;
@@ -392,7 +399,10 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
                  "%s: WARNING: the camera is SIMULATED ([camera] kind = \"sim\" in %s): this %s "
                  "uses a rendered world, not what the robot sees; set [camera] kind = \"v4l2\" "
                  "or \"libcamera\"\n",
-                 args.label, from, args.mode == LoopMode::kTeach ? "teach" : "repeat");
+                 args.label, from,
+                 args.mode == LoopMode::kTeach    ? "teach"
+                 : args.mode == LoopMode::kRecord ? "recording"
+                                                  : "repeat");
   }
   if (args.mode == LoopMode::kRepeat && config.status.kind == StatusOutputKind::kSim) {
     std::fprintf(stderr,
@@ -509,9 +519,30 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   PrintWarning(label, rt_report.memory_lock);
   PrintWarning(label, rt_report.affinity);
 
+  // The recording: its folder is created last, after everything else could start.
+  FrameRecorder frame_recorder;
+  if (!args.record_dir.empty()) {
+    FrameRecorderOptions ro;
+    ro.dir = args.record_dir;
+    ro.with_attitude = attitude.source != nullptr && pipeline.uses_attitude();
+    Result<std::string> camera_toml =
+        drivers::CameraFileText(pipeline.lens(),
+                                "Written by skyloc when it recorded this run: the camera's lens "
+                                "(docs/CAMERA_FILE.md).");
+    if (camera_toml.ok())
+      ro.camera_toml = *camera_toml;
+    else
+      PrintWarning(label,
+                   Status(camera_toml.status()).AddContext("no camera.toml in %s", ro.dir.c_str()));
+    SKYLOC_TRY(frame_recorder.Open(ro, info).AddContext("--record %s", ro.dir.c_str()));
+    std::fprintf(stderr, "%s: recording every frame%s into %s\n", label,
+                 ro.with_attitude ? " and its roll/pitch" : "", ro.dir.c_str());
+  }
+
   SKYLOC_TRY(camera->Start());
   LoopOptions loop;
   loop.mode = args.mode;
+  loop.recorder = frame_recorder.is_open() ? &frame_recorder : nullptr;
   loop.max_frames = args.max_frames;
   // Teach stops when the route is as long as repeat can load.
   const auto route_capacity = static_cast<std::uint64_t>(config.capacities.route_frames);
@@ -559,6 +590,19 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     if (!shutdown.ok() && !loop_status.ok())
       shutdown = Status::Ok();
   }
+  if (frame_recorder.is_open()) {
+    const Status closed = frame_recorder.Close();
+    const FrameRecorderCounters c = frame_recorder.counters();
+    std::fprintf(stderr,
+                 "%s: recording %s: %llu frames written, %llu dropped (the disk slower than the "
+                 "camera)%s%s\n",
+                 label, frame_recorder.dir().c_str(), static_cast<unsigned long long>(c.written),
+                 static_cast<unsigned long long>(c.dropped),
+                 closed.ok() ? "" : "; stopped: ", closed.ok() ? "" : closed.message());
+    if (c.without_attitude > 0)
+      std::fprintf(stderr, "%s: recording: %llu frames had no attitude (written as level)\n", label,
+                   static_cast<unsigned long long>(c.without_attitude));
+  }
   if (status) {
     PrintWarning(label, status->SafeState());
     status->Close();
@@ -604,6 +648,13 @@ int RunSession(const SessionArgs& args, SessionReport* report) {
   if (!s.ok()) {
     std::fprintf(stderr, "%s: %s\n", args.label, s.message());
     return 1;
+  }
+  if (args.mode == LoopMode::kRecord) {
+    std::fprintf(stderr, "%s: %llu frames captured, %llu capture errors%s\n", args.label,
+                 static_cast<unsigned long long>(report->loop.frames),
+                 static_cast<unsigned long long>(report->loop.capture_errors),
+                 report->loop.stopped ? ", stopped by signal" : "");
+    return 0;
   }
   std::fprintf(stderr,
                "%s: %llu frames (%llu LOST, %llu SEARCHING, %llu LOCALISED), %llu capture "

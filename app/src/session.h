@@ -42,6 +42,8 @@ struct SessionArgs {
   std::FILE* json = stdout;  // one line per frame; null for none
   FrameSink* extra_sink = nullptr;
   double tolerance_m = 2.0;  // replay/demo: a match within this distance is correct
+  // --record DIR (teach, repeat) and `skyloc record DIR`: the frames into this dataset folder.
+  std::string record_dir;
   const char* label = "skyloc";
   // camera.kind = "sim": how this run moves and what the light is like.
   SimRun sim;

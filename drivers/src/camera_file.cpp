@@ -243,6 +243,32 @@ Result<dsp::LensParams> GuessLensForImage(int width, int height, const char* ima
   return p;
 }
 
+Result<std::string> CameraFileText(const dsp::Lens& lens, const char* comment) {
+  const dsp::LensParams& p = lens.params();
+  if (p.model == dsp::LensModel::kOCamCalib)
+    return Status::Error(StatusCode::kUnimplemented,
+                         "an OCamCalib lens cannot be written out: copy its camera file and "
+                         "calib_results.txt instead");
+  char text[1024];
+  int n = std::snprintf(text, sizeof text,
+                        "# %s\n[image]\nwidth = %d\nheight = %d\n\n[lens]\nmodel = \"%s\"\n",
+                        comment, p.width, p.height, dsp::LensModelName(p.model));
+  if (p.model != dsp::LensModel::kEquirectangular) {
+    n += std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n),
+                       "fov_deg = %.9g\ncentre = [%.9g, %.9g]\nradius_px = %.9g\n", p.fov_deg,
+                       lens.centre_x(), lens.centre_y(), lens.radius_px());
+  }
+  if (p.model == dsp::LensModel::kKannalaBrandt) {
+    n += std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n),
+                       "fx = %.17g\nfy = %.17g\nk = [%.17g, %.17g, %.17g, %.17g]\n", p.fx, p.fy,
+                       p.k[0], p.k[1], p.k[2], p.k[3]);
+  }
+  std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n),
+                "\n[mount]\nroll_deg = %.9g\npitch_deg = %.9g\nyaw_deg = %.9g\n", p.roll_deg,
+                p.pitch_deg, p.yaw_deg);
+  return std::string(text);
+}
+
 Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* lens) {
   const dsp::LensError e = lens->Init(params);
   if (e == dsp::LensError::kOk)

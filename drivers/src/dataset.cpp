@@ -316,7 +316,7 @@ DatasetWriter::~DatasetWriter() {
 DatasetWriter::DatasetWriter(DatasetWriter&& other) noexcept
     : dir_(std::move(other.dir_)),
       csv_(std::exchange(other.csv_, nullptr)),
-      with_poses_(other.with_poses_),
+      columns_(other.columns_),
       next_index_(other.next_index_) {}
 
 DatasetWriter& DatasetWriter::operator=(DatasetWriter&& other) noexcept {
@@ -324,13 +324,13 @@ DatasetWriter& DatasetWriter::operator=(DatasetWriter&& other) noexcept {
     (void)Close();
     dir_ = std::move(other.dir_);
     csv_ = std::exchange(other.csv_, nullptr);
-    with_poses_ = other.with_poses_;
+    columns_ = other.columns_;
     next_index_ = other.next_index_;
   }
   return *this;
 }
 
-Status DatasetWriter::Open(const std::string& dir, bool with_poses) {
+Status DatasetWriter::Open(const std::string& dir, Columns columns) {
   if (csv_ != nullptr) {
     return Status::Error(StatusCode::kFailedPrecondition, "dataset writer: %s is already open",
                          dir_.c_str());
@@ -352,11 +352,21 @@ Status DatasetWriter::Open(const std::string& dir, bool with_poses) {
     }
     return Status::FromErrno(saved, "cannot create %s", csv_path.c_str());
   }
-  with_poses_ = with_poses;
+  columns_ = columns;
   next_index_ = 0;
-  const int written = with_poses
-                          ? std::fprintf(csv_, "%s,%s\n", kDatasetCsvHeader, kDatasetCsvPoseColumns)
-                          : std::fprintf(csv_, "%s\n", kDatasetCsvHeader);
+  int written;
+  switch (columns) {
+    case Columns::kPose:
+      written = std::fprintf(csv_, "%s,%s\n", kDatasetCsvHeader, kDatasetCsvPoseColumns);
+      break;
+    case Columns::kAttitude:
+      written = std::fprintf(csv_, "%s,%s\n", kDatasetCsvHeader, kDatasetCsvAttitudeColumns);
+      break;
+    case Columns::kNone:
+    default:
+      written = std::fprintf(csv_, "%s\n", kDatasetCsvHeader);
+      break;
+  }
   if (written < 0 || std::fflush(csv_) != 0) {
     const int saved = errno;
     return Status::FromErrno(saved, "cannot write %s", csv_path.c_str());
@@ -397,11 +407,14 @@ Status DatasetWriter::AppendRow(const std::string& file, double timestamp_s,
     return Status::Error(StatusCode::kInvalidArgument,
                          "dataset %s: frame %d timestamp is not finite", dir_.c_str(), next_index_);
   }
-  if (with_poses_ != pose.has_value()) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "dataset %s: frame %d %s a pose but the dataset was opened %s poses",
-                         dir_.c_str(), next_index_, pose ? "has" : "lacks",
-                         with_poses_ ? "with" : "without");
+  const bool with_poses = columns_ == Columns::kPose;
+  if (columns_ == Columns::kAttitude || with_poses != pose.has_value()) {
+    return Status::Error(
+        StatusCode::kInvalidArgument,
+        "dataset %s: frame %d %s a pose but the dataset was opened %s", dir_.c_str(), next_index_,
+        pose ? "has" : "lacks",
+        with_poses ? "with poses"
+                   : (columns_ == Columns::kAttitude ? "with attitudes" : "without poses"));
   }
   // %.17g round-trips a double exactly; timestamps get microsecond text.
   int written;
@@ -412,6 +425,29 @@ Status DatasetWriter::AppendRow(const std::string& file, double timestamp_s,
   } else {
     written = std::fprintf(csv_, "%d,%s,%.6f\n", next_index_, file.c_str(), timestamp_s);
   }
+  if (written < 0 || std::fflush(csv_) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot append to %s/frames.csv", dir_.c_str());
+  }
+  ++next_index_;
+  return Status::Ok();
+}
+
+Status DatasetWriter::AppendRow(const std::string& file, double timestamp_s,
+                                const dsp::Attitude& attitude) {
+  if (csv_ == nullptr || columns_ != Columns::kAttitude) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "dataset writer: an attitude row needs Open() with Columns::kAttitude");
+  }
+  if (file.empty() || file.find(',') != std::string::npos || file.find('/') != std::string::npos ||
+      !HasImageExtension(file) || !std::isfinite(timestamp_s)) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "dataset %s: frame %d: a .png/.pgm name without ',' or '/' and a finite "
+                         "timestamp are needed",
+                         dir_.c_str(), next_index_);
+  }
+  const int written = std::fprintf(csv_, "%d,%s,%.6f,%.17g,%.17g\n", next_index_, file.c_str(),
+                                   timestamp_s, attitude.roll_deg, attitude.pitch_deg);
   if (written < 0 || std::fflush(csv_) != 0) {
     const int saved = errno;
     return Status::FromErrno(saved, "cannot append to %s/frames.csv", dir_.c_str());

@@ -11,20 +11,19 @@
 #include <vector>
 
 #include "progress.h"
+#include "support/emulator.h"
 #include "support/synthetic_descriptors.h"
 
 namespace skyloc::app {
 namespace {
 
-// Debian 12's qemu-user (7.2) hangs in pthread_create when it runs a dynamically linked
-// ARM binary with -L (a bare std::thread never starts; a static binary is fine), so the
-// cross builds' tests, which run under it, cannot start threads. The host build runs
-// these tests; on a real ARM board they run as they are.
-#define SKIP_UNDER_EMULATION()                                                              \
-  do {                                                                                      \
-    if (SKYLOC_TESTS_UNDER_EMULATION)                                                       \
-      GTEST_SKIP() << "threads cannot start under qemu-user 7.2 (dynamic binary with -L); " \
-                      "tested by the host build";                                           \
+// qemu-user cannot start threads for these programs (support/emulator.h): the cross
+// builds skip; the host build and the arm64 VM run them.
+#define SKIP_UNDER_EMULATION()                                                            \
+  do {                                                                                    \
+    if (skyloc::testing::UnderUserModeEmulator())                                         \
+      GTEST_SKIP() << "qemu-user hangs in pthread_create here (support/emulator.h); the " \
+                      "host build and the arm64 VM run this";                             \
   } while (false)
 
 TEST(ParallelFor, RunsEveryTaskOnceWithWorkerIndicesInRange) {

@@ -64,6 +64,48 @@ yaw_deg = 90
   EXPECT_EQ(r->yaw_deg, 90.0);
 }
 
+// What skyloc writes next to a recording reads back as the same lens, for every model it
+// writes; an OCamCalib lens is refused (its polynomial lives in a file of its own).
+TEST(CameraFile, WrittenTextReadsBackAsTheSameLens) {
+  dsp::LensParams kb;
+  kb.model = dsp::LensModel::kKannalaBrandt;
+  kb.width = 640;
+  kb.height = 480;
+  kb.fx = 301.25;
+  kb.fy = 299.5;
+  kb.k = {0.01, -0.002, 0.0003, -0.00004};
+  kb.centre_x = 322.5;
+  kb.centre_y = 241.0;
+  kb.fov_deg = 190;
+  kb.roll_deg = 1.5;
+  kb.pitch_deg = -2.25;
+  kb.yaw_deg = 90;
+  dsp::LensParams eq;  // defaults: centre and radius unset, written as their effective values
+  eq.width = 96;
+  eq.height = 72;
+  for (const dsp::LensParams& p : {kb, eq}) {
+    dsp::Lens lens;
+    ASSERT_EQ(lens.Init(p), dsp::LensError::kOk);
+    Result<std::string> text = CameraFileText(lens, "a test");
+    ASSERT_TRUE(text.ok()) << text.status().message();
+    Result<dsp::LensParams> back = ParseCameraFile(*text, "written", ".");
+    ASSERT_TRUE(back.ok()) << back.status().message() << "\n" << *text;
+    dsp::Lens again;
+    ASSERT_EQ(again.Init(*back), dsp::LensError::kOk);
+    EXPECT_EQ(back->model, p.model);
+    EXPECT_EQ(back->width, p.width);
+    EXPECT_EQ(back->height, p.height);
+    EXPECT_NEAR(again.centre_x(), lens.centre_x(), 1e-6);
+    EXPECT_NEAR(again.centre_y(), lens.centre_y(), 1e-6);
+    EXPECT_NEAR(again.radius_px(), lens.radius_px(), 1e-6);
+    EXPECT_NEAR(back->fov_deg, p.fov_deg, 1e-6);
+    EXPECT_EQ(back->fx, p.fx);
+    EXPECT_EQ(back->k, p.k);
+    EXPECT_NEAR(back->yaw_deg, p.yaw_deg, 1e-6);
+    EXPECT_NEAR(back->pitch_deg, p.pitch_deg, 1e-6);
+  }
+}
+
 TEST(CameraFile, ErrorsNameTheFileTheKeyAndTheFix) {
   const std::string image = "[image]\nwidth = 640\nheight = 480\n";
   // Unknown key (a typo) with its line and the allowed keys.

@@ -19,7 +19,7 @@ else()
   set(args --batch --method vanilla)
 endif()
 # Under qemu-user (cross builds) eval runs on one thread: Debian 12's qemu 7.2 hangs in
-# pthread_create for a dynamic binary run with -L (tests/app/parallel_test.cpp).
+# pthread_create for a dynamic binary run with -L (tests/support/emulator.h).
 if(EMULATOR)
   set(jobs --jobs 1)
 endif()

@@ -173,6 +173,28 @@ expect_err "120 frames kept and committed; the last 10 did not fit" "teach on a 
 expect_rc 0 "route info after a full disk" -- "${RUN[@]}" route info "$WORK/fsize.db"
 grep -q "120 frames in 12 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
 
+# Recording: `skyloc record DIR` and `teach --record DIR` write dataset folders that teach
+# --dataset reads back. The recorder's writer thread cannot start under qemu-user
+# (tests/support/emulator.h), so only the native build runs this part.
+if [ ${#RUN[@]} -eq 1 ]; then
+  REC=$WORK/recording
+  expect_rc 0 "record" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 40
+  [ "$(wc -l <"$WORK/out")" -eq 40 ] || fail "record printed $(wc -l <"$WORK/out") JSON lines, expected 40"
+  expect_err "recording into $REC" "record start-up line"
+  expect_err "recording $REC: 40 frames written, 0 dropped" "record summary"
+  [ "$(wc -l <"$REC/frames.csv")" -eq 41 ] || fail "record: frames.csv has $(wc -l <"$REC/frames.csv") lines"
+  grep -q '^model = "equidistant"' "$REC/camera.toml" || fail "record: no camera.toml with the lens"
+  expect_rc 1 "record into an earlier recording" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 5
+  expect_err "already exists: choose a new folder" "record into an earlier recording"
+  expect_rc 2 "record without a folder" -- "${RUN[@]}" record --config "$CONFIG"
+  expect_rc 0 "teach --record" -- "${RUN[@]}" teach --route "$WORK/recorded.db" --config "$CONFIG" \
+    --frames 30 --record "$WORK/taught_run"
+  expect_err "recording $WORK/taught_run: 30 frames written" "teach --record summary"
+  expect_rc 0 "teach from the recording" -- "${RUN[@]}" teach --route "$WORK/again.db" \
+    --config "$CONFIG" --dataset "$WORK/taught_run"
+  expect_err "30 frames committed" "teach from the recording"
+fi
+
 if [ $failures -ne 0 ]; then
   echo "$failures check(s) failed" >&2
   exit 1

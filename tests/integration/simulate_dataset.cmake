@@ -22,7 +22,7 @@ foreach(mode uv visible)
   # The camera file records the simulated camera's turn on the robot (DefaultSimLens's
   # mount), so a replay describes in the frame the recorded roll and pitch are in.
   file(READ ${dir}/${mode}/camera.toml camera)
-  if(NOT camera MATCHES "yaw_deg = 90\\.0")
+  if(NOT camera MATCHES "yaw_deg = 90(\\.0*)?\n")
     message(FATAL_ERROR "${mode}/camera.toml does not record the mount yaw of 90:\n${camera}")
   endif()
   list(GET rows 0 header)

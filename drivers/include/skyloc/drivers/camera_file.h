@@ -5,6 +5,7 @@
 // never silently falls back to a default.
 #pragma once
 
+#include <string>
 #include <string_view>
 
 #include "skyloc/dsp/lens.h"
@@ -31,6 +32,12 @@ Result<dsp::OCamCalibModel> LoadOCamCalibFile(const char* path);
 // square-ish one (aspect 0.74..1.35) an equidistant 185-degree fisheye whose image circle
 // touches the short side; any other shape is an error naming `image` and the fix.
 Result<dsp::LensParams> GuessLensForImage(int width, int height, const char* image);
+
+// A camera file describing `lens` (its effective centre and radius, the mount), headed by
+// the comment line `comment`, that LoadCameraFile reads back to the same lens. OCamCalib
+// lenses are not written (their polynomial lives in a file of its own): kUnimplemented,
+// naming the fix (copy the camera file and its calib_results.txt).
+Result<std::string> CameraFileText(const dsp::Lens& lens, const char* comment);
 
 // dsp::Lens::Init with its error turned into a Status naming `source` and the fix.
 Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* lens);

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -67,10 +68,20 @@ class DatasetWriter {
   DatasetWriter(const DatasetWriter&) = delete;
   DatasetWriter& operator=(const DatasetWriter&) = delete;
 
+  // What each row carries besides index, file and timestamp.
+  enum class Columns : std::uint8_t {
+    kNone,
+    kPose,      // x,y,z,roll,pitch,yaw: every Append must carry a pose (the simulator)
+    kAttitude,  // roll,pitch: every AppendRow an attitude (a live camera with an IMU)
+  };
+
   // Creates DIR (and parents), DIR/frames/ and DIR/frames.csv with its header. Refuses
   // (kFailedPrecondition) when DIR/frames.csv already exists: a recording is never
   // overwritten. With `with_poses` every Append must carry a pose.
-  Status Open(const std::string& dir, bool with_poses);
+  Status Open(const std::string& dir, bool with_poses) {
+    return Open(dir, with_poses ? Columns::kPose : Columns::kNone);
+  }
+  Status Open(const std::string& dir, Columns columns);
 
   // Writes the image as frames/NNNNNN.png (SavePng: grey stays grey, RGB/BGR as RGB,
   // YUYV as its Y plane) and then appends its row, flushed.
@@ -78,6 +89,8 @@ class DatasetWriter {
 
   // Appends a row for an image the caller already wrote into DIR/frames/ (its name).
   Status AppendRow(const std::string& file, double timestamp_s, const std::optional<Pose>& pose);
+  // The same for Columns::kAttitude (roll and pitch from the attitude's zenith).
+  Status AppendRow(const std::string& file, double timestamp_s, const dsp::Attitude& attitude);
 
   // Flushes and closes frames.csv. Also done by the destructor (errors then are lost).
   Status Close();
@@ -89,7 +102,7 @@ class DatasetWriter {
  private:
   std::string dir_;
   std::FILE* csv_ = nullptr;
-  bool with_poses_ = false;
+  Columns columns_ = Columns::kNone;
   int next_index_ = 0;
 };
 
