@@ -3,7 +3,6 @@
 // any image failed, so scripts notice, and 2 for a bad command line (nothing processed).
 #include <cerrno>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -50,28 +49,8 @@ struct Options {
   std::vector<const char*> images;
 };
 
-__attribute__((format(printf, 1, 2))) int UsageError(const char* format, ...) {
-  std::fprintf(stderr, "skyloc describe: ");
-  va_list args;
-  va_start(args, format);
-  std::vfprintf(stderr, format, args);
-  va_end(args);
-  std::fprintf(stderr, "\nRun 'skyloc describe --help' for the options.\n");
-  return kExitUsage;
-}
-
-bool ParseDouble(const char* text, double* out, char** end_out = nullptr) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(text, &end);
-  if (end == text || errno != 0 || !std::isfinite(v))
-    return false;
-  if (end_out != nullptr)
-    *end_out = end;
-  else if (*end != '\0')
-    return false;
-  *out = v;
-  return true;
+int Usage(std::string_view what, std::string_view value = {}) {
+  return UsageError("describe", what, value);
 }
 
 // Returns kExitOk when parsed, else the exit code (help: kExitOk via `done`).
@@ -89,13 +68,13 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
       o->json = true;
     } else if (std::strcmp(a, "--camera") == 0) {
       if ((o->camera = value()) == nullptr)
-        return UsageError("%s needs a camera file (TOML)", a);
+        return Usage("%s needs a camera file (TOML)", a);
     } else if (std::strcmp(a, "--bands") == 0) {
       const char* v = value();
       double bands = 0;
-      if (v == nullptr || !ParseDouble(v, &bands) || bands != std::floor(bands) || bands < 1 ||
-          bands > dsp::kMaxShBands)
-        return UsageError("--bands needs a whole number from 1 to 512, not '%s'", v ? v : "");
+      if (v == nullptr || !ParseFiniteDouble(v, &bands) || bands != std::floor(bands) ||
+          bands < 1 || bands > dsp::kMaxShBands)
+        return Usage("--bands needs a whole number from 1 to 512, not '%s'", v ? v : "");
       o->bands = static_cast<int>(bands);
     } else if (std::strcmp(a, "--grid") == 0) {
       const char* v = value();
@@ -104,13 +83,13 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
       else if (v != nullptr && std::strcmp(v, "default") == 0)
         o->paper_grid = false;
       else
-        return UsageError("--grid must be 'default' or 'paper', not '%s'", v ? v : "");
+        return Usage("--grid must be 'default' or 'paper', not '%s'", v ? v : "");
     } else if (std::strcmp(a, "--lens") == 0) {
       const char* v = value();
       dsp::LensModel model;
       if (v == nullptr || !dsp::ParseLensModel(v, &model) ||
           model == dsp::LensModel::kKannalaBrandt || model == dsp::LensModel::kOCamCalib)
-        return UsageError(
+        return Usage(
             "--lens must be equidistant, equisolid or equirectangular (other "
             "models need a camera file), not '%s'",
             v ? v : "");
@@ -118,32 +97,33 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     } else if (std::strcmp(a, "--fov") == 0) {
       const char* v = value();
       double fov = 0;
-      if (v == nullptr || !ParseDouble(v, &fov) || !(fov > 0 && fov <= 360))
-        return UsageError("--fov needs a field of view in (0, 360] degrees, not '%s'", v ? v : "");
+      if (v == nullptr || !ParseFiniteDouble(v, &fov) || !(fov > 0 && fov <= 360))
+        return Usage("--fov needs a field of view in (0, 360] degrees, not '%s'", v ? v : "");
       o->fov_deg = fov;
     } else if (std::strcmp(a, "--centre") == 0 || std::strcmp(a, "--center") == 0) {
       const char* v = value();
       double x = 0, y = 0;
       char* end = nullptr;
-      if (v == nullptr || !ParseDouble(v, &x, &end) || *end != ',' || !ParseDouble(end + 1, &y))
-        return UsageError("--centre needs X,Y in pixels (e.g. 319.5,239.5), not '%s'", v ? v : "");
+      if (v == nullptr || !ParseFiniteDouble(v, &x, &end) || *end != ',' ||
+          !ParseFiniteDouble(end + 1, &y))
+        return Usage("--centre needs X,Y in pixels (e.g. 319.5,239.5), not '%s'", v ? v : "");
       o->centre_x = x;
       o->centre_y = y;
     } else if (std::strcmp(a, "--radius") == 0) {
       const char* v = value();
       double r = 0;
-      if (v == nullptr || !ParseDouble(v, &r) || !(r > 0))
-        return UsageError("--radius needs a positive image-circle radius in pixels, not '%s'",
-                          v ? v : "");
+      if (v == nullptr || !ParseFiniteDouble(v, &r) || !(r > 0))
+        return Usage("--radius needs a positive image-circle radius in pixels, not '%s'",
+                     v ? v : "");
       o->radius_px = r;
     } else if (a[0] == '-' && a[1] != '\0') {
-      return UsageError("unknown option '%s'", a);
+      return Usage("unknown option '%s'", a);
     } else {
       o->images.push_back(a);
     }
   }
   if (o->images.empty())
-    return UsageError("no image given: pass one or more PNG/PGM/PPM files");
+    return Usage("no image given: pass one or more PNG/PGM/PPM files");
   return kExitOk;
 }
 

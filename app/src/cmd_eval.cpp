@@ -166,16 +166,7 @@ bool ParseDoubleArg(const char* s, double* out) {
 
 // Returns kExitOk, or kExitUsage after printing the problem.
 int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
-  // `what` holds one %s for `a`.
-  auto fail = [](std::string_view what, const char* a) {
-    const std::size_t at = what.find("%s");
-    std::string msg(what.substr(0, at));
-    if (at != std::string_view::npos)
-      msg.append(a).append(what.substr(at + 2));
-    std::fprintf(stderr, "skyloc eval: %s\nRun 'skyloc eval --help' for the options.\n",
-                 msg.c_str());
-    return kExitUsage;
-  };
+  auto fail = [](std::string_view what, const char* a) { return UsageError("eval", what, a); };
   bool batch = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string_view a = args[i];
@@ -370,15 +361,18 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
                              dir.c_str(), camera.info().width, camera.info().height, file.c_str(),
                              lp.width, lp.height);
       }
-    } else {
-      // As `skyloc describe` guesses: a 2:1 image is a panorama, anything else a fisheye.
-      lp.width = camera.info().width;
-      lp.height = camera.info().height;
-      const double aspect = static_cast<double>(lp.width) / lp.height;
-      if (std::fabs(aspect - 2.0) < 0.05) {
-        lp.model = dsp::LensModel::kEquirectangular;
+    } else if (Result<dsp::LensParams> guess =
+                   drivers::GuessLensForImage(camera.info().width, camera.info().height,
+                                              camera.dataset().FramePath(0).c_str());
+               guess.ok()) {
+      lp = *guess;  // as `skyloc describe` guesses from the image's shape
+      if (lp.model == dsp::LensModel::kEquirectangular)
         source = "default lens (equirectangular: a 2:1 image)";
-      }
+    } else if (!o.lens) {
+      return Status::Error(StatusCode::kInvalidArgument, "%s or --lens", guess.status().message());
+    } else {
+      lp.width = camera.info().width;  // --lens says what the shape could not
+      lp.height = camera.info().height;
     }
     if (o.lens)
       lp.model = *o.lens;

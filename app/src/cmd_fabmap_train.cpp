@@ -42,16 +42,8 @@ constexpr const char* kUsage =
 }  // namespace
 
 int RunFabmapTrain(std::span<char* const> args) {
-  // `what` holds one %s for `a`.
   auto fail = [](std::string_view what, const char* a) {
-    const std::size_t at = what.find("%s");
-    std::string msg(what.substr(0, at));
-    if (at != std::string_view::npos)
-      msg.append(a).append(what.substr(at + 2));
-    std::fprintf(stderr,
-                 "skyloc fabmap-train: %s\nRun 'skyloc fabmap-train --help' for the options.\n",
-                 msg.c_str());
-    return kExitUsage;
+    return UsageError("fabmap-train", what, a);
   };
 #if SKYLOC_WITH_HOST_EVAL
   host_eval::TrainOptions o;

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -58,26 +57,8 @@ struct Options {
   dsp::Surf1dOptions surf;
 };
 
-__attribute__((format(printf, 1, 2))) int UsageError(const char* format, ...) {
-  std::fprintf(stderr, "skyloc surf1d: ");
-  va_list args;
-  va_start(args, format);
-  std::vfprintf(stderr, format, args);
-  va_end(args);
-  std::fprintf(stderr, "\nRun 'skyloc surf1d --help' for the options.\n");
-  return kExitUsage;
-}
-
-bool ParseNumber(const char* text, double* out, char** end_out = nullptr) {
-  if (text == nullptr || *text == '\0')
-    return false;
-  char* end = nullptr;
-  *out = std::strtod(text, &end);
-  if (end == text || !std::isfinite(*out))
-    return false;
-  if (end_out != nullptr)
-    *end_out = end;
-  return end_out != nullptr || *end == '\0';
+int Usage(std::string_view what, std::string_view value = {}) {
+  return UsageError("surf1d", what, value);
 }
 
 int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
@@ -94,12 +75,12 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
       else if (o->image_b == nullptr)
         o->image_b = a;
       else
-        return UsageError("one pair of images, got a third: '%s'", a);
+        return Usage("one pair of images, got a third: '%s'", a);
       continue;
     }
     const char* v = i + 1 < args.size() ? args[i + 1] : nullptr;
     if (v == nullptr)
-      return UsageError("%s needs a value", a);
+      return Usage("%s needs a value", a);
     ++i;
     double d = 0;
     if (std::strcmp(a, "--camera") == 0) {
@@ -109,25 +90,25 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     } else if (std::strcmp(a, "--elevation") == 0) {
       char* end = nullptr;
       double hi = 0;
-      if (!ParseNumber(v, &d, &end) || *end != ',' || !ParseNumber(end + 1, &hi) ||
+      if (!ParseFiniteDouble(v, &d, &end) || *end != ',' || !ParseFiniteDouble(end + 1, &hi) ||
           !(d >= -90 && d <= hi && hi <= 90))
-        return UsageError("--elevation '%s': give MIN,MAX degrees, -90 <= MIN <= MAX <= 90", v);
+        return Usage("--elevation '%s': give MIN,MAX degrees, -90 <= MIN <= MAX <= 90", v);
       o->strip.elevation_min_deg = d;
       o->strip.elevation_max_deg = hi;
     } else if (std::strcmp(a, "--columns") == 0) {
-      if (!ParseNumber(v, &d) || d != std::floor(d) || d < 64 || d > 4096)
-        return UsageError("--columns '%s': give a whole number of columns, 64..4096", v);
+      if (!ParseFiniteDouble(v, &d) || d != std::floor(d) || d < 64 || d > 4096)
+        return Usage("--columns '%s': give a whole number of columns, 64..4096", v);
       o->strip.n_azimuth = static_cast<int>(d);
     } else if (std::strcmp(a, "--threshold") == 0) {
-      if (!ParseNumber(v, &d) || d < 0 || d > 1000)
-        return UsageError("--threshold '%s': give a response threshold of 0..1000", v);
+      if (!ParseFiniteDouble(v, &d) || d < 0 || d > 1000)
+        return Usage("--threshold '%s': give a response threshold of 0..1000", v);
       o->surf.threshold = static_cast<float>(d);
     } else {
-      return UsageError("unknown option '%s'", a);
+      return Usage("unknown option '%s'", a);
     }
   }
   if (o->image_b == nullptr)
-    return UsageError("%s", "give two images: IMAGE_A IMAGE_B");
+    return Usage("%s", "give two images: IMAGE_A IMAGE_B");
   return kExitOk;
 }
 
@@ -190,13 +171,7 @@ Status Extract(const Options& o, const char* path, dsp::Surf1d* surf, View* view
   return Status::Ok();
 }
 
-struct DrawnMatch {
-  int a = 0;
-  int b = 0;
-  bool inlier = false;
-};
-
-std::string PlotSvg(const View& a, const View& b, const std::vector<DrawnMatch>& matches, int n) {
+std::string PlotSvg(const View& a, const View& b, const dsp::LandmarkMatcher& matcher, int n) {
   constexpr double kWidth = 900, kLeft = 60, kPlotW = 820, kPanelH = 140, kTopA = 40, kTopB = 260;
   const auto x_of = [&](double column) { return kLeft + kPlotW * column / n; };
   std::string svg;
@@ -239,12 +214,13 @@ std::string PlotSvg(const View& a, const View& b, const std::vector<DrawnMatch>&
   };
   panel(a, kTopA, "A");
   panel(b, kTopB, "B");
-  for (const DrawnMatch& m : matches) {
+  for (int i = 0; i < matcher.last_pair_count(); ++i) {
+    const dsp::LandmarkMatcher::MatchedPair m = matcher.last_pair(i);
     std::snprintf(buf, sizeof buf,
                   "<line x1=\"%.1f\" y1=\"%.0f\" x2=\"%.1f\" y2=\"%.0f\" stroke=\"%s\" "
                   "stroke-width=\"%s\"/>\n",
-                  x_of(m.a), kTopA + kPanelH, x_of(m.b), kTopB, m.inlier ? "#2ca02c" : "#d62728",
-                  m.inlier ? "1.2" : "0.6");
+                  x_of(m.x_stored), kTopA + kPanelH, x_of(m.x_test), kTopB,
+                  m.inlier ? "#2ca02c" : "#d62728", m.inlier ? "1.2" : "0.6");
     svg += buf;
   }
   std::snprintf(buf, sizeof buf,
@@ -310,12 +286,7 @@ int RunSurf1d(std::span<char* const> args) {
     std::printf("heading (strip correlation): %s\n", dsp::StripAlignmentErrorMessage(e));
   }
   if (o.plot != nullptr) {
-    std::vector<DrawnMatch> drawn;
-    for (int i = 0; i < matcher.last_pair_count(); ++i) {
-      const dsp::LandmarkMatcher::MatchedPair p = matcher.last_pair(i);
-      drawn.push_back({p.x_stored, p.x_test, p.inlier});
-    }
-    const std::string svg = PlotSvg(a, b, drawn, n);
+    const std::string svg = PlotSvg(a, b, matcher, n);
     std::FILE* f = std::fopen(o.plot, "w");
     const bool written = f != nullptr && std::fwrite(svg.data(), 1, svg.size(), f) == svg.size();
     const int saved_errno = errno;

@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <span>
+#include <string_view>
 
 namespace skyloc::app {
 
@@ -32,6 +33,15 @@ int RunFabmapTrain(std::span<char* const> args);
 inline bool IsHelpFlag(const char* arg) {
   return std::strcmp(arg, "--help") == 0 || std::strcmp(arg, "-h") == 0;
 }
+
+// The one way a command reports a bad command line, on stderr: "skyloc COMMAND: WHAT" with
+// WHAT's first %s replaced by `value`, then where the options are described. Returns
+// kExitUsage.
+int UsageError(const char* command, std::string_view what, std::string_view value = {});
+
+// A finite number at the start of `text`; with `end_out` the rest is left to the caller
+// (e.g. "X,Y"), without it the whole text must be the number.
+bool ParseFiniteDouble(const char* text, double* out, char** end_out = nullptr);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

@@ -252,29 +252,39 @@ std::vector<std::uint8_t> RenderFisheye(const Lens& lens, const Place& p, double
   return grey;
 }
 
-TEST(Surf1dTest, RecoversTheYawOfAFisheyeSceneThroughTheLens) {
-  LensParams params;
-  params.model = LensModel::kEquidistant;
-  params.width = 640;
-  params.height = 480;
-  params.fov_deg = 185.0;
-  Lens lens;
-  ASSERT_EQ(lens.Init(params), LensError::kOk);
-  HorizonStrip strip;
-  ASSERT_EQ(strip.Init(lens, HorizonStripOptions{}), HorizonStripError::kOk);
+// One place rendered through a 640x480 equidistant 185-degree fisheye at any yaw, and the
+// horizon strip of each rendering: what both heading methods are tested on.
+class FisheyeStrips : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    LensParams params;
+    params.model = LensModel::kEquidistant;
+    params.width = 640;
+    params.height = 480;
+    params.fov_deg = 185.0;
+    ASSERT_EQ(lens_.Init(params), LensError::kOk);
+    ASSERT_EQ(strip_.Init(lens_, HorizonStripOptions{}), HorizonStripError::kOk);
+  }
+  std::vector<float> StripAt(double yaw_deg) {
+    const std::vector<std::uint8_t> grey = RenderFisheye(lens_, place_, yaw_deg * kPi / 180.0);
+    std::vector<float> values(static_cast<std::size_t>(strip_.n_azimuth()));
+    EXPECT_EQ(strip_.Extract({grey.data(), 640, 480, 640, PixelFormat::kGrey8}, values),
+              HorizonStripError::kOk);
+    return values;
+  }
+  Lens lens_;
+  HorizonStrip strip_;
+  const Place place_ = RandomPlace(5);
+};
+
+TEST_F(FisheyeStrips, SurfRecoversTheYawOfTheScene) {
+  const HorizonStrip& strip = strip_;
   Surf1d surf;
   ASSERT_EQ(surf.Init(strip.n_azimuth(), Surf1dOptions{}), Surf1dError::kOk);
   LandmarkMatcher matcher;
   ASSERT_EQ(matcher.Init(512, LandmarkMatchOptions{}), Surf1dError::kOk);
 
-  const Place place = RandomPlace(5);
-  const auto features_for = [&](double yaw_deg) {
-    const std::vector<std::uint8_t> grey = RenderFisheye(lens, place, yaw_deg * kPi / 180.0);
-    std::vector<float> values(static_cast<std::size_t>(strip.n_azimuth()));
-    EXPECT_EQ(strip.Extract({grey.data(), 640, 480, 640, PixelFormat::kGrey8}, values),
-              HorizonStripError::kOk);
-    return DetectAll(surf, values);
-  };
+  const auto features_for = [&](double yaw_deg) { return DetectAll(surf, StripAt(yaw_deg)); };
   const std::vector<Surf1dFeature> stored = features_for(0.0);
   ASSERT_GE(stored.size(), 15u);
   for (const double yaw : {23.5, -71.2, 178.4, -163.0}) {
@@ -299,28 +309,11 @@ TEST(Surf1dTest, RecoversTheYawOfAFisheyeSceneThroughTheLens) {
 
 // The second heading method on the same rendered fisheye frames: circular correlation of
 // the whole strips (strip_alignment.h) agrees with the true yaw as 1D SURF does.
-TEST(Surf1dTest, StripCorrelationRecoversTheSameYawThroughTheLens) {
-  LensParams params;
-  params.model = LensModel::kEquidistant;
-  params.width = 640;
-  params.height = 480;
-  params.fov_deg = 185.0;
-  Lens lens;
-  ASSERT_EQ(lens.Init(params), LensError::kOk);
-  HorizonStrip strip;
-  ASSERT_EQ(strip.Init(lens, HorizonStripOptions{}), HorizonStripError::kOk);
-  const Place place = RandomPlace(5);
-  const auto strip_for = [&](double yaw_deg) {
-    const std::vector<std::uint8_t> grey = RenderFisheye(lens, place, yaw_deg * kPi / 180.0);
-    std::vector<float> values(static_cast<std::size_t>(strip.n_azimuth()));
-    EXPECT_EQ(strip.Extract({grey.data(), 640, 480, 640, PixelFormat::kGrey8}, values),
-              HorizonStripError::kOk);
-    return values;
-  };
-  const std::vector<float> stored = strip_for(0.0);
+TEST_F(FisheyeStrips, StripCorrelationRecoversTheSameYaw) {
+  const std::vector<float> stored = StripAt(0.0);
   for (const double yaw : {23.5, -71.2, 178.4, -163.0}) {
     StripAlignment a;
-    ASSERT_EQ(AlignStrips(stored, strip_for(yaw), &a), StripAlignmentError::kOk);
+    ASSERT_EQ(AlignStrips(stored, StripAt(yaw), &a), StripAlignmentError::kOk);
     double error = a.heading_offset_deg - yaw;
     error -= 360.0 * std::round(error / 360.0);
     EXPECT_LE(std::abs(error), 1.0) << "yaw " << yaw << " recovered " << a.heading_offset_deg;
