@@ -6,7 +6,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdarg>
@@ -15,13 +14,12 @@
 #include <iterator>
 #include <vector>
 
+#include "skyloc/platform/bytes.h"
 #include "skyloc/platform/crc32.h"
 
 namespace skyloc {
 
-// The file is little-endian; every target skyloc builds for is too. A big-endian port
-// would add byte swaps in Put/Get below.
-static_assert(std::endian::native == std::endian::little, "route_db.cpp assumes little-endian");
+// The file is little-endian (StoreBytes/LoadBytes, platform/bytes.h).
 
 namespace {
 
@@ -31,17 +29,6 @@ constexpr std::uint32_t kChunkFrames = 1;
 constexpr std::uint32_t kChunkCommit = 2;
 constexpr std::uint32_t kMaxDim = 1u << 16;
 constexpr std::uint32_t kHasPose = 1u;
-
-template <typename T>
-void Put(std::uint8_t* p, T v) {
-  std::memcpy(p, &v, sizeof v);
-}
-template <typename T>
-T Get(const std::uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
 
 std::uint32_t CrcOf(const std::uint8_t* p, std::size_t n) {
   return Crc32(std::span<const std::uint8_t>(p, n));
@@ -67,70 +54,71 @@ constexpr std::size_t kLensCrcOffset = kRouteDbLensRecordBytes - 4;
 void EncodeLensRecord(const RouteDbLens& l, std::uint8_t* h) {
   std::memset(h, 0, kRouteDbLensRecordBytes);
   if (l.known) {
-    Put<std::uint32_t>(h + 0, l.model);
-    Put<std::uint32_t>(h + 4, l.width);
-    Put<std::uint32_t>(h + 8, l.height);
-    Put<std::uint32_t>(h + 12, kLensKnown | (l.ocam_hash != 0 ? kLensOcamHash : 0u));
+    StoreBytes<std::uint32_t>(h + 0, l.model);
+    StoreBytes<std::uint32_t>(h + 4, l.width);
+    StoreBytes<std::uint32_t>(h + 8, l.height);
+    StoreBytes<std::uint32_t>(h + 12, kLensKnown | (l.ocam_hash != 0 ? kLensOcamHash : 0u));
     const double values[] = {l.centre_x, l.centre_y,  l.radius_px, l.fov_deg, l.fx,
                              l.fy,       l.k[0],      l.k[1],      l.k[2],    l.k[3],
                              l.roll_deg, l.pitch_deg, l.yaw_deg};
     for (std::size_t i = 0; i < std::size(values); ++i)
-      Put<double>(h + 16 + 8 * i, values[i]);
-    Put<std::uint64_t>(h + 120, l.ocam_hash);
+      StoreBytes<double>(h + 16 + 8 * i, values[i]);
+    StoreBytes<std::uint64_t>(h + 120, l.ocam_hash);
   }
-  Put<std::uint32_t>(h + kLensCrcOffset, CrcOf(h, kLensCrcOffset));
+  StoreBytes<std::uint32_t>(h + kLensCrcOffset, CrcOf(h, kLensCrcOffset));
 }
 
 RouteDbLens DecodeLensRecord(const std::uint8_t* h) {
   RouteDbLens l;
-  const std::uint32_t flags = Get<std::uint32_t>(h + 12);
+  const std::uint32_t flags = LoadBytes<std::uint32_t>(h + 12);
   if ((flags & kLensKnown) == 0)
     return l;
   l.known = true;
-  l.model = Get<std::uint32_t>(h + 0);
-  l.width = Get<std::uint32_t>(h + 4);
-  l.height = Get<std::uint32_t>(h + 8);
+  l.model = LoadBytes<std::uint32_t>(h + 0);
+  l.width = LoadBytes<std::uint32_t>(h + 4);
+  l.height = LoadBytes<std::uint32_t>(h + 8);
   double* values[] = {&l.centre_x, &l.centre_y,  &l.radius_px, &l.fov_deg, &l.fx,
                       &l.fy,       &l.k[0],      &l.k[1],      &l.k[2],    &l.k[3],
                       &l.roll_deg, &l.pitch_deg, &l.yaw_deg};
   for (std::size_t i = 0; i < std::size(values); ++i)
-    *values[i] = Get<double>(h + 16 + 8 * i);
-  l.ocam_hash = (flags & kLensOcamHash) != 0 ? Get<std::uint64_t>(h + 120) : 0;
+    *values[i] = LoadBytes<double>(h + 16 + 8 * i);
+  l.ocam_hash = (flags & kLensOcamHash) != 0 ? LoadBytes<std::uint64_t>(h + 120) : 0;
   return l;
 }
 
 void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   std::memset(h, 0, kRouteDbHeaderBytes);
   std::memcpy(h, kMagic, sizeof kMagic);
-  Put<std::uint32_t>(h + 8, kRouteDbVersion);
-  Put<std::uint32_t>(h + 12, static_cast<std::uint32_t>(RouteDbDataOffset(kRouteDbVersion)));
-  Put<std::uint32_t>(h + 16, s.descriptor_kind);
-  Put<std::uint32_t>(h + 20, s.bands);
-  Put<std::uint32_t>(h + 24, s.rings);
-  Put<std::uint32_t>(h + 28, s.longitudes);
-  Put<std::uint32_t>(h + 32, s.dim);
-  Put<std::uint32_t>(h + 36, s.normalisation);
-  Put<std::uint64_t>(h + 40, s.lens_hash);
-  Put<std::uint32_t>(h + 48, static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim)));
-  Put<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
-  Put<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
-  Put<std::uint32_t>(h + 60, CrcOf(h, 60));
+  StoreBytes<std::uint32_t>(h + 8, kRouteDbVersion);
+  StoreBytes<std::uint32_t>(h + 12, static_cast<std::uint32_t>(RouteDbDataOffset(kRouteDbVersion)));
+  StoreBytes<std::uint32_t>(h + 16, s.descriptor_kind);
+  StoreBytes<std::uint32_t>(h + 20, s.bands);
+  StoreBytes<std::uint32_t>(h + 24, s.rings);
+  StoreBytes<std::uint32_t>(h + 28, s.longitudes);
+  StoreBytes<std::uint32_t>(h + 32, s.dim);
+  StoreBytes<std::uint32_t>(h + 36, s.normalisation);
+  StoreBytes<std::uint64_t>(h + 40, s.lens_hash);
+  StoreBytes<std::uint32_t>(h + 48, static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim)));
+  StoreBytes<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
+  StoreBytes<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
+  StoreBytes<std::uint32_t>(h + 60, CrcOf(h, 60));
   EncodeLensRecord(s.lens, h + kRouteDbHeaderBytes);
 }
 
 void EncodeChunkHeader(std::uint32_t type, std::uint64_t first, std::uint32_t count,
                        std::uint32_t payload_bytes, std::uint32_t payload_crc, std::uint8_t* h) {
-  Put<std::uint32_t>(h + 0, kChunkMagic);
-  Put<std::uint32_t>(h + 4, type);
-  Put<std::uint64_t>(h + 8, first);
-  Put<std::uint32_t>(h + 16, count);
-  Put<std::uint32_t>(h + 20, payload_bytes);
-  Put<std::uint32_t>(h + 24, payload_crc);
-  Put<std::uint32_t>(h + 28, CrcOf(h, 28));
+  StoreBytes<std::uint32_t>(h + 0, kChunkMagic);
+  StoreBytes<std::uint32_t>(h + 4, type);
+  StoreBytes<std::uint64_t>(h + 8, first);
+  StoreBytes<std::uint32_t>(h + 16, count);
+  StoreBytes<std::uint32_t>(h + 20, payload_bytes);
+  StoreBytes<std::uint32_t>(h + 24, payload_crc);
+  StoreBytes<std::uint32_t>(h + 28, CrcOf(h, 28));
 }
 
 bool ChunkHeaderIntact(const std::uint8_t* h) {
-  return Get<std::uint32_t>(h) == kChunkMagic && CrcMatches(Get<std::uint32_t>(h + 28), h, 28);
+  return LoadBytes<std::uint32_t>(h) == kChunkMagic &&
+         CrcMatches(LoadBytes<std::uint32_t>(h + 28), h, 28);
 }
 
 Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
@@ -345,7 +333,7 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   }
   if (std::memcmp(b, kMagic, sizeof kMagic) != 0)
     return Status::Error(StatusCode::kInvalidArgument, "not a skyloc route database (no magic)");
-  const std::uint32_t version = Get<std::uint32_t>(b + 8);
+  const std::uint32_t version = LoadBytes<std::uint32_t>(b + 8);
   if (version < 1 || version > kRouteDbVersion) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "route database version %u; this skyloc reads versions 1 to %u: %s",
@@ -355,7 +343,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                                                    : "teach the route again");
   }
   const std::size_t data_offset = RouteDbDataOffset(version);
-  if (!CrcMatches(Get<std::uint32_t>(b + 60), b, 60) || Get<std::uint32_t>(b + 12) != data_offset) {
+  if (!CrcMatches(LoadBytes<std::uint32_t>(b + 60), b, 60) ||
+      LoadBytes<std::uint32_t>(b + 12) != data_offset) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): checksum mismatch, the file "
                          "is corrupt");
@@ -367,26 +356,27 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                          size, data_offset);
   }
   const std::uint8_t* lens_record = b + kRouteDbHeaderBytes;
-  if (version >= 3 &&
-      !CrcMatches(Get<std::uint32_t>(lens_record + kLensCrcOffset), lens_record, kLensCrcOffset)) {
+  if (version >= 3 && !CrcMatches(LoadBytes<std::uint32_t>(lens_record + kLensCrcOffset),
+                                  lens_record, kLensCrcOffset)) {
     return Status::Error(StatusCode::kDataLoss,
                          "lens record (offset %zu): checksum mismatch, the file is corrupt",
                          kRouteDbHeaderBytes);
   }
   r.version = version;
   RouteDbSettings& s = r.settings;
-  s.descriptor_kind = Get<std::uint32_t>(b + 16);
-  s.bands = Get<std::uint32_t>(b + 20);
-  s.rings = Get<std::uint32_t>(b + 24);
-  s.longitudes = Get<std::uint32_t>(b + 28);
-  s.dim = Get<std::uint32_t>(b + 32);
-  s.normalisation = Get<std::uint32_t>(b + 36);
-  s.lens_hash = Get<std::uint64_t>(b + 40);
-  s.gravity_cap_cdeg = version >= 2 ? Get<std::uint32_t>(b + 52) : kNoGravityCap;
-  s.gravity_cap_taper_cdeg = version >= 2 ? Get<std::uint32_t>(b + 56) : 0;
+  s.descriptor_kind = LoadBytes<std::uint32_t>(b + 16);
+  s.bands = LoadBytes<std::uint32_t>(b + 20);
+  s.rings = LoadBytes<std::uint32_t>(b + 24);
+  s.longitudes = LoadBytes<std::uint32_t>(b + 28);
+  s.dim = LoadBytes<std::uint32_t>(b + 32);
+  s.normalisation = LoadBytes<std::uint32_t>(b + 36);
+  s.lens_hash = LoadBytes<std::uint64_t>(b + 40);
+  s.gravity_cap_cdeg = version >= 2 ? LoadBytes<std::uint32_t>(b + 52) : kNoGravityCap;
+  s.gravity_cap_taper_cdeg = version >= 2 ? LoadBytes<std::uint32_t>(b + 56) : 0;
   if (version >= 3)
     s.lens = DecodeLensRecord(lens_record);
-  if (s.dim == 0 || s.dim > kMaxDim || Get<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim)) {
+  if (s.dim == 0 || s.dim > kMaxDim ||
+      LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim)) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): descriptor size %u is "
                          "invalid",
@@ -422,11 +412,11 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                               "chunk %zu at offset %zu: header checksum mismatch", chunk, offset);
       break;
     }
-    const std::uint32_t type = Get<std::uint32_t>(h + 4);
-    const std::uint64_t first = Get<std::uint64_t>(h + 8);
-    const std::uint32_t count = Get<std::uint32_t>(h + 16);
-    const std::uint32_t payload_bytes = Get<std::uint32_t>(h + 20);
-    const std::uint32_t payload_crc = Get<std::uint32_t>(h + 24);
+    const std::uint32_t type = LoadBytes<std::uint32_t>(h + 4);
+    const std::uint64_t first = LoadBytes<std::uint64_t>(h + 8);
+    const std::uint32_t count = LoadBytes<std::uint32_t>(h + 16);
+    const std::uint32_t payload_bytes = LoadBytes<std::uint32_t>(h + 20);
+    const std::uint32_t payload_crc = LoadBytes<std::uint32_t>(h + 24);
     if (first != r.frames) {
       problem = Status::Error(StatusCode::kDataLoss,
                               "chunk %zu at offset %zu: starts at frame "
@@ -478,8 +468,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
       for (std::uint32_t i = 0; i < count; ++i) {
         const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
         RouteFrameMeta meta;
-        meta.timestamp_ns = Get<std::uint64_t>(rec);
-        meta.has_pose = (Get<std::uint32_t>(rec + 8) & kHasPose) != 0;
+        meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
+        meta.has_pose = (LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0;
         std::memcpy(meta.pose.data(), rec + 16, sizeof meta.pose);
         // Copied byte-wise: the input need not be aligned for float.
         const std::span<float> slot = out->Emplace(meta);
@@ -796,8 +786,8 @@ Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> 
   std::uint8_t* rec =
       chunk_.data() + kRouteDbChunkHeaderBytes + pending_ * RouteDbRecordBytes(settings_.dim);
   std::memset(rec, 0, kRouteDbRecordFixedBytes);
-  Put<std::uint64_t>(rec, meta.timestamp_ns);
-  Put<std::uint32_t>(rec + 8, meta.has_pose ? kHasPose : 0u);
+  StoreBytes<std::uint64_t>(rec, meta.timestamp_ns);
+  StoreBytes<std::uint32_t>(rec + 8, meta.has_pose ? kHasPose : 0u);
   std::memcpy(rec + 16, meta.pose.data(), sizeof meta.pose);
   std::memcpy(rec + kRouteDbRecordFixedBytes, descriptor.data(), descriptor.size_bytes());
   ++pending_;

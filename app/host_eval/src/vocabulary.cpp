@@ -9,6 +9,7 @@
 #include <cstring>
 #include <span>
 
+#include "skyloc/platform/bytes.h"
 #include "skyloc/platform/crc32.h"
 
 namespace skyloc::host_eval {
@@ -31,19 +32,13 @@ constexpr std::uint32_t kMaxDim = 4096;
 
 template <typename T>
 void Put(std::vector<std::uint8_t>* out, std::size_t at, T v) {
-  std::memcpy(out->data() + at, &v, sizeof v);
+  StoreBytes(out->data() + at, v);
 }
 template <typename T>
 void Append(std::vector<std::uint8_t>* out, T v) {
   const std::size_t at = out->size();
   out->resize(at + sizeof v);
   Put(out, at, v);
-}
-template <typename T>
-T Get(const std::uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
 }
 
 std::uint32_t CrcOf(const std::uint8_t* p, std::size_t n) {
@@ -217,7 +212,7 @@ Result<Vocabulary> LoadVocabulary(const std::string& path) {
                          "file skyloc fabmap-train wrote",
                          p);
   }
-  const std::uint32_t version = Get<std::uint32_t>(b.data() + 8);
+  const std::uint32_t version = LoadBytes<std::uint32_t>(b.data() + 8);
   if (version != kVocabularyVersion) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "vocabulary %s has format version %u; this skyloc reads version %u: %s", p,
@@ -226,53 +221,53 @@ Result<Vocabulary> LoadVocabulary(const std::string& path) {
                              ? "use the skyloc that wrote it, or train it again with this one"
                              : "train it again with skyloc fabmap-train");
   }
-  if (b.size() < kHeaderBytes || Get<std::uint32_t>(b.data() + 12) != kHeaderBytes)
+  if (b.size() < kHeaderBytes || LoadBytes<std::uint32_t>(b.data() + 12) != kHeaderBytes)
     return corrupt("truncated header");
-  if (Get<std::uint32_t>(b.data() + 84) != CrcOf(b.data(), 84))
+  if (LoadBytes<std::uint32_t>(b.data() + 84) != CrcOf(b.data(), 84))
     return corrupt("header checksum mismatch");
   Vocabulary v;
-  v.features.width = static_cast<int>(Get<std::uint32_t>(b.data() + 16));
-  v.features.height = static_cast<int>(Get<std::uint32_t>(b.data() + 20));
-  v.features.max_features = static_cast<int>(Get<std::uint32_t>(b.data() + 24));
-  v.features.descriptor = Get<std::uint32_t>(b.data() + 28);
-  const std::uint32_t dim = Get<std::uint32_t>(b.data() + 32);
-  const std::uint32_t words = Get<std::uint32_t>(b.data() + 36);
-  const std::uint32_t samples = Get<std::uint32_t>(b.data() + 44);
-  const std::uint64_t ids = Get<std::uint64_t>(b.data() + 48);
-  const std::uint64_t payload = Get<std::uint64_t>(b.data() + 72);
+  v.features.width = static_cast<int>(LoadBytes<std::uint32_t>(b.data() + 16));
+  v.features.height = static_cast<int>(LoadBytes<std::uint32_t>(b.data() + 20));
+  v.features.max_features = static_cast<int>(LoadBytes<std::uint32_t>(b.data() + 24));
+  v.features.descriptor = LoadBytes<std::uint32_t>(b.data() + 28);
+  const std::uint32_t dim = LoadBytes<std::uint32_t>(b.data() + 32);
+  const std::uint32_t words = LoadBytes<std::uint32_t>(b.data() + 36);
+  const std::uint32_t samples = LoadBytes<std::uint32_t>(b.data() + 44);
+  const std::uint64_t ids = LoadBytes<std::uint64_t>(b.data() + 48);
+  const std::uint64_t payload = LoadBytes<std::uint64_t>(b.data() + 72);
   if (dim > kMaxDim || words > kMaxWords || ids > (1ull << 40))
     return corrupt("impossible sizes");
   if (payload != PayloadBytes(words, dim, samples, ids) || b.size() - kHeaderBytes != payload)
     return corrupt("size does not match its header");
-  if (Get<std::uint32_t>(b.data() + 80) != CrcOf(b.data() + kHeaderBytes, payload))
+  if (LoadBytes<std::uint32_t>(b.data() + 80) != CrcOf(b.data() + kHeaderBytes, payload))
     return corrupt("payload checksum mismatch");
   v.features.descriptor_dim = static_cast<int>(dim);
   v.words = static_cast<int>(words);
   v.tree.words = v.words;
-  v.tree.root = static_cast<int>(Get<std::uint32_t>(b.data() + 40));
-  v.p_z_given_e = Get<double>(b.data() + 56);
-  v.p_z_given_not_e = Get<double>(b.data() + 64);
+  v.tree.root = static_cast<int>(LoadBytes<std::uint32_t>(b.data() + 40));
+  v.p_z_given_e = LoadBytes<double>(b.data() + 56);
+  v.p_z_given_not_e = LoadBytes<double>(b.data() + 64);
   const std::uint8_t* at = b.data() + kHeaderBytes;
   v.centres.resize(static_cast<std::size_t>(words) * dim);
   for (float& c : v.centres) {
-    c = Get<float>(at);
+    c = LoadBytes<float>(at);
     at += 4;
   }
   v.tree.parent.resize(words);
   for (std::int32_t& q : v.tree.parent) {
-    q = Get<std::int32_t>(at);
+    q = LoadBytes<std::int32_t>(at);
     at += 4;
   }
   for (auto* table : {&v.tree.p_z, &v.tree.p_z_given_parent, &v.tree.p_z_given_no_parent}) {
     table->resize(words);
     for (double& x : *table) {
-      x = Get<double>(at);
+      x = LoadBytes<double>(at);
       at += 8;
     }
   }
   std::vector<std::uint64_t> offsets(static_cast<std::size_t>(samples) + 1);
   for (std::uint64_t& o : offsets) {
-    o = Get<std::uint64_t>(at);
+    o = LoadBytes<std::uint64_t>(at);
     at += 8;
   }
   const std::uint8_t* ids_at = at;
@@ -284,7 +279,7 @@ Result<Vocabulary> LoadVocabulary(const std::string& path) {
   v.samples.resize(samples);
   for (std::size_t s = 0; s < samples; ++s) {
     for (std::uint64_t k = offsets[s]; k < offsets[s + 1]; ++k)
-      v.samples[s].push_back(Get<std::uint32_t>(ids_at + 4 * k));
+      v.samples[s].push_back(LoadBytes<std::uint32_t>(ids_at + 4 * k));
   }
   if (Status s = CheckVocabulary(v); !s.ok()) {
     return Status::Error(StatusCode::kDataLoss,
