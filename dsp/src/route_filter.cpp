@@ -242,7 +242,7 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
 
   out->valid = true;
   out->row = best;
-  out->reference = row_frame(best);
+  out->reference = ReportedFrame(best);
   out->start = -1;    // no straight trajectory: the path may change speed every frame
   out->velocity = 0;  // not estimated
   // Costs are sums over the filter's memory (1 + lambda + lambda^2 + ... = ds frames of
@@ -261,6 +261,22 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   }
   out->confidence = 1.0f - out->uniqueness;
   return SeqSlamError::kOk;
+}
+
+int RouteFilter::ReportedFrame(int best) const {
+  const int first = row_first_frame(best), last = row_last_frame(best);
+  if (last == first)
+    return first;
+  // Doubles: the weights of near-equal costs decide the frame, and the same doubles come
+  // out on every machine.
+  const double best_cost = static_cast<double>(cost_[Sz(best)]);
+  const auto weight = [&](int row) {
+    return row < 0 || row >= rows_ ? 0.0
+                                   : std::exp(best_cost - static_cast<double>(cost_[Sz(row)]));
+  };
+  const double before = weight(best - 1), after = weight(best + 1);
+  const double p = (after - before) / (1.0 + before + after);
+  return first + static_cast<int>(std::floor((0.5 + p) * (last - first)));
 }
 
 std::size_t RouteFilter::BytesPerReference(int dim, ReferenceStorage storage) {

@@ -11,7 +11,8 @@
 //     standing robot when the route has stops), and at most half their median (the
 //     change of a typical frame: on a route without stops, or of unrelated frames,
 //     little or nothing merges). Frames in motion are kept, so a match keeps its
-//     precision in frames; a matched row reports the middle frame of its run.
+//     precision in frames. A matched row of one frame reports that frame; a merged row
+//     reports where in its run the evidence puts the robot (5.).
 //  2. Emission. Each query's difference column (mean absolute difference to every row,
 //     as SeqSLAM's) is z-scored over the whole route: z = (d - mean) / std. No local
 //     contrast window, so the minimum stays where the descriptor puts it (OpenSeqSLAM's
@@ -30,6 +31,16 @@
 //     deviations of evidence the best path is ahead by. confidence = 1 - exp(-margin),
 //     uniqueness = exp(-margin) (so confidence = 1 - uniqueness, as for SeqSLAM). Right
 //     after a reset the costs hold little evidence, so the confidence starts low and grows.
+//  5. The frame a merged row reports. A row that merged a stop spans many taught frames;
+//     its middle is right while the robot stands there, and half the stop wrong while it
+//     arrives or leaves (the frames just before and after the stop are where it is).
+//     With the same weights as the confidence, w = exp(-(cost_neighbour - cost_best))
+//     for the rows before and after (0 past the route's ends), the position in the run
+//     is p = (w_after - w_before) / (1 + w_before + w_after), in -1/2..1/2: the mean row
+//     offset over the best and its two neighbours. The row reports frame
+//     first + floor((1/2 + p) (last - first)): its middle when both neighbours are far
+//     behind (p = 0), its last frame when the next row is as good (leaving), its first
+//     when the row before is (arriving). A row of one frame reports that frame.
 //
 // Fixed memory (everything at Init), no allocation in AddReference, FinishRoute or Step.
 // Step is O(rows x (dim + K)).
@@ -93,10 +104,12 @@ class RouteFilter {
   // The taught frames merged into row r: first .. last (inclusive).
   int row_first_frame(int r) const { return first_frame_[static_cast<std::size_t>(r)]; }
   int row_last_frame(int r) const { return last_frame_[static_cast<std::size_t>(r)]; }
-  // The frame a match to row r reports: the middle of its run.
-  int row_frame(int r) const { return (row_first_frame(r) + row_last_frame(r)) / 2; }
   // The merge threshold FinishRoute used (0: nothing merged).
   float keyframe_threshold() const { return keyframe_threshold_; }
+
+  // The frame a match to row `best` reports, from the costs of the last Step (docs
+  // above, 5.).
+  int ReportedFrame(int best) const;
 
   static std::size_t BytesPerReference(int dim,
                                        ReferenceStorage storage = ReferenceStorage::kFloat32);
