@@ -29,6 +29,23 @@ namespace skyloc::drivers {
 namespace {
 
 constexpr int kMaxImageSide = 65535;  // OwnedImage::Allocate's limit
+// A header is a promise a few bytes long: without a limit on the pixels, a 30-byte file
+// that says 50000x50000 makes the reader allocate gigabytes before it finds the data
+// missing (found by tests/fuzz/image_file_fuzz.cpp). 2^26 pixels (8192x8192, 192 MB as
+// RGB) is well above any fisheye camera's frame.
+constexpr std::int64_t kMaxImagePixels = std::int64_t{1} << 26;
+
+Status TooLarge(const char* kind, const char* path, std::int64_t width, std::int64_t height) {
+  return Status::Error(StatusCode::kInvalidArgument,
+                       "%s '%s' is %lldx%lld pixels: too large, skyloc reads images of up to "
+                       "%lld pixels (8192x8192) and sides up to %dx%d; scale it down",
+                       kind, path, static_cast<long long>(width), static_cast<long long>(height),
+                       static_cast<long long>(kMaxImagePixels), kMaxImageSide, kMaxImageSide);
+}
+
+bool IsTooLarge(std::int64_t width, std::int64_t height) {
+  return width > kMaxImageSide || height > kMaxImageSide || width * height > kMaxImagePixels;
+}
 
 struct StbFree {
   void operator()(void* p) const { stbi_image_free(p); }
@@ -75,22 +92,39 @@ PnmHeader ReadPnmHeader(std::FILE* f) {
 }
 
 Result<OwnedImage> ReadPnm(std::FILE* f, const PnmHeader& h, const char* path) {
-  if (h.width <= 0 || h.height <= 0 || h.width > 65535 || h.height > 65535)
+  if (h.width <= 0 || h.height <= 0)
     return Status::Error(StatusCode::kInvalidArgument, "PNM image '%s' has a bad size %ldx%ld",
                          path, h.width, h.height);
+  if (IsTooLarge(h.width, h.height))
+    return TooLarge("PNM image", path, h.width, h.height);
   if (h.maxval <= 0 || h.maxval > 65535)
     return Status::Error(StatusCode::kInvalidArgument,
                          "PNM image '%s' has unsupported depth (maxval %ld; 1..65535 allowed)",
                          path, h.maxval);
+  const std::size_t count = static_cast<std::size_t>(h.width) * static_cast<std::size_t>(h.height) *
+                            static_cast<std::size_t>(h.channels);
+  const std::size_t sample_bytes = h.maxval > 255 ? 2 : 1;
+  // The samples must be in the file before the image is allocated for them.
+  const off_t start = ::ftello(f);
+  if (start >= 0 && ::fseeko(f, 0, SEEK_END) == 0) {
+    const off_t end = ::ftello(f);
+    const std::size_t present =
+        end >= start ? static_cast<std::size_t>(end - start) / sample_bytes : 0;
+    if (present < count)
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "PNM image '%s' is truncated: %zu of %zu samples present", path, present,
+                           count);
+    if (::fseeko(f, start, SEEK_SET) != 0) {
+      const int saved = errno;
+      return Status::FromErrno(saved, "cannot read image '%s'", path);
+    }
+  }
   SKYLOC_TRY_ASSIGN(
       OwnedImage image,
       OwnedImage::Allocate(static_cast<int>(h.width), static_cast<int>(h.height),
                            h.channels == 1 ? dsp::PixelFormat::kGrey8 : dsp::PixelFormat::kRgb24));
-  const std::size_t count = static_cast<std::size_t>(h.width) * static_cast<std::size_t>(h.height) *
-                            static_cast<std::size_t>(h.channels);
   std::uint8_t* out = image.mutable_view().data;
   const auto maxval = static_cast<unsigned>(h.maxval);
-  const std::size_t sample_bytes = maxval > 255 ? 2 : 1;
   // Decoded through a small stack buffer: 16-bit samples are big-endian, any maxval scales.
   std::uint8_t chunk[4096];
   std::size_t done = 0;
@@ -159,13 +193,9 @@ Result<OwnedImage> LoadImage(const char* path) {
                (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
       };
       const std::uint32_t w = be32(head + 16), h = be32(head + 20);
-      if (w > kMaxImageSide || h > kMaxImageSide) {
+      if (IsTooLarge(w, h)) {
         std::fclose(f);
-        return Status::Error(StatusCode::kInvalidArgument,
-                             "PNG '%s' is %ux%u pixels: too large, skyloc reads images up to "
-                             "%dx%d; scale it down",
-                             path, static_cast<unsigned>(w), static_cast<unsigned>(h),
-                             kMaxImageSide, kMaxImageSide);
+        return TooLarge("PNG", path, w, h);
       }
     }
     std::rewind(f);

@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <string>
 
+#include "skyloc/platform/alloc_counter.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::drivers {
@@ -165,6 +167,27 @@ TEST_F(ImageFileTest, APngTooLargeIsSaidToBeTooLarge) {
     EXPECT_NE(m.find("65535x65535"), std::string::npos) << m;
     EXPECT_EQ(m.find("not a PNG"), std::string::npos) << m;
   }
+}
+
+// A header is a few bytes: a PNM that promises 50000x50000 pixels, or a PNG of more
+// pixels than skyloc reads, is refused before anything is allocated for it (the fuzzer
+// found the PNM allocating 8 GB for a 29-byte file).
+TEST_F(ImageFileTest, AHeaderPromisingMorePixelsThanThereAreAllocatesNothing) {
+  WriteBytes(Path("promise.ppm"), "P6\n20000 3000\n255\n\x01\x02\x03");
+  ASSERT_TRUE(AllocationCounterActive());
+  AllocationScope scope;
+  auto r = LoadImage(Path("promise.ppm").c_str());
+  ASSERT_FALSE(r.ok());
+  EXPECT_LT(scope.bytes(), std::uint64_t{1} << 20);  // the FILE's buffer, the message
+  EXPECT_NE(std::string(r.status().message()).find("truncated: 3 of 180000000 samples present"),
+            std::string::npos)
+      << r.status().message();
+  WriteBytes(Path("vast.pgm"), "P5 50000 50000 255\n\x01");
+  auto v = LoadImage(Path("vast.pgm").c_str());
+  ASSERT_FALSE(v.ok());
+  EXPECT_NE(std::string(v.status().message()).find("50000x50000 pixels: too large"),
+            std::string::npos)
+      << v.status().message();
 }
 
 }  // namespace
