@@ -9,6 +9,9 @@
 #   ./skyloc.sh hil [KIND]        only the VM tests (label hil): host (amd64) or aarch64 (arm64)
 #   ./skyloc.sh deps [KIND]       only install the Debian packages KIND needs
 #   ./skyloc.sh format            clang-format every C++ file in place
+#   ./skyloc.sh fuzz [--time S | --runs N] [TARGET...]
+#                                 run the libFuzzer targets (default: all, 60 s each) on a
+#                                 corpus kept in build/fuzz-corpus/ (docs/FUZZING.md)
 #
 # Builds go to build/<KIND>/, never into the source tree. Packages are installed with
 # apt-get only when missing (root, or sudo when available).
@@ -36,7 +39,7 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one
 # it needs when missing), Debian's tools the baseline checks run in the guest, and
-# shellcheck for the harness's scripts (lint.shellcheck_hil*).
+# ShellCheck for the harness's scripts (lint.shellcheck_hil*).
 HIL_PACKAGES=(qemu-system-x86 qemu-system-arm busybox-static kmod cpio bc xz-utils
   v4l-utils gpiod libcamera-tools libcamera-ipa shellcheck)
 HIL_PACKAGES_amd64=(linux-headers-amd64)
@@ -72,7 +75,7 @@ install_packages() {
   missing=$(missing_packages "$@")
   [ -z "$missing" ] && return 0
   apt_update_once
-  say "installing: $(echo $missing | tr '\n' ' ')"
+  say "installing: $(echo "$missing" | tr '\n' ' ')"
   # shellcheck disable=SC2086
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing \
     >"$BUILD_ROOT/apt.log" 2>&1 || {
@@ -219,13 +222,73 @@ cmd_test() {
   [ ${#FAILED_KINDS[@]} -eq 0 ]
 }
 
+# Long fuzzing runs (the test suite runs each target for seconds only). Each target keeps
+# its corpus in build/fuzz-corpus/TARGET between runs, seeded from the repository's
+# example files; a crash stops the run with the input's path and a non-zero exit.
+cmd_fuzz() {
+  local limit=(-max_total_time=60) targets=()
+  while [ $# -gt 0 ]; do
+    case "$1" in
+      --time)
+        [[ "${2:-}" =~ ^[1-9][0-9]*$ ]] || die "fuzz --time needs seconds (a positive whole number), not '${2:-}'"
+        limit=(-max_total_time="$2")
+        shift 2
+        ;;
+      --runs)
+        [[ "${2:-}" =~ ^[1-9][0-9]*$ ]] || die "fuzz --runs needs a count of executions, not '${2:-}'"
+        limit=(-runs="$2")
+        shift 2
+        ;;
+      -*) die "fuzz: unknown option '$1' (--time S, --runs N)" ;;
+      *)
+        targets+=("$1")
+        shift
+        ;;
+    esac
+  done
+  deps host
+  configure_and_build host
+  local bin="$BUILD_ROOT/host/fuzz/tests/fuzz"
+  [ -d "$bin" ] || die "no fuzz targets in $bin: the host build needs clang-14 and libclang-rt-14-dev (see $BUILD_ROOT/configure-host.log)"
+  if [ ${#targets[@]} -eq 0 ]; then
+    local t
+    for t in "$bin"/*_fuzz; do targets+=("$(basename "$t" _fuzz)"); done
+  fi
+  local name exe corpus seeds log runs summary=()
+  for name in "${targets[@]}"; do
+    exe="$bin/${name}_fuzz"
+    [ -x "$exe" ] || die "no fuzz target '$name' (targets: $(find "$bin" -maxdepth 1 -name '*_fuzz' -printf '%f ' | sed 's/_fuzz//g'))"
+    corpus="$BUILD_ROOT/fuzz-corpus/$name"
+    mkdir -p "$corpus"
+    # Seeds: the repository's own examples of each input.
+    seeds=()
+    case "$name" in
+      config) seeds=("$ROOT"/config/skyloc.toml "$ROOT"/tests/integration/small.toml) ;;
+      camera_file) seeds=("$ROOT"/config/camera-*.toml) ;;
+    esac
+    [ -d "$ROOT/tests/fuzz/corpus/$name" ] && seeds+=("$ROOT/tests/fuzz/corpus/$name"/*)
+    log="$BUILD_ROOT/fuzz-$name.log"
+    say "fuzzing $name (${limit[*]}; corpus $corpus; log $log)"
+    local seed_arg=()
+    [ ${#seeds[@]} -gt 0 ] && seed_arg=(-seed_inputs="$(IFS=,; echo "${seeds[*]}")")
+    (cd "$BUILD_ROOT" && "$exe" "${limit[@]}" -max_len=4096 -print_final_stats=1 \
+      -artifact_prefix="$BUILD_ROOT/fuzz-crash-$name-" "${seed_arg[@]}" "$corpus") >"$log" 2>&1 || {
+      tail -30 "$log" >&2
+      die "fuzz target '$name' found a failure: the input is $BUILD_ROOT/fuzz-crash-$name-*; full log $log"
+    }
+    runs=$(sed -nE 's/^stat::number_of_executed_units: *([0-9]+).*/\1/p' "$log" | tail -1)
+    summary+=("$name: ${runs:-?} executions, no failure, corpus $(find "$corpus" -type f | wc -l) inputs")
+  done
+  printf '%s\n' "${summary[@]}"
+}
+
 cmd_demo() {
   deps host
   configure_and_build host
   "$BUILD_ROOT/host/app/skyloc" demo "$@"
 }
 
-usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$0"; }
 
 main() {
   local cmd=${1:-}
@@ -238,6 +301,7 @@ main() {
   case "$cmd" in
     demo) cmd_demo "$@" ;;
     test) cmd_test "$@" ;;
+    fuzz) cmd_fuzz "$@" ;;
     build)
       deps "${1:-host}"
       configure_and_build "${1:-host}"
