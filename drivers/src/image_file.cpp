@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -45,6 +46,45 @@ Status TooLarge(const char* kind, const char* path, std::int64_t width, std::int
 
 bool IsTooLarge(std::int64_t width, std::int64_t height) {
   return width > kMaxImageSide || height > kMaxImageSide || width * height > kMaxImagePixels;
+}
+
+std::uint32_t BigEndian32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+
+// stb grows its buffer to a chunk's declared length before it reads the chunk, so a few
+// bytes that declare a 2 GB IDAT make it allocate 2 GB (found by the fuzzer). Every chunk
+// must fit in the file before stb sees it. `f` is left at the start.
+Status CheckPngChunks(std::FILE* f, const char* path) {
+  if (::fseeko(f, 0, SEEK_END) != 0) {
+    const int saved = errno;
+    return Status::FromErrno(saved, "cannot read image '%s'", path);
+  }
+  const off_t size = ::ftello(f);
+  off_t at = 8;  // after the signature
+  while (size >= 0 && at + 12 <= size) {
+    unsigned char head[8];
+    if (::fseeko(f, at, SEEK_SET) != 0 || std::fread(head, 1, sizeof head, f) != sizeof head)
+      break;
+    const std::uint32_t length = BigEndian32(head);
+    char type[5];
+    for (int i = 0; i < 4; ++i)
+      type[i] = std::isalpha(head[4 + i]) != 0 ? static_cast<char>(head[4 + i]) : '?';
+    type[4] = '\0';
+    if (static_cast<std::int64_t>(length) > static_cast<std::int64_t>(size - at - 12)) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "PNG '%s' is truncated or corrupt: its %s chunk at byte %lld declares "
+                           "%u bytes, and the file ends %lld bytes later",
+                           path, type, static_cast<long long>(at), static_cast<unsigned>(length),
+                           static_cast<long long>(size - at - 12));
+    }
+    if (std::memcmp(head + 4, "IEND", 4) == 0)
+      break;
+    at += 12 + static_cast<off_t>(length);
+  }
+  std::rewind(f);
+  return Status::Ok();
 }
 
 struct StbFree {
@@ -188,14 +228,14 @@ Result<OwnedImage> LoadImage(const char* path) {
     if (std::fread(head, 1, sizeof head, f) == sizeof head &&
         std::memcmp(head, kPngMagic, sizeof kPngMagic) == 0 &&
         std::memcmp(head + 12, "IHDR", 4) == 0) {
-      auto be32 = [](const unsigned char* p) {
-        return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
-               (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
-      };
-      const std::uint32_t w = be32(head + 16), h = be32(head + 20);
+      const std::uint32_t w = BigEndian32(head + 16), h = BigEndian32(head + 20);
       if (IsTooLarge(w, h)) {
         std::fclose(f);
         return TooLarge("PNG", path, w, h);
+      }
+      if (Status chunks = CheckPngChunks(f, path); !chunks.ok()) {
+        std::fclose(f);
+        return chunks;
       }
     }
     std::rewind(f);

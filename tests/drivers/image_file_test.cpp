@@ -182,6 +182,19 @@ TEST_F(ImageFileTest, AHeaderPromisingMorePixelsThanThereAreAllocatesNothing) {
   EXPECT_NE(std::string(r.status().message()).find("truncated: 3 of 180000000 samples present"),
             std::string::npos)
       << r.status().message();
+  // A PNG of 4x3 pixels whose IDAT chunk declares 1.3 GB: stb would allocate that much.
+  std::string png(
+      "\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\0\x04\0\0\0\x03\x08\0\0\0\0"
+      "\x91\x9f\xf1\x1a\x50\0\0\0IDATx\x9c\x63\x60",
+      45);
+  WriteBytes(Path("greedy.png"), png);
+  AllocationScope png_scope;
+  auto g = LoadImage(Path("greedy.png").c_str());
+  ASSERT_FALSE(g.ok());
+  EXPECT_LT(png_scope.bytes(), std::uint64_t{1} << 20);
+  EXPECT_NE(std::string(g.status().message()).find("its IDAT chunk at byte 33 declares"),
+            std::string::npos)
+      << g.status().message();
   WriteBytes(Path("vast.pgm"), "P5 50000 50000 255\n\x01");
   auto v = LoadImage(Path("vast.pgm").c_str());
   ASSERT_FALSE(v.ok());
