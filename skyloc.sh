@@ -2,8 +2,8 @@
 # skyloc: install what is missing, build, test, run. See README.md.
 #
 #   ./skyloc.sh demo              build for this machine and run the demo on the simulated camera
-#   ./skyloc.sh test              host + sanitizer + aarch64 + armhf (qemu-user) builds, every test
-#   ./skyloc.sh build [KIND]      KIND: host (default), asan, aarch64, armhf, release
+#   ./skyloc.sh test              host + sanitizers + aarch64 + armhf (qemu-user) builds, every test
+#   ./skyloc.sh build [KIND]      KIND: host (default), asan, tsan, aarch64, armhf, release
 #   ./skyloc.sh bench [FILTER]    Release build, run the Google Benchmark programs
 #   ./skyloc.sh run ARGS...       build host and run: skyloc ARGS...
 #   ./skyloc.sh hil [KIND]        only the VM tests (label hil): host (amd64) or aarch64 (arm64)
@@ -112,7 +112,7 @@ deps() {
       ;;
   esac
   case "$kind" in
-    host | asan | release) ;;
+    host | asan | tsan | release) ;;
     aarch64)
       install_packages "${CROSS_PACKAGES_aarch64[@]}"
       ensure_foreign_arch arm64
@@ -123,7 +123,7 @@ deps() {
       ensure_foreign_arch armhf
       install_optional "${CROSS_OPTIONAL_armhf[@]}"
       ;;
-    *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
+    *) die "unknown build kind '$kind' (host, asan, tsan, release, aarch64, armhf)" ;;
   esac
 }
 
@@ -137,10 +137,11 @@ configure_and_build() {
   case "$kind" in
     host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
     release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
-    asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=ON -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
+    asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=address -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
+    tsan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=thread -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
     aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake") ;;
     armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake") ;;
-    *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
+    *) die "unknown build kind '$kind' (host, asan, tsan, release, aarch64, armhf)" ;;
   esac
   # A build folder configured by hand with another generator cannot be reused: start it afresh.
   if [ -f "$dir/CMakeCache.txt" ] && ! grep -q "^CMAKE_GENERATOR:INTERNAL=Ninja$" "$dir/CMakeCache.txt"; then
@@ -203,6 +204,11 @@ cmd_test() {
   # The sanitizer and aarch64 builds run every test but the VM ones (those boot a guest
   # with the host build's binaries) and the long soak runs (the host build runs those).
   run_ctest asan -LE "hil|slow"
+  # ThreadSanitizer over what runs threads: the recorder's writer thread and its queue,
+  # eval's fork-join (the batch matcher and the descriptors), and the firmware modes
+  # that record. (The libcamera completion path runs in the VM only: docs/DRIVERS.md.)
+  configure_and_build tsan
+  run_ctest tsan -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_batch$|^cli[.]firmware_modes$"
   configure_and_build aarch64
   # Every aarch64 test, the hil ones included: those boot an arm64 kernel in
   # qemu-system-aarch64 with the cross-built binaries (the rest run under qemu-user).

@@ -25,12 +25,16 @@ target_compile_options(skyloc_fp INTERFACE -ffp-contract=off -fno-fast-math -fno
 
 add_library(skyloc_sanitize INTERFACE)
 add_library(skyloc::sanitize ALIAS skyloc_sanitize)
-if(SKYLOC_SANITIZE)
-  # -O1: Eigen and the SH tables at -O0 make the suite ten times slower, and the
-  # sanitizers still see every access at -O1.
+# -O1: Eigen and the SH tables at -O0 make the suite ten times slower, and the
+# sanitizers still see every access at -O1.
+if(SKYLOC_SANITIZE STREQUAL "address")
   target_compile_options(skyloc_sanitize INTERFACE
     -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1)
   target_link_options(skyloc_sanitize INTERFACE -fsanitize=address,undefined)
+  target_compile_definitions(skyloc_sanitize INTERFACE SKYLOC_SANITIZED=1)
+elseif(SKYLOC_SANITIZE STREQUAL "thread")
+  target_compile_options(skyloc_sanitize INTERFACE -fsanitize=thread -fno-omit-frame-pointer -O1)
+  target_link_options(skyloc_sanitize INTERFACE -fsanitize=thread)
   target_compile_definitions(skyloc_sanitize INTERFACE SKYLOC_SANITIZED=1)
 endif()
 

@@ -63,7 +63,9 @@ Status CheckPngChunks(std::FILE* f, const char* path) {
   }
   const off_t size = ::ftello(f);
   off_t at = 8;  // after the signature
-  while (size >= 0 && at + 12 <= size) {
+  // Up to IEND, each chunk's length, type and CRC (12 bytes) and its data must be there
+  // (a header cut off after its length field declared 1.8 GB, too).
+  while (size >= 0 && at + 8 <= size) {
     unsigned char head[8];
     if (::fseeko(f, at, SEEK_SET) != 0 || std::fread(head, 1, sizeof head, f) != sizeof head)
       break;
@@ -72,12 +74,12 @@ Status CheckPngChunks(std::FILE* f, const char* path) {
     for (int i = 0; i < 4; ++i)
       type[i] = std::isalpha(head[4 + i]) != 0 ? static_cast<char>(head[4 + i]) : '?';
     type[4] = '\0';
-    if (static_cast<std::int64_t>(length) > static_cast<std::int64_t>(size - at - 12)) {
+    if (static_cast<std::int64_t>(length) + 12 > static_cast<std::int64_t>(size - at)) {
       return Status::Error(StatusCode::kInvalidArgument,
                            "PNG '%s' is truncated or corrupt: its %s chunk at byte %lld declares "
-                           "%u bytes, and the file ends %lld bytes later",
+                           "%u bytes, and the file ends %lld bytes after its header",
                            path, type, static_cast<long long>(at), static_cast<unsigned>(length),
-                           static_cast<long long>(size - at - 12));
+                           static_cast<long long>(size - at - 8));
     }
     if (std::memcmp(head + 4, "IEND", 4) == 0)
       break;
