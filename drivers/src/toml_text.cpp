@@ -10,6 +10,10 @@ namespace {
 // others), which is undefined behaviour on a garbled or mistyped file; the config fuzz
 // target found it. skyloc's keys and unquoted values are ASCII anyway, so non-ASCII text is
 // accepted only inside strings and comments, where the parser does not make that check.
+// A quote opens a string only where TOML lets a string begin (a line's start, after '=',
+// '[', '{', ',' or a dotted key's '.'): after a malformed value such as `3PPPPP"...`
+// the parser reads the bytes after the quote as code, and the camera-file fuzz target
+// found it reaching the same unreachable point there.
 // Returns the 1-based line and column of the first offending byte, or line 0.
 struct TextPosition {
   int line = 0;
@@ -19,6 +23,10 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
   enum class Mode { kCode, kComment, kBasic, kLiteral, kMultiBasic, kMultiLiteral };
   Mode mode = Mode::kCode;
   int line = 1, column = 0;
+  char last = '\n';  // the last character of code that was not whitespace
+  const auto string_may_start = [&] {
+    return last == '\n' || last == '=' || last == '[' || last == '{' || last == ',' || last == '.';
+  };
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     ++column;
@@ -29,6 +37,8 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
           return {line, column};
         if (c == '#') {
           mode = Mode::kComment;
+        } else if ((c == '"' || c == '\'') && !string_may_start()) {
+          last = c;  // a stray quote: what follows stays code
         } else if (starts("\"\"\"")) {
           mode = Mode::kMultiBasic;
           i += 2;
@@ -41,11 +51,17 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
           mode = Mode::kBasic;
         } else if (c == '\'') {
           mode = Mode::kLiteral;
+        } else if (c == '\n') {
+          last = '\n';
+        } else if (c != ' ' && c != '\t' && c != '\r') {
+          last = c;
         }
         break;
       case Mode::kComment:
-        if (c == '\n')
+        if (c == '\n') {
           mode = Mode::kCode;
+          last = '\n';
+        }
         break;
       case Mode::kBasic:
       case Mode::kMultiBasic:
@@ -60,19 +76,24 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
         }
         if (mode == Mode::kBasic && (c == '"' || c == '\n')) {
           mode = Mode::kCode;
+          last = c;
         } else if (mode == Mode::kMultiBasic && starts("\"\"\"")) {
           mode = Mode::kCode;
+          last = '"';
           i += 2;
           column += 2;
         }
         break;
       case Mode::kLiteral:
-        if (c == '\'' || c == '\n')
+        if (c == '\'' || c == '\n') {
           mode = Mode::kCode;
+          last = c;
+        }
         break;
       case Mode::kMultiLiteral:
         if (starts("'''")) {
           mode = Mode::kCode;
+          last = '\'';
           i += 2;
           column += 2;
         }

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <string>
 
+#include "skyloc/drivers/toml_text.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::drivers {
@@ -161,6 +162,18 @@ TEST(CameraFile, NonAsciiOutsideStringsIsRefusedWithItsPosition) {
   // U+00A0 (no-break space) where toml++ looks for whitespace, after a value.
   m = Message(Parse("[image]\nwidth = 640\xc2\xa0\nheight = 480\n"));
   EXPECT_THAT(m, HasSubstr("cam.toml:2:12: a non-ASCII"));
+  // The camera-file fuzzer's input: a quote after a malformed value opens no string, and
+  // toml++ reads the U+0430 after it as code.
+  m = Message(Parse("[lens]\ncentre = 3PP\"\xd0\xb0\"\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:2:14: a non-ASCII"));
+  // Strings open where TOML lets them: after '=', '[', ',', '{', '.' or at a line's start.
+  auto strings = ParseTomlText(
+      "\"cl\xc3\xa9\" = [ \"\xc3\xa9t\xc3\xa9\",\n  '\xc3\xa9' ]\na.\"\xc3\xa9\" = { b = "
+      "\"\xc3\xa9\" }\n"
+      "c = \"\"\"\n\xc3\xa9\"\"\"\n",
+      "text.toml");
+  ASSERT_TRUE(strings.ok()) << strings.status().message();
+  EXPECT_EQ(strings->size(), 3u);
 
   auto ok = Parse(
       "# Kamera f\xc3\xbcr UV \xe2\x80\x94 a comment\n[image]\nwidth = 640  # \xc3\xa9\n"
