@@ -66,6 +66,32 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
       case Mode::kBasic:
       case Mode::kMultiBasic:
         if (c == '\\') {
+          if (mode == Mode::kMultiBasic) {
+            // A line-ending backslash: toml++ trims the whitespace and line breaks after
+            // it with the same whitespace check, so the first character it keeps must be
+            // ASCII too (the camera-file fuzz target found `\<newline><U+FEDF>`).
+            std::size_t j = i + 1;
+            while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r'))
+              ++j;
+            if (j < text.size() && text[j] == '\n') {
+              for (; i + 1 < j; ++i)
+                ++column;
+              for (; j < text.size() &&
+                     (text[j] == ' ' || text[j] == '\t' || text[j] == '\r' || text[j] == '\n');
+                   ++j) {
+                if (text[j] == '\n') {
+                  ++line;
+                  column = 0;
+                } else {
+                  ++column;
+                }
+              }
+              if (j < text.size() && static_cast<unsigned char>(text[j]) >= 0x80)
+                return {line, column + 1};
+              i = j - 1;  // the loop moves on to the first kept character
+              continue;
+            }
+          }
           ++i;  // the escaped character cannot end the string
           ++column;
           if (i < text.size() && text[i] == '\n') {

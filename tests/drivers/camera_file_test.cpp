@@ -166,11 +166,15 @@ TEST(CameraFile, NonAsciiOutsideStringsIsRefusedWithItsPosition) {
   // toml++ reads the U+0430 after it as code.
   m = Message(Parse("[lens]\ncentre = 3PP\"\xd0\xb0\"\n"));
   EXPECT_THAT(m, HasSubstr("cam.toml:2:14: a non-ASCII"));
+  // Inside a multi-line string, the first character kept after a line-ending backslash
+  // (toml++ trims the whitespace after it with the same check).
+  m = Message(Parse("n = \"\"\"a\\\n  \xef\xbb\x9f\"\"\"\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:2:3: a non-ASCII"));
   // Strings open where TOML lets them: after '=', '[', ',', '{', '.' or at a line's start.
   auto strings = ParseTomlText(
       "\"cl\xc3\xa9\" = [ \"\xc3\xa9t\xc3\xa9\",\n  '\xc3\xa9' ]\na.\"\xc3\xa9\" = { b = "
       "\"\xc3\xa9\" }\n"
-      "c = \"\"\"\n\xc3\xa9\"\"\"\n",
+      "c = \"\"\"\n\xc3\xa9 \\\n  x\xc3\xa9\"\"\"\n",
       "text.toml");
   ASSERT_TRUE(strings.ok()) << strings.status().message();
   EXPECT_EQ(strings->size(), 3u);
