@@ -66,13 +66,17 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
       case Mode::kBasic:
       case Mode::kMultiBasic:
         if (c == '\\') {
+          // After a backslash toml++ looks for a line-ending backslash's whitespace with the
+          // same check, so the character after it (and after any spaces) must be ASCII; no
+          // escape is anything else. In a multi-line string it then trims the whitespace
+          // and line breaks that follow, so the first character it keeps must be ASCII too.
+          // (The camera-file fuzz target found `\<U+FEFD>` and `\<newline><U+FEDF>`.)
+          std::size_t j = i + 1;
+          while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r'))
+            ++j;
+          if (j < text.size() && static_cast<unsigned char>(text[j]) >= 0x80)
+            return {line, column + static_cast<int>(j - i)};
           if (mode == Mode::kMultiBasic) {
-            // A line-ending backslash: toml++ trims the whitespace and line breaks after
-            // it with the same whitespace check, so the first character it keeps must be
-            // ASCII too (the camera-file fuzz target found `\<newline><U+FEDF>`).
-            std::size_t j = i + 1;
-            while (j < text.size() && (text[j] == ' ' || text[j] == '\t' || text[j] == '\r'))
-              ++j;
             if (j < text.size() && text[j] == '\n') {
               for (; i + 1 < j; ++i)
                 ++column;

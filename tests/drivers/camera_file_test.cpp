@@ -170,6 +170,11 @@ TEST(CameraFile, NonAsciiOutsideStringsIsRefusedWithItsPosition) {
   // (toml++ trims the whitespace after it with the same check).
   m = Message(Parse("n = \"\"\"a\\\n  \xef\xbb\x9f\"\"\"\n"));
   EXPECT_THAT(m, HasSubstr("cam.toml:2:3: a non-ASCII"));
+  // ...and right after a backslash, in either kind of basic string.
+  m = Message(Parse("n = \"\"\"a\\\xef\xbb\xbd\"\"\"\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:1:10: a non-ASCII"));
+  m = Message(Parse("n = \"a\\ \xc3\xa9\"\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:1:9: a non-ASCII"));
   // Strings open where TOML lets them: after '=', '[', ',', '{', '.' or at a line's start.
   auto strings = ParseTomlText(
       "\"cl\xc3\xa9\" = [ \"\xc3\xa9t\xc3\xa9\",\n  '\xc3\xa9' ]\na.\"\xc3\xa9\" = { b = "
