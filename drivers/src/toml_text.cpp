@@ -10,10 +10,11 @@ namespace {
 // others), which is undefined behaviour on a garbled or mistyped file; the config fuzz
 // target found it. skyloc's keys and unquoted values are ASCII anyway, so non-ASCII text is
 // accepted only inside strings and comments, where the parser does not make that check.
-// A quote opens a string only where TOML lets a string begin (a line's start, after '=',
-// '[', '{', ',' or a dotted key's '.'): after a malformed value such as `3PPPPP"...`
-// the parser reads the bytes after the quote as code, and the camera-file fuzz target
-// found it reaching the same unreachable point there.
+// A quote opens a string only where a value or a quoted key begins (a line's start,
+// after '=', '[', '{' or ','): after a malformed value such as `3PPPPP"...` or
+// `[38.59.'''...` the parser reads the bytes after the quote as code, and the camera-file
+// fuzz target found it reaching the same unreachable point there. (So a quoted part of a
+// dotted key, `a."b"`, must be ASCII: skyloc's keys are.)
 // Returns the 1-based line and column of the first offending byte, or line 0.
 struct TextPosition {
   int line = 0;
@@ -25,7 +26,13 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
   int line = 1, column = 0;
   char last = '\n';  // the last character of code that was not whitespace
   const auto string_may_start = [&] {
-    return last == '\n' || last == '=' || last == '[' || last == '{' || last == ',' || last == '.';
+    return last == '\n' || last == '=' || last == '[' || last == '{' || last == ',';
+  };
+  // A '#' opens a comment at a line's start or after whitespace: glued to a malformed
+  // value (`3P#...`) toml++ may still be reading that value.
+  const auto comment_may_start = [&](std::size_t i) {
+    return i == 0 || text[i - 1] == ' ' || text[i - 1] == '\t' || text[i - 1] == '\n' ||
+           text[i - 1] == '\r' || (last == '"' || last == '\'' || last == ']' || last == '}');
   };
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -35,7 +42,7 @@ TextPosition FirstNonAsciiOutsideStrings(std::string_view text) {
       case Mode::kCode:
         if (static_cast<unsigned char>(c) >= 0x80)
           return {line, column};
-        if (c == '#') {
+        if (c == '#' && comment_may_start(i)) {
           mode = Mode::kComment;
         } else if ((c == '"' || c == '\'') && !string_may_start()) {
           last = c;  // a stray quote: what follows stays code

@@ -166,6 +166,10 @@ TEST(CameraFile, NonAsciiOutsideStringsIsRefusedWithItsPosition) {
   // toml++ reads the U+0430 after it as code.
   m = Message(Parse("[lens]\ncentre = 3PP\"\xd0\xb0\"\n"));
   EXPECT_THAT(m, HasSubstr("cam.toml:2:14: a non-ASCII"));
+  m = Message(Parse("[lens]\ncentre = [38.59.'''\xef\xb7\xbe'''\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:2:20: a non-ASCII"));
+  m = Message(Parse("[lens]\ncentre = 3P#\xd0\xb0\n"));
+  EXPECT_THAT(m, HasSubstr("cam.toml:2:13: a non-ASCII"));
   // Inside a multi-line string, the first character kept after a line-ending backslash
   // (toml++ trims the whitespace after it with the same check).
   m = Message(Parse("n = \"\"\"a\\\n  \xef\xbb\x9f\"\"\"\n"));
@@ -177,7 +181,7 @@ TEST(CameraFile, NonAsciiOutsideStringsIsRefusedWithItsPosition) {
   EXPECT_THAT(m, HasSubstr("cam.toml:1:9: a non-ASCII"));
   // Strings open where TOML lets them: after '=', '[', ',', '{', '.' or at a line's start.
   auto strings = ParseTomlText(
-      "\"cl\xc3\xa9\" = [ \"\xc3\xa9t\xc3\xa9\",\n  '\xc3\xa9' ]\na.\"\xc3\xa9\" = { b = "
+      "\"cl\xc3\xa9\" = [ \"\xc3\xa9t\xc3\xa9\",\n  '\xc3\xa9' ]# \xc3\xa9\na.b = { c = "
       "\"\xc3\xa9\" }\n"
       "c = \"\"\"\n\xc3\xa9 \\\n  x\xc3\xa9\"\"\"\n",
       "text.toml");
