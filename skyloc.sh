@@ -35,18 +35,19 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one
-# it needs when missing), Debian's tools the baseline checks run in the guest, and
-# shellcheck for the harness's scripts (lint.shellcheck_hil*).
+# it needs when missing), Debian's tools the baseline checks run in the guest,
+# and shellcheck for the harness's scripts (lint.shellcheck_hil*).
 HIL_PACKAGES=(qemu-system-x86 qemu-system-arm busybox-static kmod cpio bc xz-utils
   v4l-utils gpiod libcamera-tools libcamera-ipa shellcheck)
 HIL_PACKAGES_amd64=(linux-headers-amd64)
-CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static)
-CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static)
-# Optional target libraries from Debian multiarch. The archive's architectures are not
-# always in step (a security update can reach amd64 before arm64), and then these are not
-# co-installable; the build then leaves the driver out and says so at configure time.
-CROSS_OPTIONAL_aarch64=(libgpiod-dev:arm64)
-CROSS_OPTIONAL_armhf=(libgpiod-dev:armhf)
+# The ARM builds: Debian's cross compilers, qemu-user for their tests, and mmdebstrap,
+# which makes each build's target sysroot (ensure_sysroot below).
+CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static mmdebstrap)
+CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static mmdebstrap)
+# What the ARM builds include and link: toolchains/sysroot-packages.txt.
+SYSROOT_PACKAGES_FILE="$ROOT/toolchains/sysroot-packages.txt"
+# Bump when ensure_sysroot changes what it makes, so every cached sysroot is made again.
+SYSROOT_FORMAT=1
 
 apt_updated=0
 as_root() {
@@ -72,7 +73,7 @@ install_packages() {
   missing=$(missing_packages "$@")
   [ -z "$missing" ] && return 0
   apt_update_once
-  say "installing: $(echo $missing | tr '\n' ' ')"
+  say "installing: $(echo "$missing" | tr '\n' ' ')"
   # shellcheck disable=SC2086
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing \
     >"$BUILD_ROOT/apt.log" 2>&1 || {
@@ -80,22 +81,92 @@ install_packages() {
     die "apt-get install failed for: $(echo $missing | tr '\n' ' ') (log: $BUILD_ROOT/apt.log)"
   }
 }
-install_optional() {
-  local p
-  for p in $(missing_packages "$@"); do
-    apt_update_once
-    if ! as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$p" \
-      >>"$BUILD_ROOT/apt.log" 2>&1; then
-      say "optional package $p is not installable right now; its driver is left out of this build"
-    fi
-  done
+# ---------------------------------------------------------------------------------------
+# Target sysroots: a minimal Debian root of the target architecture holding the -dev
+# packages of toolchains/sysroot-packages.txt and their dependencies, extracted (not
+# configured: nothing of the target runs) by mmdebstrap from the archive this machine's apt
+# uses. Cached in build/sysroot-<arch>/; made again only when the package list, the suite
+# or SYSROOT_FORMAT changes (the hash in skyloc-sysroot/stamp).
+
+# The sysroot comes from the same archive as the machine's own packages: one
+# "deb URI SUITE COMPONENTS" line for each source apt uses for the machine's Debian suite
+# and its -updates and -security suites (third-party repositories are left out).
+debian_sources() {
+  local suite=$1
+  # shellcheck disable=SC2016 # apt's format, not the shell's
+  apt-get indextargets --format '$(REPO_URI) $(RELEASE) $(COMPONENT)' 'Identifier: Packages' |
+    awk -v s="$suite" '$2 == s || $2 == s "-updates" || $2 == s "-security" {
+      key = $1 " " $2; if (!(key in c)) order[n++] = key; c[key] = c[key] " " $3 }
+      END { for (i = 0; i < n; i++) print "deb " order[i] c[order[i]] }'
 }
-ensure_foreign_arch() {
-  local arch=$1
-  if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
-    as_root dpkg --add-architecture "$arch"
-    apt_updated=0
+
+ensure_sysroot() {
+  local arch=$1 # Debian's name: arm64, armhf
+  local dir="$BUILD_ROOT/sysroot-$arch" suite packages want
+  # shellcheck source=/dev/null
+  suite=$(. /etc/os-release && echo "${VERSION_CODENAME:-}")
+  [ -n "$suite" ] || die "cannot tell this machine's Debian suite (VERSION_CODENAME in /etc/os-release); the $arch sysroot is made from the same suite"
+  packages=$(sed -e 's/#.*//' "$SYSROOT_PACKAGES_FILE" | xargs)
+  [ -n "$packages" ] || die "$SYSROOT_PACKAGES_FILE lists no packages"
+  want=$(printf '%s\n' "format $SYSROOT_FORMAT" "$arch" "$suite" "$packages" | sha256sum | cut -d' ' -f1)
+  if [ "$(cat "$dir/skyloc-sysroot/stamp" 2>/dev/null)" = "$want" ]; then
+    if [ -f "$dir/skyloc-sysroot/suites-left-out" ]; then
+      say "WARNING: $dir was made without $(cat "$dir/skyloc-sysroot/suites-left-out") (its $arch index could not be downloaded then); delete it to make it again"
+    fi
+    return 0
   fi
+  command -v mmdebstrap >/dev/null || die "mmdebstrap is missing: it makes the $arch sysroot (apt-get install mmdebstrap; ./skyloc.sh deps does)"
+  local sources=()
+  mapfile -t sources < <(debian_sources "$suite" | sort -u)
+  [ ${#sources[@]} -gt 0 ] || die "apt knows no source for Debian '$suite' (apt-get indextargets): the $arch sysroot is made from the archive this machine's apt uses"
+  say "making the $arch sysroot in $dir with mmdebstrap: $packages"
+  local log="$BUILD_ROOT/sysroot-$arch.log" start=$SECONDS attempt skipped=()
+  # The extract hook runs while the downloaded packages are still in the target's apt
+  # cache: it keeps their versions (for reports) and their shlibs files, which
+  # dpkg-shlibdeps reads to compute the .deb's Depends (an extracted root has no dpkg
+  # database).
+  for attempt in 1 2; do
+    rm -rf "$dir" "$dir.new"
+    # shellcheck disable=SC2016 # the hooks' $1 is mmdebstrap's, expanded by its shell
+    if as_root mmdebstrap --variant=extract --architectures="$arch" --include="${packages// /,}" \
+      --extract-hook='mkdir -p "$1/skyloc-sysroot"' \
+      --extract-hook='for d in "$1"/var/cache/apt/archives/*.deb; do dpkg-deb -f "$d" Package Version | paste -sd" "; done | sort >"$1/skyloc-sysroot/packages"' \
+      --extract-hook='for d in "$1"/var/cache/apt/archives/*.deb; do dpkg-deb --ctrl-tarfile "$d" | tar -xO --wildcards "*shlibs" 2>/dev/null || true; done | grep -v "^udeb:" >"$1/skyloc-sysroot/shlibs"' \
+      "$suite" "$dir.new" "${sources[@]}" >"$log" 2>&1; then
+      break
+    fi
+    grep -E "^(E|Err):" "$log" | tail -6 >&2
+    rm -rf "$dir.new"
+    # An archive whose -updates or -security index for this architecture does not match
+    # its Release file (a mirror mid-sync, or a frozen mirror that stayed so: seen here for
+    # bookworm-security armhf) fails apt-get update. The sysroot is then made once more
+    # without that suite, loudly, and says so at every build until it is made again.
+    local failed
+    failed=$(grep -oE "Failed to fetch [^ ]*/dists/[^/]+/" "$log" | sed -E 's|.*/dists/([^/]+)/|\1|' | sort -u | xargs)
+    if [ "$attempt" = 1 ] && [ -n "$failed" ] && ! grep -qx "$suite" <<<"${failed// /$'\n'}"; then
+      say "WARNING: the archive's $arch index of $failed cannot be downloaded (above); making the $arch sysroot without $failed"
+      skipped=("$failed")
+      local kept=() line
+      for line in "${sources[@]}"; do
+        [[ " $failed " == *" $(awk '{print $3}' <<<"$line") "* ]] || kept+=("$line")
+      done
+      sources=("${kept[@]}")
+      continue
+    fi
+    die "mmdebstrap could not make the $arch sysroot (log: $log). Is the Debian archive reachable (${sources[*]}), and does it carry $arch?"
+  done
+  # Absolute symbolic links (libc6-dev's libm.so -> /lib/...) would point into the build
+  # machine's root: make them relative, inside the sysroot. Device nodes and /tmp are not
+  # wanted: qemu-user -L would show the sysroot's /dev and /tmp to the tests.
+  local link
+  while IFS= read -r -d '' link; do
+    ln -sfn --relative "$dir.new$(readlink "$link")" "$link"
+  done < <(find "$dir.new" -type l -lname '/*' -print0)
+  rm -rf "$dir.new/dev" "$dir.new/tmp" "$dir.new/var/cache" "$dir.new/var/log"
+  echo "$want" >"$dir.new/skyloc-sysroot/stamp"
+  if [ ${#skipped[@]} -gt 0 ]; then echo "${skipped[*]}" >"$dir.new/skyloc-sysroot/suites-left-out"; fi
+  mv "$dir.new" "$dir"
+  say "$arch sysroot ready in $((SECONDS - start)) s ($(du -sh "$dir" | cut -f1), $(wc -l <"$dir/skyloc-sysroot/packages") packages)"
 }
 
 deps() {
@@ -112,13 +183,11 @@ deps() {
     host | asan | release) ;;
     aarch64)
       install_packages "${CROSS_PACKAGES_aarch64[@]}"
-      ensure_foreign_arch arm64
-      install_optional "${CROSS_OPTIONAL_aarch64[@]}"
+      ensure_sysroot arm64
       ;;
     armhf)
       install_packages "${CROSS_PACKAGES_armhf[@]}"
-      ensure_foreign_arch armhf
-      install_optional "${CROSS_OPTIONAL_armhf[@]}"
+      ensure_sysroot armhf
       ;;
     *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
   esac
@@ -135,8 +204,10 @@ configure_and_build() {
     host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
     release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
     asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=ON -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
-    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake") ;;
-    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake") ;;
+    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"
+      -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
+    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake"
+      -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
     *) die "unknown build kind '$kind' (host, asan, release, aarch64, armhf)" ;;
   esac
   # A build folder configured by hand with another generator cannot be reused: start it afresh.
