@@ -8,16 +8,14 @@ find_package(PkgConfig REQUIRED)
 find_package(Threads REQUIRED)
 
 # PNG decoding/encoding for the describe/eval/replay/simulate tools: Debian's stb
-# (libstb-dev), used header-only so every architecture shares one set of headers; a
-# multiarch libpng-dev:arm64 is often not co-installable with the host's during mirror
-# syncs (seen on these machines), which would break the ARM build for an image codec.
+# (libstb-dev), used header-only, so the firmware links no image library (a cross build
+# finds the headers in its sysroot).
 find_path(SKYLOC_STB_INCLUDE stb/stb_image.h REQUIRED)
 add_library(skyloc_stb INTERFACE)
 target_include_directories(skyloc_stb SYSTEM INTERFACE ${SKYLOC_STB_INCLUDE})
 add_library(skyloc::stb ALIAS skyloc_stb)
 
-# toml++ is used header-only (TOML_HEADER_ONLY=1), so one set of headers serves every
-# architecture and the ARM build needs no libtomlplusplus:arm64.
+# toml++ is used header-only (TOML_HEADER_ONLY=1): the firmware links no TOML library.
 find_path(SKYLOC_TOMLPP_INCLUDE toml++/toml.h REQUIRED)
 add_library(skyloc_tomlpp INTERFACE)
 target_include_directories(skyloc_tomlpp SYSTEM INTERFACE ${SKYLOC_TOMLPP_INCLUDE})
@@ -55,11 +53,14 @@ set(skyloc_driver_V4L2_package "linux/videodev2.h (the kernel headers: linux-lib
 set(skyloc_driver_GPIOD_package "libgpiodcxx>=1.6 (libgpiod-dev)")
 set(skyloc_driver_LIBCAMERA_package "libcamera>=0.0.3 (libcamera-dev)")
 if(CMAKE_CROSSCOMPILING)
-  set(skyloc_driver_where "the ${CMAKE_SYSTEM_PROCESSOR} sysroot ${CMAKE_SYSROOT} "
-                          "(toolchains/sysroot-packages.txt)")
+  set(skyloc_driver_where "the ${CMAKE_SYSTEM_PROCESSOR} sysroot ${CMAKE_SYSROOT}")
+  set(skyloc_driver_fix "Add its package to toolchains/sysroot-packages.txt (./skyloc.sh "
+                        "deps then makes the sysroot again)")
 else()
-  set(skyloc_driver_where "this machine (./skyloc.sh deps installs it)")
+  set(skyloc_driver_where "this machine")
+  set(skyloc_driver_fix "Install it (./skyloc.sh deps does)")
 endif()
+string(JOIN "" skyloc_driver_fix ${skyloc_driver_fix})
 string(JOIN "" skyloc_driver_where ${skyloc_driver_where})
 include(CheckIncludeFileCXX)
 foreach(driver V4L2 GPIOD LIBCAMERA)
@@ -94,12 +95,12 @@ foreach(driver V4L2 GPIOD LIBCAMERA)
     message(FATAL_ERROR "skyloc: the ${driver} driver is required in this build "
                         "(SKYLOC_WITH_${driver}=ON, the default when cross-compiling), but "
                         "${skyloc_driver_${driver}_package} was not found in "
-                        "${skyloc_driver_where}. Install it, or configure with "
+                        "${skyloc_driver_where}. ${skyloc_driver_fix}, or configure with "
                         "-DSKYLOC_WITH_${driver}=OFF to build without this driver.")
   else()
     set(SKYLOC_WITH_${driver} OFF)
     message(STATUS "skyloc: ${driver} driver: LEFT OUT (SKYLOC_WITH_${driver}=AUTO and "
-                   "${skyloc_driver_${driver}_package} is not installed on "
+                   "${skyloc_driver_${driver}_package} was not found in "
                    "${skyloc_driver_where}; -DSKYLOC_WITH_${driver}=ON makes this an error)")
   endif()
 endforeach()
