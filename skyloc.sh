@@ -7,6 +7,7 @@
 #   ./skyloc.sh bench [FILTER]    Release build, run the Google Benchmark programs
 #   ./skyloc.sh run ARGS...       build host and run: skyloc ARGS...
 #   ./skyloc.sh hil [KIND]        only the VM tests (label hil): host (amd64) or aarch64 (arm64)
+#   ./skyloc.sh package [KIND]    Release build, build/skyloc_<version>_<arch>.deb; KIND: host, aarch64, armhf
 #   ./skyloc.sh deps [KIND]       only install the Debian packages KIND needs
 #   ./skyloc.sh format            clang-format every C++ file in place
 #
@@ -31,7 +32,8 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
   libboost-math-dev
   libopencv-dev  # host-only evaluation tools: SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md)
   libcamera-dev
-  clang-14 libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (tests/fuzz)
+  clang-14 libclang-rt-14-dev  # clang + libFuzzer: the fuzz targets (tests/fuzz)
+  lintian mmdebstrap)  # ./skyloc.sh package and its test (tests/package): lint, install in a Debian root
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one
@@ -88,24 +90,10 @@ install_packages() {
 # uses. Cached in build/sysroot-<arch>/; made again only when the package list, the suite
 # or SYSROOT_FORMAT changes (the hash in skyloc-sysroot/stamp).
 
-# The sysroot comes from the same archive as the machine's own packages: one
-# "deb URI SUITE COMPONENTS" line for each source apt uses for the machine's Debian suite
-# and its -updates and -security suites (third-party repositories are left out).
-debian_sources() {
-  local suite=$1
-  # shellcheck disable=SC2016 # apt's format, not the shell's
-  apt-get indextargets --format '$(REPO_URI) $(RELEASE) $(COMPONENT)' 'Identifier: Packages' |
-    awk -v s="$suite" '$2 == s || $2 == s "-updates" || $2 == s "-security" {
-      key = $1 " " $2; if (!(key in c)) order[n++] = key; c[key] = c[key] " " $3 }
-      END { for (i = 0; i < n; i++) print "deb " order[i] c[order[i]] }'
-}
-
 ensure_sysroot() {
   local arch=$1 # Debian's name: arm64, armhf
   local dir="$BUILD_ROOT/sysroot-$arch" suite packages want
-  # shellcheck source=/dev/null
-  suite=$(. /etc/os-release && echo "${VERSION_CODENAME:-}")
-  [ -n "$suite" ] || die "cannot tell this machine's Debian suite (VERSION_CODENAME in /etc/os-release); the $arch sysroot is made from the same suite"
+  suite=$("$ROOT/toolchains/debian-sources.sh" --suite) || die "the $arch sysroot is made from this machine's Debian suite"
   packages=$(sed -e 's/#.*//' "$SYSROOT_PACKAGES_FILE" | xargs)
   [ -n "$packages" ] || die "$SYSROOT_PACKAGES_FILE lists no packages"
   want=$(printf '%s\n' "format $SYSROOT_FORMAT" "$arch" "$suite" "$packages" | sha256sum | cut -d' ' -f1)
@@ -117,7 +105,7 @@ ensure_sysroot() {
   fi
   command -v mmdebstrap >/dev/null || die "mmdebstrap is missing: it makes the $arch sysroot (apt-get install mmdebstrap; ./skyloc.sh deps does)"
   local sources=()
-  mapfile -t sources < <(debian_sources "$suite" | sort -u)
+  mapfile -t sources < <("$ROOT/toolchains/debian-sources.sh")
   [ ${#sources[@]} -gt 0 ] || die "apt knows no source for Debian '$suite' (apt-get indextargets): the $arch sysroot is made from the archive this machine's apt uses"
   say "making the $arch sysroot in $dir with mmdebstrap: $packages"
   local log="$BUILD_ROOT/sysroot-$arch.log" start=$SECONDS attempt skipped=()
@@ -203,6 +191,19 @@ configure_and_build() {
   case "$kind" in
     host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
     release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
+    # What goes into the .deb: Release, the firmware only, every driver required.
+    package-*)
+      args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF -DSKYLOC_BUILD_BENCHMARKS=OFF
+        -DSKYLOC_HOST_EVAL=OFF -DSKYLOC_WITH_V4L2=ON -DSKYLOC_WITH_GPIOD=ON -DSKYLOC_WITH_LIBCAMERA=ON)
+      case "$kind" in
+        package-host) ;;
+        package-aarch64) args+=(-DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"
+          -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
+        package-armhf) args+=(-DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake"
+          -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
+        *) die "unknown package kind '${kind#package-}' (host, aarch64, armhf)" ;;
+      esac
+      ;;
     asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=ON -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
     aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"
       -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
@@ -262,7 +263,9 @@ cmd_test() {
   deps aarch64
   deps armhf
   configure_and_build host
-  run_ctest host -LE hil
+  # Not the package test (label package, tests/package): 2.5 min and ~60 MB from the
+  # archive at every run; ctest -L package runs it (docs/PACKAGING.md).
+  run_ctest host -LE "hil|package"
   # VM tests get one more try when they fail: libcamera 0.0.3 under QEMU TCG hung once in
   # 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc. A real failure
   # fails both tries.
@@ -290,13 +293,45 @@ cmd_test() {
   [ ${#FAILED_KINDS[@]} -eq 0 ]
 }
 
+# The Debian package of a Release build (packaging/make-deb.sh, docs/PACKAGING.md),
+# checked by lintian: an error or an unexplained warning fails.
+cmd_package() {
+  local kind=${1:-host} arch sysroot=()
+  case "$kind" in
+    host) arch=$(dpkg --print-architecture) ;;
+    aarch64) arch=arm64 sysroot=("$BUILD_ROOT/sysroot-arm64") ;;
+    armhf) arch=armhf sysroot=("$BUILD_ROOT/sysroot-armhf") ;;
+    *) die "unknown package kind '$kind' (host, aarch64, armhf)" ;;
+  esac
+  deps "$kind"
+  configure_and_build "package-$kind"
+  local deb
+  deb=$("$ROOT/packaging/make-deb.sh" "$BUILD_ROOT/package-$kind/app/skyloc" "$arch" "$BUILD_ROOT" "${sysroot[@]}") ||
+    die "packaging failed for $kind"
+  say "lintian $deb"
+  lintian --fail-on error,warning "$deb" || die "lintian rejects $deb (above): fix it, or override a tag with its reason in packaging/lintian-overrides"
+  # An ARM package cannot be installed here (no binfmt_misc for its maintainer scripts,
+  # docs/PACKAGING.md); its binary at least runs from the package under qemu-user.
+  if [ ${#sysroot[@]} -gt 0 ]; then
+    local qemu=qemu-aarch64-static unpacked="$BUILD_ROOT/package-$kind/unpacked" version
+    if [ "$kind" = armhf ]; then qemu="qemu-arm-static"; fi
+    rm -rf "$unpacked"
+    dpkg-deb -x "$deb" "$unpacked"
+    version=$("$qemu" -L "${sysroot[0]}" "$unpacked/usr/bin/skyloc" --version) ||
+      die "the packed $arch skyloc does not run under $qemu -L ${sysroot[0]}"
+    rm -rf "$unpacked"
+    say "packed binary under $qemu: $version"
+  fi
+  say "built $deb ($(du -h "$deb" | cut -f1)); on the robot: apt install ./$(basename "$deb")"
+}
+
 cmd_demo() {
   deps host
   configure_and_build host
   "$BUILD_ROOT/host/app/skyloc" demo "$@"
 }
 
-usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; }
 
 main() {
   local cmd=${1:-}
@@ -314,6 +349,7 @@ main() {
       configure_and_build "${1:-host}"
       ;;
     deps) deps "${1:-host}" ;;
+    package) cmd_package "$@" ;;
     hil)
       local kind=${1:-host}
       case "$kind" in host | aarch64) ;; *) die "hil runs for host or aarch64, not '$kind'" ;; esac
