@@ -167,6 +167,15 @@ done
 TOOLS=(v4l2-ctl media-ctl gpiodetect gpioinfo gpioget gpioset)
 if [ "$ARCH" = arm64 ]; then
   for p in "${TOOLS[@]}"; do add_program "$HIL_GUEST_SYSROOT/usr/bin/$p"; done
+  # A cross build with libcamera: vimc's IPA module and its data from the build's sysroot
+  # (libcamera loads them from fixed paths).
+  LCDIR=/usr/lib/aarch64-linux-gnu/libcamera
+  if [ -n "$LIB_SYSROOT" ] && [ -f "$LIB_SYSROOT$LCDIR/ipa_vimc.so" ]; then
+    for f in ipa_vimc.so vimc_ipa_proxy; do add_program "$LIB_SYSROOT$LCDIR/$f" "$LCDIR"; done
+    cp "$LIB_SYSROOT$LCDIR/ipa_vimc.so.sign" "$OV$LCDIR/"
+    mkdir -p "$OV/usr/share/libcamera/ipa"
+    cp -r "$LIB_SYSROOT/usr/share/libcamera/ipa/vimc" "$OV/usr/share/libcamera/ipa/"
+  fi
 else
   for p in "${TOOLS[@]}" cam; do add_program "$(command -v "$p")"; done
   # libcamera loads its IPA modules and their data from fixed paths.
