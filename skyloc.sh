@@ -7,6 +7,7 @@
 #   ./skyloc.sh bench [FILTER]    Release build, run the Google Benchmark programs
 #   ./skyloc.sh run ARGS...       build host and run: skyloc ARGS...
 #   ./skyloc.sh hil [KIND]        only the VM tests (label hil): host (amd64) or aarch64 (arm64)
+#   ./skyloc.sh package [KIND]    Release build, build/skyloc_<version>_<arch>.deb; KIND: host, aarch64, armhf
 #   ./skyloc.sh deps [KIND]       only install the Debian packages KIND needs
 #   ./skyloc.sh format            clang-format every C++ file in place
 #   ./skyloc.sh fuzz [--time S | --runs N] [TARGET...]
@@ -34,7 +35,8 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
   libboost-math-dev
   libopencv-dev  # host-only evaluation tools: SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md)
   libcamera-dev
-  clang-14 libclang-rt-14-dev)  # clang + libFuzzer: the fuzz targets (tests/fuzz)
+  clang-14 libclang-rt-14-dev  # clang + libFuzzer: the fuzz targets (tests/fuzz)
+  lintian mmdebstrap)  # ./skyloc.sh package and its test (tests/package): lint, install in a Debian root
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one
@@ -43,13 +45,14 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
 HIL_PACKAGES=(qemu-system-x86 qemu-system-arm busybox-static kmod cpio bc xz-utils
   v4l-utils gpiod libcamera-tools libcamera-ipa shellcheck)
 HIL_PACKAGES_amd64=(linux-headers-amd64)
-CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static)
-CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static)
-# Optional target libraries from Debian multiarch. The archive's architectures are not
-# always in step (a security update can reach amd64 before arm64), and then these are not
-# co-installable; the build then leaves the driver out and says so at configure time.
-CROSS_OPTIONAL_aarch64=(libgpiod-dev:arm64)
-CROSS_OPTIONAL_armhf=(libgpiod-dev:armhf)
+# The ARM builds: Debian's cross compilers, qemu-user for their tests, and mmdebstrap,
+# which makes each build's target sysroot (ensure_sysroot below).
+CROSS_PACKAGES_aarch64=(crossbuild-essential-arm64 qemu-user-static mmdebstrap)
+CROSS_PACKAGES_armhf=(crossbuild-essential-armhf qemu-user-static mmdebstrap)
+# What the ARM builds include and link: toolchains/sysroot-packages.txt.
+SYSROOT_PACKAGES_FILE="$ROOT/toolchains/sysroot-packages.txt"
+# Bump when ensure_sysroot changes what it makes, so every cached sysroot is made again.
+SYSROOT_FORMAT=1
 
 apt_updated=0
 as_root() {
@@ -83,22 +86,78 @@ install_packages() {
     die "apt-get install failed for: $(echo $missing | tr '\n' ' ') (log: $BUILD_ROOT/apt.log)"
   }
 }
-install_optional() {
-  local p
-  for p in $(missing_packages "$@"); do
-    apt_update_once
-    if ! as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$p" \
-      >>"$BUILD_ROOT/apt.log" 2>&1; then
-      say "optional package $p is not installable right now; its driver is left out of this build"
+# ---------------------------------------------------------------------------------------
+# Target sysroots: a minimal Debian root of the target architecture holding the -dev
+# packages of toolchains/sysroot-packages.txt and their dependencies, extracted (not
+# configured: nothing of the target runs) by mmdebstrap from the archive this machine's apt
+# uses. Cached in build/sysroot-<arch>/; made again only when the package list, the suite
+# or SYSROOT_FORMAT changes (the hash in skyloc-sysroot/stamp).
+
+ensure_sysroot() {
+  local arch=$1 # Debian's name: arm64, armhf
+  local dir="$BUILD_ROOT/sysroot-$arch" suite packages want
+  suite=$("$ROOT/toolchains/debian-sources.sh" --suite) || die "the $arch sysroot is made from this machine's Debian suite"
+  packages=$(sed -e 's/#.*//' "$SYSROOT_PACKAGES_FILE" | xargs)
+  [ -n "$packages" ] || die "$SYSROOT_PACKAGES_FILE lists no packages"
+  want=$(printf '%s\n' "format $SYSROOT_FORMAT" "$arch" "$suite" "$packages" | sha256sum | cut -d' ' -f1)
+  if [ "$(cat "$dir/skyloc-sysroot/stamp" 2>/dev/null)" = "$want" ]; then
+    if [ -f "$dir/skyloc-sysroot/suites-left-out" ]; then
+      say "WARNING: $dir was made without $(cat "$dir/skyloc-sysroot/suites-left-out") (its $arch index could not be downloaded then); delete it to make it again"
     fi
-  done
-}
-ensure_foreign_arch() {
-  local arch=$1
-  if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
-    as_root dpkg --add-architecture "$arch"
-    apt_updated=0
+    return 0
   fi
+  command -v mmdebstrap >/dev/null || die "mmdebstrap is missing: it makes the $arch sysroot (apt-get install mmdebstrap; ./skyloc.sh deps does)"
+  local sources=()
+  mapfile -t sources < <("$ROOT/toolchains/debian-sources.sh")
+  [ ${#sources[@]} -gt 0 ] || die "apt knows no source for Debian '$suite' (apt-get indextargets): the $arch sysroot is made from the archive this machine's apt uses"
+  say "making the $arch sysroot in $dir with mmdebstrap: $packages"
+  local log="$BUILD_ROOT/sysroot-$arch.log" start=$SECONDS attempt skipped=()
+  # The extract hook runs while the downloaded packages are still in the target's apt
+  # cache: it keeps their versions (for reports) and their shlibs files, which
+  # dpkg-shlibdeps reads to compute the .deb's Depends (an extracted root has no dpkg
+  # database).
+  for attempt in 1 2; do
+    rm -rf "$dir" "$dir.new"
+    # shellcheck disable=SC2016 # the hooks' $1 is mmdebstrap's, expanded by its shell
+    if as_root mmdebstrap --variant=extract --architectures="$arch" --include="${packages// /,}" \
+      --extract-hook='mkdir -p "$1/skyloc-sysroot"' \
+      --extract-hook='for d in "$1"/var/cache/apt/archives/*.deb; do dpkg-deb -f "$d" Package Version | paste -sd" "; done | sort >"$1/skyloc-sysroot/packages"' \
+      --extract-hook='for d in "$1"/var/cache/apt/archives/*.deb; do dpkg-deb --ctrl-tarfile "$d" | tar -xO --wildcards "*shlibs" 2>/dev/null || true; done | grep -v "^udeb:" >"$1/skyloc-sysroot/shlibs"' \
+      "$suite" "$dir.new" "${sources[@]}" >"$log" 2>&1; then
+      break
+    fi
+    grep -E "^(E|Err):" "$log" | tail -6 >&2
+    rm -rf "$dir.new"
+    # An archive whose -updates or -security index for this architecture does not match
+    # its Release file (a mirror mid-sync, or a frozen mirror that stayed so: seen here for
+    # bookworm-security armhf) fails apt-get update. The sysroot is then made once more
+    # without that suite, loudly, and says so at every build until it is made again.
+    local failed
+    failed=$(grep -oE "Failed to fetch [^ ]*/dists/[^/]+/" "$log" | sed -E 's|.*/dists/([^/]+)/|\1|' | sort -u | xargs)
+    if [ "$attempt" = 1 ] && [ -n "$failed" ] && ! grep -qx "$suite" <<<"${failed// /$'\n'}"; then
+      say "WARNING: the archive's $arch index of $failed cannot be downloaded (above); making the $arch sysroot without $failed"
+      skipped=("$failed")
+      local kept=() line
+      for line in "${sources[@]}"; do
+        [[ " $failed " == *" $(awk '{print $3}' <<<"$line") "* ]] || kept+=("$line")
+      done
+      sources=("${kept[@]}")
+      continue
+    fi
+    die "mmdebstrap could not make the $arch sysroot (log: $log). Is the Debian archive reachable (${sources[*]}), and does it carry $arch?"
+  done
+  # Absolute symbolic links (libc6-dev's libm.so -> /lib/...) would point into the build
+  # machine's root: make them relative, inside the sysroot. Device nodes and /tmp are not
+  # wanted: qemu-user -L would show the sysroot's /dev and /tmp to the tests.
+  local link
+  while IFS= read -r -d '' link; do
+    ln -sfn --relative "$dir.new$(readlink "$link")" "$link"
+  done < <(find "$dir.new" -type l -lname '/*' -print0)
+  rm -rf "$dir.new/dev" "$dir.new/tmp" "$dir.new/var/cache" "$dir.new/var/log"
+  echo "$want" >"$dir.new/skyloc-sysroot/stamp"
+  if [ ${#skipped[@]} -gt 0 ]; then echo "${skipped[*]}" >"$dir.new/skyloc-sysroot/suites-left-out"; fi
+  mv "$dir.new" "$dir"
+  say "$arch sysroot ready in $((SECONDS - start)) s ($(du -sh "$dir" | cut -f1), $(wc -l <"$dir/skyloc-sysroot/packages") packages)"
 }
 
 deps() {
@@ -115,13 +174,11 @@ deps() {
     host | asan | tsan | release) ;;
     aarch64)
       install_packages "${CROSS_PACKAGES_aarch64[@]}"
-      ensure_foreign_arch arm64
-      install_optional "${CROSS_OPTIONAL_aarch64[@]}"
+      ensure_sysroot arm64
       ;;
     armhf)
       install_packages "${CROSS_PACKAGES_armhf[@]}"
-      ensure_foreign_arch armhf
-      install_optional "${CROSS_OPTIONAL_armhf[@]}"
+      ensure_sysroot armhf
       ;;
     *) die "unknown build kind '$kind' (host, asan, tsan, release, aarch64, armhf)" ;;
   esac
@@ -137,10 +194,25 @@ configure_and_build() {
   case "$kind" in
     host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
     release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
+    # What goes into the .deb: Release, the firmware only, every driver required.
+    package-*)
+      args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF -DSKYLOC_BUILD_BENCHMARKS=OFF
+        -DSKYLOC_HOST_EVAL=OFF -DSKYLOC_WITH_V4L2=ON -DSKYLOC_WITH_GPIOD=ON -DSKYLOC_WITH_LIBCAMERA=ON)
+      case "$kind" in
+        package-host) ;;
+        package-aarch64) args+=(-DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"
+          -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
+        package-armhf) args+=(-DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake"
+          -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
+        *) die "unknown package kind '${kind#package-}' (host, aarch64, armhf)" ;;
+      esac
+      ;;
     asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=address -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
     tsan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=thread -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
-    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake") ;;
-    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake") ;;
+    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"
+      -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
+    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake"
+      -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
     *) die "unknown build kind '$kind' (host, asan, tsan, release, aarch64, armhf)" ;;
   esac
   # A build folder configured by hand with another generator cannot be reused: start it afresh.
@@ -195,7 +267,9 @@ cmd_test() {
   deps aarch64
   deps armhf
   configure_and_build host
-  run_ctest host -LE hil
+  # Not the package test (label package, tests/package): 2.5 min and ~60 MB from the
+  # archive at every run; ctest -L package runs it (docs/PACKAGING.md).
+  run_ctest host -LE "hil|package"
   # VM tests get one more try when they fail: libcamera 0.0.3 under QEMU TCG hung once in
   # 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc. A real failure
   # fails both tries.
@@ -289,6 +363,38 @@ cmd_fuzz() {
   printf '%s\n' "${summary[@]}"
 }
 
+# The Debian package of a Release build (packaging/make-deb.sh, docs/PACKAGING.md),
+# checked by lintian: an error or an unexplained warning fails.
+cmd_package() {
+  local kind=${1:-host} arch sysroot=()
+  case "$kind" in
+    host) arch=$(dpkg --print-architecture) ;;
+    aarch64) arch=arm64 sysroot=("$BUILD_ROOT/sysroot-arm64") ;;
+    armhf) arch=armhf sysroot=("$BUILD_ROOT/sysroot-armhf") ;;
+    *) die "unknown package kind '$kind' (host, aarch64, armhf)" ;;
+  esac
+  deps "$kind"
+  configure_and_build "package-$kind"
+  local deb
+  deb=$("$ROOT/packaging/make-deb.sh" "$BUILD_ROOT/package-$kind/app/skyloc" "$arch" "$BUILD_ROOT" "${sysroot[@]}") ||
+    die "packaging failed for $kind"
+  say "lintian $deb"
+  lintian --fail-on error,warning "$deb" || die "lintian rejects $deb (above): fix it, or override a tag with its reason in packaging/lintian-overrides"
+  # An ARM package cannot be installed here (no binfmt_misc for its maintainer scripts,
+  # docs/PACKAGING.md); its binary at least runs from the package under qemu-user.
+  if [ ${#sysroot[@]} -gt 0 ]; then
+    local qemu=qemu-aarch64-static unpacked="$BUILD_ROOT/package-$kind/unpacked" version
+    if [ "$kind" = armhf ]; then qemu="qemu-arm-static"; fi
+    rm -rf "$unpacked"
+    dpkg-deb -x "$deb" "$unpacked"
+    version=$("$qemu" -L "${sysroot[0]}" "$unpacked/usr/bin/skyloc" --version) ||
+      die "the packed $arch skyloc does not run under $qemu -L ${sysroot[0]}"
+    rm -rf "$unpacked"
+    say "packed binary under $qemu: $version"
+  fi
+  say "built $deb ($(du -h "$deb" | cut -f1)); on the robot: apt install ./$(basename "$deb")"
+}
+
 cmd_demo() {
   deps host
   configure_and_build host
@@ -314,6 +420,7 @@ main() {
       configure_and_build "${1:-host}"
       ;;
     deps) deps "${1:-host}" ;;
+    package) cmd_package "$@" ;;
     hil)
       local kind=${1:-host}
       case "$kind" in host | aarch64) ;; *) die "hil runs for host or aarch64, not '$kind'" ;; esac

@@ -1,23 +1,21 @@
 # Third-party libraries, all from Debian packages. On a cross build the toolchain file
-# points find_* at Debian's multiarch directories (/usr/lib/<triplet>), so the same
-# calls find the ARM libraries. A driver whose library is missing is left out, and
-# configure says so; the pure algorithms never need more than Eigen.
+# points find_* and pkg-config at the target sysroot (build/sysroot-<arch>), so the same
+# calls find the ARM libraries. Which drivers a build contains is chosen below and printed
+# by configure; the pure algorithms never need more than Eigen.
 
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(PkgConfig REQUIRED)
 find_package(Threads REQUIRED)
 
 # PNG decoding/encoding for the describe/eval/replay/simulate tools: Debian's stb
-# (libstb-dev), used header-only so every architecture shares one set of headers; a
-# multiarch libpng-dev:arm64 is often not co-installable with the host's during mirror
-# syncs (seen on these machines), which would break the ARM build for an image codec.
+# (libstb-dev), used header-only, so the firmware links no image library (a cross build
+# finds the headers in its sysroot).
 find_path(SKYLOC_STB_INCLUDE stb/stb_image.h REQUIRED)
 add_library(skyloc_stb INTERFACE)
 target_include_directories(skyloc_stb SYSTEM INTERFACE ${SKYLOC_STB_INCLUDE})
 add_library(skyloc::stb ALIAS skyloc_stb)
 
-# toml++ is used header-only (TOML_HEADER_ONLY=1), so one set of headers serves every
-# architecture and the ARM build needs no libtomlplusplus:arm64.
+# toml++ is used header-only (TOML_HEADER_ONLY=1): the firmware links no TOML library.
 find_path(SKYLOC_TOMLPP_INCLUDE toml++/toml.h REQUIRED)
 add_library(skyloc_tomlpp INTERFACE)
 target_include_directories(skyloc_tomlpp SYSTEM INTERFACE ${SKYLOC_TOMLPP_INCLUDE})
@@ -40,22 +38,70 @@ else()
                  "the default when cross-compiling)")
 endif()
 
-# Optional drivers: each is built only when its library is installed for the target.
-pkg_check_modules(LIBGPIOD IMPORTED_TARGET libgpiodcxx>=1.6)
-pkg_check_modules(LIBCAMERA IMPORTED_TARGET libcamera>=0.0.3)
+# Drivers. SKYLOC_WITH_<DRIVER> is ON (configure fails when the driver's library is
+# missing), OFF (left out on purpose), or AUTO (built when the library is found). The
+# cross builds are the product, and their sysroot holds every driver's library
+# (toolchains/sysroot-packages.txt), so there the default is ON; a native build defaults
+# to AUTO so that a laptop without libcamera-dev still builds. Code asks
+# `#if SKYLOC_WITH_<DRIVER>` (always defined, 0 or 1: drivers/CMakeLists.txt).
+if(CMAKE_CROSSCOMPILING)
+  set(skyloc_driver_default ON)
+else()
+  set(skyloc_driver_default AUTO)
+endif()
+set(skyloc_driver_V4L2_package "linux/videodev2.h (the kernel headers: linux-libc-dev)")
+set(skyloc_driver_GPIOD_package "libgpiodcxx>=1.6 (libgpiod-dev)")
+set(skyloc_driver_LIBCAMERA_package "libcamera>=0.0.3 (libcamera-dev)")
+if(CMAKE_CROSSCOMPILING)
+  set(skyloc_driver_where "the ${CMAKE_SYSTEM_PROCESSOR} sysroot ${CMAKE_SYSROOT}")
+  set(skyloc_driver_fix "Add its package to toolchains/sysroot-packages.txt (./skyloc.sh "
+                        "deps then makes the sysroot again)")
+else()
+  set(skyloc_driver_where "this machine")
+  set(skyloc_driver_fix "Install it (./skyloc.sh deps does)")
+endif()
+string(JOIN "" skyloc_driver_fix ${skyloc_driver_fix})
+string(JOIN "" skyloc_driver_where ${skyloc_driver_where})
 include(CheckIncludeFileCXX)
-check_include_file_cxx(linux/videodev2.h SKYLOC_HAVE_VIDEODEV2)
-
-set(SKYLOC_WITH_V4L2 ${SKYLOC_HAVE_VIDEODEV2})
-set(SKYLOC_WITH_GPIOD ${LIBGPIOD_FOUND})
-set(SKYLOC_WITH_LIBCAMERA ${LIBCAMERA_FOUND})
 foreach(driver V4L2 GPIOD LIBCAMERA)
-  if(SKYLOC_WITH_${driver})
+  set(SKYLOC_WITH_${driver} ${skyloc_driver_default} CACHE STRING
+      "Build the ${driver} driver: ON (fail when its library is missing), OFF, or AUTO")
+  set_property(CACHE SKYLOC_WITH_${driver} PROPERTY STRINGS ON OFF AUTO)
+  set(mode ${SKYLOC_WITH_${driver}})
+  if(NOT mode MATCHES "^(ON|OFF|AUTO)$")
+    message(FATAL_ERROR "skyloc: SKYLOC_WITH_${driver}=${mode}: use ON, OFF or AUTO.")
+  endif()
+  set(found OFF)
+  if(NOT mode STREQUAL "OFF")
+    if(driver STREQUAL "V4L2")
+      check_include_file_cxx(linux/videodev2.h SKYLOC_HAVE_VIDEODEV2)
+      set(found ${SKYLOC_HAVE_VIDEODEV2})
+    elseif(driver STREQUAL "GPIOD")
+      pkg_check_modules(LIBGPIOD IMPORTED_TARGET libgpiodcxx>=1.6)
+      set(found ${LIBGPIOD_FOUND})
+    else()
+      pkg_check_modules(LIBCAMERA IMPORTED_TARGET libcamera>=0.0.3)
+      set(found ${LIBCAMERA_FOUND})
+    endif()
+  endif()
+  # From here on SKYLOC_WITH_<DRIVER> is what this build contains: ON or OFF.
+  if(found)
+    set(SKYLOC_WITH_${driver} ON)
     message(STATUS "skyloc: ${driver} driver: built")
+  elseif(mode STREQUAL "OFF")
+    set(SKYLOC_WITH_${driver} OFF)
+    message(STATUS "skyloc: ${driver} driver: LEFT OUT (SKYLOC_WITH_${driver}=OFF)")
+  elseif(mode STREQUAL "ON")
+    message(FATAL_ERROR "skyloc: the ${driver} driver is required in this build "
+                        "(SKYLOC_WITH_${driver}=ON, the default when cross-compiling), but "
+                        "${skyloc_driver_${driver}_package} was not found in "
+                        "${skyloc_driver_where}. ${skyloc_driver_fix}, or configure with "
+                        "-DSKYLOC_WITH_${driver}=OFF to build without this driver.")
   else()
-    message(STATUS "skyloc: ${driver} driver: LEFT OUT (its development package is not "
-                   "installed for ${CMAKE_SYSTEM_PROCESSOR}; see docs/ARCHITECTURE.md, "
-                   "'Cross builds')")
+    set(SKYLOC_WITH_${driver} OFF)
+    message(STATUS "skyloc: ${driver} driver: LEFT OUT (SKYLOC_WITH_${driver}=AUTO and "
+                   "${skyloc_driver_${driver}_package} was not found in "
+                   "${skyloc_driver_where}; -DSKYLOC_WITH_${driver}=ON makes this an error)")
   endif()
 endforeach()
 

@@ -2,11 +2,13 @@
 # run.sh: boots the HIL VM (QEMU, TCG) with real kernel test drivers and runs scenarios.
 #
 #   run.sh --arch amd64|arm64 --tests a,b [--bin FILE]... [--name NAME] [--log FILE]
-#          [--timeout SECONDS] [--cache DIR]
+#          [--timeout SECONDS] [--cache DIR] [--lib-sysroot DIR]
 #
 # --tests   scenarios from tests/hil/guest/<name>.sh, run in order inside the VM
 # --bin     a program copied to /hil/bin in the guest, with the shared libraries it needs
 #           (resolved from its ELF NEEDED entries; arm64 ones from the cross sysroot)
+# --lib-sysroot  the cross build's target sysroot (build/sysroot-arm64): the libraries
+#           (and the loader) the --bin programs were linked against, searched first
 # --log     where the guest console goes (default build/hil-logs/NAME.log)
 #
 # Needs tests/hil/setup.sh ARCH to have run (CTest: the hil.setup fixture). Exit status:
@@ -25,6 +27,7 @@ LOG=
 TIMEOUT=300
 CACHE=${SKYLOC_HIL_CACHE:-$ROOT/build/hil-cache}
 BINS=()
+LIB_SYSROOT=
 while [ $# -gt 0 ]; do
   case "$1" in
     --arch) ARCH=$2 ;;
@@ -34,6 +37,7 @@ while [ $# -gt 0 ]; do
     --log) LOG=$2 ;;
     --timeout) TIMEOUT=$2 ;;
     --cache) CACHE=$2 ;;
+    --lib-sysroot) LIB_SYSROOT=$2 ;;
     *)
       sed -n '2,16p' "$0" >&2
       exit 2
@@ -75,10 +79,16 @@ case "$ARCH" in
     # cortex-a53: -cpu max emulates pointer authentication, which makes TCG 4x slower.
     MACHINE=(-M virt -cpu cortex-a53)
     CONSOLE=ttyAMA0
-    # Debian's arm64 libraries (the set-up's sysroot) first: they are what a board runs;
-    # then the cross toolchain's and multiarch ones for what the sysroot lacks.
-    LIBDIRS=("$HIL_GUEST_SYSROOT/lib/aarch64-linux-gnu" "$HIL_GUEST_SYSROOT/usr/lib/aarch64-linux-gnu"
-      /usr/aarch64-linux-gnu/lib /usr/lib/aarch64-linux-gnu /lib/aarch64-linux-gnu)
+    # Debian's arm64 libraries: first the cross build's sysroot (what the programs were
+    # linked against: libcamera, libgpiod, libc), then the set-up's sysroot (the guest
+    # tools' libraries), then the cross toolchain's for what both lack. The loader comes
+    # from the first of the two sysroots, so that it matches that libc.
+    LIBDIRS=()
+    for r in $LIB_SYSROOT $HIL_GUEST_SYSROOT; do
+      LIBDIRS+=("$r/lib/aarch64-linux-gnu" "$r/usr/lib/aarch64-linux-gnu")
+    done
+    LIBDIRS+=(/usr/aarch64-linux-gnu/lib)
+    LOADER_ROOT=${LIB_SYSROOT:-$HIL_GUEST_SYSROOT}
     READELF=aarch64-linux-gnu-readelf
     command -v "$READELF" >/dev/null || READELF=readelf
     ;;
@@ -119,7 +129,7 @@ add_libs() {
   if [ -n "$interp" ] && [ -z "${copied[$interp]:-}" ]; then
     copied[$interp]=1
     local real=$interp
-    [ "$ARCH" = arm64 ] && real=$HIL_GUEST_SYSROOT$interp
+    [ "$ARCH" = arm64 ] && real=$LOADER_ROOT$interp
     mkdir -p "$OV$(dirname "$interp")"
     cp -L "$real" "$OV$interp"
   fi
@@ -157,6 +167,15 @@ done
 TOOLS=(v4l2-ctl media-ctl gpiodetect gpioinfo gpioget gpioset)
 if [ "$ARCH" = arm64 ]; then
   for p in "${TOOLS[@]}"; do add_program "$HIL_GUEST_SYSROOT/usr/bin/$p"; done
+  # A cross build with libcamera: vimc's IPA module and its data from the build's sysroot
+  # (libcamera loads them from fixed paths).
+  LCDIR=/usr/lib/aarch64-linux-gnu/libcamera
+  if [ -n "$LIB_SYSROOT" ] && [ -f "$LIB_SYSROOT$LCDIR/ipa_vimc.so" ]; then
+    for f in ipa_vimc.so vimc_ipa_proxy; do add_program "$LIB_SYSROOT$LCDIR/$f" "$LCDIR"; done
+    cp "$LIB_SYSROOT$LCDIR/ipa_vimc.so.sign" "$OV$LCDIR/"
+    mkdir -p "$OV/usr/share/libcamera/ipa"
+    cp -r "$LIB_SYSROOT/usr/share/libcamera/ipa/vimc" "$OV/usr/share/libcamera/ipa/"
+  fi
 else
   for p in "${TOOLS[@]}" cam; do add_program "$(command -v "$p")"; done
   # libcamera loads its IPA modules and their data from fixed paths.

@@ -16,7 +16,7 @@ export SKYLOC_TEST_GPIO_LINES=0,1,2
 export SKYLOC_TEST_GPIO_INPUT_LINE=7
 export SKYLOC_TEST_GPIO_SIM_DIR="$HIL_GPIO_SIM_DIR"
 
-# A build without libcamera (the aarch64 cross build) has no libcamera instance to run:
+# A build without libcamera (-DSKYLOC_WITH_LIBCAMERA=OFF) has no libcamera instance to run:
 # it is left out, visibly.
 if ls /hil/lib/libcamera.so.* >/dev/null 2>&1; then
   export SKYLOC_TEST_LIBCAMERA_CAMERA=first
