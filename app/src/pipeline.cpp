@@ -1,9 +1,11 @@
 #include "pipeline.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
 #include "skyloc/drivers/camera_file.h"
+#include "skyloc/dsp/strip_alignment.h"
 
 namespace skyloc::app {
 namespace {
@@ -236,12 +238,60 @@ Status Pipeline::Init(const Config& config) {
         static_cast<std::uint32_t>(std::lround(options.cap.taper_deg * 100));
   }
 
+  SKYLOC_TRY(InitHeading(config.heading));
+
   latency_ = LatencyTable();
   stage_capture = latency_.AddStage("capture");
   stage_descriptor = latency_.AddStage("descriptor");
   stage_seqslam = latency_.AddStage("seqslam");
+  stage_heading = latency_.AddStage("heading");
   stage_output = latency_.AddStage("output");
   stage_total = latency_.AddStage("total");
+  return Status::Ok();
+}
+
+Status Pipeline::InitHeading(const HeadingConfig& config) {
+  route_settings_.strip = {};
+  surf_enabled_ = false;
+  route_ = nullptr;
+  const auto columns = static_cast<std::size_t>(config.strip_columns);
+  // Zero-sized buffers when heading is off: strip() is then empty and teach stores none.
+  SKYLOC_TRY(strip_.Allocate(columns));
+  SKYLOC_TRY(strip_bytes_.Allocate(columns));
+  SKYLOC_TRY(stored_strip_.Allocate(columns));
+  if (columns == 0)
+    return Status::Ok();
+  dsp::HorizonStripOptions strip;
+  strip.n_azimuth = config.strip_columns;
+  strip.band_rows = config.band_rows;
+  strip.elevation_min_deg = config.elevation_min_deg;
+  strip.elevation_max_deg = config.elevation_max_deg;
+  if (const dsp::HorizonStripError e = horizon_.Init(lens_, strip);
+      e != dsp::HorizonStripError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
+                         dsp::HorizonStripErrorMessage(e));
+  // The band as the route records it: hundredths of a degree, so a value written to the
+  // config file and read back compares equal.
+  route_settings_.strip.columns = static_cast<std::uint32_t>(config.strip_columns);
+  route_settings_.strip.band_rows = static_cast<std::uint32_t>(config.band_rows);
+  route_settings_.strip.elevation_min_cdeg =
+      static_cast<std::int32_t>(std::lround(config.elevation_min_deg * 100));
+  route_settings_.strip.elevation_max_cdeg =
+      static_cast<std::int32_t>(std::lround(config.elevation_max_deg * 100));
+  if (!config.surf)
+    return Status::Ok();
+  dsp::Surf1dOptions surf;
+  surf.threshold = static_cast<float>(config.surf_threshold);
+  if (const dsp::Surf1dError e = surf_.Init(config.strip_columns, surf); e != dsp::Surf1dError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading] surf: %s",
+                         dsp::Surf1dErrorMessage(e));
+  if (const dsp::Surf1dError e = landmarks_.Init(config.surf_max_features, {});
+      e != dsp::Surf1dError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading] surf_max_features: %s",
+                         dsp::Surf1dErrorMessage(e));
+  SKYLOC_TRY(query_features_.Allocate(static_cast<std::size_t>(config.surf_max_features)));
+  SKYLOC_TRY(stored_features_.Allocate(static_cast<std::size_t>(config.surf_max_features)));
+  surf_enabled_ = true;
   return Status::Ok();
 }
 
@@ -269,6 +319,9 @@ Status Pipeline::SetRoute(const RouteFrames& route) {
       return Status::Error(StatusCode::kFailedPrecondition, "route: %s",
                            dsp::SeqSlamErrorMessage(e));
   }
+  // Strips of another length cannot be compared (the route loader refuses them; this
+  // guards a route built in memory).
+  route_ = route.has_strips() && route.strip_columns() == strip_.size() ? &route : nullptr;
   ResetTracking();
   return Status::Ok();
 }
@@ -297,7 +350,60 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
   }
   result->threshold = segmentation.threshold;
   result->sky_fraction = static_cast<float>(segmentation.sky_fraction);
+  if (!strip_.empty()) {
+    // Read through the body frame as the lens sees it: a tilted robot's band moves up on
+    // one side and down on the other (docs/RESULTS.md, "Heading").
+    if (const dsp::HorizonStripError e = horizon_.Extract(image, strip_.span());
+        e != dsp::HorizonStripError::kOk)
+      return Status::Error(StatusCode::kDataLoss, "frame %llu: horizon strip: %s",
+                           static_cast<unsigned long long>(result->frame),
+                           dsp::HorizonStripErrorMessage(e));
+    for (std::size_t j = 0; j < strip_.size(); ++j)
+      strip_bytes_[j] = static_cast<std::uint8_t>(std::lround(std::clamp(strip_[j], 0.0f, 255.0f)));
+  }
   return Status::Ok();
+}
+
+void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
+  StageTimer timer(latency_, stage_heading, clock_);
+  const std::span<const std::uint8_t> stored = route_->strip(route_frame);
+  for (std::size_t j = 0; j < stored.size(); ++j)
+    stored_strip_[j] = stored[j];
+  // The query is compared as the route stores it (bytes), so a frame against its own
+  // taught copy correlates at exactly 1.
+  for (std::size_t j = 0; j < strip_.size(); ++j)
+    strip_[j] = strip_bytes_[j];
+  // Both estimators give how far the query's strip content is turned from the stored one,
+  // towards increasing azimuth; a robot turned by +psi sees its scene turned by -psi.
+  auto robot_heading = [](double content_offset_deg) {
+    double h = -content_offset_deg;
+    if (h >= 180)
+      h -= 360;
+    return static_cast<float>(h);
+  };
+  dsp::StripAlignment alignment;
+  if (dsp::AlignStrips(stored_strip_.span(), strip_.span(), &alignment) ==
+      dsp::StripAlignmentError::kOk) {
+    result->has_heading = true;
+    result->heading_deg = robot_heading(alignment.heading_offset_deg);
+    result->heading_confidence = std::max(0.0f, alignment.correlation);
+  }
+  if (!surf_enabled_)
+    return;
+  int stored_count = 0, query_count = 0;
+  if (surf_.Detect(stored_strip_.span(), stored_features_.span(), &stored_count) !=
+          dsp::Surf1dError::kOk ||
+      surf_.Detect(strip_.span(), query_features_.span(), &query_count) != dsp::Surf1dError::kOk)
+    return;
+  dsp::LandmarkMatch match;
+  if (landmarks_.Match(stored_features_.span().first(static_cast<std::size_t>(stored_count)),
+                       query_features_.span().first(static_cast<std::size_t>(query_count)),
+                       static_cast<int>(strip_.size()), &match) == dsp::Surf1dError::kOk &&
+      match.model_found) {
+    result->has_heading_surf = true;
+    result->heading_surf_deg = robot_heading(match.heading_offset_deg);
+    result->heading_surf_inliers = match.inliers;
+  }
 }
 
 Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
@@ -329,6 +435,9 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
   obs.uniqueness = result->uniqueness;
   obs.confidence = result->confidence;
   result->state = state_.Update(obs);
+  if (match.valid && heading_enabled() && match.reference >= 0 &&
+      static_cast<std::size_t>(match.reference) < route_->size())
+    EstimateHeading(static_cast<std::size_t>(match.reference), result);
   return Status::Ok();
 }
 

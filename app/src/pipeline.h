@@ -12,11 +12,13 @@
 
 #include "config.h"
 #include "skyloc/drivers/camera.h"
+#include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/surf1d.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/latency.h"
 #include "skyloc/platform/route_db.h"
@@ -38,6 +40,18 @@ struct FrameResult {
   Nanoseconds latency{0};  // from the frame leaving Capture() to the state being shown
   bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
   drivers::Pose pose;
+  // Heading relative to the matched route frame (repeat, when matched and the route has
+  // horizon strips): how far the robot is turned from the taught view, degrees in
+  // [-180, 180), positive counter-clockwise seen from above (the sense of the pose's yaw):
+  // the robot's yaw now minus its yaw when the frame was taught. heading_deg is the strip
+  // cross-correlation's (dsp::AlignStrips), heading_confidence its peak correlation
+  // (0..1); heading_surf_deg is 1D SURF + RANSAC's, with its inlier count.
+  bool has_heading = false;
+  float heading_deg = 0;
+  float heading_confidence = 0;
+  bool has_heading_surf = false;
+  float heading_surf_deg = 0;
+  int heading_surf_inliers = 0;
 };
 
 // The descriptor kinds a route database records (RouteDbSettings::descriptor_kind).
@@ -65,8 +79,8 @@ std::vector<dsp::TrackState> ReplayStateMachine(const Config& config,
 class Pipeline {
  public:
   // Latency stages, in the order the table prints them.
-  int stage_capture = -1, stage_descriptor = -1, stage_seqslam = -1, stage_output = -1,
-      stage_total = -1;
+  int stage_capture = -1, stage_descriptor = -1, stage_seqslam = -1, stage_heading = -1,
+      stage_output = -1, stage_total = -1;
 
   Status Init(const Config& config);
 
@@ -76,7 +90,11 @@ class Pipeline {
   int height() const { return lens_.params().height; }
 
   // Replaces the route SeqSLAM matches against (start-up, after loading the database).
+  // The heading reads the route's horizon strips in place: `route` must outlive the
+  // pipeline's use of it (both live for the whole session).
   Status SetRoute(const RouteFrames& route);
+  // Heading is estimated: [heading] strip_columns > 0 and the route has strips.
+  bool heading_enabled() const { return route_ != nullptr && route_->has_strips(); }
   std::size_t route_size() const;  // taught frames
 
   // The descriptor of one frame into descriptor(). Allocates nothing. attitude: the body's
@@ -87,6 +105,11 @@ class Pipeline {
   bool uses_attitude() const { return uses_attitude_; }
   const dsp::Lens& lens() const { return lens_; }  // the lens the frames are read through
   std::span<const float> descriptor() const { return amplitudes_.span(); }
+  // The last described frame's horizon strip as the route stores it (one byte per
+  // column); empty when [heading] strip_columns = 0.
+  std::span<const std::uint8_t> strip() const { return strip_bytes_.span(); }
+  // What the route database records about the strip (columns 0: none).
+  const RouteDbStrip& strip_settings() const { return route_settings_.strip; }
 
   // Describe + SeqSLAM step + state machine. Allocates nothing.
   Status Localise(const drivers::Frame& frame, FrameResult* result,
@@ -105,6 +128,19 @@ class Pipeline {
   dsp::StreamingSeqSlam seqslam_;  // [seqslam] matcher = "openseqslam"; Init allocates one
   dsp::LocalisationStateMachine state_;
   FixedArray<float> amplitudes_;
+  // Heading ([heading]); all sized by Init.
+  Status InitHeading(const HeadingConfig& config);
+  void EstimateHeading(std::size_t route_frame, FrameResult* result);
+  dsp::HorizonStrip horizon_;
+  FixedArray<float> strip_;               // the frame's strip, grey levels
+  FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the route stores it
+  FixedArray<float> stored_strip_;        // the matched route frame's strip as floats
+  bool surf_enabled_ = false;
+  dsp::Surf1d surf_;
+  dsp::LandmarkMatcher landmarks_;
+  FixedArray<dsp::Surf1dFeature> query_features_;
+  FixedArray<dsp::Surf1dFeature> stored_features_;
+  const RouteFrames* route_ = nullptr;
   RouteDbSettings route_settings_;
   LatencyTable latency_;
   MonotonicClock clock_;

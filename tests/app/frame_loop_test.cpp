@@ -247,7 +247,8 @@ TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
     RouteDbWriter writer;
     ASSERT_TRUE(writer.Create(path.c_str(), taught.route_settings(), 25, false).ok());
     const std::vector<float> d(static_cast<std::size_t>(taught.dim()), 0.5f);
-    ASSERT_TRUE(writer.Append(RouteFrameMeta{}, d).ok());
+    const std::vector<std::uint8_t> strip(taught.strip_settings().columns, 100);
+    ASSERT_TRUE(writer.Append(RouteFrameMeta{}, d, strip).ok());
     ASSERT_TRUE(writer.Commit().ok());
   }
   auto write_camera_file = [&](const char* name, double fov, double centre_x, int size) {
@@ -322,7 +323,7 @@ TEST(FrameLoop, StopsOnRequestedStop) {
 }
 
 TEST(JsonLines, RepeatAndTeachLines) {
-  char buffer[1024] = {};
+  char buffer[2048] = {};
   std::FILE* f = fmemopen(buffer, sizeof buffer - 1, "w");
   ASSERT_NE(f, nullptr);
   JsonLinesSink sink(f);
@@ -336,6 +337,15 @@ TEST(JsonLines, RepeatAndTeachLines) {
   r.state = dsp::TrackState::kSearching;
   r.latency = std::chrono::microseconds(812);
   sink.OnFrame(LoopMode::kRepeat, r, 0);
+  r.has_heading = true;
+  r.heading_deg = -12.304f;
+  r.heading_confidence = 0.94123f;
+  r.has_heading_surf = true;
+  r.heading_surf_deg = -12.1f;
+  r.heading_surf_inliers = 41;
+  sink.OnFrame(LoopMode::kRepeat, r, 0);
+  r.has_heading = false;
+  r.has_heading_surf = false;
   r.matched = false;
   sink.OnFrame(LoopMode::kRepeat, r, 0);
   r.threshold = 97;
@@ -344,9 +354,17 @@ TEST(JsonLines, RepeatAndTeachLines) {
   std::fclose(f);
   EXPECT_STREQ(buffer,
                "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"latency_us\":812}\n"
+               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
+               "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
+               "\"latency_us\":812}\n"
+               "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,\"uniqueness\":0.2500,"
+               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":-12.30,"
+               "\"heading_confidence\":0.9412,\"heading_surf_deg\":-12.10,"
+               "\"heading_surf_inliers\":41,\"latency_us\":812}\n"
                "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":null,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"latency_us\":812}\n"
+               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
+               "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
+               "\"latency_us\":812}\n"
                "{\"frame\":12,\"timestamp\":0.400000,\"route_frames\":13,\"threshold\":97,"
                "\"sky_fraction\":0.5000,\"latency_us\":812}\n");
 }
