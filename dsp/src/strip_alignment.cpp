@@ -45,13 +45,19 @@ StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const f
   const double norm = 1.0 / std::sqrt(var_a * var_b);
 
   // c(s) for s = 0..n-1, kept only as the three values the parabola needs and the peak;
-  // a second pass finds the runner-up (no buffer: allocation-free for any n).
+  // a second pass finds the runner-up (no buffer: allocation-free for any n). With the
+  // means taken out afterwards, sum_j (a_j - ma)(b_(j+s) - mb) = sum_j a_j b_(j+s) - n ma mb,
+  // each c(s) is a plain dot product in two pieces, with no modulo in the inner loop: this
+  // runs on every matched frame.
+  const double mean_product = static_cast<double>(n) * mean_a * mean_b;
   auto correlation = [&](std::size_t s) {
     double sum = 0;
-    for (std::size_t j = 0; j < n; ++j)
-      sum += (static_cast<double>(stored[j]) - mean_a) *
-             (static_cast<double>(test[(j + s) % n]) - mean_b);
-    return sum * norm;
+    const std::size_t wrap = n - s;
+    for (std::size_t j = 0; j < wrap; ++j)
+      sum += static_cast<double>(stored[j]) * static_cast<double>(test[j + s]);
+    for (std::size_t j = wrap; j < n; ++j)
+      sum += static_cast<double>(stored[j]) * static_cast<double>(test[j - wrap]);
+    return (sum - mean_product) * norm;
   };
   std::size_t best = 0;
   double best_c = -2;

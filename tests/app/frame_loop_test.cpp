@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -46,7 +48,10 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
   StreetCamera camera(Street(frames));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
-  ASSERT_TRUE(route->Allocate(400, static_cast<std::size_t>(pipeline.dim())).ok());
+  ASSERT_TRUE(route
+                  ->Allocate(400, static_cast<std::size_t>(pipeline.dim()),
+                             pipeline.strip_settings().columns)
+                  .ok());
   for (;;) {
     Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1));
     if (!f.ok())
@@ -56,7 +61,7 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
     RouteFrameMeta meta;
     meta.has_pose = true;
     meta.pose[0] = f->pose->x_m;
-    ASSERT_TRUE(route->Append(meta, pipeline.descriptor()));
+    ASSERT_TRUE(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
   }
 }
 
@@ -131,6 +136,8 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   RouteFrames route;
   Teach(pipeline, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
+  // The heading path runs on every matched frame (strip, correlation, 1D SURF + RANSAC).
+  ASSERT_TRUE(pipeline.heading_enabled());
   StreetCamera camera(Repeat(0));  // endless: the street goes on past the route
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -153,7 +160,61 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   EXPECT_EQ(summary.frames, 10000u);
   EXPECT_EQ(allocations, 0u);
   EXPECT_FALSE(json.write_failed());
+  // Most frames were matched, so the heading ran thousands of times under the counter.
+  EXPECT_GT(pipeline.latency().stage(pipeline.stage_heading).count(), 5000u);
   std::fclose(null);
+}
+
+// The repeat drives the taught street turned by a known yaw: the JSON lines carry
+// heading_deg near that yaw (the robot's yaw now minus when taught, counter-clockwise
+// positive), from both estimators. The reference is the camera's own rotation, not the
+// strip code.
+TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
+  ClearSignalFlags();
+  Pipeline pipeline;
+  ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
+  RouteFrames route;
+  Teach(pipeline, 300, &route);
+  ASSERT_TRUE(pipeline.SetRoute(route).ok());
+  for (const double yaw : {25.0, -40.0}) {
+    StreetCameraOptions o = Repeat(200);
+    o.yaw_deg = yaw;
+    StreetCamera camera(o);
+    ASSERT_TRUE(camera.Open().ok());
+    ASSERT_TRUE(camera.Start().ok());
+    char* text = nullptr;
+    std::size_t size = 0;
+    std::FILE* f = open_memstream(&text, &size);
+    ASSERT_NE(f, nullptr);
+    JsonLinesSink json(f);
+    LoopSummary summary;
+    pipeline.ResetTracking();
+    ASSERT_TRUE(RunFrameLoop(camera, nullptr, pipeline, nullptr, &json, {}, &summary).ok());
+    std::fclose(f);
+    const std::string lines(text, size);
+    std::free(text);
+    // heading_deg and heading_surf_deg of every line that has them.
+    std::vector<double> heading, surf;
+    const std::string heading_key = "\"heading_deg\":", surf_key = "\"heading_surf_deg\":";
+    for (std::size_t at = 0; (at = lines.find(heading_key, at)) != std::string::npos;) {
+      at += heading_key.size();
+      if (lines.compare(at, 4, "null") != 0)
+        heading.push_back(std::strtod(lines.c_str() + at, nullptr));
+      const std::size_t s = lines.find(surf_key, at) + surf_key.size();
+      if (lines.compare(s, 4, "null") != 0)
+        surf.push_back(std::strtod(lines.c_str() + s, nullptr));
+    }
+    ASSERT_GE(heading.size(), 150u) << yaw;  // all but the first ds frames are matched
+    auto within = [&](const std::vector<double>& v, double tolerance) {
+      std::size_t n = 0;
+      for (double h : v)
+        n += std::fabs(h - yaw) <= tolerance ? 1 : 0;
+      return static_cast<double>(n) / static_cast<double>(v.size());
+    };
+    EXPECT_GE(within(heading, 3.0), 0.9) << yaw;
+    ASSERT_GE(surf.size(), 100u) << yaw;
+    EXPECT_GE(within(surf, 3.0), 0.8) << yaw;
+  }
 }
 
 // [attitude] on: every frame takes the IMU's attitude at its timestamp through the filter,

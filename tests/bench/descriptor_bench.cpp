@@ -8,10 +8,13 @@
 #include <numbers>
 #include <vector>
 
+#include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/sample_lut.h"
 #include "skyloc/dsp/segmentation.h"
 #include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/strip_alignment.h"
+#include "skyloc/dsp/surf1d.h"
 
 namespace {
 
@@ -165,5 +168,83 @@ void BM_ProjectAndAmplitudes(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ProjectAndAmplitudes)->Unit(benchmark::kMicrosecond);
+
+// Heading of a matched frame (issue 13), the two ways app::Pipeline::EstimateHeading runs
+// them after the matcher picks a route frame, beside the descriptor: the route frame's
+// strip (360 bytes, as the route database stores it) against a query frame turned by 25
+// degrees. A skyline of a few harmonics over azimuth-textured ground, so 1D SURF finds a
+// realistic number of features (the street canyon above is almost all wall at 0..20 deg).
+std::vector<std::uint8_t> SkylineFrame(const Lens& lens, double turn_deg) {
+  std::vector<std::uint8_t> grey(static_cast<std::size_t>(kWidth * kHeight), 0);
+  Eigen::Vector3d ray;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      if (!lens.PixelToRay(x, y, &ray))
+        continue;
+      const double phi = std::atan2(ray.y(), ray.x()) - turn_deg * std::numbers::pi / 180.0;
+      const double elevation = std::asin(ray.z()) * 180.0 / std::numbers::pi;
+      const double skyline = 9.0 + 4.0 * std::sin(3.0 * phi) + 2.5 * std::cos(7.0 * phi) +
+                             1.5 * std::sin(13.0 * phi + 1.0);
+      const double ground = 70.0 + 20.0 * std::sin(5.0 * phi) + 10.0 * std::cos(11.0 * phi);
+      grey[static_cast<std::size_t>(y * kWidth + x)] =
+          static_cast<std::uint8_t>(elevation > skyline ? 215.0 : ground);
+    }
+  }
+  return grey;
+}
+
+enum class HeadingWay : std::uint8_t { kCorrelation, kSurf };
+
+void BM_Heading(benchmark::State& state, HeadingWay way) {
+  const Lens lens = MakeLens();
+  const std::vector<std::uint8_t> taught = SkylineFrame(lens, 0.0);
+  const std::vector<std::uint8_t> query = SkylineFrame(lens, 25.0);
+  HorizonStrip horizon;
+  if (horizon.Init(lens, HorizonStripOptions{}) != HorizonStripError::kOk)
+    std::abort();
+  const auto n = static_cast<std::size_t>(horizon.n_azimuth());
+  std::vector<float> strip(n), stored(n);
+  std::vector<std::uint8_t> route_bytes(n);
+  horizon.Extract(View(taught), strip);
+  for (std::size_t j = 0; j < n; ++j)
+    route_bytes[j] = static_cast<std::uint8_t>(std::lround(strip[j]));
+  horizon.Extract(View(query), strip);
+  Surf1d surf;
+  LandmarkMatcher matcher;
+  if (surf.Init(horizon.n_azimuth(), Surf1dOptions{}) != Surf1dError::kOk ||
+      matcher.Init(256, LandmarkMatchOptions{}) != Surf1dError::kOk)
+    std::abort();
+  std::vector<Surf1dFeature> stored_features(256), query_features(256);
+  int stored_count = 0, query_count = 0;
+  double heading = 0;
+  for (auto _ : state) {
+    // Both ways start from the route frame's bytes and the query's strip.
+    for (std::size_t j = 0; j < n; ++j)
+      stored[j] = route_bytes[j];
+    if (way == HeadingWay::kCorrelation) {
+      horizon.Extract(View(query), strip);
+      StripAlignment alignment;
+      AlignStrips(stored, strip, &alignment);
+      heading = alignment.heading_offset_deg;
+    } else {
+      LandmarkMatch match;
+      surf.Detect(stored, stored_features, &stored_count);
+      surf.Detect(strip, query_features, &query_count);
+      matcher.Match(std::span(stored_features).first(static_cast<std::size_t>(stored_count)),
+                    std::span(query_features).first(static_cast<std::size_t>(query_count)),
+                    horizon.n_azimuth(), &match);
+      heading = match.heading_offset_deg;
+    }
+    benchmark::DoNotOptimize(heading);
+  }
+  state.counters["heading_deg"] = heading;
+  if (way == HeadingWay::kSurf)
+    state.counters["features"] = query_count;
+}
+// Strip extraction of the query + circular cross-correlation (heading_deg).
+BENCHMARK_CAPTURE(BM_Heading, correlation, HeadingWay::kCorrelation)->Unit(benchmark::kMicrosecond);
+// 1D SURF on both strips + nearest neighbours + RANSAC (heading_surf_deg); the query strip
+// is the one extracted above.
+BENCHMARK_CAPTURE(BM_Heading, surf, HeadingWay::kSurf)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
