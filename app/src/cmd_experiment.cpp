@@ -348,14 +348,14 @@ std::string CommonNotes(const sim::ExperimentOptions& e) {
              e.tolerance_frames, e.max_offset_m);
 }
 
-std::string HeadingJson(const sim::HeadingErrors& e) {
+std::string HeadingJson(const dsp::HeadingErrorSummary& e) {
   return Format(
       "{\"frames\": %d, \"estimated\": %d, \"median_deg\": %.3f, \"p90_deg\": %.3f, "
       "\"max_deg\": %.3f}",
       e.frames, e.estimated, e.median_deg, e.p90_deg, e.max_deg);
 }
 
-std::string HeadingCell(const sim::HeadingErrors& e) {
+std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
   if (e.estimated == 0)
     return Format("— (0 of %d)", e.frames);
   return Format("%.2f° / %.2f° (%d of %d)", e.median_deg, e.p90_deg, e.estimated, e.frames);
@@ -369,15 +369,17 @@ int RunHeading(const Options& o, const std::string& command) {
     return kExitFailure;
   }
   // All worlds together: the done-when figure.
-  sim::HeadingErrors all_correlation, all_surf;
+  std::vector<double> pooled_correlation, pooled_surf;
+  int pooled_frames = 0;
   for (const sim::HeadingRow& r : rows) {
-    for (auto [all, one] : {std::pair{&all_correlation, &r.correlation}, {&all_surf, &r.surf}}) {
-      all->frames += one->frames;
-      all->errors_deg.insert(all->errors_deg.end(), one->errors_deg.begin(), one->errors_deg.end());
-    }
+    pooled_frames += r.correlation.frames;
+    pooled_correlation.insert(pooled_correlation.end(), r.correlation_errors_deg.begin(),
+                              r.correlation_errors_deg.end());
+    pooled_surf.insert(pooled_surf.end(), r.surf_errors_deg.begin(), r.surf_errors_deg.end());
   }
-  sim::SummariseHeadingErrors(&all_correlation);
-  sim::SummariseHeadingErrors(&all_surf);
+  const dsp::HeadingErrorSummary all_correlation =
+      dsp::SummariseHeadingErrors(pooled_correlation, pooled_frames);
+  const dsp::HeadingErrorSummary all_surf = dsp::SummariseHeadingErrors(pooled_surf, pooled_frames);
   std::string md = "# skyloc experiment heading\n\n```\n" + command +
                    "\n```\n\nHeading error (absolute, median / 90th percentile, degrees; frames "
                    "with an estimate of the correctly matched ones):\n\n"

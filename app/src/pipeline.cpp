@@ -5,7 +5,6 @@
 #include <cstring>
 
 #include "skyloc/drivers/camera_file.h"
-#include "skyloc/dsp/strip_alignment.h"
 
 namespace skyloc::app {
 namespace {
@@ -252,7 +251,6 @@ Status Pipeline::Init(const Config& config) {
 
 Status Pipeline::InitHeading(const HeadingConfig& config) {
   route_settings_.strip = {};
-  surf_enabled_ = false;
   route_ = nullptr;
   const auto columns = static_cast<std::size_t>(config.strip_columns);
   // Zero-sized buffers when heading is off: strip() is then empty and teach stores none.
@@ -278,20 +276,14 @@ Status Pipeline::InitHeading(const HeadingConfig& config) {
       static_cast<std::int32_t>(std::lround(config.elevation_min_deg * 100));
   route_settings_.strip.elevation_max_cdeg =
       static_cast<std::int32_t>(std::lround(config.elevation_max_deg * 100));
-  if (!config.surf)
-    return Status::Ok();
-  dsp::Surf1dOptions surf;
-  surf.threshold = static_cast<float>(config.surf_threshold);
-  if (const dsp::Surf1dError e = surf_.Init(config.strip_columns, surf); e != dsp::Surf1dError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[heading] surf: %s",
-                         dsp::Surf1dErrorMessage(e));
-  if (const dsp::Surf1dError e = landmarks_.Init(config.surf_max_features, {});
-      e != dsp::Surf1dError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[heading] surf_max_features: %s",
-                         dsp::Surf1dErrorMessage(e));
-  SKYLOC_TRY(query_features_.Allocate(static_cast<std::size_t>(config.surf_max_features)));
-  SKYLOC_TRY(stored_features_.Allocate(static_cast<std::size_t>(config.surf_max_features)));
-  surf_enabled_ = true;
+  dsp::HeadingOptions heading;
+  heading.surf = config.surf;
+  heading.features.threshold = static_cast<float>(config.surf_threshold);
+  heading.max_features = config.surf_max_features;
+  if (const dsp::HeadingError e = heading_.Init(config.strip_columns, heading);
+      e != dsp::HeadingError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
+                         dsp::HeadingErrorMessage(e));
   return Status::Ok();
 }
 
@@ -373,37 +365,15 @@ void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
   // taught copy correlates at exactly 1.
   for (std::size_t j = 0; j < strip_.size(); ++j)
     strip_[j] = strip_bytes_[j];
-  // Both estimators give how far the query's strip content is turned from the stored one,
-  // towards increasing azimuth; a robot turned by +psi sees its scene turned by -psi.
-  auto robot_heading = [](double content_offset_deg) {
-    double h = -content_offset_deg;
-    if (h >= 180)
-      h -= 360;
-    return static_cast<float>(h);
-  };
-  dsp::StripAlignment alignment;
-  if (dsp::AlignStrips(stored_strip_.span(), strip_.span(), &alignment) ==
-      dsp::StripAlignmentError::kOk) {
-    result->has_heading = true;
-    result->heading_deg = robot_heading(alignment.heading_offset_deg);
-    result->heading_confidence = std::max(0.0f, alignment.correlation);
-  }
-  if (!surf_enabled_)
-    return;
-  int stored_count = 0, query_count = 0;
-  if (surf_.Detect(stored_strip_.span(), stored_features_.span(), &stored_count) !=
-          dsp::Surf1dError::kOk ||
-      surf_.Detect(strip_.span(), query_features_.span(), &query_count) != dsp::Surf1dError::kOk)
-    return;
-  dsp::LandmarkMatch match;
-  if (landmarks_.Match(stored_features_.span().first(static_cast<std::size_t>(stored_count)),
-                       query_features_.span().first(static_cast<std::size_t>(query_count)),
-                       static_cast<int>(strip_.size()), &match) == dsp::Surf1dError::kOk &&
-      match.model_found) {
-    result->has_heading_surf = true;
-    result->heading_surf_deg = robot_heading(match.heading_offset_deg);
-    result->heading_surf_inliers = match.inliers;
-  }
+  dsp::HeadingEstimate estimate;
+  if (heading_.Estimate(stored_strip_.span(), strip_.span(), &estimate) != dsp::HeadingError::kOk)
+    return;  // strips of the configured length by construction (SetRoute)
+  result->has_heading = estimate.has_correlation;
+  result->heading_deg = static_cast<float>(estimate.correlation_deg);
+  result->heading_confidence = estimate.confidence;
+  result->has_heading_surf = estimate.has_surf;
+  result->heading_surf_deg = static_cast<float>(estimate.surf_deg);
+  result->heading_surf_inliers = estimate.surf_inliers;
 }
 
 Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,

@@ -12,13 +12,13 @@
 
 #include "config.h"
 #include "skyloc/drivers/camera.h"
+#include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
-#include "skyloc/dsp/surf1d.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/latency.h"
 #include "skyloc/platform/route_db.h"
@@ -41,11 +41,10 @@ struct FrameResult {
   bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
   drivers::Pose pose;
   // Heading relative to the matched route frame (repeat, when matched and the route has
-  // horizon strips): how far the robot is turned from the taught view, degrees in
-  // [-180, 180), positive counter-clockwise seen from above (the sense of the pose's yaw):
-  // the robot's yaw now minus its yaw when the frame was taught. heading_deg is the strip
-  // cross-correlation's (dsp::AlignStrips), heading_confidence its peak correlation
-  // (0..1); heading_surf_deg is 1D SURF + RANSAC's, with its inlier count.
+  // horizon strips), dsp/heading.h's convention: the robot's yaw now minus its yaw when
+  // the frame was taught, degrees in [-180, 180), counter-clockwise seen from above
+  // positive. heading_deg is the strip cross-correlation's, heading_confidence its peak
+  // correlation (0..1); heading_surf_deg is 1D SURF + RANSAC's, with its inlier count.
   bool has_heading = false;
   float heading_deg = 0;
   float heading_confidence = 0;
@@ -135,11 +134,7 @@ class Pipeline {
   FixedArray<float> strip_;               // the frame's strip, grey levels
   FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the route stores it
   FixedArray<float> stored_strip_;        // the matched route frame's strip as floats
-  bool surf_enabled_ = false;
-  dsp::Surf1d surf_;
-  dsp::LandmarkMatcher landmarks_;
-  FixedArray<dsp::Surf1dFeature> query_features_;
-  FixedArray<dsp::Surf1dFeature> stored_features_;
+  dsp::HeadingEstimator heading_;
   const RouteFrames* route_ = nullptr;
   RouteDbSettings route_settings_;
   LatencyTable latency_;

@@ -8,13 +8,12 @@
 #include <numbers>
 #include <vector>
 
+#include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/sample_lut.h"
 #include "skyloc/dsp/segmentation.h"
 #include "skyloc/dsp/sky_descriptor.h"
-#include "skyloc/dsp/strip_alignment.h"
-#include "skyloc/dsp/surf1d.h"
 
 namespace {
 
@@ -193,9 +192,11 @@ std::vector<std::uint8_t> SkylineFrame(const Lens& lens, double turn_deg) {
   return grey;
 }
 
-enum class HeadingWay : std::uint8_t { kCorrelation, kSurf };
-
-void BM_Heading(benchmark::State& state, HeadingWay way) {
+// What the firmware does per matched frame (app::Pipeline::EstimateHeading): the query's
+// strip from the frame, the route frame's bytes to floats, then dsp::HeadingEstimator with
+// (b) the cross-correlation alone, or (b) + (a) 1D SURF + RANSAC ([heading] surf = true,
+// the default); (a)'s cost is the difference.
+void BM_Heading(benchmark::State& state, bool surf) {
   const Lens lens = MakeLens();
   const std::vector<std::uint8_t> taught = SkylineFrame(lens, 0.0);
   const std::vector<std::uint8_t> query = SkylineFrame(lens, 25.0);
@@ -208,43 +209,26 @@ void BM_Heading(benchmark::State& state, HeadingWay way) {
   horizon.Extract(View(taught), strip);
   for (std::size_t j = 0; j < n; ++j)
     route_bytes[j] = static_cast<std::uint8_t>(std::lround(strip[j]));
-  horizon.Extract(View(query), strip);
-  Surf1d surf;
-  LandmarkMatcher matcher;
-  if (surf.Init(horizon.n_azimuth(), Surf1dOptions{}) != Surf1dError::kOk ||
-      matcher.Init(256, LandmarkMatchOptions{}) != Surf1dError::kOk)
+  HeadingOptions options;
+  options.surf = surf;
+  HeadingEstimator estimator;
+  if (estimator.Init(horizon.n_azimuth(), options) != HeadingError::kOk)
     std::abort();
-  std::vector<Surf1dFeature> stored_features(256), query_features(256);
-  int stored_count = 0, query_count = 0;
-  double heading = 0;
+  HeadingEstimate estimate;
   for (auto _ : state) {
-    // Both ways start from the route frame's bytes and the query's strip.
+    horizon.Extract(View(query), strip);
     for (std::size_t j = 0; j < n; ++j)
       stored[j] = route_bytes[j];
-    if (way == HeadingWay::kCorrelation) {
-      horizon.Extract(View(query), strip);
-      StripAlignment alignment;
-      AlignStrips(stored, strip, &alignment);
-      heading = alignment.heading_offset_deg;
-    } else {
-      LandmarkMatch match;
-      surf.Detect(stored, stored_features, &stored_count);
-      surf.Detect(strip, query_features, &query_count);
-      matcher.Match(std::span(stored_features).first(static_cast<std::size_t>(stored_count)),
-                    std::span(query_features).first(static_cast<std::size_t>(query_count)),
-                    horizon.n_azimuth(), &match);
-      heading = match.heading_offset_deg;
-    }
-    benchmark::DoNotOptimize(heading);
+    estimator.Estimate(stored, strip, &estimate);
+    benchmark::DoNotOptimize(estimate);
   }
-  state.counters["heading_deg"] = heading;
-  if (way == HeadingWay::kSurf)
-    state.counters["features"] = query_count;
+  state.counters["heading_deg"] = estimate.correlation_deg;
+  if (surf) {
+    state.counters["surf_deg"] = estimate.surf_deg;
+    state.counters["inliers"] = estimate.surf_inliers;
+  }
 }
-// Strip extraction of the query + circular cross-correlation (heading_deg).
-BENCHMARK_CAPTURE(BM_Heading, correlation, HeadingWay::kCorrelation)->Unit(benchmark::kMicrosecond);
-// 1D SURF on both strips + nearest neighbours + RANSAC (heading_surf_deg); the query strip
-// is the one extracted above.
-BENCHMARK_CAPTURE(BM_Heading, surf, HeadingWay::kSurf)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, correlation, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, correlation_and_surf, true)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -6,9 +6,8 @@
 #include <cstdio>
 #include <utility>
 
+#include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/sky_descriptor.h"
-#include "skyloc/dsp/strip_alignment.h"
-#include "skyloc/dsp/surf1d.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/sim/imu_model.h"
 
@@ -424,34 +423,7 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
   return Status::Ok();
 }
 
-void SummariseHeadingErrors(HeadingErrors* errors) {
-  std::vector<double> magnitude;
-  magnitude.reserve(errors->errors_deg.size());
-  for (const double e : errors->errors_deg)
-    magnitude.push_back(std::fabs(e));
-  std::sort(magnitude.begin(), magnitude.end());
-  errors->estimated = static_cast<int>(magnitude.size());
-  if (magnitude.empty())
-    return;
-  // Nearest rank: the smallest error at least this share of frames stay within.
-  auto rank = [&](double share) {
-    const auto k =
-        static_cast<std::size_t>(std::ceil(share * static_cast<double>(magnitude.size())));
-    return magnitude[std::max<std::size_t>(k, 1) - 1];
-  };
-  errors->median_deg = rank(0.5);
-  errors->p90_deg = rank(0.9);
-  errors->max_deg = magnitude.back();
-}
-
 namespace {
-
-double WrapDegrees(double d) {
-  d = std::fmod(d + 180.0, 360.0);
-  if (d < 0)
-    d += 360.0;
-  return d - 180.0;
-}
 
 // Angle of the body's z axis from the world zenith, degrees (roll then pitch).
 double TiltDeg(const drivers::Pose& pose) {
@@ -472,14 +444,10 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   options.vanilla = false;
   options.cap.enabled = false;
   const auto n = static_cast<std::size_t>(options.strip.n_azimuth);
-  dsp::Surf1d surf;
-  dsp::LandmarkMatcher matcher;
-  constexpr int kMaxFeatures = 256;  // the firmware's [heading] surf_max_features
-  if (surf.Init(options.strip.n_azimuth, dsp::Surf1dOptions{}) != dsp::Surf1dError::kOk ||
-      matcher.Init(kMaxFeatures, dsp::LandmarkMatchOptions{}) != dsp::Surf1dError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "1D SURF: the strip needs more than 147 columns");
-  std::vector<dsp::Surf1dFeature> stored_features(kMaxFeatures), query_features(kMaxFeatures);
+  dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
+  if (const dsp::HeadingError e = estimator.Init(options.strip.n_azimuth, {});
+      e != dsp::HeadingError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "heading: %s", dsp::HeadingErrorMessage(e));
   std::vector<float> stored(n), test(n);
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
@@ -508,6 +476,8 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
     row.query_frames = static_cast<int>(query.trajectory.size());
     SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, options, &row.match,
                          ExperimentMatcher::kRouteFilter));
+    std::vector<double> correlation, surf, level, tilted;  // signed errors, degrees
+    int frames = 0, level_frames = 0;
     for (std::size_t q = 0; q < query.trajectory.size(); ++q) {
       if (!row.match.correct[q])
         continue;
@@ -517,33 +487,29 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
         test[j] = query.strips[q * n + j];
       }
       const drivers::Pose& query_pose = query.trajectory[q].pose;
-      // The truth: how far the robot is turned from the taught frame's heading (the
-      // firmware's heading_deg convention, counter-clockwise positive).
-      const double truth = WrapDegrees(query_pose.yaw_deg - reference.trajectory[r].pose.yaw_deg);
-      const bool level = TiltDeg(query_pose) <= kLevelTiltDeg;
-      ++row.correlation.frames;
-      ++row.surf.frames;
-      ++(level ? row.correlation_level : row.correlation_tilted).frames;
-      // Both estimators give the query content's turn; the robot turned the other way.
-      dsp::StripAlignment alignment;
-      if (dsp::AlignStrips(stored, test, &alignment) == dsp::StripAlignmentError::kOk) {
-        const double error = WrapDegrees(-alignment.heading_offset_deg - truth);
-        row.correlation.errors_deg.push_back(error);
-        (level ? row.correlation_level : row.correlation_tilted).errors_deg.push_back(error);
+      // The truth: how far the robot is turned from the taught frame's heading.
+      const double truth =
+          dsp::WrapDegrees(query_pose.yaw_deg - reference.trajectory[r].pose.yaw_deg);
+      const bool is_level = TiltDeg(query_pose) <= kLevelTiltDeg;
+      ++frames;
+      level_frames += is_level ? 1 : 0;
+      dsp::HeadingEstimate estimate;
+      if (estimator.Estimate(stored, test, &estimate) != dsp::HeadingError::kOk)
+        return Status::Error(StatusCode::kInternal, "heading of query frame %zu", q);
+      if (estimate.has_correlation) {
+        const double error = dsp::WrapDegrees(estimate.correlation_deg - truth);
+        correlation.push_back(error);
+        (is_level ? level : tilted).push_back(error);
       }
-      int stored_count = 0, query_count = 0;
-      dsp::LandmarkMatch landmarks;
-      if (surf.Detect(stored, stored_features, &stored_count) == dsp::Surf1dError::kOk &&
-          surf.Detect(test, query_features, &query_count) == dsp::Surf1dError::kOk &&
-          matcher.Match(std::span(stored_features).first(static_cast<std::size_t>(stored_count)),
-                        std::span(query_features).first(static_cast<std::size_t>(query_count)),
-                        options.strip.n_azimuth, &landmarks) == dsp::Surf1dError::kOk &&
-          landmarks.model_found)
-        row.surf.errors_deg.push_back(WrapDegrees(-landmarks.heading_offset_deg - truth));
+      if (estimate.has_surf)
+        surf.push_back(dsp::WrapDegrees(estimate.surf_deg - truth));
     }
-    for (HeadingErrors* e :
-         {&row.correlation, &row.surf, &row.correlation_level, &row.correlation_tilted})
-      SummariseHeadingErrors(e);
+    row.correlation_errors_deg = correlation;
+    row.surf_errors_deg = surf;
+    row.correlation = dsp::SummariseHeadingErrors(correlation, frames);
+    row.surf = dsp::SummariseHeadingErrors(surf, frames);
+    row.correlation_level = dsp::SummariseHeadingErrors(level, level_frames);
+    row.correlation_tilted = dsp::SummariseHeadingErrors(tilted, frames - level_frames);
     rows->push_back(std::move(row));
   }
   return Status::Ok();

@@ -168,26 +168,17 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
 // the right place, the heading relative to the matched reference frame from the two
 // frames' horizon strips, (b) circular cross-correlation (dsp::AlignStrips) and (a) 1D
 // SURF + RANSAC, against the truth: the query pose's yaw minus the reference pose's.
-struct HeadingErrors {
-  int frames = 0;     // correctly matched query frames
-  int estimated = 0;  // of those, frames the method gave a heading for
-  // Absolute errors over the estimated frames, degrees.
-  double median_deg = 0, p90_deg = 0, max_deg = 0;
-  std::vector<double> errors_deg;  // per estimated frame, signed (estimate - truth)
-};
-
 struct HeadingRow {
   WorldKind world = WorldKind::kForest;
   int query_frames = 0;
   MethodScore match;  // the route filter on the sky descriptor
-  HeadingErrors correlation, surf;
+  dsp::HeadingErrorSummary correlation, surf;
   // The same frames split by the query's tilt (angle of body z from the zenith) at or
   // below / above 5 degrees, correlation only: what the bumps do to the strip.
-  HeadingErrors correlation_level, correlation_tilted;
+  dsp::HeadingErrorSummary correlation_level, correlation_tilted;
+  // Signed errors (estimate - truth, degrees) of the estimated frames, for pooling worlds.
+  std::vector<double> correlation_errors_deg, surf_errors_deg;
 };
-
-// Orders `errors_deg` and fills median/p90/max of their absolute values.
-void SummariseHeadingErrors(HeadingErrors* errors);
 
 Status RunHeadingExperiment(const ExperimentOptions& options, std::vector<HeadingRow>* rows,
                             ProgressFn progress = nullptr, void* context = nullptr);
