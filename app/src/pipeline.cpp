@@ -138,6 +138,23 @@ dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
   return sm;
 }
 
+dsp::HorizonStripOptions HorizonStripOptionsFrom(const HeadingConfig& config) {
+  dsp::HorizonStripOptions strip;
+  strip.n_azimuth = config.strip_columns;
+  strip.band_rows = config.band_rows;
+  strip.elevation_min_deg = config.elevation_min_deg;
+  strip.elevation_max_deg = config.elevation_max_deg;
+  return strip;
+}
+
+dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config) {
+  dsp::HeadingOptions heading;
+  heading.surf = config.surf;
+  heading.features.threshold = static_cast<float>(config.surf_threshold);
+  heading.max_features = config.surf_max_features;
+  return heading;
+}
+
 dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config) {
   dsp::RouteFilterParams filter;
   filter.sequence_length = config.seqslam.ds;
@@ -259,11 +276,7 @@ Status Pipeline::InitHeading(const HeadingConfig& config) {
   SKYLOC_TRY(stored_strip_.Allocate(columns));
   if (columns == 0)
     return Status::Ok();
-  dsp::HorizonStripOptions strip;
-  strip.n_azimuth = config.strip_columns;
-  strip.band_rows = config.band_rows;
-  strip.elevation_min_deg = config.elevation_min_deg;
-  strip.elevation_max_deg = config.elevation_max_deg;
+  const dsp::HorizonStripOptions strip = HorizonStripOptionsFrom(config);
   if (const dsp::HorizonStripError e = horizon_.Init(lens_, strip);
       e != dsp::HorizonStripError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
@@ -276,10 +289,7 @@ Status Pipeline::InitHeading(const HeadingConfig& config) {
       static_cast<std::int32_t>(std::lround(config.elevation_min_deg * 100));
   route_settings_.strip.elevation_max_cdeg =
       static_cast<std::int32_t>(std::lround(config.elevation_max_deg * 100));
-  dsp::HeadingOptions heading;
-  heading.surf = config.surf;
-  heading.features.threshold = static_cast<float>(config.surf_threshold);
-  heading.max_features = config.surf_max_features;
+  const dsp::HeadingOptions heading = HeadingOptionsFrom(config);
   if (const dsp::HeadingError e = heading_.Init(config.strip_columns, heading);
       e != dsp::HeadingError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",

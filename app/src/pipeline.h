@@ -68,6 +68,9 @@ RouteDbLens RouteLensFrom(const dsp::Lens& lens);
 
 // The state machine's parameters from [state] and the matcher's motion limits.
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config);
+// The horizon strip and the heading estimator from [heading] (strip_columns > 0).
+dsp::HorizonStripOptions HorizonStripOptionsFrom(const HeadingConfig& config);
+dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config);
 // The route filter's parameters from [seqslam].
 dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config);
 // The firmware's state machine replayed over per-frame matches, as repeat would have shown

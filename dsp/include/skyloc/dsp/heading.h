@@ -34,8 +34,8 @@ struct HeadingOptions {
 struct HeadingEstimate {
   bool has_correlation = false;  // (b) gave a heading (false: a flat strip)
   double correlation_deg = 0;
-  float confidence = 0;  // (b)'s peak correlation, clamped to 0..1
-  float runner_up = 0;   // (b)'s best correlation away from the peak (ambiguity)
+  float confidence = 0;   // (b)'s peak correlation, clamped to 0..1
+  float runner_up = 0;    // (b)'s best correlation away from the peak (ambiguity)
   bool has_surf = false;  // (a) found a RANSAC model
   double surf_deg = 0;
   int surf_inliers = 0;
