@@ -384,7 +384,7 @@ int RunHeading(const Options& o, const std::string& command) {
                    "\n```\n\nHeading error (absolute, median / 90th percentile, degrees; frames "
                    "with an estimate of the correctly matched ones):\n\n"
                    "| world | query frames | correctly matched | (b) cross-correlation | "
-                   "(a) 1D SURF + RANSAC | (b) tilt <= 5° | (b) tilt > 5° |\n"
+                   "(a) 1D SURF + RANSAC | (b) tilt <= 10° | (b) tilt > 10° |\n"
                    "|---|---|---|---|---|---|---|\n";
   std::string json =
       "{\n  \"experiment\": \"heading\",\n  \"command\": \"" + command + "\",\n  \"rows\": [\n";

@@ -497,6 +497,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Bool("surf", &h.surf);
     r.Double("surf_threshold", &h.surf_threshold, 0.0, 255.0);
     r.Int("surf_max_features", &h.surf_max_features, 1, 4096);
+    r.Int("surf_min_inliers", &h.surf_min_inliers, 2, 4096);
     if (error.ok() && h.strip_columns != 0 && h.strip_columns < 148)
       r.Invalid("strip_columns",
                 "must be 0 (no heading) or at least 148: 1D SURF's widest filter spans 147 "

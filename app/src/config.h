@@ -193,6 +193,7 @@ struct HeadingConfig {
   bool surf = true;
   double surf_threshold = 2.0;  // Surf1dOptions::threshold, strip grey levels
   int surf_max_features = 256;  // per strip; the strongest are kept
+  int surf_min_inliers = 10;    // fewer RANSAC inliers: heading_surf_deg is null
 
   bool operator==(const HeadingConfig&) const = default;
 };

@@ -152,6 +152,7 @@ dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config) {
   heading.surf = config.surf;
   heading.features.threshold = static_cast<float>(config.surf_threshold);
   heading.max_features = config.surf_max_features;
+  heading.min_surf_inliers = config.surf_min_inliers;
   return heading;
 }
 

@@ -14,7 +14,8 @@ const char* HeadingErrorMessage(HeadingError error) {
       return "ok";
     case HeadingError::kBadOptions:
       return "heading options out of range: the strip needs more than 147 columns for 1D "
-             "SURF's widest filter, and max_features must be 1..4096";
+             "SURF's widest filter, max_features must be 1..4096 and min_surf_inliers at "
+             "least 2";
     case HeadingError::kSizeMismatch:
       return "a horizon strip is not the length the heading estimator was set up for";
   }
@@ -30,7 +31,8 @@ double WrapDegrees(double degrees) {
 
 HeadingError HeadingEstimator::Init(int columns, const HeadingOptions& options) {
   columns_ = 0;
-  if (columns < 3 || options.max_features < 1 || options.max_features > 4096)
+  if (columns < 3 || options.max_features < 1 || options.max_features > 4096 ||
+      options.min_surf_inliers < 2)
     return HeadingError::kBadOptions;
   if (options.surf) {
     if (surf_.Init(columns, options.features) != Surf1dError::kOk ||
@@ -69,7 +71,7 @@ HeadingError HeadingEstimator::Estimate(std::span<const float> stored, std::span
                      std::span<const Surf1dFeature>(test_features_)
                          .first(static_cast<std::size_t>(test_count)),
                      columns_, &match) == Surf1dError::kOk &&
-      match.model_found) {
+      match.model_found && match.inliers >= options_.min_surf_inliers) {
     out->has_surf = true;
     out->surf_deg = WrapDegrees(-match.heading_offset_deg);
     out->surf_inliers = match.inliers;

@@ -88,6 +88,16 @@ TEST(Heading, ErrorsAndNoAllocation) {
 
   ASSERT_EQ(estimator.Init(360, HeadingOptions{}), HeadingError::kOk);
   const std::vector<float> stored = Skyline(360, 9), test = Shifted(stored, 45);
+  // A RANSAC line with fewer inliers than asked for gives no (a) heading; (b) still answers.
+  HeadingOptions strict;
+  strict.min_surf_inliers = 4000;
+  HeadingEstimator gated;
+  ASSERT_EQ(gated.Init(360, strict), HeadingError::kOk);
+  ASSERT_EQ(gated.Estimate(stored, test, &e), HeadingError::kOk);
+  EXPECT_TRUE(e.has_correlation);
+  EXPECT_FALSE(e.has_surf);
+  strict.min_surf_inliers = 1;
+  EXPECT_EQ(gated.Init(360, strict), HeadingError::kBadOptions);
   AllocationScope scope;
   for (int i = 0; i < 10; ++i)
     (void)estimator.Estimate(stored, test, &e);

@@ -438,7 +438,7 @@ double TiltDeg(const drivers::Pose& pose) {
 Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vector<HeadingRow>* rows,
                             ProgressFn progress, void* context) {
   constexpr double kBumpsDeg = 15;
-  constexpr double kLevelTiltDeg = 5;
+  constexpr double kLevelTiltDeg = 10;
   ExperimentOptions options = heading_options;
   options.strips = true;
   options.vanilla = false;

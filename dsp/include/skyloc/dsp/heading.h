@@ -29,6 +29,11 @@ struct HeadingOptions {
   Surf1dOptions features;
   LandmarkMatchOptions matching;
   int max_features = 256;  // per strip; the strongest are kept
+  // (a) answers only when RANSAC's line has at least this many inliers: a model from a
+  // handful of matches is as often a wrong line (docs/RESULTS.md, "Heading": on the
+  // manoeuvre runs, models with fewer than 10 inliers hold most of the errors above 10
+  // degrees).
+  int min_surf_inliers = 10;
 };
 
 struct HeadingEstimate {
@@ -36,14 +41,15 @@ struct HeadingEstimate {
   double correlation_deg = 0;
   float confidence = 0;   // (b)'s peak correlation, clamped to 0..1
   float runner_up = 0;    // (b)'s best correlation away from the peak (ambiguity)
-  bool has_surf = false;  // (a) found a RANSAC model
+  bool has_surf = false;  // (a) found a RANSAC model with at least min_surf_inliers
   double surf_deg = 0;
   int surf_inliers = 0;
 };
 
 enum class HeadingError : std::uint8_t {
   kOk,
-  kBadOptions,    // 1D SURF's options or max_features out of range, or the strip is
+  kBadOptions,    // 1D SURF's options, max_features or min_surf_inliers (>= 2) out of
+                  // range, or the strip is
                   // too short for its widest filter (more than 147 columns)
   kSizeMismatch,  // a strip is not the length given to Init
 };

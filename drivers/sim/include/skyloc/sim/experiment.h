@@ -174,7 +174,7 @@ struct HeadingRow {
   MethodScore match;  // the route filter on the sky descriptor
   dsp::HeadingErrorSummary correlation, surf;
   // The same frames split by the query's tilt (angle of body z from the zenith) at or
-  // below / above 5 degrees, correlation only: what the bumps do to the strip.
+  // below / above 10 degrees, correlation only: what the bumps do to the strip.
   dsp::HeadingErrorSummary correlation_level, correlation_tilted;
   // Signed errors (estimate - truth, degrees) of the estimated frames, for pooling worlds.
   std::vector<double> correlation_errors_deg, surf_errors_deg;
