@@ -269,7 +269,7 @@ Status Pipeline::Init(const Config& config) {
 
 Status Pipeline::InitHeading(const HeadingConfig& config) {
   route_settings_.strip = {};
-  route_ = nullptr;
+  route_strip_frames_ = 0;
   const auto columns = static_cast<std::size_t>(config.strip_columns);
   // Zero-sized buffers when heading is off: strip() is then empty and teach stores none.
   SKYLOC_TRY(strip_.Allocate(columns));
@@ -324,7 +324,13 @@ Status Pipeline::SetRoute(const RouteFrames& route) {
   }
   // Strips of another length cannot be compared (the route loader refuses them; this
   // guards a route built in memory).
-  route_ = route.has_strips() && route.strip_columns() == strip_.size() ? &route : nullptr;
+  route_strip_frames_ = 0;
+  if (route.has_strips() && route.strip_columns() == strip_.size() && !strip_.empty()) {
+    SKYLOC_TRY(route_strips_.Allocate(route.size() * strip_.size()));
+    for (std::size_t i = 0; i < route.size(); ++i)
+      std::memcpy(route_strips_.data() + i * strip_.size(), route.strip(i).data(), strip_.size());
+    route_strip_frames_ = route.size();
+  }
   ResetTracking();
   return Status::Ok();
 }
@@ -369,8 +375,8 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
 
 void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
   StageTimer timer(latency_, stage_heading, clock_);
-  const std::span<const std::uint8_t> stored = route_->strip(route_frame);
-  for (std::size_t j = 0; j < stored.size(); ++j)
+  const std::uint8_t* stored = route_strips_.data() + route_frame * strip_.size();
+  for (std::size_t j = 0; j < strip_.size(); ++j)
     stored_strip_[j] = stored[j];
   // The query is compared as the route stores it (bytes), so a frame against its own
   // taught copy correlates at exactly 1.
@@ -417,7 +423,7 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
   obs.confidence = result->confidence;
   result->state = state_.Update(obs);
   if (match.valid && heading_enabled() && match.reference >= 0 &&
-      static_cast<std::size_t>(match.reference) < route_->size())
+      static_cast<std::size_t>(match.reference) < route_strip_frames_)
     EstimateHeading(static_cast<std::size_t>(match.reference), result);
   return Status::Ok();
 }

@@ -91,12 +91,12 @@ class Pipeline {
   int width() const { return lens_.params().width; }
   int height() const { return lens_.params().height; }
 
-  // Replaces the route SeqSLAM matches against (start-up, after loading the database).
-  // The heading reads the route's horizon strips in place: `route` must outlive the
-  // pipeline's use of it (both live for the whole session).
+  // Replaces the route SeqSLAM matches against (start-up, after loading the database),
+  // copying its descriptors and, when it has them, its horizon strips (the heading reads
+  // its own copy: the route need not outlive the call).
   Status SetRoute(const RouteFrames& route);
   // Heading is estimated: [heading] strip_columns > 0 and the route has strips.
-  bool heading_enabled() const { return route_ != nullptr && route_->has_strips(); }
+  bool heading_enabled() const { return route_strip_frames_ > 0; }
   std::size_t route_size() const;  // taught frames
 
   // The descriptor of one frame into descriptor(). Allocates nothing. attitude: the body's
@@ -138,7 +138,8 @@ class Pipeline {
   FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the route stores it
   FixedArray<float> stored_strip_;        // the matched route frame's strip as floats
   dsp::HeadingEstimator heading_;
-  const RouteFrames* route_ = nullptr;
+  FixedArray<std::uint8_t> route_strips_;  // route frames x strip columns (SetRoute)
+  std::size_t route_strip_frames_ = 0;
   RouteDbSettings route_settings_;
   LatencyTable latency_;
   MonotonicClock clock_;
