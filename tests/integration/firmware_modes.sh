@@ -59,6 +59,15 @@ expect_err "p99_us" "repeat latency table at exit"
 expect_err "precision at 100% recall" "repeat evaluation"
 expect_err "route $DB (150 frames)" "repeat start-up line"
 expect_err "WARNING: the status output is SIMULATED" "repeat with the simulated status output"
+# A route without horizon strips (taught with [heading] strip_columns = 0, as every file
+# before format 4) still localises with heading on: heading null, one note at start-up.
+{ cat "$CONFIG"; printf '\n[heading]\nstrip_columns = 0\n'; } >"$WORK/nostrips.toml"
+expect_rc 0 "teach without strips" -- "${RUN[@]}" teach --route "$WORK/nostrips.db" --config "$WORK/nostrips.toml" --frames 60
+expect_rc 0 "repeat a route without strips" -- "${RUN[@]}" repeat --route "$WORK/nostrips.db" --config "$CONFIG" --frames 40
+expect_err "strip_columns = 0: heading is off; re-teach to get heading" "repeat a route without strips"
+[ "$(grep -c 'heading is off' "$WORK/err")" -eq 1 ] || fail "the no-strips note is not said exactly once"
+[ "$(grep -c '"heading_deg":null' "$WORK/out")" -eq 40 ] || fail "a route without strips gave a heading"
+grep -q '"best_index":[0-9]' "$WORK/out" || fail "a route without strips did not match"
 
 # 4. settings that differ from the taught ones are refused, naming the setting.
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
