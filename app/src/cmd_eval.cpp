@@ -327,6 +327,10 @@ struct Descriptors {
   int count = 0;
   std::vector<float> values;        // count x dim
   std::vector<std::uint8_t> bytes;  // count x dim, dsp::QuantiseToBytes (vanilla, batch)
+  // Sky: every frame's horizon strip as the route stores it ([heading]; 0 columns: none,
+  // or the lens does not see the band).
+  int strip_columns = 0;
+  std::vector<std::uint8_t> strips;  // count x strip_columns
   std::span<const float> all() const { return values; }
 };
 
@@ -394,6 +398,18 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
   } else {
     d.dim = dsp::kVanillaDescriptorSize;
   }
+  // The firmware's horizon strip, for the heading of the correctly matched frames.
+  dsp::HorizonStrip horizon;
+  if (method == Method::kSky && o.config.heading.strip_columns > 0) {
+    if (const dsp::HorizonStripError e =
+            horizon.Init(lens_of_run, HorizonStripOptionsFrom(o.config.heading));
+        e == dsp::HorizonStripError::kOk)
+      d.strip_columns = o.config.heading.strip_columns;
+    else
+      std::fprintf(stderr, "skyloc eval: %s: no heading: %s\n", dir.c_str(),
+                   dsp::HorizonStripErrorMessage(e));
+  }
+  const auto strip_columns = static_cast<std::size_t>(d.strip_columns);
   // The frames are decoded and described on --jobs threads, each with its own sky
   // descriptor (it holds scratch); a frame's descriptor does not depend on the thread.
   const drivers::Dataset& dataset = camera.dataset();
@@ -406,8 +422,11 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
     d.values.resize(n * dim);
   if (forms.bytes)
     d.bytes.resize(n * dim);
+  d.strips.resize(n * strip_columns);
   const int workers = std::clamp(o.jobs, 1, std::max(1, static_cast<int>(n)));
   std::vector<std::vector<float>> rows(static_cast<std::size_t>(workers), std::vector<float>(dim));
+  std::vector<std::vector<float>> strip_rows(static_cast<std::size_t>(workers),
+                                             std::vector<float>(strip_columns));
   std::vector<std::unique_ptr<dsp::SkyDescriptor>> skies;
   if (method == Method::kSky) {
     for (int w = 0; w < workers; ++w) {
@@ -452,6 +471,16 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
       if (!de.ok()) {
         return Status::Error(StatusCode::kDataLoss, "%s: sky descriptor: %s",
                              dataset.FramePath(i).c_str(), de.message);
+      }
+      if (strip_columns > 0) {
+        std::vector<float>& strip = strip_rows[static_cast<std::size_t>(worker)];
+        if (const dsp::HorizonStripError e = horizon.Extract(image.view(), strip);
+            e != dsp::HorizonStripError::kOk)
+          return Status::Error(StatusCode::kDataLoss, "%s: horizon strip: %s",
+                               dataset.FramePath(i).c_str(), dsp::HorizonStripErrorMessage(e));
+        for (std::size_t j = 0; j < strip_columns; ++j)
+          d.strips[i * strip_columns + j] =
+              static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
       }
     } else {
       const dsp::VanillaError ve = dsp::VanillaDescriptor(image.view(), out);
@@ -619,6 +648,10 @@ struct Run {
   std::vector<dsp::PrPoint> curve;
   dsp::PrSummary summary;
   std::string label;
+  // Sky with strips and poses: the heading error of the correctly matched frames
+  // (HeadingErrors), by the cross-correlation and by 1D SURF + RANSAC.
+  bool heading_evaluated = false;
+  dsp::HeadingErrorSummary heading_correlation, heading_surf;
 };
 
 Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOptions& o,
@@ -757,6 +790,50 @@ void Score(const GroundTruth& gt, Run* run) {
   }
   run->label = std::string(MethodName(run->method)) + " " + run->matcher_name +
                " ds=" + std::to_string(run->ds);
+}
+
+// The heading of every correctly matched query frame against its matched reference frame,
+// from the two frames' strips (dsp::HeadingEstimator, as the firmware), against the truth:
+// the query pose's yaw minus the reference pose's. Needs strips and poses in both runs.
+Status HeadingErrors(const EvalOptions& o, const Descriptors& ref_d, const Descriptors& query_d,
+                     const drivers::Dataset& ref, const drivers::Dataset& query, Run* run) {
+  if (ref_d.strip_columns == 0 || ref_d.strip_columns != query_d.strip_columns || !ref.has_poses ||
+      !query.has_poses)
+    return Status::Ok();
+  const auto n = static_cast<std::size_t>(ref_d.strip_columns);
+  dsp::HeadingEstimator estimator;
+  if (const dsp::HeadingError e =
+          estimator.Init(ref_d.strip_columns, HeadingOptionsFrom(o.config.heading));
+      e != dsp::HeadingError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
+                         dsp::HeadingErrorMessage(e));
+  std::vector<float> stored(n), test(n);
+  std::vector<double> correlation, surf;  // signed errors, degrees
+  int frames = 0;
+  for (std::size_t k = 0; k < run->evaluated.size(); ++k) {
+    if (!run->evaluated[k].correct)
+      continue;
+    const auto q = static_cast<std::size_t>(run->evaluated_queries[k]);
+    const auto r = static_cast<std::size_t>(run->matches[q].reference);
+    for (std::size_t j = 0; j < n; ++j) {
+      stored[j] = ref_d.strips[r * n + j];
+      test[j] = query_d.strips[q * n + j];
+    }
+    const double truth =
+        dsp::WrapDegrees(query.frames[q].pose->yaw_deg - ref.frames[r].pose->yaw_deg);
+    dsp::HeadingEstimate e;
+    if (estimator.Estimate(stored, test, &e) != dsp::HeadingError::kOk)
+      return Status::Error(StatusCode::kInternal, "heading of query frame %zu", q);
+    ++frames;
+    if (e.has_correlation)
+      correlation.push_back(dsp::WrapDegrees(e.correlation_deg - truth));
+    if (e.has_surf)
+      surf.push_back(dsp::WrapDegrees(e.surf_deg - truth));
+  }
+  run->heading_evaluated = true;
+  run->heading_correlation = dsp::SummariseHeadingErrors(correlation, frames);
+  run->heading_surf = dsp::SummariseHeadingErrors(surf, frames);
+  return Status::Ok();
 }
 
 // ---- Output files ------------------------------------------------------------------------
@@ -918,6 +995,20 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
                  "     \"precision_at_100_recall\": %.6f, \"recall_at_100_precision\": %.6f, "
                  "\"auc\": %.6f,\n",
                  s.precision_at_full_recall, s.recall_at_full_precision, s.area_under_curve);
+    if (r.heading_evaluated) {
+      auto heading = [](const dsp::HeadingErrorSummary& h) {
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      "{\"frames\": %d, \"estimated\": %d, \"median_deg\": %.4f, "
+                      "\"p90_deg\": %.4f, \"max_deg\": %.4f}",
+                      h.frames, h.estimated, h.median_deg, h.p90_deg, h.max_deg);
+        return std::string(text);
+      };
+      std::fprintf(out, "     \"heading\": {\"correlation\": %s, \"surf\": %s},\n",
+                   heading(r.heading_correlation).c_str(), heading(r.heading_surf).c_str());
+    } else {
+      std::fprintf(out, "     \"heading\": null,\n");
+    }
     std::fprintf(out, "     \"curve\": [");
     for (std::size_t k = 0; k < r.curve.size(); ++k) {
       const dsp::PrPoint& p = r.curve[k];
@@ -1030,6 +1121,7 @@ Status Evaluate(EvalOptions o) {
         config.seqslam.matcher = matcher;
         run.states = ReplayStateMachine(config, run.matches);
         Score(gt, &run);
+        SKYLOC_TRY(HeadingErrors(o, rd, qd, ref, query, &run));
         runs.push_back(std::move(run));
       }
     }
@@ -1046,6 +1138,17 @@ Status Evaluate(EvalOptions o) {
                 r.matcher_name.c_str(), r.ds, r.summary.evaluated, r.summary.correct,
                 r.summary.precision_at_full_recall, r.summary.recall_at_full_precision,
                 r.summary.area_under_curve, r.localised_correct, r.localised);
+  }
+  for (const Run& r : runs) {
+    if (!r.heading_evaluated)
+      continue;
+    const dsp::HeadingErrorSummary& c = r.heading_correlation;
+    const dsp::HeadingErrorSummary& s = r.heading_surf;
+    std::printf(
+        "heading %s %s ds %d, %d correctly matched frames: cross-correlation median %.2f, p90 "
+        "%.2f deg (%d estimated); 1D SURF median %.2f, p90 %.2f deg (%d estimated)\n",
+        MethodName(r.method), r.matcher_name.c_str(), r.ds, c.frames, c.median_deg, c.p90_deg,
+        c.estimated, s.median_deg, s.p90_deg, s.estimated);
   }
   const bool openseqslam =
       std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();

@@ -27,7 +27,7 @@ namespace skyloc::app {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: skyloc experiment tilt|manoeuvre|ants|speed --out DIR [options]\n"
+    "usage: skyloc experiment tilt|manoeuvre|ants|speed|heading --out DIR [options]\n"
     "\n"
     "  tilt       City loop, runs at tilt -30..30 paired alpha1 ~ -alpha2 (differences\n"
     "             0..60): recall at 100 % precision, sky vs vanilla SeqSLAM\n"
@@ -38,6 +38,9 @@ constexpr const char* kUsage =
     "  speed      forest and city, sampled in time at 10 fps: a taught run with stops vs\n"
     "             repeats at 0.5x/1x/2x, with and without stops, level and +-15 deg bumps;\n"
     "             OpenSeqSLAM vs the route filter (sky), ds 1/5/10/20\n"
+    "  heading    manoeuvre's runs (zig-zag +-20 deg, bumps +-15 deg): heading error of the\n"
+    "             horizon-strip cross-correlation and of 1D SURF + RANSAC against the\n"
+    "             poses, on frames the route filter matches correctly\n"
     "\n"
     "options:\n"
     "  --width W --height H   image size (default 320x240)\n"
@@ -70,13 +73,16 @@ bool ParseNumber(const char* text, double lo, double hi, double* value) {
 int ParseArgs(std::span<char* const> args, Options* o) {
   if (args.empty() || args[0][0] == '-') {
     std::fprintf(stderr,
-                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants or speed\n");
+                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed or "
+                 "heading\n");
     return kExitUsage;
   }
   o->name = args[0];
-  if (o->name != "tilt" && o->name != "manoeuvre" && o->name != "ants" && o->name != "speed") {
+  if (o->name != "tilt" && o->name != "manoeuvre" && o->name != "ants" && o->name != "speed" &&
+      o->name != "heading") {
     std::fprintf(stderr,
-                 "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed)\n",
+                 "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed, "
+                 "heading)\n",
                  args[0]);
     return kExitUsage;
   }
@@ -342,6 +348,91 @@ std::string CommonNotes(const sim::ExperimentOptions& e) {
              e.tolerance_frames, e.max_offset_m);
 }
 
+std::string HeadingJson(const dsp::HeadingErrorSummary& e) {
+  return Format(
+      "{\"frames\": %d, \"estimated\": %d, \"median_deg\": %.3f, \"p90_deg\": %.3f, "
+      "\"max_deg\": %.3f}",
+      e.frames, e.estimated, e.median_deg, e.p90_deg, e.max_deg);
+}
+
+std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
+  if (e.estimated == 0)
+    return Format("— (0 of %d)", e.frames);
+  return Format("%.2f° / %.2f° (%d of %d)", e.median_deg, e.p90_deg, e.estimated, e.frames);
+}
+
+// `skyloc experiment heading`: its own tables (errors, not precision-recall).
+int RunHeading(const Options& o, const std::string& command) {
+  std::vector<sim::HeadingRow> rows;
+  if (Status s = sim::RunHeadingExperiment(o.experiment, &rows, PrintProgress, nullptr); !s.ok()) {
+    std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
+    return kExitFailure;
+  }
+  // All worlds together: the done-when figure.
+  std::vector<double> pooled_correlation, pooled_surf;
+  int pooled_frames = 0;
+  for (const sim::HeadingRow& r : rows) {
+    pooled_frames += r.correlation.frames;
+    pooled_correlation.insert(pooled_correlation.end(), r.correlation_errors_deg.begin(),
+                              r.correlation_errors_deg.end());
+    pooled_surf.insert(pooled_surf.end(), r.surf_errors_deg.begin(), r.surf_errors_deg.end());
+  }
+  const dsp::HeadingErrorSummary all_correlation =
+      dsp::SummariseHeadingErrors(pooled_correlation, pooled_frames);
+  const dsp::HeadingErrorSummary all_surf = dsp::SummariseHeadingErrors(pooled_surf, pooled_frames);
+  std::string md = "# skyloc experiment heading\n\n```\n" + command +
+                   "\n```\n\nHeading error (absolute, median / 90th percentile, degrees; frames "
+                   "with an estimate of the correctly matched ones):\n\n"
+                   "| world | query frames | correctly matched | (b) cross-correlation | "
+                   "(a) 1D SURF + RANSAC | (b) tilt <= 10° | (b) tilt > 10° |\n"
+                   "|---|---|---|---|---|---|---|\n";
+  std::string json =
+      "{\n  \"experiment\": \"heading\",\n  \"command\": \"" + command + "\",\n  \"rows\": [\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const sim::HeadingRow& r = rows[i];
+    md += Format("| %s | %d | %d | %s | %s | %s | %s |\n", sim::WorldKindName(r.world),
+                 r.query_frames, r.match.summary.correct, HeadingCell(r.correlation).c_str(),
+                 HeadingCell(r.surf).c_str(), HeadingCell(r.correlation_level).c_str(),
+                 HeadingCell(r.correlation_tilted).c_str());
+    json += Format("    {\"world\": \"%s\", \"query_frames\": %d, \"correct_matches\": %d, ",
+                   sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct) +
+            "\"correlation\": " + HeadingJson(r.correlation) +
+            ", \"surf\": " + HeadingJson(r.surf) +
+            ", \"correlation_level\": " + HeadingJson(r.correlation_level) +
+            ", \"correlation_tilted\": " + HeadingJson(r.correlation_tilted) + "}" +
+            (i + 1 < rows.size() ? ",\n" : "\n");
+  }
+  md += Format("| all | | | %s | %s | | |\n", HeadingCell(all_correlation).c_str(),
+               HeadingCell(all_surf).c_str());
+  json += "  ],\n  \"all\": {\"correlation\": " + HeadingJson(all_correlation) +
+          ", \"surf\": " + HeadingJson(all_surf) + "}\n}\n";
+  const dsp::HorizonStripOptions& strip = o.experiment.strip;
+  md += Format(
+      "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "
+      "positive, the firmware's heading_deg). Matches: the route filter (ds %d) on the sky "
+      "descriptor, correct within %d frames. Strips: %d columns, %d rows over %.3g..%.3g "
+      "degrees above the body's horizon, from the UV frame, rounded to bytes as the route "
+      "stores them. Tilt: the query body's z from the zenith. Done when (issue 13): median < "
+      "3 degrees and 90th percentile < 10 degrees.\n\n",
+      o.experiment.seqslam.sequence_length, o.experiment.tolerance_frames, strip.n_azimuth,
+      strip.band_rows, strip.elevation_min_deg, strip.elevation_max_deg);
+  md += CommonNotes(o.experiment);
+  if (::mkdir(o.out.c_str(), 0755) != 0 && errno != EEXIST) {
+    std::fprintf(stderr, "skyloc experiment heading: cannot create '%s': %s\n", o.out.c_str(),
+                 std::strerror(errno));
+    return kExitFailure;
+  }
+  for (const auto& [name, text] : {std::pair{"/results.md", &md}, {"/metrics.json", &json}}) {
+    if (Status s = WriteFile(o.out + name, *text); !s.ok()) {
+      std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
+      return kExitFailure;
+    }
+  }
+  std::fputs(md.c_str(), stdout);
+  std::printf("skyloc experiment heading: wrote %s/: results.md, metrics.json\n", o.out.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 int RunExperiment(std::span<char* const> args) {
@@ -357,6 +448,8 @@ int RunExperiment(std::span<char* const> args) {
   std::string command = "skyloc experiment";
   for (char* const a : args)
     command += std::string(" ") + a;
+  if (o.name == "heading")
+    return RunHeading(o, command);
 
   std::vector<Row> rows;
   Status status;

@@ -237,6 +237,15 @@ int RunRoute(std::span<char* const> args) {
   FormatRouteDbLens(st.lens, lens, sizeof lens);
   std::printf("%s: lens %s%s\n", path, lens,
               st.lens.known ? "" : "; repeat checks the lens hash only (teach again to store it)");
+  if (st.strip.columns != 0)
+    std::printf(
+        "%s: horizon strips for heading: %u columns (bytes per frame), %u rows over "
+        "%.2f..%.2f deg above the horizon\n",
+        path, st.strip.columns, st.strip.band_rows, st.strip.elevation_min_cdeg / 100.0,
+        st.strip.elevation_max_cdeg / 100.0);
+  else
+    std::printf("%s: no horizon strips: repeat reports no heading (teach again to store them)\n",
+                path);
   if (report.trailing_bytes > 0) {
     std::printf(
         "%s: %zu trailing bytes after the commit record at offset %zu (not part of the "

@@ -309,7 +309,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
 
   constexpr const char* kSections[] = {"camera",     "segmentation", "descriptor", "seqslam",
                                        "capacities", "state",        "status",     "realtime",
-                                       "route_db",   "attitude"};
+                                       "route_db",   "attitude",     "heading"};
   for (auto&& [k, node] : root) {
     if (!node.is_table()) {
       // A key above every [section] header (or a section written as a key).
@@ -327,7 +327,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
       return Status::Error(StatusCode::kInvalidArgument,
                            "%s:%u: [%s] is not a known section (known: camera, segmentation, "
                            "descriptor, seqslam, capacities, state, status, realtime, route_db, "
-                           "attitude)",
+                           "attitude, heading)",
                            source.c_str(), node.source().begin.line, name.c_str());
     }
     if (!node.is_table()) {
@@ -485,6 +485,25 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
       r.Invalid("kind",
                 "\"sim\" simulates the IMU of the simulated camera's run: it needs "
                 "[camera] kind = \"sim\"");
+    r.Finish();
+  }
+  {
+    SectionReader r(section("heading"), "heading", source_name, &error);
+    HeadingConfig& h = c.heading;
+    r.Int("strip_columns", &h.strip_columns, 0, 4096);
+    r.Int("band_rows", &h.band_rows, 1, 256);
+    r.Double("elevation_min_deg", &h.elevation_min_deg, -90.0, 90.0);
+    r.Double("elevation_max_deg", &h.elevation_max_deg, -90.0, 90.0);
+    r.Bool("surf", &h.surf);
+    r.Double("surf_threshold", &h.surf_threshold, 0.0, 255.0);
+    r.Int("surf_max_features", &h.surf_max_features, 1, 4096);
+    r.Int("surf_min_inliers", &h.surf_min_inliers, 2, 4096);
+    if (error.ok() && h.strip_columns != 0 && h.strip_columns < 148)
+      r.Invalid("strip_columns",
+                "must be 0 (no heading) or at least 148: 1D SURF's widest filter spans 147 "
+                "columns");
+    if (error.ok() && h.elevation_min_deg > h.elevation_max_deg)
+      r.Invalid("elevation_min_deg", "must not be above elevation_max_deg");
     r.Finish();
   }
   if (!error.ok())

@@ -177,6 +177,27 @@ struct AttitudeConfig {
   bool operator==(const AttitudeConfig&) const = default;
 };
 
+// The heading of a recognised place (docs/SURF1D.md, "Heading in the firmware"): every
+// route frame stores a horizon strip, and repeat turns the query's strip against the
+// matched frame's.
+struct HeadingConfig {
+  // Azimuth columns of the strip over 360 degrees, 0 (no heading, no strips) or 148..4096
+  // (1D SURF's widest filter needs more than 147). The route stores one byte per column
+  // per frame.
+  int strip_columns = 360;
+  int band_rows = 16;              // elevations averaged per column
+  double elevation_min_deg = 0.0;  // the band, degrees above the horizon
+  double elevation_max_deg = 20.0;
+  // The second estimate, 1D SURF + RANSAC on the same strips (heading_surf_deg); off
+  // saves its time (~0.3 ms per frame, docs/BENCHMARKS.md).
+  bool surf = true;
+  double surf_threshold = 2.0;  // Surf1dOptions::threshold, strip grey levels
+  int surf_max_features = 256;  // per strip; the strongest are kept
+  int surf_min_inliers = 10;    // fewer RANSAC inliers: heading_surf_deg is null
+
+  bool operator==(const HeadingConfig&) const = default;
+};
+
 struct Config {
   std::string source;  // the file it was read from; empty: the built-in defaults
   CameraConfig camera;
@@ -189,6 +210,7 @@ struct Config {
   RealtimeConfig realtime;
   RouteDbConfig route_db;
   AttitudeConfig attitude;
+  HeadingConfig heading;
 
   bool operator==(const Config&) const = default;
 };

@@ -29,10 +29,14 @@ class FrameSink {
 
 // One JSON object per line on `out`:
 //   repeat: {"frame":12,"timestamp":0.4,"best_index":10,"uniqueness":0.41,
-//            "confidence":0.59,"state":"SEARCHING","latency_us":812}
+//            "confidence":0.59,"state":"SEARCHING","heading_deg":-12.30,
+//            "heading_confidence":0.9412,"heading_surf_deg":-12.10,
+//            "heading_surf_inliers":41,"latency_us":812}
 //   teach:  {"frame":12,"timestamp":0.4,"route_frames":13,"threshold":97,
 //            "sky_fraction":0.41,"latency_us":650}
-// best_index is null until SeqSLAM has ds frames. Formatted into a fixed buffer.
+// best_index is null until SeqSLAM has ds frames; the heading fields are null without a
+// match or when the route has no horizon strips (FrameResult says what they mean).
+// Formatted into a fixed buffer.
 class JsonLinesSink final : public FrameSink {
  public:
   explicit JsonLinesSink(std::FILE* out) : out_(out) {}

@@ -1,5 +1,6 @@
 #include "pipeline.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -137,6 +138,24 @@ dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
   return sm;
 }
 
+dsp::HorizonStripOptions HorizonStripOptionsFrom(const HeadingConfig& config) {
+  dsp::HorizonStripOptions strip;
+  strip.n_azimuth = config.strip_columns;
+  strip.band_rows = config.band_rows;
+  strip.elevation_min_deg = config.elevation_min_deg;
+  strip.elevation_max_deg = config.elevation_max_deg;
+  return strip;
+}
+
+dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config) {
+  dsp::HeadingOptions heading;
+  heading.surf = config.surf;
+  heading.features.threshold = static_cast<float>(config.surf_threshold);
+  heading.max_features = config.surf_max_features;
+  heading.min_surf_inliers = config.surf_min_inliers;
+  return heading;
+}
+
 dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config) {
   dsp::RouteFilterParams filter;
   filter.sequence_length = config.seqslam.ds;
@@ -236,12 +255,46 @@ Status Pipeline::Init(const Config& config) {
         static_cast<std::uint32_t>(std::lround(options.cap.taper_deg * 100));
   }
 
+  SKYLOC_TRY(InitHeading(config.heading));
+
   latency_ = LatencyTable();
   stage_capture = latency_.AddStage("capture");
   stage_descriptor = latency_.AddStage("descriptor");
   stage_seqslam = latency_.AddStage("seqslam");
+  stage_heading = latency_.AddStage("heading");
   stage_output = latency_.AddStage("output");
   stage_total = latency_.AddStage("total");
+  return Status::Ok();
+}
+
+Status Pipeline::InitHeading(const HeadingConfig& config) {
+  route_settings_.strip = {};
+  route_strip_frames_ = 0;
+  const auto columns = static_cast<std::size_t>(config.strip_columns);
+  // Zero-sized buffers when heading is off: strip() is then empty and teach stores none.
+  SKYLOC_TRY(strip_.Allocate(columns));
+  SKYLOC_TRY(strip_bytes_.Allocate(columns));
+  SKYLOC_TRY(stored_strip_.Allocate(columns));
+  if (columns == 0)
+    return Status::Ok();
+  const dsp::HorizonStripOptions strip = HorizonStripOptionsFrom(config);
+  if (const dsp::HorizonStripError e = horizon_.Init(lens_, strip);
+      e != dsp::HorizonStripError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
+                         dsp::HorizonStripErrorMessage(e));
+  // The band as the route records it: hundredths of a degree, so a value written to the
+  // config file and read back compares equal.
+  route_settings_.strip.columns = static_cast<std::uint32_t>(config.strip_columns);
+  route_settings_.strip.band_rows = static_cast<std::uint32_t>(config.band_rows);
+  route_settings_.strip.elevation_min_cdeg =
+      static_cast<std::int32_t>(std::lround(config.elevation_min_deg * 100));
+  route_settings_.strip.elevation_max_cdeg =
+      static_cast<std::int32_t>(std::lround(config.elevation_max_deg * 100));
+  const dsp::HeadingOptions heading = HeadingOptionsFrom(config);
+  if (const dsp::HeadingError e = heading_.Init(config.strip_columns, heading);
+      e != dsp::HeadingError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
+                         dsp::HeadingErrorMessage(e));
   return Status::Ok();
 }
 
@@ -268,6 +321,15 @@ Status Pipeline::SetRoute(const RouteFrames& route) {
     if (const dsp::SeqSlamError e = filter_.FinishRoute(); e != dsp::SeqSlamError::kOk)
       return Status::Error(StatusCode::kFailedPrecondition, "route: %s",
                            dsp::SeqSlamErrorMessage(e));
+  }
+  // Strips of another length cannot be compared (the route loader refuses them; this
+  // guards a route built in memory).
+  route_strip_frames_ = 0;
+  if (route.has_strips() && route.strip_columns() == strip_.size() && !strip_.empty()) {
+    SKYLOC_TRY(route_strips_.Allocate(route.size() * strip_.size()));
+    for (std::size_t i = 0; i < route.size(); ++i)
+      std::memcpy(route_strips_.data() + i * strip_.size(), route.strip(i).data(), strip_.size());
+    route_strip_frames_ = route.size();
   }
   ResetTracking();
   return Status::Ok();
@@ -297,7 +359,38 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
   }
   result->threshold = segmentation.threshold;
   result->sky_fraction = static_cast<float>(segmentation.sky_fraction);
+  if (!strip_.empty()) {
+    // Read through the body frame as the lens sees it: a tilted robot's band moves up on
+    // one side and down on the other (docs/RESULTS.md, "Heading").
+    if (const dsp::HorizonStripError e = horizon_.Extract(image, strip_.span());
+        e != dsp::HorizonStripError::kOk)
+      return Status::Error(StatusCode::kDataLoss, "frame %llu: horizon strip: %s",
+                           static_cast<unsigned long long>(result->frame),
+                           dsp::HorizonStripErrorMessage(e));
+    for (std::size_t j = 0; j < strip_.size(); ++j)
+      strip_bytes_[j] = static_cast<std::uint8_t>(std::lround(std::clamp(strip_[j], 0.0f, 255.0f)));
+  }
   return Status::Ok();
+}
+
+void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
+  StageTimer timer(latency_, stage_heading, clock_);
+  const std::uint8_t* stored = route_strips_.data() + route_frame * strip_.size();
+  for (std::size_t j = 0; j < strip_.size(); ++j)
+    stored_strip_[j] = stored[j];
+  // The query is compared as the route stores it (bytes), so a frame against its own
+  // taught copy correlates at exactly 1.
+  for (std::size_t j = 0; j < strip_.size(); ++j)
+    strip_[j] = strip_bytes_[j];
+  dsp::HeadingEstimate estimate;
+  if (heading_.Estimate(stored_strip_.span(), strip_.span(), &estimate) != dsp::HeadingError::kOk)
+    return;  // strips of the configured length by construction (SetRoute)
+  result->has_heading = estimate.has_correlation;
+  result->heading_deg = static_cast<float>(estimate.correlation_deg);
+  result->heading_confidence = estimate.confidence;
+  result->has_heading_surf = estimate.has_surf;
+  result->heading_surf_deg = static_cast<float>(estimate.surf_deg);
+  result->heading_surf_inliers = estimate.surf_inliers;
 }
 
 Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
@@ -329,6 +422,9 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
   obs.uniqueness = result->uniqueness;
   obs.confidence = result->confidence;
   result->state = state_.Update(obs);
+  if (match.valid && heading_enabled() && match.reference >= 0 &&
+      static_cast<std::size_t>(match.reference) < route_strip_frames_)
+    EstimateHeading(static_cast<std::size_t>(match.reference), result);
   return Status::Ok();
 }
 

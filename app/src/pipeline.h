@@ -12,6 +12,8 @@
 
 #include "config.h"
 #include "skyloc/drivers/camera.h"
+#include "skyloc/dsp/heading.h"
+#include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/route_filter.h"
@@ -38,6 +40,17 @@ struct FrameResult {
   Nanoseconds latency{0};  // from the frame leaving Capture() to the state being shown
   bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
   drivers::Pose pose;
+  // Heading relative to the matched route frame (repeat, when matched and the route has
+  // horizon strips), dsp/heading.h's convention: the robot's yaw now minus its yaw when
+  // the frame was taught, degrees in [-180, 180), counter-clockwise seen from above
+  // positive. heading_deg is the strip cross-correlation's, heading_confidence its peak
+  // correlation (0..1); heading_surf_deg is 1D SURF + RANSAC's, with its inlier count.
+  bool has_heading = false;
+  float heading_deg = 0;
+  float heading_confidence = 0;
+  bool has_heading_surf = false;
+  float heading_surf_deg = 0;
+  int heading_surf_inliers = 0;
 };
 
 // The descriptor kinds a route database records (RouteDbSettings::descriptor_kind).
@@ -55,6 +68,9 @@ RouteDbLens RouteLensFrom(const dsp::Lens& lens);
 
 // The state machine's parameters from [state] and the matcher's motion limits.
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config);
+// The horizon strip and the heading estimator from [heading] (strip_columns > 0).
+dsp::HorizonStripOptions HorizonStripOptionsFrom(const HeadingConfig& config);
+dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config);
 // The route filter's parameters from [seqslam].
 dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config);
 // The firmware's state machine replayed over per-frame matches, as repeat would have shown
@@ -65,8 +81,8 @@ std::vector<dsp::TrackState> ReplayStateMachine(const Config& config,
 class Pipeline {
  public:
   // Latency stages, in the order the table prints them.
-  int stage_capture = -1, stage_descriptor = -1, stage_seqslam = -1, stage_output = -1,
-      stage_total = -1;
+  int stage_capture = -1, stage_descriptor = -1, stage_seqslam = -1, stage_heading = -1,
+      stage_output = -1, stage_total = -1;
 
   Status Init(const Config& config);
 
@@ -75,8 +91,12 @@ class Pipeline {
   int width() const { return lens_.params().width; }
   int height() const { return lens_.params().height; }
 
-  // Replaces the route SeqSLAM matches against (start-up, after loading the database).
+  // Replaces the route SeqSLAM matches against (start-up, after loading the database),
+  // copying its descriptors and, when it has them, its horizon strips (the heading reads
+  // its own copy: the route need not outlive the call).
   Status SetRoute(const RouteFrames& route);
+  // Heading is estimated: [heading] strip_columns > 0 and the route has strips.
+  bool heading_enabled() const { return route_strip_frames_ > 0; }
   std::size_t route_size() const;  // taught frames
 
   // The descriptor of one frame into descriptor(). Allocates nothing. attitude: the body's
@@ -87,6 +107,11 @@ class Pipeline {
   bool uses_attitude() const { return uses_attitude_; }
   const dsp::Lens& lens() const { return lens_; }  // the lens the frames are read through
   std::span<const float> descriptor() const { return amplitudes_.span(); }
+  // The last described frame's horizon strip as the route stores it (one byte per
+  // column); empty when [heading] strip_columns = 0.
+  std::span<const std::uint8_t> strip() const { return strip_bytes_.span(); }
+  // What the route database records about the strip (columns 0: none).
+  const RouteDbStrip& strip_settings() const { return route_settings_.strip; }
 
   // Describe + SeqSLAM step + state machine. Allocates nothing.
   Status Localise(const drivers::Frame& frame, FrameResult* result,
@@ -105,6 +130,16 @@ class Pipeline {
   dsp::StreamingSeqSlam seqslam_;  // [seqslam] matcher = "openseqslam"; Init allocates one
   dsp::LocalisationStateMachine state_;
   FixedArray<float> amplitudes_;
+  // Heading ([heading]); all sized by Init.
+  Status InitHeading(const HeadingConfig& config);
+  void EstimateHeading(std::size_t route_frame, FrameResult* result);
+  dsp::HorizonStrip horizon_;
+  FixedArray<float> strip_;               // the frame's strip, grey levels
+  FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the route stores it
+  FixedArray<float> stored_strip_;        // the matched route frame's strip as floats
+  dsp::HeadingEstimator heading_;
+  FixedArray<std::uint8_t> route_strips_;  // route frames x strip columns (SetRoute)
+  std::size_t route_strip_frames_ = 0;
   RouteDbSettings route_settings_;
   LatencyTable latency_;
   MonotonicClock clock_;

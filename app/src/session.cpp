@@ -453,7 +453,8 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   RouteFrames route;
   if (args.mode == LoopMode::kRepeat) {
     SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
-                              static_cast<std::size_t>(pipeline.dim())));
+                              static_cast<std::size_t>(pipeline.dim()),
+                              pipeline.strip_settings().columns));
     RouteDbLoadReport loaded;
     const RouteDbSettings want = pipeline.route_settings();
     SKYLOC_TRY(
@@ -466,6 +467,19 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     }
     SKYLOC_TRY(pipeline.SetRoute(route));
     report->route_frames = route.size();
+    // One note, at start-up: a route without strips still localises, without heading.
+    if (pipeline.strip_settings().columns != 0 && !pipeline.heading_enabled()) {
+      if (loaded.version < 4)
+        std::fprintf(stderr,
+                     "%s: route %s has no horizon strips (format v%u): heading is off; "
+                     "re-teach to get heading\n",
+                     args.label, args.route_path.c_str(), loaded.version);
+      else
+        std::fprintf(stderr,
+                     "%s: route %s was taught with [heading] strip_columns = 0: heading is "
+                     "off; re-teach to get heading\n",
+                     args.label, args.route_path.c_str());
+    }
   }
 
   MonotonicClock clock;

@@ -122,7 +122,7 @@ Result<drivers::Frame> StreetCamera::DoCapture(Nanoseconds) {
     return Status::Error(StatusCode::kOutOfRange, "street camera: end of the run");
   constexpr double kDeg = std::numbers::pi / 180.0;
   const double phase = 2.0 * std::numbers::pi * static_cast<double>(next_) / 40.0;
-  const double yaw = options_.zigzag_deg * kDeg * std::sin(phase);
+  const double yaw = (options_.yaw_deg + options_.zigzag_deg * std::sin(phase)) * kDeg;
   const double pitch = options_.tilt_deg * kDeg;
   Render(x_m_, yaw, pitch);
   const Nanoseconds due =

@@ -26,6 +26,7 @@ struct StreetCameraOptions {
   double speed_jitter = 0.0;  // relative random variation of the step, 0..0.5
   double tilt_deg = 0.0;      // constant pitch of the camera
   double zigzag_deg = 0.0;    // yaw amplitude of a zig-zag path (period 40 frames)
+  double yaw_deg = 0.0;       // constant heading offset (counter-clockwise from above)
   double brightness = 1.0;    // lighting: scales sky and ground levels
   std::uint64_t frames = 0;   // end of the run (Capture -> kOutOfRange); 0 = endless
   double fps = 30.0;          // timestamps advance by 1/fps

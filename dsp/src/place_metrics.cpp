@@ -120,4 +120,24 @@ PrSummary SummarisePrecisionRecall(std::span<const EvaluatedMatch> matches,
   return s;
 }
 
+HeadingErrorSummary SummariseHeadingErrors(std::span<double> errors_deg, int frames) {
+  HeadingErrorSummary s;
+  s.frames = frames;
+  s.estimated = static_cast<int>(errors_deg.size());
+  if (errors_deg.empty())
+    return s;
+  for (double& e : errors_deg)
+    e = std::fabs(e);
+  std::sort(errors_deg.begin(), errors_deg.end());
+  auto rank = [&](double share) {
+    const auto k =
+        static_cast<std::size_t>(std::ceil(share * static_cast<double>(errors_deg.size())));
+    return errors_deg[std::max<std::size_t>(k, 1) - 1];
+  };
+  s.median_deg = rank(0.5);
+  s.p90_deg = rank(0.9);
+  s.max_deg = errors_deg.back();
+  return s;
+}
+
 }  // namespace skyloc::dsp

@@ -86,6 +86,26 @@ RouteDbLens DecodeLensRecord(const std::uint8_t* h) {
   return l;
 }
 
+// The strip record (version 4, docs/ROUTE_DB.md): h points just after the lens record.
+constexpr std::size_t kStripCrcOffset = kRouteDbStripRecordBytes - 4;
+void EncodeStripRecord(const RouteDbStrip& strip, std::uint8_t* h) {
+  std::memset(h, 0, kRouteDbStripRecordBytes);
+  StoreBytes<std::uint32_t>(h + 0, strip.columns);
+  StoreBytes<std::uint32_t>(h + 4, strip.band_rows);
+  StoreBytes<std::int32_t>(h + 8, strip.elevation_min_cdeg);
+  StoreBytes<std::int32_t>(h + 12, strip.elevation_max_cdeg);
+  StoreBytes<std::uint32_t>(h + kStripCrcOffset, CrcOf(h, kStripCrcOffset));
+}
+
+RouteDbStrip DecodeStripRecord(const std::uint8_t* h) {
+  RouteDbStrip strip;
+  strip.columns = LoadBytes<std::uint32_t>(h + 0);
+  strip.band_rows = LoadBytes<std::uint32_t>(h + 4);
+  strip.elevation_min_cdeg = LoadBytes<std::int32_t>(h + 8);
+  strip.elevation_max_cdeg = LoadBytes<std::int32_t>(h + 12);
+  return strip;
+}
+
 void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   std::memset(h, 0, kRouteDbHeaderBytes);
   std::memcpy(h, kMagic, sizeof kMagic);
@@ -98,11 +118,13 @@ void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   StoreBytes<std::uint32_t>(h + 32, s.dim);
   StoreBytes<std::uint32_t>(h + 36, s.normalisation);
   StoreBytes<std::uint64_t>(h + 40, s.lens_hash);
-  StoreBytes<std::uint32_t>(h + 48, static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim)));
+  StoreBytes<std::uint32_t>(h + 48,
+                            static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim, s.strip.columns)));
   StoreBytes<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
   StoreBytes<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
   StoreBytes<std::uint32_t>(h + 60, CrcOf(h, 60));
   EncodeLensRecord(s.lens, h + kRouteDbHeaderBytes);
+  EncodeStripRecord(s.strip, h + kRouteDbHeaderBytes + kRouteDbLensRecordBytes);
 }
 
 void EncodeChunkHeader(std::uint32_t type, std::uint64_t first, std::uint32_t count,
@@ -158,6 +180,18 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
                            f.name, static_cast<unsigned long long>(f.in_file),
                            static_cast<unsigned long long>(f.wanted));
     }
+  }
+  // A route without strips, or a configuration without heading, loads: heading is then
+  // off (the caller says so once). Two different strips would give a wrong heading.
+  if (file.strip.columns != 0 && want.strip.columns != 0 && !(file.strip == want.strip)) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with a %u-column horizon strip over %.2f..%.2f deg (%u rows), "
+                         "this configuration has %u columns over %.2f..%.2f deg (%u rows): set "
+                         "[heading] as taught, or teach again",
+                         file.strip.columns, file.strip.elevation_min_cdeg / 100.0,
+                         file.strip.elevation_max_cdeg / 100.0, file.strip.band_rows,
+                         want.strip.columns, want.strip.elevation_min_cdeg / 100.0,
+                         want.strip.elevation_max_cdeg / 100.0, want.strip.band_rows);
   }
   if (file.lens.known && want.lens.known)
     return CheckRouteDbLens(file.lens, want.lens);
@@ -292,29 +326,43 @@ void FormatRouteDbLens(const RouteDbLens& l, char* out, std::size_t size) {
 // ---------------------------------------------------------------------------------------
 // RouteFrames
 
-Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim) {
+Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns) {
   SKYLOC_TRY(descriptors_.Allocate(capacity * dim));
+  SKYLOC_TRY(strips_.Allocate(capacity * strip_columns));
   SKYLOC_TRY(meta_.Allocate(capacity));
   dim_ = dim;
-  size_ = 0;
+  strip_columns_ = strip_columns;
+  Clear();
   return Status::Ok();
 }
 
-bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> descriptor) {
-  if (descriptor.size() != dim_)
+bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                         std::span<const std::uint8_t> strip) {
+  if (descriptor.size() != dim_ || (!strip.empty() && strip.size() != strip_columns_))
     return false;
-  const std::span<float> slot = Emplace(meta);
-  if (slot.empty())
+  const Slot slot = Emplace(meta, !strip.empty());
+  if (slot.descriptor.empty())
     return false;
-  std::memcpy(slot.data(), descriptor.data(), slot.size_bytes());
+  std::memcpy(slot.descriptor.data(), descriptor.data(), slot.descriptor.size_bytes());
+  if (!strip.empty())
+    std::memcpy(slot.strip.data(), strip.data(), strip.size());
   return true;
 }
 
-std::span<float> RouteFrames::Emplace(const RouteFrameMeta& meta) {
-  if (size_ >= meta_.size())
+RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_strip) {
+  if (size_ >= meta_.size() || (with_strip && strip_columns_ == 0))
+    return {};
+  if (size_ == 0)
+    has_strips_ = with_strip;
+  else if (with_strip != has_strips_)
     return {};
   meta_[size_] = meta;
-  return {descriptors_.data() + size_++ * dim_, dim_};
+  Slot slot;
+  slot.descriptor = {descriptors_.data() + size_ * dim_, dim_};
+  if (with_strip)
+    slot.strip = {strips_.data() + size_ * strip_columns_, strip_columns_};
+  ++size_;
+  return slot;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -375,8 +423,22 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   s.gravity_cap_taper_cdeg = version >= 2 ? LoadBytes<std::uint32_t>(b + 56) : 0;
   if (version >= 3)
     s.lens = DecodeLensRecord(lens_record);
+  if (version >= 4) {
+    const std::uint8_t* strip_record = lens_record + kRouteDbLensRecordBytes;
+    if (!CrcMatches(LoadBytes<std::uint32_t>(strip_record + kStripCrcOffset), strip_record,
+                    kStripCrcOffset)) {
+      return Status::Error(StatusCode::kDataLoss,
+                           "strip record (offset %zu): checksum mismatch, the file is corrupt",
+                           kRouteDbHeaderBytes + kRouteDbLensRecordBytes);
+    }
+    s.strip = DecodeStripRecord(strip_record);
+    if (s.strip.columns > kMaxDim) {
+      return Status::Error(StatusCode::kDataLoss, "strip record: %u strip columns is invalid",
+                           s.strip.columns);
+    }
+  }
   if (s.dim == 0 || s.dim > kMaxDim ||
-      LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim)) {
+      LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim, s.strip.columns)) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): descriptor size %u is "
                          "invalid",
@@ -391,7 +453,11 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
     }
     out->Clear();
   }
-  const std::size_t record_bytes = RouteDbRecordBytes(s.dim);
+  // The strips are kept when memory has room for exactly these; a route or configuration
+  // without them loads the descriptors only (CheckSettings refuses two different strips).
+  const bool keep_strips =
+      out != nullptr && s.strip.columns != 0 && out->strip_columns() == s.strip.columns;
+  const std::size_t record_bytes = RouteDbRecordBytes(s.dim, s.strip.columns);
 
   std::size_t offset = data_offset;
   std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
@@ -472,11 +538,14 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
         meta.has_pose = (LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0;
         std::memcpy(meta.pose.data(), rec + 16, sizeof meta.pose);
         // Copied byte-wise: the input need not be aligned for float.
-        const std::span<float> slot = out->Emplace(meta);
-        if (slot.size() == s.dim)
-          std::memcpy(slot.data(), rec + kRouteDbRecordFixedBytes, slot.size_bytes());
-        else
+        const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
+        if (slot.descriptor.size() != s.dim)
           return Status::Error(StatusCode::kInternal, "route frames rejected a record");
+        std::memcpy(slot.descriptor.data(), rec + kRouteDbRecordFixedBytes,
+                    slot.descriptor.size_bytes());
+        if (keep_strips)
+          std::memcpy(slot.strip.data(), rec + kRouteDbRecordFixedBytes + 4 * std::size_t{s.dim},
+                      slot.strip.size());
       }
     }
     r.frames += count;
@@ -725,7 +794,7 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
   } else if (errno != ENOENT) {
     return Status::FromErrno(errno, "cannot check %s", path);
   }
-  const std::size_t record_bytes = RouteDbRecordBytes(settings.dim);
+  const std::size_t record_bytes = RouteDbRecordBytes(settings.dim, settings.strip.columns);
   SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
 
   char tmp[sizeof write_path_];
@@ -744,7 +813,7 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
   // Held until the writer closes: `route recover` refuses the file meanwhile.
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
     return Status::FromErrno(errno, "cannot lock %s", tmp);
-  std::uint8_t header[kRouteDbHeaderBytes + kRouteDbLensRecordBytes];
+  std::uint8_t header[RouteDbDataOffset(kRouteDbVersion)];
   EncodeHeader(settings, header);
   if (Status w = WriteAll(fd.get(), header, sizeof header); !w.ok())
     return w.AddContext("%s", tmp);
@@ -776,20 +845,28 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
   return Status::Ok();
 }
 
-Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> descriptor) {
+Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                             std::span<const std::uint8_t> strip) {
   if (!fd_.is_valid())
     return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
   if (descriptor.size() != settings_.dim) {
     return Status::Error(StatusCode::kInvalidArgument, "descriptor has %zu values, expected %u",
                          descriptor.size(), settings_.dim);
   }
-  std::uint8_t* rec =
-      chunk_.data() + kRouteDbChunkHeaderBytes + pending_ * RouteDbRecordBytes(settings_.dim);
+  if (strip.size() != settings_.strip.columns) {
+    return Status::Error(StatusCode::kInvalidArgument, "horizon strip has %zu columns, expected %u",
+                         strip.size(), settings_.strip.columns);
+  }
+  std::uint8_t* rec = chunk_.data() + kRouteDbChunkHeaderBytes +
+                      pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns);
   std::memset(rec, 0, kRouteDbRecordFixedBytes);
   StoreBytes<std::uint64_t>(rec, meta.timestamp_ns);
   StoreBytes<std::uint32_t>(rec + 8, meta.has_pose ? kHasPose : 0u);
   std::memcpy(rec + 16, meta.pose.data(), sizeof meta.pose);
   std::memcpy(rec + kRouteDbRecordFixedBytes, descriptor.data(), descriptor.size_bytes());
+  if (!strip.empty())
+    std::memcpy(rec + kRouteDbRecordFixedBytes + descriptor.size_bytes(), strip.data(),
+                strip.size());
   ++pending_;
   ++appended_;
   if (pending_ == flush_every_)
@@ -822,7 +899,7 @@ Status RouteDbWriter::Flush() {
   if (pending_ == 0)
     return Status::Ok();
   SKYLOC_TRY(WriteChunk(kChunkFrames, durable_, static_cast<std::uint32_t>(pending_),
-                        pending_ * RouteDbRecordBytes(settings_.dim)));
+                        pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns)));
   durable_ += pending_;
   pending_ = 0;
   return Status::Ok();

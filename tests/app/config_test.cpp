@@ -186,6 +186,8 @@ const BadCase kBadCases[] = {
     {"[attitude]\nmount_yaw_deg = 270\n", "[attitude] mount_yaw_deg"},
     {"[attitude]\nstale_ms = 0\n", "[attitude] stale_ms"},
     {"[attitude]\nfilter_kp = -1\n", "[attitude] filter_kp"},
+    {"[heading]\nstrip_columns = 100\n", "[heading] strip_columns"},
+    {"[heading]\nelevation_min_deg = 30\n", "[heading] elevation_min_deg"},
 };
 
 class ConfigRejects : public ::testing::TestWithParam<BadCase> {};

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -46,7 +48,10 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
   StreetCamera camera(Street(frames));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
-  ASSERT_TRUE(route->Allocate(400, static_cast<std::size_t>(pipeline.dim())).ok());
+  ASSERT_TRUE(route
+                  ->Allocate(400, static_cast<std::size_t>(pipeline.dim()),
+                             pipeline.strip_settings().columns)
+                  .ok());
   for (;;) {
     Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1));
     if (!f.ok())
@@ -56,7 +61,7 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
     RouteFrameMeta meta;
     meta.has_pose = true;
     meta.pose[0] = f->pose->x_m;
-    ASSERT_TRUE(route->Append(meta, pipeline.descriptor()));
+    ASSERT_TRUE(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
   }
 }
 
@@ -131,6 +136,8 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   RouteFrames route;
   Teach(pipeline, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
+  // The heading path runs on every matched frame (strip, correlation, 1D SURF + RANSAC).
+  ASSERT_TRUE(pipeline.heading_enabled());
   StreetCamera camera(Repeat(0));  // endless: the street goes on past the route
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -153,7 +160,61 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   EXPECT_EQ(summary.frames, 10000u);
   EXPECT_EQ(allocations, 0u);
   EXPECT_FALSE(json.write_failed());
+  // Most frames were matched, so the heading ran thousands of times under the counter.
+  EXPECT_GT(pipeline.latency().stage(pipeline.stage_heading).count(), 5000u);
   std::fclose(null);
+}
+
+// The repeat drives the taught street turned by a known yaw: the JSON lines carry
+// heading_deg near that yaw (the robot's yaw now minus when taught, counter-clockwise
+// positive), from both estimators. The reference is the camera's own rotation, not the
+// strip code.
+TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
+  ClearSignalFlags();
+  Pipeline pipeline;
+  ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
+  RouteFrames route;
+  Teach(pipeline, 300, &route);
+  ASSERT_TRUE(pipeline.SetRoute(route).ok());
+  for (const double yaw : {25.0, -40.0}) {
+    StreetCameraOptions o = Repeat(200);
+    o.yaw_deg = yaw;
+    StreetCamera camera(o);
+    ASSERT_TRUE(camera.Open().ok());
+    ASSERT_TRUE(camera.Start().ok());
+    char* text = nullptr;
+    std::size_t size = 0;
+    std::FILE* f = open_memstream(&text, &size);
+    ASSERT_NE(f, nullptr);
+    JsonLinesSink json(f);
+    LoopSummary summary;
+    pipeline.ResetTracking();
+    ASSERT_TRUE(RunFrameLoop(camera, nullptr, pipeline, nullptr, &json, {}, &summary).ok());
+    std::fclose(f);
+    const std::string lines(text, size);
+    std::free(text);
+    // heading_deg and heading_surf_deg of every line that has them.
+    std::vector<double> heading, surf;
+    const std::string heading_key = "\"heading_deg\":", surf_key = "\"heading_surf_deg\":";
+    for (std::size_t at = 0; (at = lines.find(heading_key, at)) != std::string::npos;) {
+      at += heading_key.size();
+      if (lines.compare(at, 4, "null") != 0)
+        heading.push_back(std::strtod(lines.c_str() + at, nullptr));
+      const std::size_t s = lines.find(surf_key, at) + surf_key.size();
+      if (lines.compare(s, 4, "null") != 0)
+        surf.push_back(std::strtod(lines.c_str() + s, nullptr));
+    }
+    ASSERT_GE(heading.size(), 150u) << yaw;  // all but the first ds frames are matched
+    auto within = [&](const std::vector<double>& v, double tolerance) {
+      std::size_t n = 0;
+      for (double h : v)
+        n += std::fabs(h - yaw) <= tolerance ? 1 : 0;
+      return static_cast<double>(n) / static_cast<double>(v.size());
+    };
+    EXPECT_GE(within(heading, 3.0), 0.9) << yaw;
+    ASSERT_GE(surf.size(), 100u) << yaw;
+    EXPECT_GE(within(surf, 3.0), 0.8) << yaw;
+  }
 }
 
 // [attitude] on: every frame takes the IMU's attitude at its timestamp through the filter,
@@ -247,7 +308,8 @@ TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
     RouteDbWriter writer;
     ASSERT_TRUE(writer.Create(path.c_str(), taught.route_settings(), 25, false).ok());
     const std::vector<float> d(static_cast<std::size_t>(taught.dim()), 0.5f);
-    ASSERT_TRUE(writer.Append(RouteFrameMeta{}, d).ok());
+    const std::vector<std::uint8_t> strip(taught.strip_settings().columns, 100);
+    ASSERT_TRUE(writer.Append(RouteFrameMeta{}, d, strip).ok());
     ASSERT_TRUE(writer.Commit().ok());
   }
   auto write_camera_file = [&](const char* name, double fov, double centre_x, int size) {
@@ -322,7 +384,7 @@ TEST(FrameLoop, StopsOnRequestedStop) {
 }
 
 TEST(JsonLines, RepeatAndTeachLines) {
-  char buffer[1024] = {};
+  char buffer[2048] = {};
   std::FILE* f = fmemopen(buffer, sizeof buffer - 1, "w");
   ASSERT_NE(f, nullptr);
   JsonLinesSink sink(f);
@@ -336,6 +398,15 @@ TEST(JsonLines, RepeatAndTeachLines) {
   r.state = dsp::TrackState::kSearching;
   r.latency = std::chrono::microseconds(812);
   sink.OnFrame(LoopMode::kRepeat, r, 0);
+  r.has_heading = true;
+  r.heading_deg = -12.304f;
+  r.heading_confidence = 0.94123f;
+  r.has_heading_surf = true;
+  r.heading_surf_deg = -12.1f;
+  r.heading_surf_inliers = 41;
+  sink.OnFrame(LoopMode::kRepeat, r, 0);
+  r.has_heading = false;
+  r.has_heading_surf = false;
   r.matched = false;
   sink.OnFrame(LoopMode::kRepeat, r, 0);
   r.threshold = 97;
@@ -344,9 +415,17 @@ TEST(JsonLines, RepeatAndTeachLines) {
   std::fclose(f);
   EXPECT_STREQ(buffer,
                "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"latency_us\":812}\n"
+               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
+               "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
+               "\"latency_us\":812}\n"
+               "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,\"uniqueness\":0.2500,"
+               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":-12.30,"
+               "\"heading_confidence\":0.9412,\"heading_surf_deg\":-12.10,"
+               "\"heading_surf_inliers\":41,\"latency_us\":812}\n"
                "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":null,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"latency_us\":812}\n"
+               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
+               "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
+               "\"latency_us\":812}\n"
                "{\"frame\":12,\"timestamp\":0.400000,\"route_frames\":13,\"threshold\":97,"
                "\"sky_fraction\":0.5000,\"latency_us\":812}\n");
 }

@@ -8,6 +8,8 @@
 #include <numbers>
 #include <vector>
 
+#include "skyloc/dsp/heading.h"
+#include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/sample_lut.h"
 #include "skyloc/dsp/segmentation.h"
@@ -165,5 +167,68 @@ void BM_ProjectAndAmplitudes(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ProjectAndAmplitudes)->Unit(benchmark::kMicrosecond);
+
+// Heading of a matched frame (issue 13), the two ways app::Pipeline::EstimateHeading runs
+// them after the matcher picks a route frame, beside the descriptor: the route frame's
+// strip (360 bytes, as the route database stores it) against a query frame turned by 25
+// degrees. A skyline of a few harmonics over azimuth-textured ground, so 1D SURF finds a
+// realistic number of features (the street canyon above is almost all wall at 0..20 deg).
+std::vector<std::uint8_t> SkylineFrame(const Lens& lens, double turn_deg) {
+  std::vector<std::uint8_t> grey(static_cast<std::size_t>(kWidth * kHeight), 0);
+  Eigen::Vector3d ray;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      if (!lens.PixelToRay(x, y, &ray))
+        continue;
+      const double phi = std::atan2(ray.y(), ray.x()) - turn_deg * std::numbers::pi / 180.0;
+      const double elevation = std::asin(ray.z()) * 180.0 / std::numbers::pi;
+      const double skyline = 9.0 + 4.0 * std::sin(3.0 * phi) + 2.5 * std::cos(7.0 * phi) +
+                             1.5 * std::sin(13.0 * phi + 1.0);
+      const double ground = 70.0 + 20.0 * std::sin(5.0 * phi) + 10.0 * std::cos(11.0 * phi);
+      grey[static_cast<std::size_t>(y * kWidth + x)] =
+          static_cast<std::uint8_t>(elevation > skyline ? 215.0 : ground);
+    }
+  }
+  return grey;
+}
+
+// What the firmware does per matched frame (app::Pipeline::EstimateHeading): the query's
+// strip from the frame, the route frame's bytes to floats, then dsp::HeadingEstimator with
+// (b) the cross-correlation alone, or (b) + (a) 1D SURF + RANSAC ([heading] surf = true,
+// the default); (a)'s cost is the difference.
+void BM_Heading(benchmark::State& state, bool surf) {
+  const Lens lens = MakeLens();
+  const std::vector<std::uint8_t> taught = SkylineFrame(lens, 0.0);
+  const std::vector<std::uint8_t> query = SkylineFrame(lens, 25.0);
+  HorizonStrip horizon;
+  if (horizon.Init(lens, HorizonStripOptions{}) != HorizonStripError::kOk)
+    std::abort();
+  const auto n = static_cast<std::size_t>(horizon.n_azimuth());
+  std::vector<float> strip(n), stored(n);
+  std::vector<std::uint8_t> route_bytes(n);
+  horizon.Extract(View(taught), strip);
+  for (std::size_t j = 0; j < n; ++j)
+    route_bytes[j] = static_cast<std::uint8_t>(std::lround(strip[j]));
+  HeadingOptions options;
+  options.surf = surf;
+  HeadingEstimator estimator;
+  if (estimator.Init(horizon.n_azimuth(), options) != HeadingError::kOk)
+    std::abort();
+  HeadingEstimate estimate;
+  for (auto _ : state) {
+    horizon.Extract(View(query), strip);
+    for (std::size_t j = 0; j < n; ++j)
+      stored[j] = route_bytes[j];
+    estimator.Estimate(stored, strip, &estimate);
+    benchmark::DoNotOptimize(estimate);
+  }
+  state.counters["heading_deg"] = estimate.correlation_deg;
+  if (surf) {
+    state.counters["surf_deg"] = estimate.surf_deg;
+    state.counters["inliers"] = estimate.surf_inliers;
+  }
+}
+BENCHMARK_CAPTURE(BM_Heading, correlation, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, correlation_and_surf, true)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

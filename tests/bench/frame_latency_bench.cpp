@@ -1,8 +1,9 @@
 // End-to-end frame latency of the firmware pipeline: a 640x480 UV frame in (already
 // captured), the state out (sky descriptor -> streaming SeqSLAM over a 10,000-frame route
-// -> state machine -> status output). Target: <= 1 ms p99 on one core. The p50/p99/max
-// counters come from the same LatencyHistogram the firmware prints. The reference in the
-// same run is one read of the frame (the memory traffic no pipeline can avoid).
+// -> state machine -> heading against the matched frame's strip -> status output). Target: <= 1 ms
+// p99 on one core. The p50/p99/max counters come from the same LatencyHistogram the firmware
+// prints. The reference in the same run is one read of the frame (the memory traffic no pipeline
+// can avoid).
 #include <benchmark/benchmark.h>
 
 #include <array>
@@ -46,9 +47,13 @@ struct Fixture {
     if (!camera.Open().ok() || !camera.Start().ok())
       return;
     RouteFrames route;
-    if (!route.Allocate(kRouteFrames, static_cast<std::size_t>(pipeline.dim())).ok())
+    if (!route
+             .Allocate(kRouteFrames, static_cast<std::size_t>(pipeline.dim()),
+                       pipeline.strip_settings().columns)
+             .ok())
       return;
     std::vector<std::vector<float>> descriptors;
+    std::vector<std::vector<std::uint8_t>> strips;  // [heading]: every matched frame's heading
     for (int i = 0; i < kFrames; ++i) {
       Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1));
       if (!f.ok())
@@ -58,6 +63,7 @@ struct Fixture {
       if (!pipeline.Describe(f->image, &r).ok())
         return;
       descriptors.emplace_back(pipeline.descriptor().begin(), pipeline.descriptor().end());
+      strips.emplace_back(pipeline.strip().begin(), pipeline.strip().end());
     }
     // A 10,000-frame route: the street's descriptors, each repeated with a small offset so
     // no two are equal (SeqSLAM's cost does not depend on the values).
@@ -65,10 +71,10 @@ struct Fixture {
       std::vector<float> d = descriptors[static_cast<std::size_t>(i % kFrames)];
       for (float& v : d)
         v += 1e-4f * static_cast<float>(i / kFrames);
-      if (!route.Append({}, d))
+      if (!route.Append({}, d, strips[static_cast<std::size_t>(i % kFrames)]))
         return;
     }
-    ok = pipeline.SetRoute(route).ok();
+    ok = pipeline.SetRoute(route).ok() && pipeline.heading_enabled();
   }
 };
 
@@ -101,7 +107,7 @@ void FrameToState(benchmark::State& state, bool attitude) {
   drivers::SimulatedStatusOutput status({}, &clock);
   (void)status.Open();
   LatencyHistogram histogram;
-  std::uint64_t i = 0;
+  std::uint64_t i = 0, with_heading = 0;
   for (auto _ : state) {
     drivers::Frame frame;
     const std::vector<std::uint8_t>& image = fixture.images[i % kFrames];
@@ -122,12 +128,16 @@ void FrameToState(benchmark::State& state, bool attitude) {
     (void)fixture.pipeline.Localise(frame, &r, used);
     (void)status.Show(ToStatusState(r.state), r.confidence, clock.Now());
     histogram.Record(clock.Now() - t0);
+    with_heading += r.has_heading ? 1 : 0;
     benchmark::DoNotOptimize(r);
   }
   auto us = [](Nanoseconds d) { return static_cast<double>(d.count()) / 1000.0; };
   state.counters["p50_us"] = us(histogram.Percentile(50));
   state.counters["p99_us"] = us(histogram.Percentile(99));
   state.counters["max_us"] = us(histogram.max());
+  // Matched frames run the heading (both ways, [heading] defaults) against the route's strip.
+  state.counters["heading_share"] =
+      i > 0 ? static_cast<double>(with_heading) / static_cast<double>(i) : 0.0;
 }
 void BM_FrameToState(benchmark::State& state) {
   FrameToState(state, false);

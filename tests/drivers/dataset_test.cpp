@@ -1,10 +1,9 @@
 #include "skyloc/drivers/dataset.h"
 
 #include <gtest/gtest.h>
-
-#include <cmath>
 #include <stdlib.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>

@@ -48,14 +48,26 @@ expect_err "already exists: not replacing a taught route; pass --force to replac
 # 3. repeat the same street: one JSON line per frame with every key; it localises.
 expect_rc 0 "repeat" -- "${RUN[@]}" repeat --route "$DB" --config "$CONFIG" --frames 150
 [ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "repeat printed $(wc -l <"$WORK/out") lines"
-for key in frame timestamp best_index uniqueness confidence state latency_us; do
+for key in frame timestamp best_index uniqueness confidence state heading_deg heading_confidence \
+  heading_surf_deg heading_surf_inliers latency_us; do
   [ "$(grep -c "\"$key\":" "$WORK/out")" -eq 150 ] || fail "repeat: key $key missing on some lines"
 done
 grep -q '"state":"LOCALISED"' "$WORK/out" || fail "repeat never localised"
+# The same street, the same way round: matched frames carry a heading near 0.
+grep -q '"heading_deg":-\?[0-9]\.' "$WORK/out" || fail "repeat: no matched frame has a heading"
 expect_err "p99_us" "repeat latency table at exit"
 expect_err "precision at 100% recall" "repeat evaluation"
 expect_err "route $DB (150 frames)" "repeat start-up line"
 expect_err "WARNING: the status output is SIMULATED" "repeat with the simulated status output"
+# A route without horizon strips (taught with [heading] strip_columns = 0, as every file
+# before format 4) still localises with heading on: heading null, one note at start-up.
+{ cat "$CONFIG"; printf '\n[heading]\nstrip_columns = 0\n'; } >"$WORK/nostrips.toml"
+expect_rc 0 "teach without strips" -- "${RUN[@]}" teach --route "$WORK/nostrips.db" --config "$WORK/nostrips.toml" --frames 60
+expect_rc 0 "repeat a route without strips" -- "${RUN[@]}" repeat --route "$WORK/nostrips.db" --config "$CONFIG" --frames 40
+expect_err "strip_columns = 0: heading is off; re-teach to get heading" "repeat a route without strips"
+[ "$(grep -c 'heading is off' "$WORK/err")" -eq 1 ] || fail "the no-strips note is not said exactly once"
+[ "$(grep -c '"heading_deg":null' "$WORK/out")" -eq 40 ] || fail "a route without strips gave a heading"
+grep -q '"best_index":[0-9]' "$WORK/out" || fail "a route without strips did not match"
 
 # 4. settings that differ from the taught ones are refused, naming the setting.
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
@@ -164,14 +176,16 @@ expect_err "the route is full" "teach capacity"
 expect_err "50 frames committed" "teach capacity"
 
 # 11. disk full during teach (RLIMIT_FSIZE: 20 KiB): the chunk that does not fit is lost,
-# the frames before it are committed and said so; the route loads strictly.
+# the frames before it are committed and said so; the route loads strictly. Format 4 with
+# small.toml: 240-byte header, chunks of 10 records of 64 + 4 x 24 + 360 (strip) = 520
+# bytes: 240 + 3 x 5232 fits in 20480 bytes, a fourth chunk does not.
 (ulimit -f 20 && exec "${RUN[@]}" teach --route "$WORK/fsize.db" --config "$CONFIG" --frames 300) \
   >/dev/null 2>"$WORK/err"
 rc=$?
 [ $rc -eq 1 ] || fail "teach on a full disk exited $rc, expected 1: $(cat "$WORK/err")"
-expect_err "120 frames kept and committed; the last 10 did not fit" "teach on a full disk"
+expect_err "30 frames kept and committed; the last 10 did not fit" "teach on a full disk"
 expect_rc 0 "route info after a full disk" -- "${RUN[@]}" route info "$WORK/fsize.db"
-grep -q "120 frames in 12 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
+grep -q "30 frames in 3 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
 
 # Recording: `skyloc record DIR` and `teach --record DIR` write dataset folders that teach
 # --dataset reads back. The recorder's writer thread cannot start under qemu-user

@@ -58,15 +58,16 @@ RouteDbSettings Settings() {
 // Where the first chunk starts in a file this skyloc writes (header + lens record).
 constexpr std::size_t kDataOffset = RouteDbDataOffset(kRouteDbVersion);
 
-// The file rewritten as an older version: the header says `version` and, below version 3,
-// the lens record is cut out (those versions have none); version 1 also loses the cap.
+// The file (written without strips) rewritten as an older version: the header says
+// `version`; below version 4 the strip record is cut out, below version 3 the lens record
+// too (those versions have none); version 1 also loses the cap.
 std::vector<std::uint8_t> AsVersion(std::vector<std::uint8_t> b, std::uint32_t version) {
   std::memcpy(b.data() + 8, &version, 4);
-  if (version < 3) {
-    b.erase(b.begin() + static_cast<long>(kRouteDbHeaderBytes),
+  if (version < 4) {
+    b.erase(b.begin() + static_cast<long>(RouteDbDataOffset(version)),
             b.begin() + static_cast<long>(kDataOffset));
-    const auto header = static_cast<std::uint32_t>(kRouteDbHeaderBytes);
-    std::memcpy(b.data() + 12, &header, 4);
+    const auto offset = static_cast<std::uint32_t>(RouteDbDataOffset(version));
+    std::memcpy(b.data() + 12, &offset, 4);
   }
   if (version < 2)
     std::memset(b.data() + 52, 0, 8);
@@ -148,7 +149,7 @@ std::size_t ChunkOffset(std::size_t k, std::size_t f, std::size_t n) {
   std::size_t offset = kDataOffset;
   for (std::size_t j = 1; j < k; ++j) {
     const std::size_t frames = std::min(f, n - (j - 1) * f);
-    offset += kRouteDbChunkHeaderBytes + frames * RouteDbRecordBytes(kDim);
+    offset += kRouteDbChunkHeaderBytes + frames * RouteDbRecordBytes(kDim, 0);
   }
   return offset;
 }
@@ -163,11 +164,13 @@ TEST_F(RouteDbTest, RoundTrip) {
   EXPECT_EQ(report.frames, 137u);
   EXPECT_EQ(report.chunks, 14u);
   EXPECT_EQ(report.settings, Settings());  // the lens record too
-  EXPECT_EQ(report.version, 3u);
+  EXPECT_EQ(report.version, 4u);
   ExpectFrames(frames_, 137);
+  EXPECT_FALSE(frames_.has_strips());
   // The size follows from the format alone.
   EXPECT_EQ(Bytes().size(), kRouteDbHeaderBytes + kRouteDbLensRecordBytes +
-                                15 * kRouteDbChunkHeaderBytes + 137 * RouteDbRecordBytes(kDim));
+                                kRouteDbStripRecordBytes + 15 * kRouteDbChunkHeaderBytes +
+                                137 * RouteDbRecordBytes(kDim, 0));
 }
 
 TEST_F(RouteDbTest, EmptyCommittedRouteLoads) {
@@ -311,12 +314,12 @@ TEST_F(RouteDbTest, ReadsVersionOneAndRefusesANewerVersion) {
   EXPECT_EQ(report.settings.gravity_cap_cdeg, kNoGravityCap);
   EXPECT_FALSE(report.settings.lens.known);
   ExpectFrames(frames_, 5);
-  std::vector<std::uint8_t> v4 = Bytes();
-  const std::uint32_t four = 4;
-  std::memcpy(v4.data() + 8, &four, 4);
-  s = Parse(v4);
+  std::vector<std::uint8_t> v5 = Bytes();
+  const std::uint32_t five = 5;
+  std::memcpy(v5.data() + 8, &five, 4);
+  s = Parse(v5);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(s.message()).find("version 4; this skyloc reads versions 1 to 3"),
+  EXPECT_NE(std::string(s.message()).find("version 5; this skyloc reads versions 1 to 4"),
             std::string::npos)
       << s.message();
 }
@@ -360,6 +363,84 @@ TEST_F(RouteDbTest, VersionTwoFallsBackToTheLensHash) {
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_EQ(report.version, 2u);
   ExpectFrames(frames_, 7);
+}
+
+// Version 4 stores a horizon strip per frame (bytes after the descriptor): they come back
+// byte for byte, and the record grows by exactly the strip's columns.
+TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
+  constexpr std::size_t kColumns = 24;
+  RouteDbSettings settings = Settings();
+  settings.strip = {static_cast<std::uint32_t>(kColumns), 16, 0, 2000};
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), settings, 4, true).ok());
+    for (std::size_t i = 0; i < 10; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      std::uint8_t strip[kColumns];
+      for (std::size_t j = 0; j < kColumns; ++j)
+        strip[j] = static_cast<std::uint8_t>(7 * i + j);
+      ASSERT_TRUE(w.Append(meta, d, strip).ok());
+    }
+    // A strip of the wrong length is an error, not a torn record.
+    const std::uint8_t short_strip[3] = {};
+    float d[kDim] = {};
+    EXPECT_EQ(w.Append({}, d, short_strip).code(), StatusCode::kInvalidArgument);
+    ASSERT_TRUE(w.Commit().ok());
+  }
+  EXPECT_EQ(Bytes().size(), kDataOffset + 4 * kRouteDbChunkHeaderBytes +
+                                10 * (kRouteDbRecordFixedBytes + 4 * kDim + kColumns));
+  RouteFrames with_strips;
+  ASSERT_TRUE(with_strips.Allocate(20, kDim, kColumns).ok());
+  RouteDbLoadReport report;
+  Status s = ParseRouteDb(Bytes(), &settings, RouteDbLoadPolicy::kStrict, &with_strips, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(report.settings.strip, settings.strip);
+  ExpectFrames(with_strips, 10);
+  ASSERT_TRUE(with_strips.has_strips());
+  for (std::size_t i = 0; i < 10; ++i) {
+    ASSERT_EQ(with_strips.strip(i).size(), kColumns);
+    for (std::size_t j = 0; j < kColumns; ++j)
+      ASSERT_EQ(with_strips.strip(i)[j], static_cast<std::uint8_t>(7 * i + j)) << i << "," << j;
+  }
+  // A configuration without heading loads the descriptors and ignores the strips.
+  const RouteDbSettings no_heading = Settings();
+  s = ParseRouteDb(Bytes(), &no_heading, RouteDbLoadPolicy::kStrict, &frames_, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  ExpectFrames(frames_, 10);
+  EXPECT_FALSE(frames_.has_strips());
+  // Another strip would give a wrong heading: refused, naming both.
+  RouteDbSettings other = settings;
+  other.strip.columns = 360;
+  s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, nullptr, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message())
+                .find("taught with a 24-column horizon strip over 0.00..20.00 deg (16 rows), "
+                      "this configuration has 360 columns"),
+            std::string::npos)
+      << s.message();
+}
+
+// A version-3 file has no strips: it loads into a configuration that wants them, with
+// has_strips() false (the firmware then reports no heading and says why once).
+TEST_F(RouteDbTest, VersionThreeLoadsWithoutStrips) {
+  Teach(9, 4, true);
+  const std::vector<std::uint8_t> v3 = AsVersion(Bytes(), 3);
+  EXPECT_EQ(v3.size() + kRouteDbStripRecordBytes, Bytes().size());
+  RouteDbSettings want = Settings();
+  want.strip = {360, 16, 0, 2000};
+  RouteFrames frames;
+  ASSERT_TRUE(frames.Allocate(20, kDim, 360).ok());
+  RouteDbLoadReport report;
+  Status s = ParseRouteDb(v3, &want, RouteDbLoadPolicy::kStrict, &frames, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(report.version, 3u);
+  EXPECT_EQ(report.settings.strip.columns, 0u);
+  EXPECT_TRUE(report.settings.lens.known);
+  ExpectFrames(frames, 9);
+  EXPECT_FALSE(frames.has_strips());
+  EXPECT_TRUE(frames.strip(0).empty());
 }
 
 // Version 3 compares the lens parameters within tolerances and names what differs.
@@ -480,8 +561,13 @@ TEST_F(RouteDbTest, EveryBitFlipIsRejectedNamingTheChunk) {
           << byte << ": " << m;
       continue;
     }
-    if (byte < kDataOffset) {
+    if (byte < kRouteDbHeaderBytes + kRouteDbLensRecordBytes) {
       EXPECT_NE(m.find("lens record (offset 64): checksum mismatch"), std::string::npos)
+          << byte << ": " << m;
+      continue;
+    }
+    if (byte < kDataOffset) {
+      EXPECT_NE(m.find("strip record (offset 208): checksum mismatch"), std::string::npos)
           << byte << ": " << m;
       continue;
     }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/sim/imu_model.h"
@@ -150,6 +151,16 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   out->sky.assign(n * bands, 0.0f);
   out->vanilla.assign(n * dsp::kVanillaDescriptorSize, 0.0f);
   out->sky_cap.assign(options.cap.enabled ? n * bands : 0, 0.0f);
+  dsp::HorizonStrip horizon;
+  if (options.strips) {
+    if (const dsp::HorizonStripError e = horizon.Init(renderer.lens(), options.strip);
+        e != dsp::HorizonStripError::kOk)
+      return Status::Error(StatusCode::kInvalidArgument, "horizon strip: %s",
+                           dsp::HorizonStripErrorMessage(e));
+  }
+  const auto columns = options.strips ? static_cast<std::size_t>(options.strip.n_azimuth) : 0;
+  out->strips.assign(n * columns, 0);
+  std::vector<float> strip(columns);
   double sky_fraction = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const drivers::Pose& pose = out->trajectory[i].pose;
@@ -162,6 +173,16 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
         !e.ok())
       return Status::Error(StatusCode::kInternal, "sky descriptor of frame %zu: %s", i, e.message);
     sky_fraction += segmentation.sky_fraction;
+    if (options.strips) {
+      // The firmware's strip: from the same UV frame, rounded to bytes as the route stores it.
+      if (const dsp::HorizonStripError e = horizon.Extract(uv_view, strip);
+          e != dsp::HorizonStripError::kOk)
+        return Status::Error(StatusCode::kInternal, "horizon strip of frame %zu: %s", i,
+                             dsp::HorizonStripErrorMessage(e));
+      for (std::size_t j = 0; j < columns; ++j)
+        out->strips[i * columns + j] =
+            static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
+    }
     if (from_image) {
       const auto t_ns = static_cast<std::int64_t>(out->trajectory[i].time_s * 1e9);
       if (!zenith.Estimate(sky.samples(), t_ns, &out->attitude[i])) {
@@ -398,6 +419,98 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
       row.query_zenith = query.zenith_error;
       rows->push_back(std::move(row));
     }
+  }
+  return Status::Ok();
+}
+
+namespace {
+
+// Angle of the body's z axis from the world zenith, degrees (roll then pitch).
+double TiltDeg(const drivers::Pose& pose) {
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  return std::acos(std::clamp(std::cos(pose.roll_deg * kDeg) * std::cos(pose.pitch_deg * kDeg),
+                              -1.0, 1.0)) /
+         kDeg;
+}
+
+}  // namespace
+
+Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vector<HeadingRow>* rows,
+                            ProgressFn progress, void* context) {
+  constexpr double kBumpsDeg = 15;
+  constexpr double kLevelTiltDeg = 10;
+  ExperimentOptions options = heading_options;
+  options.strips = true;
+  options.vanilla = false;
+  options.cap.enabled = false;
+  const auto n = static_cast<std::size_t>(options.strip.n_azimuth);
+  dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
+  if (const dsp::HeadingError e = estimator.Init(options.strip.n_azimuth, {});
+      e != dsp::HeadingError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "heading: %s", dsp::HeadingErrorMessage(e));
+  std::vector<float> stored(n), test(n);
+  rows->clear();
+  for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
+    World world;
+    SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
+    // The manoeuvre experiment's two runs (RunManoeuvreExperiment).
+    RunSpec reference_spec;
+    reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
+    reference_spec.motion.seed = 301;
+    LightingPreset("noon", 401, &reference_spec.lighting);
+    RunSpec query_spec;
+    query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
+    query_spec.motion.seed = 302;
+    query_spec.motion.zigzag_deg = 20;
+    query_spec.motion.zigzag_period_m = 12;
+    query_spec.motion.bumps_deg = kBumpsDeg;
+    LightingPreset("dawn", 402, &query_spec.lighting);
+    RunDescriptors reference, query;
+    Report(progress, context, reference_spec.label.c_str());
+    SKYLOC_TRY(
+        DescribeRun(world, world.route, world.route_closed, reference_spec, options, &reference));
+    Report(progress, context, query_spec.label.c_str());
+    SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, options, &query));
+    HeadingRow row;
+    row.world = kind;
+    row.query_frames = static_cast<int>(query.trajectory.size());
+    SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, options, &row.match,
+                         ExperimentMatcher::kRouteFilter));
+    std::vector<double> correlation, surf, level, tilted;  // signed errors, degrees
+    int frames = 0, level_frames = 0;
+    for (std::size_t q = 0; q < query.trajectory.size(); ++q) {
+      if (!row.match.correct[q])
+        continue;
+      const auto r = static_cast<std::size_t>(row.match.matched[q]);
+      for (std::size_t j = 0; j < n; ++j) {
+        stored[j] = reference.strips[r * n + j];
+        test[j] = query.strips[q * n + j];
+      }
+      const drivers::Pose& query_pose = query.trajectory[q].pose;
+      // The truth: how far the robot is turned from the taught frame's heading.
+      const double truth =
+          dsp::WrapDegrees(query_pose.yaw_deg - reference.trajectory[r].pose.yaw_deg);
+      const bool is_level = TiltDeg(query_pose) <= kLevelTiltDeg;
+      ++frames;
+      level_frames += is_level ? 1 : 0;
+      dsp::HeadingEstimate estimate;
+      if (estimator.Estimate(stored, test, &estimate) != dsp::HeadingError::kOk)
+        return Status::Error(StatusCode::kInternal, "heading of query frame %zu", q);
+      if (estimate.has_correlation) {
+        const double error = dsp::WrapDegrees(estimate.correlation_deg - truth);
+        correlation.push_back(error);
+        (is_level ? level : tilted).push_back(error);
+      }
+      if (estimate.has_surf)
+        surf.push_back(dsp::WrapDegrees(estimate.surf_deg - truth));
+    }
+    row.correlation_errors_deg = correlation;
+    row.surf_errors_deg = surf;
+    row.correlation = dsp::SummariseHeadingErrors(correlation, frames);
+    row.surf = dsp::SummariseHeadingErrors(surf, frames);
+    row.correlation_level = dsp::SummariseHeadingErrors(level, level_frames);
+    row.correlation_tilted = dsp::SummariseHeadingErrors(tilted, frames - level_frames);
+    rows->push_back(std::move(row));
   }
   return Status::Ok();
 }

@@ -111,4 +111,18 @@ std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,
 PrSummary SummarisePrecisionRecall(std::span<const EvaluatedMatch> matches,
                                    std::span<const PrPoint> curve);
 
+// ---- Heading error (issue 13): eval and the heading experiment --------------------------
+
+struct HeadingErrorSummary {
+  int frames = 0;     // frames the heading was asked for (correctly matched ones)
+  int estimated = 0;  // of which the method gave a heading
+  // Over the estimated frames' absolute errors, degrees; the percentile is the nearest
+  // rank: the smallest error that at least that share of frames stay within.
+  double median_deg = 0, p90_deg = 0, max_deg = 0;
+};
+
+// Summarises signed errors (estimate - truth, degrees, already wrapped to [-180, 180));
+// `errors_deg` is overwritten with the sorted absolute errors (no allocation).
+HeadingErrorSummary SummariseHeadingErrors(std::span<double> errors_deg, int frames);
+
 }  // namespace skyloc::dsp

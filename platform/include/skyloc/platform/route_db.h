@@ -55,6 +55,20 @@ Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now);
 // One line for `route info`: "equidistant 320x240, centre 159.50 119.50 px, ...".
 void FormatRouteDbLens(const RouteDbLens& lens, char* out, std::size_t size);
 
+// The horizon strip stored with every frame (version 4) for the heading of a recognised
+// place (docs/SURF1D.md): `columns` bytes per frame, the band mean of each azimuth column
+// rounded to 0..255. columns = 0: no strips (every file before version 4, or a route
+// taught with [heading] strip_columns = 0). Numbers only; app/ fills it from
+// dsp::HorizonStripOptions.
+struct RouteDbStrip {
+  std::uint32_t columns = 0;  // azimuth columns over 360 degrees; 0: none stored
+  std::uint32_t band_rows = 0;
+  std::int32_t elevation_min_cdeg = 0;  // band, hundredths of a degree above the horizon
+  std::int32_t elevation_max_cdeg = 0;
+
+  bool operator==(const RouteDbStrip&) const = default;
+};
+
 // What produced the descriptors; a route loads only into a pipeline with equal settings.
 struct RouteDbSettings {
   std::uint32_t descriptor_kind = 0;
@@ -71,6 +85,9 @@ struct RouteDbSettings {
   // and taper in hundredths of a degree, or kNoGravityCap (every version-1 file).
   std::uint32_t gravity_cap_cdeg = 0xffffffffu;
   std::uint32_t gravity_cap_taper_cdeg = 0;
+  // Version 4. A file without strips loads into any configuration (heading is then off);
+  // a file with strips must match the configuration's strip unless that has none.
+  RouteDbStrip strip;
 
   bool operator==(const RouteDbSettings&) const = default;
 };
@@ -84,43 +101,74 @@ struct RouteFrameMeta {
 
 inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
-// Version 3 added the lens record after the header. This version reads 1 to 3, writes 3.
-inline constexpr std::uint32_t kRouteDbVersion = 3;
+// Version 3 added the lens record after the header. Version 4 added the strip record after
+// the lens record and a horizon strip at the end of every frame record. This version reads
+// 1 to 4, writes 4.
+inline constexpr std::uint32_t kRouteDbVersion = 4;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
 inline constexpr std::size_t kRouteDbLensRecordBytes = 144;  // version 3, after the header
-// Where the first chunk starts: after the header (versions 1, 2) and the lens record (3).
+inline constexpr std::size_t kRouteDbStripRecordBytes = 32;  // version 4, after the lens
+// Where the first chunk starts: after the header (versions 1, 2), the lens record (3) and
+// the strip record (4).
 constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
-  return version >= 3 ? kRouteDbHeaderBytes + kRouteDbLensRecordBytes : kRouteDbHeaderBytes;
+  return kRouteDbHeaderBytes + (version >= 3 ? kRouteDbLensRecordBytes : 0) +
+         (version >= 4 ? kRouteDbStripRecordBytes : 0);
 }
 inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
 inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
-constexpr std::size_t RouteDbRecordBytes(std::size_t dim) {
-  return kRouteDbRecordFixedBytes + 4 * dim;
+// A frame record: the fixed part, dim floats, then strip_columns bytes (version 4).
+constexpr std::size_t RouteDbRecordBytes(std::size_t dim, std::size_t strip_columns) {
+  return kRouteDbRecordFixedBytes + 4 * dim + strip_columns;
 }
 
-// The frames of a route in memory, at a capacity fixed at start-up.
+// The frames of a route in memory, at a capacity fixed at start-up. strip_columns: room
+// for a horizon strip per frame (0: none); has_strips() says whether the loaded route
+// filled them (a file before version 4, or taught without strips, does not).
 class RouteFrames {
  public:
-  Status Allocate(std::size_t capacity, std::size_t dim);
-  void Clear() { size_ = 0; }
-  // False when full.
-  [[nodiscard]] bool Append(const RouteFrameMeta& meta, std::span<const float> descriptor);
-  // Adds a frame and returns its descriptor storage to fill in; empty when full.
-  [[nodiscard]] std::span<float> Emplace(const RouteFrameMeta& meta);
+  Status Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns = 0);
+  void Clear() {
+    size_ = 0;
+    has_strips_ = false;
+  }
+  // False when full, or when `strip` is neither empty nor strip_columns() long. Every
+  // frame of a route has a strip or none does: the first Append decides.
+  [[nodiscard]] bool Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                            std::span<const std::uint8_t> strip = {});
 
   std::size_t size() const { return size_; }
   std::size_t capacity() const { return meta_.size(); }
   std::size_t dim() const { return dim_; }
+  std::size_t strip_columns() const { return strip_columns_; }
+  bool has_strips() const { return has_strips_; }
   std::span<const float> descriptor(std::size_t i) const {
     return {descriptors_.data() + i * dim_, dim_};
   }
+  // Frame i's horizon strip; empty when the route has none.
+  std::span<const std::uint8_t> strip(std::size_t i) const {
+    if (!has_strips_)
+      return {};
+    return {strips_.data() + i * strip_columns_, strip_columns_};
+  }
   const RouteFrameMeta& meta(std::size_t i) const { return meta_[i]; }
+
+  // Adds a frame and returns its storage to fill in (the loader copies straight into it):
+  // the descriptor, and the strip when `with_strip` (which the first frame decides for
+  // the route). Empty spans when full or when with_strip disagrees with the route.
+  struct Slot {
+    std::span<float> descriptor;
+    std::span<std::uint8_t> strip;
+  };
+  [[nodiscard]] Slot Emplace(const RouteFrameMeta& meta, bool with_strip);
 
  private:
   FixedArray<float> descriptors_;
+  FixedArray<std::uint8_t> strips_;
   FixedArray<RouteFrameMeta> meta_;
   std::size_t dim_ = 0;
+  std::size_t strip_columns_ = 0;
   std::size_t size_ = 0;
+  bool has_strips_ = false;
 };
 
 enum class RouteDbLoadPolicy : std::uint8_t {
@@ -187,7 +235,9 @@ class RouteDbWriter {
   // exclusive flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
-  Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor);
+  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0.
+  Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                std::span<const std::uint8_t> strip = {});
   // Writes the buffered frames as one chunk and waits until they are on the disk.
   Status Flush();
   // Flush, append the commit record, sync, close. After this the writer is closed. When

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
@@ -63,6 +64,10 @@ struct ExperimentOptions {
   AttitudeInput attitude = AttitudeInput::kSimulatedImu;
   dsp::GravityCapOptions cap{false, -1, 10};
   dsp::ZenithEstimateOptions zenith;  // AttitudeInput::kImage
+  // Horizon strips of every frame's UV image, as the firmware's route stores them (one
+  // byte per column) for the heading (issue 13); false: none (every other experiment).
+  bool strips = false;
+  dsp::HorizonStripOptions strip;  // the firmware's [heading] defaults
 };
 
 // How far the cap's zenith was from the true one over a run's frames (degrees).
@@ -83,6 +88,7 @@ struct RunDescriptors {
   std::vector<dsp::Attitude> attitude;  // per frame: the zenith the cap used
   ZenithError zenith_error;             // of `attitude` against the true poses
   double mean_sky_fraction = 0;
+  std::vector<std::uint8_t> strips;  // frames x strip.n_azimuth (options.strips)
 };
 
 struct RunSpec {
@@ -155,6 +161,27 @@ struct ManoeuvreRow {
 Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
                               std::vector<ManoeuvreRow>* rows, ProgressFn progress = nullptr,
                               void* context = nullptr);
+
+// Heading (issue 13 item 6): the manoeuvre experiment's runs (reference at noon, smooth;
+// query at dawn with +-20 degree zig-zag yaw and +-15 degree bumps), matched by the route
+// filter (the firmware's matcher) on the sky descriptor; on every query frame matched to
+// the right place, the heading relative to the matched reference frame from the two
+// frames' horizon strips, (b) circular cross-correlation (dsp::AlignStrips) and (a) 1D
+// SURF + RANSAC, against the truth: the query pose's yaw minus the reference pose's.
+struct HeadingRow {
+  WorldKind world = WorldKind::kForest;
+  int query_frames = 0;
+  MethodScore match;  // the route filter on the sky descriptor
+  dsp::HeadingErrorSummary correlation, surf;
+  // The same frames split by the query's tilt (angle of body z from the zenith) at or
+  // below / above 10 degrees, correlation only: what the bumps do to the strip.
+  dsp::HeadingErrorSummary correlation_level, correlation_tilted;
+  // Signed errors (estimate - truth, degrees) of the estimated frames, for pooling worlds.
+  std::vector<double> correlation_errors_deg, surf_errors_deg;
+};
+
+Status RunHeadingExperiment(const ExperimentOptions& options, std::vector<HeadingRow>* rows,
+                            ProgressFn progress = nullptr, void* context = nullptr);
 
 // Ants (Seville habitat): one ant's route as the reference, other routes of the same ant
 // and of other ants as queries, at each camera height (ant ~0.01 m, small robot ~0.1 m).

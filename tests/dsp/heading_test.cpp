@@ -1,0 +1,130 @@
+// dsp::HeadingEstimator: a strip circularly shifted by k columns reads as a robot turned by
+// -k columns' worth of degrees (its content turned by +k), within one sample, by both
+// ways; the sign and wrap are checked against hand-computed values, not the code's own
+// conversion. SummariseHeadingErrors against a hand-ranked list.
+#include "skyloc/dsp/heading.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "skyloc/dsp/place_metrics.h"
+#include "skyloc/platform/alloc_counter.h"
+
+namespace skyloc::dsp {
+namespace {
+
+// A skyline with blobs of many widths plus grey-level texture, rounded to bytes as the
+// route stores strips; column j of the shifted strip is column j - k of the original.
+std::vector<float> Skyline(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> level(40.0, 200.0);
+  std::uniform_int_distribution<int> width(2, 30);
+  std::vector<float> s(static_cast<std::size_t>(n));
+  int j = 0;
+  while (j < n) {
+    const int w = width(rng);
+    const double v = level(rng);
+    for (int i = 0; i < w && j < n; ++i, ++j)
+      s[static_cast<std::size_t>(j)] = static_cast<float>(std::lround(v + 5 * std::sin(j * 0.7)));
+  }
+  return s;
+}
+
+std::vector<float> Shifted(const std::vector<float>& s, int k) {
+  const int n = static_cast<int>(s.size());
+  std::vector<float> out(s.size());
+  for (int j = 0; j < n; ++j)
+    out[static_cast<std::size_t>(j)] = s[static_cast<std::size_t>(((j - k) % n + n) % n)];
+  return out;
+}
+
+TEST(Heading, ACircularShiftIsTheHeadingWithinOneSample) {
+  constexpr int kN = 360;
+  HeadingEstimator estimator;
+  ASSERT_EQ(estimator.Init(kN, HeadingOptions{}), HeadingError::kOk);
+  const std::vector<float> stored = Skyline(kN, 3);
+  // Content turned by +k columns (1 degree each): the robot turned by -k degrees,
+  // wrapped into [-180, 180): k = 300 -> +60, k = 180 -> -180.
+  const struct {
+    int k;
+    double heading_deg;
+  } kCases[] = {{0, 0}, {1, -1}, {37, -37}, {180, -180}, {300, 60}, {359, 1}};
+  for (const auto& c : kCases) {
+    HeadingEstimate e;
+    ASSERT_EQ(estimator.Estimate(stored, Shifted(stored, c.k), &e), HeadingError::kOk);
+    ASSERT_TRUE(e.has_correlation) << c.k;
+    // Differences across the wrap (-180 vs +179.9) are one sample apart, not 360.
+    EXPECT_LE(std::fabs(WrapDegrees(e.correlation_deg - c.heading_deg)), 1.0) << c.k;
+    EXPECT_GT(e.confidence, 0.99f) << c.k;
+    ASSERT_TRUE(e.has_surf) << c.k;
+    EXPECT_LE(std::fabs(WrapDegrees(e.surf_deg - c.heading_deg)), 1.0) << c.k;
+    EXPECT_GE(e.surf_inliers, 10) << c.k;
+  }
+  // Fewer columns: one sample is 2 degrees.
+  HeadingEstimator coarse;
+  ASSERT_EQ(coarse.Init(180, HeadingOptions{}), HeadingError::kOk);
+  const std::vector<float> s180 = Skyline(180, 5);
+  HeadingEstimate e;
+  ASSERT_EQ(coarse.Estimate(s180, Shifted(s180, 20), &e), HeadingError::kOk);
+  EXPECT_LE(std::fabs(e.correlation_deg - (-40.0)), 2.0);
+  EXPECT_LE(std::fabs(e.surf_deg - (-40.0)), 2.0);
+}
+
+TEST(Heading, ErrorsAndNoAllocation) {
+  HeadingEstimator estimator;
+  EXPECT_EQ(estimator.Init(100, HeadingOptions{}), HeadingError::kBadOptions);  // < 148 for SURF
+  HeadingOptions no_surf;
+  no_surf.surf = false;
+  ASSERT_EQ(estimator.Init(100, no_surf), HeadingError::kOk);  // correlation needs no filter
+  const std::vector<float> a = Skyline(100, 1), flat(100, 7.0f), shorter(99, 1.0f);
+  HeadingEstimate e;
+  EXPECT_EQ(estimator.Estimate(a, shorter, &e), HeadingError::kSizeMismatch);
+  ASSERT_EQ(estimator.Estimate(a, flat, &e), HeadingError::kOk);
+  EXPECT_FALSE(e.has_correlation);  // a flat strip has no turn to read
+  EXPECT_FALSE(e.has_surf);
+
+  ASSERT_EQ(estimator.Init(360, HeadingOptions{}), HeadingError::kOk);
+  const std::vector<float> stored = Skyline(360, 9), test = Shifted(stored, 45);
+  // A RANSAC line with fewer inliers than asked for gives no (a) heading; (b) still answers.
+  HeadingOptions strict;
+  strict.min_surf_inliers = 4000;
+  HeadingEstimator gated;
+  ASSERT_EQ(gated.Init(360, strict), HeadingError::kOk);
+  ASSERT_EQ(gated.Estimate(stored, test, &e), HeadingError::kOk);
+  EXPECT_TRUE(e.has_correlation);
+  EXPECT_FALSE(e.has_surf);
+  strict.min_surf_inliers = 1;
+  EXPECT_EQ(gated.Init(360, strict), HeadingError::kBadOptions);
+  AllocationScope scope;
+  for (int i = 0; i < 10; ++i)
+    (void)estimator.Estimate(stored, test, &e);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
+TEST(Heading, WrapDegrees) {
+  EXPECT_DOUBLE_EQ(WrapDegrees(180), -180);
+  EXPECT_DOUBLE_EQ(WrapDegrees(-180), -180);
+  EXPECT_DOUBLE_EQ(WrapDegrees(190), -170);
+  EXPECT_DOUBLE_EQ(WrapDegrees(-190), 170);
+  EXPECT_DOUBLE_EQ(WrapDegrees(725), 5);
+}
+
+TEST(Heading, SummaryRanksAbsoluteErrors) {
+  // |errors| sorted: 0.5 1 1 2 3 4 5 6 8 40. Nearest rank: median = 5th = 3,
+  // p90 = 9th = 8, max 40.
+  std::vector<double> errors = {-1, 3, 0.5, -40, 2, 8, -4, 5, 6, 1};
+  const HeadingErrorSummary s = SummariseHeadingErrors(errors, 12);
+  EXPECT_EQ(s.frames, 12);
+  EXPECT_EQ(s.estimated, 10);
+  EXPECT_DOUBLE_EQ(s.median_deg, 3);
+  EXPECT_DOUBLE_EQ(s.p90_deg, 8);
+  EXPECT_DOUBLE_EQ(s.max_deg, 40);
+  std::vector<double> none;
+  EXPECT_EQ(SummariseHeadingErrors(none, 4).estimated, 0);
+}
+
+}  // namespace
+}  // namespace skyloc::dsp

@@ -1,0 +1,32 @@
+# A small `skyloc experiment heading` writes its table and metrics, and its strip
+# cross-correlation is right on most correctly matched frames at 160x120: measured median
+# 1.6 degrees on x86-64 and armhf, 90th percentile 5.9 (x86-64) and 16.6 (armhf, whose
+# renderer rounds differently: SIMULATOR.md on determinism) over ~150 frames, so the bound
+# on the tail is loose here; issue 13's bar (median < 3, p90 < 10) is checked on the
+# full-size run in docs/RESULTS.md. The truth is the simulator's poses, not the strip code.
+set(dir ${WORK_DIR}/experiment_heading)
+file(REMOVE_RECURSE ${dir})
+execute_process(COMMAND ${EMULATOR} ${CMD} experiment heading --frames 150 --width 160
+                        --height 120 --bands 16 --out ${dir}
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "experiment heading failed (${rc}):\n${out}\n${err}")
+endif()
+foreach(f results.md metrics.json)
+  if(NOT EXISTS ${dir}/${f})
+    message(FATAL_ERROR "missing ${dir}/${f}")
+  endif()
+endforeach()
+file(READ ${dir}/metrics.json json)
+string(JSON n LENGTH "${json}" rows)
+if(NOT n EQUAL 2)
+  message(FATAL_ERROR "metrics.json has ${n} rows, expected 2 (forest, repetitive)")
+endif()
+string(JSON frames GET "${json}" all correlation estimated)
+string(JSON median GET "${json}" all correlation median_deg)
+string(JSON p90 GET "${json}" all correlation p90_deg)
+if(frames LESS 100 OR median GREATER_EQUAL 3 OR p90 GREATER_EQUAL 30)
+  message(FATAL_ERROR "heading (cross-correlation) over ${frames} frames: median ${median}, "
+                      "p90 ${p90} degrees; expected >= 100 frames, < 3 and < 30")
+endif()
+file(REMOVE_RECURSE ${dir})
