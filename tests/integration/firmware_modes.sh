@@ -195,18 +195,30 @@ if [ ${#RUN[@]} -eq 1 ]; then
   expect_rc 0 "record" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 40
   [ "$(wc -l <"$WORK/out")" -eq 40 ] || fail "record printed $(wc -l <"$WORK/out") JSON lines, expected 40"
   expect_err "recording into $REC" "record start-up line"
-  expect_err "recording $REC: 40 frames written, 0 dropped" "record summary"
-  [ "$(wc -l <"$REC/frames.csv")" -eq 41 ] || fail "record: frames.csv has $(wc -l <"$REC/frames.csv") lines"
+  # The writer may fall behind the 200 fps camera on a loaded machine and drop frames
+  # (counted, and tested exactly in frame_recorder_test); every frame is one or the other,
+  # and frames.csv holds exactly the written ones.
+  written=$(sed -nE "s|.*recording $REC: ([0-9]+) frames written, ([0-9]+) dropped.*|\1|p" "$WORK/err")
+  dropped=$(sed -nE "s|.*recording $REC: ([0-9]+) frames written, ([0-9]+) dropped.*|\2|p" "$WORK/err")
+  if [ -z "$written" ] || [ $((written + dropped)) -ne 40 ] || [ "$written" -lt 1 ]; then
+    fail "record summary: expected N written and M dropped with N + M = 40: $(cat "$WORK/err")"
+  else
+    [ "$(wc -l <"$REC/frames.csv")" -eq $((written + 1)) ] ||
+      fail "record: frames.csv has $(wc -l <"$REC/frames.csv") lines for $written frames written"
+  fi
   grep -q '^model = "equidistant"' "$REC/camera.toml" || fail "record: no camera.toml with the lens"
   expect_rc 1 "record into an earlier recording" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 5
   expect_err "already exists: choose a new folder" "record into an earlier recording"
   expect_rc 2 "record without a folder" -- "${RUN[@]}" record --config "$CONFIG"
   expect_rc 0 "teach --record" -- "${RUN[@]}" teach --route "$WORK/recorded.db" --config "$CONFIG" \
     --frames 30 --record "$WORK/taught_run"
-  expect_err "recording $WORK/taught_run: 30 frames written" "teach --record summary"
+  taught=$(sed -nE "s|.*recording $WORK/taught_run: ([0-9]+) frames written.*|\1|p" "$WORK/err")
+  if [ -z "$taught" ] || [ "$taught" -lt 1 ] || [ "$taught" -gt 30 ]; then
+    fail "teach --record summary: no 'N frames written' (1..30): $(cat "$WORK/err")"
+  fi
   expect_rc 0 "teach from the recording" -- "${RUN[@]}" teach --route "$WORK/again.db" \
     --config "$CONFIG" --dataset "$WORK/taught_run"
-  expect_err "30 frames committed" "teach from the recording"
+  expect_err "${taught:-30} frames committed" "teach from the recording"
 fi
 
 if [ $failures -ne 0 ]; then
