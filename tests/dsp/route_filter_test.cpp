@@ -227,12 +227,11 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
                                 : std::exp(cost[static_cast<std::size_t>(best)] -
                                            cost[static_cast<std::size_t>(r)]);
     };
-    const double offset = (weight(best + 1) - weight(best - 1)) /
-                          (weight(best - 1) + 1.0 + weight(best + 1));
+    const double offset =
+        (weight(best + 1) - weight(best - 1)) / (weight(best - 1) + 1.0 + weight(best + 1));
     const int first = out.first[static_cast<std::size_t>(best)];
     const int last = out.last[static_cast<std::size_t>(best)];
-    out.reference.push_back(first +
-                            static_cast<int>(std::floor((0.5 + offset) * (last - first))));
+    out.reference.push_back(first + static_cast<int>(std::floor((0.5 + offset) * (last - first))));
     out.confidence.push_back(
         std::isinf(second) ? 0.0
                            : 1.0 - std::exp(-(second - cost[static_cast<std::size_t>(best)])));
@@ -388,8 +387,8 @@ TEST(RouteFilter, FollowsAPlantedRouteThroughStopsAndSpeedChanges) {
 TEST(RouteFilter, AMergedStopReportsTheEndTheRobotArrivesAtOrLeavesBy) {
   const AppearanceField field(24, 7);
   // Taught: 10 m at 1 m/s, a 5 s stop, 1 s of pulling away at 1 cm a frame, 10 m more.
-  const TimedRun reference = MakeRun(
-      field, SampleInTime({{10, 1.0}, {5, 0}, {1, 0.1}, {10, 1.0}}, 10, 0.0), 0.02f, 51);
+  const TimedRun reference =
+      MakeRun(field, SampleInTime({{10, 1.0}, {5, 0}, {1, 0.1}, {10, 1.0}}, 10, 0.0), 0.02f, 51);
   // Repeats at 0.5 m/s from 7 m: through the place without stopping, and stopping there
   // for 3 s and pulling away as the taught run did.
   const std::vector<TimedRun> queries = {
@@ -398,8 +397,7 @@ TEST(RouteFilter, AMergedStopReportsTheEndTheRobotArrivesAtOrLeavesBy) {
   for (std::size_t q = 0; q < queries.size(); ++q) {
     const TimedRun& query = queries[q];
     RouteFilter filter;
-    ASSERT_EQ(filter.Init(RouteFilterParams{}, field.dim(), reference.frames()),
-              SeqSlamError::kOk);
+    ASSERT_EQ(filter.Init(RouteFilterParams{}, field.dim(), reference.frames()), SeqSlamError::kOk);
     ASSERT_TRUE(Teach(filter, reference, field.dim()));
     int stop_row = -1;
     for (int r = 0; r < filter.rows(); ++r) {
@@ -414,9 +412,8 @@ TEST(RouteFilter, AMergedStopReportsTheEndTheRobotArrivesAtOrLeavesBy) {
       const double s = query.s_m[static_cast<std::size_t>(t)];
       if (!Within(reference, s, match.reference, 5)) {
         ++wrong;
-        ADD_FAILURE() << "query " << q << " frame " << t << " at " << s
-                      << " m matched reference " << match.reference << " (row " << match.row
-                      << ")";
+        ADD_FAILURE() << "query " << q << " frame " << t << " at " << s << " m matched reference "
+                      << match.reference << " (row " << match.row << ")";
       }
       if (match.row == stop_row) {
         ++on_stop_row;
