@@ -27,7 +27,7 @@ class ButtonDebouncer {
  private:
   Nanoseconds debounce_;
   bool active_ = false;
-  Nanoseconds since_{0};  // the last edge's time
+  Nanoseconds since_{0};   // the last edge's time
   bool reported_ = false;  // accepted as a press; cleared by a steady release
 };
 

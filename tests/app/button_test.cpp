@@ -9,7 +9,9 @@ namespace {
 
 using std::chrono::milliseconds;
 
-drivers::ButtonEvent Edge(bool pressed, int ms) { return {pressed, milliseconds(ms)}; }
+drivers::ButtonEvent Edge(bool pressed, int ms) {
+  return {pressed, milliseconds(ms)};
+}
 
 // Polls every millisecond over [from, to) and counts accepted presses.
 int PressesBetween(ButtonDebouncer& b, int from, int to) {
