@@ -272,5 +272,33 @@ TEST_F(ButtonTeach, RepeatWithTheButtonPolledAllocatesNothing) {
   EXPECT_FALSE(summary.button_pressed);
 }
 
+TEST_F(ButtonTeach, TeachingWithTheButtonAndItsPatternAllocatesNothing) {
+  ASSERT_TRUE(AllocationCounterActive());
+  RouteDbWriter writer;
+  ASSERT_TRUE(writer.Create(path_.c_str(), pipeline_.route_settings(), 25, false).ok());
+  StreetCamera camera(Street(1));
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  ButtonDebouncer button(std::chrono::milliseconds(50));
+  LoopOptions o = Options();
+  o.mode = LoopMode::kTeach;
+  o.button = &button;
+  o.show_teaching = true;
+  o.max_frames = 10;
+  LoopSummary summary;
+  ASSERT_TRUE(RunFrameLoop(camera, status_.get(), pipeline_, &writer, nullptr, o, &summary).ok());
+  o.max_frames = 300;
+  // The ManualClock stands still, so the pattern is checked at both halves of its period.
+  AllocationScope scope;
+  Status s = RunFrameLoop(camera, status_.get(), pipeline_, &writer, nullptr, o, &summary);
+  clock_.Advance(kTeachingPeriod / 2);
+  if (s.ok())
+    s = RunFrameLoop(camera, status_.get(), pipeline_, &writer, nullptr, o, &summary);
+  const std::uint64_t allocations = scope.allocations();
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(allocations, 0u);
+  ASSERT_TRUE(writer.Commit().ok());
+}
+
 }  // namespace
 }  // namespace skyloc::app
