@@ -435,6 +435,10 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Int("line_searching", &c.status.line_searching, 0, 511);
     r.Int("line_localised", &c.status.line_localised, 0, 511);
     r.Enum("encoding", &c.status.encoding, kStatusEncodings);
+    r.Bool("active_low", &c.status.active_low);
+    r.Int("button_line", &c.status.button_line, -1, 511);
+    r.Bool("button_active_low", &c.status.button_active_low);
+    r.Int("button_debounce_ms", &c.status.button_debounce_ms, 0, 1000);
     if (error.ok() && c.status.encoding == StatusEncoding::kPerState) {
       if (c.status.line_localised == c.status.line_lost ||
           c.status.line_localised == c.status.line_searching)
@@ -442,6 +446,18 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
       else if (c.status.line_searching == c.status.line_lost)
         r.Invalid("line_searching", "must differ from line_lost");
     }
+    // The button is an input: it cannot share a pin with a lit indicator.
+    const StatusConfig& st = c.status;
+    const bool per_state = st.encoding == StatusEncoding::kPerState;
+    if (error.ok() && st.button_line >= 0 &&
+        (st.button_line == st.line_localised ||
+         (per_state && (st.button_line == st.line_lost || st.button_line == st.line_searching))))
+      r.Invalid("button_line",
+                per_state ? "must differ from line_lost, line_searching and line_localised "
+                            "(-1: no button)"
+                          : "must differ from line_localised, the blinking line (-1: no button)");
+    if (error.ok() && st.button_line >= 0 && st.kind == StatusOutputKind::kNone)
+      r.Invalid("button_line", "needs kind = \"gpio\" (the button is read on its chip), or -1");
     r.Finish();
   }
   {

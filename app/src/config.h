@@ -129,6 +129,13 @@ struct StatusConfig {
   int line_searching = 27;
   int line_localised = 22;
   StatusEncoding encoding = StatusEncoding::kPerState;
+  bool active_low = false;  // every output line: an indicator lit by driving its pin low
+  // The teach button's input line; -1: no button. A button to ground with a pull-up reads
+  // low when pressed, the usual wiring, hence active-low by default.
+  int button_line = -1;
+  bool button_active_low = true;
+  // A press counts once the line has stayed active this long after its last edge.
+  int button_debounce_ms = 50;
 
   bool operator==(const StatusConfig&) const = default;
 };

@@ -24,7 +24,7 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
   const double t = static_cast<double>(r.timestamp.count()) * 1e-9;
   const long long latency_us = static_cast<long long>(r.latency.count() / 1000);
   int n;
-  if (mode == LoopMode::kRecord) {
+  if (mode == LoopMode::kRecord || mode == LoopMode::kWaitForButton) {
     n = std::snprintf(line, sizeof line,
                       "{\"frame\":%llu,\"timestamp\":%.6f,\"latency_us\":%lld}\n",
                       static_cast<unsigned long long>(r.frame), t, latency_us);
@@ -88,6 +88,23 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
                    static_cast<unsigned long long>(s.frames));
       latency.Print(stderr);
+    }
+    if (options.button != nullptr && status != nullptr) {
+      for (;;) {
+        Result<drivers::ButtonEvent> edge = status->ReadButtonEvent();
+        if (!edge.ok()) {
+          if (edge.status().code() == StatusCode::kDeadlineExceeded)
+            break;  // no edge pending
+          *summary = s;
+          Status failed = edge.status();
+          return failed.AddContext("the teach button");
+        }
+        options.button->OnEdge(*edge);
+      }
+      if (options.button->TakePress(clock.Now())) {
+        s.button_pressed = true;
+        break;
+      }
     }
     const Nanoseconds t0 = clock.Now();
     Result<drivers::Frame> captured = camera.Capture(options.capture_timeout);
@@ -179,7 +196,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     }
     if (options.recorder != nullptr)
       (void)options.recorder->Submit(frame, attitude_used);  // dropped frames are counted
-    if (options.mode == LoopMode::kRecord) {
+    if (options.mode == LoopMode::kRecord || options.mode == LoopMode::kWaitForButton) {
       result.matched = false;  // the recorder has the frame; nothing else to do
     } else if (options.mode == LoopMode::kTeach) {
       SKYLOC_TRY(pipeline.Describe(frame.image, &result, attitude_used));
@@ -193,6 +210,13 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       {
         StageTimer timer(latency, pipeline.stage_output, clock);
         SKYLOC_TRY(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
+        if (status != nullptr && options.show_teaching) {
+          const Nanoseconds now = clock.Now();
+          if (now % kTeachingPeriod < kTeachingPeriod / 2)
+            SKYLOC_TRY(status->Show(drivers::LocalisationState::kSearching, 0.0f, now));
+          else
+            SKYLOC_TRY(status->SafeState());
+        }
       }
     } else {
       Status st = pipeline.Localise(frame, &result, attitude_used);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "button.h"
 #include "frame_recorder.h"
 #include "pipeline.h"
 #include "skyloc/drivers/attitude_source.h"
@@ -17,7 +18,8 @@
 namespace skyloc::app {
 
 // kRecord: frames only go to LoopOptions::recorder (`skyloc record`), nothing is described.
-enum class LoopMode : std::uint8_t { kTeach, kRepeat, kRecord };
+// kWaitForButton: the same, until the teach button is pressed (repeat without a route).
+enum class LoopMode : std::uint8_t { kTeach, kRepeat, kRecord, kWaitForButton };
 
 // Receives every frame's result. Implementations must not allocate.
 class FrameSink {
@@ -85,7 +87,20 @@ struct LoopOptions {
   // --record: every captured frame (with its attitude when there is one) is offered to the
   // recorder, which copies it and never blocks; null: no recording.
   FrameRecorder* recorder = nullptr;
+  // The teach button: before each frame the status output's pending edges go through this
+  // debouncer, and an accepted press ends the loop (LoopSummary::button_pressed); its
+  // clock is `clock`, which must be the one the edges are stamped with. null: no button.
+  ButtonDebouncer* button = nullptr;
+  // Teach: the status lines show that a route is being taught (see kTeachingPeriod),
+  // where a plain teach leaves them in the safe state.
+  bool show_teaching = false;
 };
+
+// While teaching with show_teaching, the SEARCHING indicator is shown for the first half
+// of every period and the lines are safe for the second: per-state, the SEARCHING line
+// blinks at 0.5 Hz (repeat never blinks it); blink encoding, one 500 ms flash every 2 s
+// (LOST flashes 100 ms, SEARCHING blinks at 1 Hz).
+inline constexpr Nanoseconds kTeachingPeriod = std::chrono::seconds(2);
 
 struct LoopSummary {
   std::uint64_t frames = 0;            // frames through the pipeline
@@ -96,6 +111,7 @@ struct LoopSummary {
   // [attitude]: frames described as if level because the source had no attitude for them
   // (none yet, stale, or the IMU gone); each outage is warned about once on stderr.
   std::uint64_t attitude_missing = 0;
+  bool button_pressed = false;  // LoopOptions::button accepted a press: the loop ended there
 };
 
 // Runs until stopped. `status` and `sink` may be null; `route` is required for teach.

@@ -1,6 +1,9 @@
 #include "session.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -21,6 +24,7 @@
 #if SKYLOC_WITH_GPIOD
 #include "skyloc/drivers/gpio_status_output.h"
 #endif
+#include "button_teach.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/platform/realtime.h"
 #include "skyloc/platform/signals.h"
@@ -307,6 +311,7 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
     case StatusOutputKind::kSim: {
       drivers::SimulatedStatusOutputConfig c;
       c.mode = LineMode(config);
+      c.has_button = config.status.button_line >= 0;
       return std::unique_ptr<drivers::StatusOutput>(
           std::make_unique<drivers::SimulatedStatusOutput>(c, clock));
     }
@@ -315,6 +320,9 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
       drivers::GpioStatusOutputConfig c;
       std::snprintf(c.chip, sizeof c.chip, "%s", config.status.chip.c_str());
       c.mode = LineMode(config);
+      c.active_low = config.status.active_low;
+      c.button_line = config.status.button_line;
+      c.button_active_low = config.status.button_active_low;
       // Per state: LOST, SEARCHING, LOCALISED; blinking uses the LOCALISED line.
       if (c.mode == drivers::StatusLineMode::kBlink) {
         c.lines = {static_cast<unsigned>(config.status.line_localised), 0u, 0u};
@@ -358,7 +366,7 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
                                                                           : cam.device.c_str(),
         format, info.width, info.height, cam.fps);
   }
-  char status[160];
+  char status[200];
   switch (config.status.kind) {
     case StatusOutputKind::kGpio:
       if (config.status.encoding == StatusEncoding::kBlink)
@@ -376,8 +384,16 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
       std::snprintf(status, sizeof status, "status none");
       break;
   }
+  if (config.status.button_line >= 0 && config.status.kind != StatusOutputKind::kNone) {
+    const std::size_t used = std::strlen(status);
+    std::snprintf(status + used, sizeof status - used, ", teach button line %d%s",
+                  config.status.button_line,
+                  config.status.button_active_low ? " (active-low)" : "");
+  }
   char route[80];
-  if (args.mode == LoopMode::kTeach)
+  if (args.mode == LoopMode::kRepeat && loaded_frames == 0)
+    std::snprintf(route, sizeof route, "none yet: the teach button teaches it");
+  else if (args.mode == LoopMode::kTeach)
     std::snprintf(route, sizeof route, "%s", writer.replacing() ? "replacing it at commit" : "new");
   else
     std::snprintf(route, sizeof route, "%zu frames", loaded_frames);
@@ -451,21 +467,37 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
 
   RouteDbWriter writer;
   RouteFrames route;
+  // repeat (live, not replay) with a teach button: a press teaches a new route
+  // (button_teach.h), so a missing or empty route is something to wait for, not an error.
+  const bool teach_button = args.mode == LoopMode::kRepeat && args.dataset.empty() &&
+                            config.status.button_line >= 0 &&
+                            config.status.kind != StatusOutputKind::kNone;
   if (args.mode == LoopMode::kRepeat) {
     SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
                               static_cast<std::size_t>(pipeline.dim()),
                               pipeline.strip_settings().columns));
     RouteDbLoadReport loaded;
     const RouteDbSettings want = pipeline.route_settings();
-    SKYLOC_TRY(
-        LoadRouteDb(args.route_path.c_str(), &want, RouteDbLoadPolicy::kStrict, &route, &loaded));
-    if (route.size() == 0) {
+    struct stat st {};
+    const bool missing = ::lstat(args.route_path.c_str(), &st) != 0 && errno == ENOENT;
+    if (!(teach_button && missing)) {
+      SKYLOC_TRY(
+          LoadRouteDb(args.route_path.c_str(), &want, RouteDbLoadPolicy::kStrict, &route, &loaded));
+    }
+    if (teach_button && route.size() == 0) {
+      std::fprintf(stderr,
+                   "%s: route %s %s: waiting for the teach button (line %d): press it to "
+                   "start teaching, press again to commit the route and repeat on it\n",
+                   label, args.route_path.c_str(), missing ? "does not exist yet" : "has no frames",
+                   config.status.button_line);
+    } else if (route.size() == 0) {
       return Status::Error(StatusCode::kFailedPrecondition,
                            "route %s has no frames: teach it "
                            "again",
                            args.route_path.c_str());
     }
-    SKYLOC_TRY(pipeline.SetRoute(route));
+    if (route.size() > 0)
+      SKYLOC_TRY(pipeline.SetRoute(route));
     report->route_frames = route.size();
     // One note, at start-up: a route without strips still localises, without heading.
     if (pipeline.strip_settings().columns != 0 && !pipeline.heading_enabled()) {
@@ -516,7 +548,8 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   std::size_t run_frames = source.frames;
   if (args.max_frames > 0 && (run_frames == 0 || args.max_frames < run_frames))
     run_frames = static_cast<std::size_t>(args.max_frames);
-  const bool evaluate = args.mode == LoopMode::kRepeat && run_frames > 0;
+  // (Not with the teach button: the routes change under the results.)
+  const bool evaluate = args.mode == LoopMode::kRepeat && run_frames > 0 && !teach_button;
   if (evaluate)
     SKYLOC_TRY(recorder.Allocate(run_frames));
   JsonLinesSink json(args.json);
@@ -568,9 +601,29 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   loop.recorded = !args.dataset.empty() || config.camera.kind == CameraKind::kDataset;
   loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
   loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
-  const Status loop_status = RunFrameLoop(*camera, status.get(), pipeline,
-                                          args.mode == LoopMode::kTeach ? &writer : nullptr, &sink,
-                                          loop, &report->loop, attitude.source.get());
+  Status loop_status;
+  if (teach_button) {
+    ButtonDebouncer button(std::chrono::milliseconds(config.status.button_debounce_ms));
+    loop.clock = &clock;  // the simulated button stamps its edges with it
+    ButtonTeachSetup setup;
+    setup.camera = camera;
+    setup.status = status.get();
+    setup.pipeline = &pipeline;
+    setup.route = &route;
+    setup.route_path = args.route_path.c_str();
+    setup.flush_every = static_cast<std::size_t>(config.route_db.flush_every);
+    setup.sink = &sink;
+    setup.attitude = attitude.source.get();
+    setup.label = label;
+    ButtonTeachReport taught;
+    loop_status = RunRepeatWithButton(setup, loop, &button, &taught);
+    report->loop = taught.loop;
+    report->route_frames = route.size();
+  } else {
+    loop_status = RunFrameLoop(*camera, status.get(), pipeline,
+                               args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop,
+                               &report->loop, attitude.source.get());
+  }
 
   if (capped && report->loop.frames == route_capacity) {
     std::fprintf(stderr,

@@ -76,6 +76,10 @@ cpu_affinity = 3
 [status]
 kind = "gpio"
 encoding = "blink"
+active_low = true
+button_line = 5
+button_active_low = false
+button_debounce_ms = 20
 [attitude]
 kind = "iio"
 device = "bmi160"
@@ -100,6 +104,10 @@ stale_ms = 100
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
   EXPECT_EQ(c->status.kind, StatusOutputKind::kGpio);
   EXPECT_EQ(c->status.encoding, StatusEncoding::kBlink);
+  EXPECT_TRUE(c->status.active_low);
+  EXPECT_EQ(c->status.button_line, 5);
+  EXPECT_FALSE(c->status.button_active_low);
+  EXPECT_EQ(c->status.button_debounce_ms, 20);
   EXPECT_EQ(c->attitude.kind, AttitudeKind::kIio);
   EXPECT_EQ(c->attitude.device, "bmi160");
   EXPECT_EQ(c->attitude.trigger, "hrtimer0");
@@ -171,6 +179,18 @@ const BadCase kBadCases[] = {
     {"[status]\nline_searching = -1\n", "[status] line_searching"},
     {"[status]\nline_localised = 17\n", "[status] line_localised"},
     {"[status]\nencoding = \"morse\"\n", "[status] encoding"},
+    {"[status]\nactive_low = 1\n", "[status] active_low must be true or false"},
+    {"[status]\nbutton_line = 512\n",
+     "[status] button_line = 512 is out of range: must be -1..511"},
+    {"[status]\nbutton_line = -2\n", "[status] button_line"},
+    {"[status]\nbutton_active_low = \"yes\"\n", "[status] button_active_low"},
+    {"[status]\nbutton_debounce_ms = 1001\n", "[status] button_debounce_ms"},
+    {"[status]\nbutton_debounce_ms = -1\n", "[status] button_debounce_ms"},
+    {"[status]\nbutton_line = 27\n",
+     "[status] button_line must differ from line_lost, line_searching and line_localised"},
+    {"[status]\nencoding = \"blink\"\nbutton_line = 22\n",
+     "[status] button_line must differ from line_localised", ":3:"},
+    {"[status]\nkind = \"none\"\nbutton_line = 5\n", "[status] button_line needs kind", ":3:"},
     {"[realtime]\nsched_fifo_priority = 100\n", "[realtime] sched_fifo_priority"},
     {"[realtime]\nmlockall = \"yes\"\n", "[realtime] mlockall"},
     {"[realtime]\ncpu_affinity = -2\n", "[realtime] cpu_affinity"},

@@ -69,7 +69,8 @@ class GpioStatusOutput final : public StatusOutput {
   Result<bool> ButtonPressed() const;
   // The next edge, or kDeadlineExceeded when none is pending. Timestamps are the
   // kernel's (CLOCK_MONOTONIC on Linux >= 5.7).
-  Result<ButtonEvent> ReadButtonEvent();
+  bool has_button() const override { return button_ != nullptr; }
+  Result<ButtonEvent> ReadButtonEvent() override;
 
  private:
   Status Write(const StatusLines& lines);

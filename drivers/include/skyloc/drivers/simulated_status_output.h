@@ -58,7 +58,8 @@ class SimulatedStatusOutput final : public StatusOutput {
   // --- the button ---
   int button_event_fd() const { return button_fd_.get(); }
   Result<bool> ButtonPressed() const;
-  Result<ButtonEvent> ReadButtonEvent();  // kDeadlineExceeded when no edge is pending
+  bool has_button() const override { return button_fd_.is_valid(); }
+  Result<ButtonEvent> ReadButtonEvent() override;  // kDeadlineExceeded when no edge is pending
   void PressButton() { InjectButton(true); }
   void ReleaseButton() { InjectButton(false); }
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 
+#include "skyloc/drivers/button_event.h"
 #include "skyloc/platform/clock.h"
 #include "skyloc/platform/status.h"
 
@@ -27,6 +28,14 @@ class StatusOutput {
   // time, repeatedly, and from the shutdown path after a fatal error.
   virtual Status SafeState() = 0;
   virtual void Close() = 0;
+
+  // The optional teach button on the same chip (GpioStatusOutput, SimulatedStatusOutput):
+  // whether one is configured and open, and its next edge without blocking
+  // (kDeadlineExceeded when none is pending). Outputs without a button keep these.
+  virtual bool has_button() const { return false; }
+  virtual Result<ButtonEvent> ReadButtonEvent() {
+    return Status::Error(StatusCode::kFailedPrecondition, "this status output has no button");
+  }
 
  protected:
   StatusOutput() = default;
