@@ -14,6 +14,7 @@
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
+#include "small_config.h"
 #include "street_camera.h"
 #include "support/scratch_dir.h"
 
@@ -22,17 +23,7 @@ namespace {
 
 constexpr Nanoseconds kFramePeriod = std::chrono::milliseconds(33);
 
-Config SmallConfig() {
-  Config c = DefaultConfig();
-  c.camera.width = 64;
-  c.camera.height = 64;
-  c.descriptor.bands = 16;
-  c.descriptor.rings = 8;
-  c.descriptor.longitudes = 32;
-  c.capacities.route_frames = 400;
-  c.route_db.flush_every = 25;
-  return c;
-}
+using testing::SmallConfig;
 
 StreetCameraOptions Street(std::uint64_t run_seed) {
   StreetCameraOptions o;

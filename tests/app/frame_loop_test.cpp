@@ -16,23 +16,14 @@
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
+#include "small_config.h"
 #include "street_camera.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::app {
 namespace {
 
-Config SmallConfig() {
-  Config c = DefaultConfig();
-  c.camera.width = 64;
-  c.camera.height = 64;
-  c.descriptor.bands = 16;
-  c.descriptor.rings = 8;
-  c.descriptor.longitudes = 32;
-  c.capacities.route_frames = 400;
-  c.route_db.flush_every = 25;
-  return c;
-}
+using testing::SmallConfig;
 
 StreetCameraOptions Street(std::uint64_t frames) {
   StreetCameraOptions o;

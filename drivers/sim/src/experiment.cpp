@@ -374,6 +374,24 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
   return Status::Ok();
 }
 
+namespace {
+
+// The manoeuvre experiment's two runs in a world (also the heading experiment's): a smooth
+// reference at noon, and a query at dawn that weaves +-20 degrees and bumps.
+void ManoeuvreRuns(WorldKind kind, double bumps_deg, RunSpec* reference, RunSpec* query) {
+  reference->label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
+  reference->motion.seed = 301;
+  LightingPreset("noon", 401, &reference->lighting);
+  query->label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
+  query->motion.seed = 302;
+  query->motion.zigzag_deg = 20;
+  query->motion.zigzag_period_m = 12;
+  query->motion.bumps_deg = bumps_deg;
+  LightingPreset("dawn", 402, &query->lighting);
+}
+
+}  // namespace
+
 Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
                               std::span<const int> ds_values, std::vector<ManoeuvreRow>* rows,
                               ProgressFn progress, void* context) {
@@ -383,17 +401,8 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
     World world;
     SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
-    RunSpec reference_spec;
-    reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
-    reference_spec.motion.seed = 301;
-    LightingPreset("noon", 401, &reference_spec.lighting);
-    RunSpec query_spec;
-    query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
-    query_spec.motion.seed = 302;
-    query_spec.motion.zigzag_deg = 20;
-    query_spec.motion.zigzag_period_m = 12;
-    query_spec.motion.bumps_deg = kBumpsDeg;
-    LightingPreset("dawn", 402, &query_spec.lighting);
+    RunSpec reference_spec, query_spec;
+    ManoeuvreRuns(kind, kBumpsDeg, &reference_spec, &query_spec);
     RunDescriptors reference, query;
     Report(progress, context, reference_spec.label.c_str());
     SKYLOC_TRY(
@@ -453,18 +462,8 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
     World world;
     SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
-    // The manoeuvre experiment's two runs (RunManoeuvreExperiment).
-    RunSpec reference_spec;
-    reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
-    reference_spec.motion.seed = 301;
-    LightingPreset("noon", 401, &reference_spec.lighting);
-    RunSpec query_spec;
-    query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
-    query_spec.motion.seed = 302;
-    query_spec.motion.zigzag_deg = 20;
-    query_spec.motion.zigzag_period_m = 12;
-    query_spec.motion.bumps_deg = kBumpsDeg;
-    LightingPreset("dawn", 402, &query_spec.lighting);
+    RunSpec reference_spec, query_spec;
+    ManoeuvreRuns(kind, kBumpsDeg, &reference_spec, &query_spec);
     RunDescriptors reference, query;
     Report(progress, context, reference_spec.label.c_str());
     SKYLOC_TRY(
