@@ -376,18 +376,30 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
 
 namespace {
 
-// The manoeuvre experiment's two runs in a world (also the heading experiment's): a smooth
-// reference at noon, and a query at dawn that weaves +-20 degrees and bumps.
-void ManoeuvreRuns(WorldKind kind, double bumps_deg, RunSpec* reference, RunSpec* query) {
-  reference->label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
-  reference->motion.seed = 301;
-  LightingPreset("noon", 401, &reference->lighting);
-  query->label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
-  query->motion.seed = 302;
-  query->motion.zigzag_deg = 20;
-  query->motion.zigzag_period_m = 12;
-  query->motion.bumps_deg = bumps_deg;
-  LightingPreset("dawn", 402, &query->lighting);
+// The manoeuvre experiment's two runs in a world (also the heading experiment's), rendered
+// and described: a smooth reference at noon, and a query at dawn that weaves +-20 degrees
+// and bumps.
+Status DescribeManoeuvreRuns(WorldKind kind, double bumps_deg, const ExperimentOptions& options,
+                             ProgressFn progress, void* context, RunDescriptors* reference,
+                             RunDescriptors* query) {
+  World world;
+  SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
+  RunSpec reference_spec;
+  reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
+  reference_spec.motion.seed = 301;
+  LightingPreset("noon", 401, &reference_spec.lighting);
+  RunSpec query_spec;
+  query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
+  query_spec.motion.seed = 302;
+  query_spec.motion.zigzag_deg = 20;
+  query_spec.motion.zigzag_period_m = 12;
+  query_spec.motion.bumps_deg = bumps_deg;
+  LightingPreset("dawn", 402, &query_spec.lighting);
+  Report(progress, context, reference_spec.label.c_str());
+  SKYLOC_TRY(
+      DescribeRun(world, world.route, world.route_closed, reference_spec, options, reference));
+  Report(progress, context, query_spec.label.c_str());
+  return DescribeRun(world, world.route, world.route_closed, query_spec, options, query);
 }
 
 }  // namespace
@@ -399,16 +411,9 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
   const ExperimentOptions options = WithCapFor(manoeuvre_options, LargestTiltDeg(0, kBumpsDeg));
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
-    World world;
-    SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
-    RunSpec reference_spec, query_spec;
-    ManoeuvreRuns(kind, kBumpsDeg, &reference_spec, &query_spec);
     RunDescriptors reference, query;
-    Report(progress, context, reference_spec.label.c_str());
     SKYLOC_TRY(
-        DescribeRun(world, world.route, world.route_closed, reference_spec, options, &reference));
-    Report(progress, context, query_spec.label.c_str());
-    SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, options, &query));
+        DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, context, &reference, &query));
     for (const int ds : ds_values) {
       ExperimentOptions o = options;
       o.seqslam.sequence_length = ds;
@@ -460,16 +465,9 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   std::vector<float> stored(n), test(n);
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
-    World world;
-    SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
-    RunSpec reference_spec, query_spec;
-    ManoeuvreRuns(kind, kBumpsDeg, &reference_spec, &query_spec);
     RunDescriptors reference, query;
-    Report(progress, context, reference_spec.label.c_str());
     SKYLOC_TRY(
-        DescribeRun(world, world.route, world.route_closed, reference_spec, options, &reference));
-    Report(progress, context, query_spec.label.c_str());
-    SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, options, &query));
+        DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, context, &reference, &query));
     HeadingRow row;
     row.world = kind;
     row.query_frames = static_cast<int>(query.trajectory.size());
