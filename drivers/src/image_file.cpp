@@ -227,14 +227,18 @@ Result<OwnedImage> LoadImage(const char* path) {
   {
     constexpr unsigned char kPngMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     unsigned char head[24];
-    if (std::fread(head, 1, sizeof head, f) == sizeof head &&
-        std::memcmp(head, kPngMagic, sizeof kPngMagic) == 0 &&
-        std::memcmp(head + 12, "IHDR", 4) == 0) {
+    const std::size_t got = std::fread(head, 1, sizeof head, f);
+    const bool png = got >= sizeof kPngMagic && std::memcmp(head, kPngMagic, sizeof kPngMagic) == 0;
+    if (png && got == sizeof head && std::memcmp(head + 12, "IHDR", 4) == 0) {
       const std::uint32_t w = BigEndian32(head + 16), h = BigEndian32(head + 20);
       if (IsTooLarge(w, h)) {
         std::fclose(f);
         return TooLarge("PNG", path, w, h);
       }
+    }
+    // Every PNG, also one whose first chunk is not IHDR (stb reads Apple's CgBI chunk
+    // first: the fuzzer's fifth find in images allocated 2 GB behind one).
+    if (png) {
       if (Status chunks = CheckPngChunks(f, path); !chunks.ok()) {
         std::fclose(f);
         return chunks;
@@ -250,6 +254,10 @@ Result<OwnedImage> LoadImage(const char* path) {
                          "'%s' is not a PNG, binary PGM (P5) or binary PPM (P6) image (%s); "
                          "convert it, e.g. 'convert IN OUT.png'",
                          path, why != nullptr ? why : "unknown format");
+  }
+  if (IsTooLarge(width, height)) {  // a size stb found later than IHDR's usual place
+    std::fclose(f);
+    return TooLarge("image", path, width, height);
   }
   const bool grey = channels <= 2;
   const int want = grey ? 1 : 3;

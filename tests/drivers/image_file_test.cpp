@@ -187,6 +187,19 @@ TEST_F(ImageFileTest, AHeaderPromisingMorePixelsThanThereAreAllocatesNothing) {
       "\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\0\x04\0\0\0\x03\x08\0\0\0\0"
       "\x91\x9f\xf1\x1a\x50\0\0\0IDATx\x9c\x63\x60",
       45);
+  // Behind a first chunk that is not IHDR (stb reads Apple's CgBI chunk first).
+  {
+    const std::string cgbi =
+        png.substr(0, 8) + std::string("\0\0\0\0CgBI\0\0\0\0", 12) + png.substr(8);
+    WriteBytes(Path("cgbi.png"), cgbi);
+    AllocationScope cgbi_scope;
+    auto c = LoadImage(Path("cgbi.png").c_str());
+    ASSERT_FALSE(c.ok());
+    EXPECT_LT(cgbi_scope.bytes(), std::uint64_t{1} << 20);
+    EXPECT_NE(std::string(c.status().message()).find("its IDAT chunk at byte 45 declares"),
+              std::string::npos)
+        << c.status().message();
+  }
   // Whole, and cut off right after the chunk's type (no data, no CRC).
   for (const std::size_t length : {png.size(), std::size_t{41}}) {
     WriteBytes(Path("greedy.png"), png.substr(0, length));
