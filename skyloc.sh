@@ -379,7 +379,12 @@ cmd_package() {
   deb=$("$ROOT/packaging/make-deb.sh" "$BUILD_ROOT/package-$kind/app/skyloc" "$arch" "$BUILD_ROOT" "${sysroot[@]}") ||
     die "packaging failed for $kind"
   say "lintian $deb"
-  lintian --fail-on error,warning "$deb" || die "lintian rejects $deb (above): fix it, or override a tag with its reason in packaging/lintian-overrides"
+  # lintian leaves its mldbm-elf-* databases in TMPDIR: keep them in the build folder.
+  local lintian_tmp="$BUILD_ROOT/package-$kind/lintian-tmp"
+  rm -rf "$lintian_tmp"
+  mkdir -p "$lintian_tmp"
+  TMPDIR="$lintian_tmp" lintian --fail-on error,warning "$deb" || die "lintian rejects $deb (above): fix it, or override a tag with its reason in packaging/lintian-overrides"
+  rm -rf "$lintian_tmp"
   # An ARM package cannot be installed here (no binfmt_misc for its maintainer scripts,
   # docs/PACKAGING.md); its binary at least runs from the package under qemu-user.
   if [ ${#sysroot[@]} -gt 0 ]; then

@@ -25,7 +25,9 @@ echo "built $deb ($(stat -c %s "$deb") bytes) in $((SECONDS - start)) s"
 dpkg-deb -f "$deb" Depends
 
 t=$SECONDS
-lintian --fail-on error,warning --info "$deb" || fail "lintian rejects $deb"
+# lintian leaves its mldbm-elf-* databases in TMPDIR: keep them in WORK_DIR.
+mkdir -p "$work/tmp"
+TMPDIR="$work/tmp" lintian --fail-on error,warning --info "$deb" || fail "lintian rejects $deb"
 echo "lintian: clean in $((SECONDS - t)) s"
 
 t=$SECONDS
