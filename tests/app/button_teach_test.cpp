@@ -113,6 +113,17 @@ class ButtonTeach : public ::testing::Test {
     o.clock = &clock_;
     return o;
   }
+  // Opens and starts the camera and runs repeat with a 50 ms debounced button until the
+  // camera's script requests a stop.
+  ::testing::AssertionResult RunUntilStopped(drivers::Camera* camera, ButtonTeachReport* report) {
+    if (!camera->Open().ok() || !camera->Start().ok())
+      return ::testing::AssertionFailure() << "the scripted camera did not open and start";
+    ButtonDebouncer button(std::chrono::milliseconds(50));
+    const Status s = RunRepeatWithButton(Setup(camera), Options(), &button, report);
+    if (!s.ok())
+      return ::testing::AssertionFailure() << s.message();
+    return ::testing::AssertionSuccess();
+  }
   // Changes of the SEARCHING line (per-state line 1) in the history.
   int SearchingChanges() const {
     int n = 0;
@@ -151,12 +162,8 @@ TEST_F(ButtonTeach, WaitsForAPressTeachesUntilTheNextAndRepeatsOnTheNewRoute) {
     if (call == 300)
       RequestStop();
   });
-  ASSERT_TRUE(camera.Open().ok());
-  ASSERT_TRUE(camera.Start().ok());
-  ButtonDebouncer button(std::chrono::milliseconds(50));
   ButtonTeachReport report;
-  const Status s = RunRepeatWithButton(Setup(&camera), Options(), &button, &report);
-  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_TRUE(RunUntilStopped(&camera, &report));
   EXPECT_EQ(report.routes_taught, 1u);
   EXPECT_TRUE(report.loop.stopped);
   // Edges are read before each capture, at the clock of the previous one. Waiting:
@@ -213,12 +220,8 @@ TEST_F(ButtonTeach, TheOldRouteIsKeptUntilTheNewOneIsCommitted) {
     if (call == 150)
       RequestStop();
   });
-  ASSERT_TRUE(camera.Open().ok());
-  ASSERT_TRUE(camera.Start().ok());
-  ButtonDebouncer button(std::chrono::milliseconds(50));
   ButtonTeachReport report;
-  const Status s = RunRepeatWithButton(Setup(&camera), Options(), &button, &report);
-  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_TRUE(RunUntilStopped(&camera, &report));
   EXPECT_EQ(report.routes_taught, 1u);
   EXPECT_EQ(route_.size(), 80u);  // captures 23..102
   EXPECT_FALSE(std::filesystem::exists(path_ + ".tmp"));
