@@ -116,6 +116,22 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
   if (read_error)
     return Status::FromErrno(saved, "cannot read %s", csv_path.c_str());
 
+  SKYLOC_TRY(ParseDatasetCsv(text, csv_path, ds));
+  // Every line after the header is a frame (an empty line is an error), so frame i is on
+  // line i + 2.
+  for (std::size_t i = 0; i < ds->frames.size(); ++i) {
+    const std::string image_path = frames_dir + "/" + ds->frames[i].file;
+    if (!FileExists(image_path)) {
+      return Status::Error(StatusCode::kNotFound, "%s:%zu: image %s does not exist",
+                           csv_path.c_str(), i + 2, image_path.c_str());
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ParseDatasetCsv(std::string_view text, const std::string& csv_path, Dataset* ds) {
   const std::string pose_header = std::string(kDatasetCsvHeader) + "," + kDatasetCsvPoseColumns;
   const std::string attitude_header =
       std::string(kDatasetCsvHeader) + "," + kDatasetCsvAttitudeColumns;
@@ -222,11 +238,6 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
       frame.attitude = dsp::AttitudeFromRollPitch(0, frame.pose->roll_deg, frame.pose->pitch_deg);
     if (frame.attitude)
       frame.attitude->timestamp_ns = static_cast<std::int64_t>(frame.timestamp_s * 1e9 + 0.5);
-    const std::string image_path = frames_dir + "/" + frame.file;
-    if (!FileExists(image_path)) {
-      return Status::Error(StatusCode::kNotFound, "%s:%d: image %s does not exist",
-                           csv_path.c_str(), line_no, image_path.c_str());
-    }
     ds->frames.push_back(std::move(frame));
   }
   if (line_no == 0) {
@@ -236,6 +247,8 @@ Status ReadCsv(const std::string& csv_path, const std::string& frames_dir, Datas
   ds->has_timestamps = true;
   return Status::Ok();
 }
+
+namespace {
 
 Status MakeDirs(const std::string& path) {
   std::string partial;

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "skyloc/drivers/camera.h"
@@ -57,6 +58,11 @@ inline constexpr const char* kDatasetCsvAttitudeColumns = "roll_deg,pitch_deg";
 // every image file exists. kNotFound for a missing folder or image, kInvalidArgument for a
 // malformed frames.csv ("DIR/frames.csv:12: ..."). An empty dataset is an error.
 Result<Dataset> ReadDataset(const std::string& dir);
+
+// Parses the text of a frames.csv into ds->frames (and has_poses, has_attitude,
+// has_timestamps), without touching the disk: ReadDataset then checks that each image
+// exists. Errors are kInvalidArgument, "<csv_path>:12: ...". Also what the fuzzer drives.
+Status ParseDatasetCsv(std::string_view text, const std::string& csv_path, Dataset* ds);
 
 // Writes a dataset folder frame by frame.
 class DatasetWriter {
