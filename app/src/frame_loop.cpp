@@ -75,6 +75,13 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
   const Clock& clock = options.clock != nullptr ? *options.clock : monotonic;
   LatencyTable& latency = pipeline.latency();
   LoopSummary s;
+  // The caller's summary is written on every way out, the SKYLOC_TRY returns of a failed
+  // write included: a teach that dies at frame 40 still says it ran 40 frames.
+  struct PublishSummary {
+    const LoopSummary& from;
+    LoopSummary* to;
+    ~PublishSummary() { *to = from; }
+  } publish{s, summary};
   int errors_in_a_row = 0;
   Nanoseconds unavailable_since{-1};
   Nanoseconds first_timestamp{-1};
@@ -95,7 +102,6 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         if (!edge.ok()) {
           if (edge.status().code() == StatusCode::kDeadlineExceeded)
             break;  // no edge pending
-          *summary = s;
           Status failed = edge.status();
           return failed.AddContext("the teach button");
         }
@@ -124,7 +130,6 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         (void)status->SafeState();
       pipeline.ResetTracking();
       if (code == StatusCode::kDataLoss && options.recorded) {
-        *summary = s;
         return captured.status();
       }
       if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
@@ -143,7 +148,6 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
           continue;
         }
       }
-      *summary = s;
       Status fatal = captured.status();
       return fatal.AddContext("camera %s", camera.info().name);
     }
@@ -224,7 +228,6 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         // A frame the descriptor rejects (wrong size from a misbehaving driver) is
         // skipped like a corrupt capture; the next frame may be fine.
         if (options.recorded || ++errors_in_a_row >= options.max_consecutive_errors) {
-          *summary = s;
           return st;
         }
         ++s.capture_errors;
@@ -243,7 +246,6 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       sink->OnFrame(options.mode, result, route != nullptr ? route->frames_appended() : 0);
   }
   s.stopped = StopRequested();
-  *summary = s;
   return Status::Ok();
 }
 

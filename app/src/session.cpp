@@ -49,6 +49,7 @@ class ResultRecorder final : public FrameSink {
       ++dropped_;
   }
   std::span<const FrameResult> results() const { return {results_.data(), size_}; }
+  std::uint64_t dropped() const { return dropped_; }
 
  private:
   FixedArray<FrameResult> results_;
@@ -690,10 +691,50 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   pipeline.latency().Print(stderr);
   if (json.write_failed())
     std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", label);
-  if (evaluate)
+  if (evaluate) {
+    // Sized from the run's length, so only a source that delivers more frames than it
+    // announced fills it; the evaluation then covers the frames kept, and says so.
+    if (recorder.dropped() > 0)
+      std::fprintf(stderr,
+                   "%s: warning: evaluating the first %zu frames only (%llu more came "
+                   "than the run announced)\n",
+                   label, recorder.results().size(),
+                   static_cast<unsigned long long>(recorder.dropped()));
     Evaluate(recorder.results(), route, args.tolerance_m, report);
+  }
   SKYLOC_TRY(loop_status);
   return shutdown;
+}
+
+// The run's closing lines on stderr: frames by state and capture errors, and the
+// evaluation when there was one.
+void PrintSummary(const SessionArgs& args, const SessionReport& r) {
+  if (args.mode == LoopMode::kRecord) {
+    std::fprintf(stderr, "%s: %llu frames captured, %llu capture errors%s\n", args.label,
+                 static_cast<unsigned long long>(r.loop.frames),
+                 static_cast<unsigned long long>(r.loop.capture_errors),
+                 r.loop.stopped ? ", stopped by signal" : "");
+    return;
+  }
+  std::fprintf(stderr,
+               "%s: %llu frames (%llu LOST, %llu SEARCHING, %llu LOCALISED), %llu capture "
+               "errors%s\n",
+               args.label, static_cast<unsigned long long>(r.loop.frames),
+               static_cast<unsigned long long>(r.loop.state_frames[0]),
+               static_cast<unsigned long long>(r.loop.state_frames[1]),
+               static_cast<unsigned long long>(r.loop.state_frames[2]),
+               static_cast<unsigned long long>(r.loop.capture_errors),
+               r.loop.stopped ? ", stopped by signal" : "");
+  if (r.evaluated) {
+    std::fprintf(stderr,
+                 "%s: precision at 100%% recall %.3f, recall at 100%% precision %.3f, AUC %.3f "
+                 "(%d matches, %d correct within %.1f m); LOCALISED frames correct: %llu of "
+                 "%llu\n",
+                 args.label, r.precision_at_full_recall, r.recall_at_full_precision,
+                 r.area_under_curve, r.evaluated_matches, r.correct_matches, args.tolerance_m,
+                 static_cast<unsigned long long>(r.localised_correct),
+                 static_cast<unsigned long long>(r.localised_frames));
+  }
 }
 
 }  // namespace
@@ -714,34 +755,13 @@ int RunSession(const SessionArgs& args, SessionReport* report) {
   const Status s = Run(args, config, report);
   if (!s.ok()) {
     std::fprintf(stderr, "%s: %s\n", args.label, s.message());
+    // What ran before the error is still the user's to know (the frames a teach kept are
+    // said by Run itself).
+    if (report->loop.frames > 0)
+      PrintSummary(args, *report);
     return 1;
   }
-  if (args.mode == LoopMode::kRecord) {
-    std::fprintf(stderr, "%s: %llu frames captured, %llu capture errors%s\n", args.label,
-                 static_cast<unsigned long long>(report->loop.frames),
-                 static_cast<unsigned long long>(report->loop.capture_errors),
-                 report->loop.stopped ? ", stopped by signal" : "");
-    return 0;
-  }
-  std::fprintf(stderr,
-               "%s: %llu frames (%llu LOST, %llu SEARCHING, %llu LOCALISED), %llu capture "
-               "errors%s\n",
-               args.label, static_cast<unsigned long long>(report->loop.frames),
-               static_cast<unsigned long long>(report->loop.state_frames[0]),
-               static_cast<unsigned long long>(report->loop.state_frames[1]),
-               static_cast<unsigned long long>(report->loop.state_frames[2]),
-               static_cast<unsigned long long>(report->loop.capture_errors),
-               report->loop.stopped ? ", stopped by signal" : "");
-  if (report->evaluated) {
-    std::fprintf(stderr,
-                 "%s: precision at 100%% recall %.3f, recall at 100%% precision %.3f, AUC %.3f "
-                 "(%d matches, %d correct within %.1f m); LOCALISED frames correct: %llu of "
-                 "%llu\n",
-                 args.label, report->precision_at_full_recall, report->recall_at_full_precision,
-                 report->area_under_curve, report->evaluated_matches, report->correct_matches,
-                 args.tolerance_m, static_cast<unsigned long long>(report->localised_correct),
-                 static_cast<unsigned long long>(report->localised_frames));
-  }
+  PrintSummary(args, *report);
   return 0;
 }
 

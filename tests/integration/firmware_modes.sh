@@ -184,6 +184,9 @@ expect_err "50 frames committed" "teach capacity"
 rc=$?
 [ $rc -eq 1 ] || fail "teach on a full disk exited $rc, expected 1: $(cat "$WORK/err")"
 expect_err "30 frames kept and committed; the last 10 did not fit" "teach on a full disk"
+# The run's closing line is written on the error path too: how far the teach got.
+grep -Eq "skyloc teach: [0-9]+ frames \([0-9]+ LOST, [0-9]+ SEARCHING, [0-9]+ LOCALISED\)" "$WORK/err" ||
+  fail "teach on a full disk ended without its frames line: $(cat "$WORK/err")"
 expect_rc 0 "route info after a full disk" -- "${RUN[@]}" route info "$WORK/fsize.db"
 grep -q "30 frames in 3 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
 
