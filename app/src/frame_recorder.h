@@ -17,8 +17,8 @@
 
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/dataset.h"
-#include "skyloc/drivers/spsc_queue.h"
 #include "skyloc/dsp/imu.h"
+#include "skyloc/platform/spsc_queue.h"
 #include "skyloc/platform/status.h"
 
 namespace skyloc::app {
@@ -81,8 +81,8 @@ class FrameRecorder {
   FrameRecorderOptions options_;
   drivers::CameraInfo info_;
   std::vector<Slot> slots_;
-  drivers::SpscQueue<int, kQueueCapacity> ready_;  // frame path -> writer
-  drivers::SpscQueue<int, kQueueCapacity> free_;   // writer -> frame path
+  SpscQueue<int, kQueueCapacity> ready_;  // frame path -> writer
+  SpscQueue<int, kQueueCapacity> free_;   // writer -> frame path
   drivers::DatasetWriter writer_;
   std::thread writer_thread_;
   std::atomic<bool> stop_{false};

@@ -27,7 +27,7 @@
 
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/mapped_buffer.h"
-#include "skyloc/drivers/spsc_queue.h"
+#include "skyloc/platform/spsc_queue.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/platform/unique_fd.h"
 

@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <type_traits>
 
-namespace skyloc::drivers {
+namespace skyloc {
 
 template <typename T, std::size_t kCapacity>
 class SpscQueue {
@@ -52,4 +52,4 @@ class SpscQueue {
   alignas(64) std::atomic<std::size_t> tail_{0};
 };
 
-}  // namespace skyloc::drivers
+}  // namespace skyloc

@@ -1,5 +1,5 @@
 // The hand-over queue between libcamera's completion thread and the pipeline thread.
-#include "skyloc/drivers/spsc_queue.h"
+#include "skyloc/platform/spsc_queue.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 
 #include "support/emulator.h"
 
-namespace skyloc::drivers {
+namespace skyloc {
 namespace {
 
 using skyloc::testing::UnderUserModeEmulator;
@@ -71,4 +71,4 @@ TEST(SpscQueue, TwoThreadsLoseAndReorderNothing) {
 }
 
 }  // namespace
-}  // namespace skyloc::drivers
+}  // namespace skyloc
