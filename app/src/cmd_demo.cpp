@@ -42,7 +42,7 @@ class ProgressLine final : public FrameSink {
         std::snprintf(match, sizeof match, "%lld", static_cast<long long>(r.best_index));
       std::printf("%s  %-6s frame %5llu  %-9s  confidence %.2f  route frame %5s  %5lld us%s",
                   tty_ ? "\r" : "", what_, static_cast<unsigned long long>(r.frame),
-                  dsp::TrackStateName(r.state), static_cast<double>(r.confidence), match,
+                  dsp::LocalisationStateName(r.state), static_cast<double>(r.confidence), match,
                   static_cast<long long>(r.latency.count() / 1000), tty_ ? "   " : "\n");
     }
     std::fflush(stdout);

@@ -640,8 +640,8 @@ struct Run {
   Matcher matcher = Matcher::kRouteFilter;
   std::string matcher_name;  // MatcherName(matcher), or "fabmap2" for FAB-MAP's own inference
   int ds = 0;
-  std::vector<dsp::SeqSlamMatch> matches;  // per query frame
-  std::vector<dsp::TrackState> states;     // per query frame: the state machine replayed
+  std::vector<dsp::SeqSlamMatch> matches;      // per query frame
+  std::vector<dsp::LocalisationState> states;  // per query frame: the state machine replayed
   int localised = 0, localised_correct = 0;
   std::vector<int> evaluated_queries;  // queries with a match, in order
   std::vector<dsp::EvaluatedMatch> evaluated;
@@ -783,7 +783,7 @@ void Score(const GroundTruth& gt, Run* run) {
   run->summary = dsp::SummarisePrecisionRecall(run->evaluated, run->curve);
   for (std::size_t k = 0; k < run->evaluated_queries.size(); ++k) {
     if (run->states[static_cast<std::size_t>(run->evaluated_queries[k])] ==
-        dsp::TrackState::kLocalised) {
+        dsp::LocalisationState::kLocalised) {
       ++run->localised;
       run->localised_correct += run->evaluated[k].correct ? 1 : 0;
     }
@@ -959,7 +959,7 @@ Status WriteMatchesCsv(const std::string& path, const std::vector<Run>& runs) {
       std::fprintf(f.get(), "%s,%d,%d,%d,%.6g,%.6g,%d,%s,%s\n", MethodName(run.method), run.ds, q,
                    m.reference, static_cast<double>(m.score), static_cast<double>(m.uniqueness),
                    run.evaluated[i].correct ? 1 : 0, run.matcher_name.c_str(),
-                   dsp::TrackStateName(run.states[static_cast<std::size_t>(q)]));
+                   dsp::LocalisationStateName(run.states[static_cast<std::size_t>(q)]));
     }
   }
   return f.Close();

@@ -308,10 +308,10 @@ constexpr std::size_t kMatcherMethodsWithoutCap = 2;
 std::pair<int, int> LocalisedFrames(const sim::MethodScore& m) {
   Config config;
   config.seqslam.matcher = Matcher::kRouteFilter;
-  const std::vector<dsp::TrackState> states = ReplayStateMachine(config, m.matches);
+  const std::vector<dsp::LocalisationState> states = ReplayStateMachine(config, m.matches);
   int localised = 0, correct = 0;
   for (std::size_t t = 0; t < states.size(); ++t) {
-    if (states[t] == dsp::TrackState::kLocalised) {
+    if (states[t] == dsp::LocalisationState::kLocalised) {
       ++localised;
       correct += m.correct[t] ? 1 : 0;
     }

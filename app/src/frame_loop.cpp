@@ -7,18 +7,6 @@
 
 namespace skyloc::app {
 
-drivers::LocalisationState ToStatusState(dsp::TrackState state) {
-  switch (state) {
-    case dsp::TrackState::kLost:
-      return drivers::LocalisationState::kLost;
-    case dsp::TrackState::kSearching:
-      return drivers::LocalisationState::kSearching;
-    case dsp::TrackState::kLocalised:
-      return drivers::LocalisationState::kLocalised;
-  }
-  return drivers::LocalisationState::kLost;
-}
-
 void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t route_frames) {
   char line[448];
   const double t = static_cast<double>(r.timestamp.count()) * 1e-9;
@@ -55,7 +43,7 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
                       "\"heading_surf_inliers\":%d,\"latency_us\":%lld}\n",
                       static_cast<unsigned long long>(r.frame), t, index,
                       static_cast<double>(r.uniqueness), static_cast<double>(r.confidence),
-                      dsp::TrackStateName(r.state), heading, heading_confidence, surf,
+                      dsp::LocalisationStateName(r.state), heading, heading_confidence, surf,
                       r.has_heading_surf ? r.heading_surf_inliers : 0, latency_us);
   }
   if (n > 0 &&
@@ -235,7 +223,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       }
       StageTimer timer(latency, pipeline.stage_output, clock);
       if (status != nullptr)
-        SKYLOC_TRY(status->Show(ToStatusState(result.state), result.confidence, clock.Now()));
+        SKYLOC_TRY(status->Show(result.state, result.confidence, clock.Now()));
     }
     const Nanoseconds done = clock.Now();
     result.latency = done - t1;

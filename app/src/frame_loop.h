@@ -122,6 +122,4 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
                     RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
                     LoopSummary* summary, drivers::AttitudeSource* attitude = nullptr);
 
-drivers::LocalisationState ToStatusState(dsp::TrackState state);
-
 }  // namespace skyloc::app

@@ -165,11 +165,11 @@ dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config) {
   return filter;
 }
 
-std::vector<dsp::TrackState> ReplayStateMachine(const Config& config,
-                                                std::span<const dsp::SeqSlamMatch> matches) {
+std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
+                                                       std::span<const dsp::SeqSlamMatch> matches) {
   dsp::LocalisationStateMachine machine;
   machine.Init(StateMachineParamsFrom(config));
-  std::vector<dsp::TrackState> states;
+  std::vector<dsp::LocalisationState> states;
   states.reserve(matches.size());
   for (std::size_t t = 0; t < matches.size(); ++t) {
     const dsp::SeqSlamMatch& m = matches[t];

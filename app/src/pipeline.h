@@ -36,7 +36,7 @@ struct FrameResult {
   float score = 0;
   float uniqueness = 1;
   float confidence = 0;
-  dsp::TrackState state = dsp::TrackState::kLost;
+  dsp::LocalisationState state = dsp::LocalisationState::kLost;
   Nanoseconds latency{0};  // from the frame leaving Capture() to the state being shown
   bool has_pose = false;   // the camera knew where it was (simulator, recorded dataset)
   drivers::Pose pose;
@@ -75,8 +75,8 @@ dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config);
 dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config);
 // The firmware's state machine replayed over per-frame matches, as repeat would have shown
 // them (offline: eval and the experiments). Allocates the result.
-std::vector<dsp::TrackState> ReplayStateMachine(const Config& config,
-                                                std::span<const dsp::SeqSlamMatch> matches);
+std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
+                                                       std::span<const dsp::SeqSlamMatch> matches);
 
 class Pipeline {
  public:

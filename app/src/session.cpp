@@ -89,7 +89,7 @@ void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, do
     const bool correct =
         r.matched && known_frame &&
         dsp::MatchIsCorrect(static_cast<int>(r.best_index), truth, rule, reference, query);
-    if (r.state == dsp::TrackState::kLocalised) {
+    if (r.state == dsp::LocalisationState::kLocalised) {
       ++report->localised_frames;
       report->localised_correct += correct ? 1 : 0;
     }

@@ -2,13 +2,13 @@
 
 namespace skyloc::dsp {
 
-const char* TrackStateName(TrackState state) {
+const char* LocalisationStateName(LocalisationState state) {
   switch (state) {
-    case TrackState::kLost:
+    case LocalisationState::kLost:
       return "LOST";
-    case TrackState::kSearching:
+    case LocalisationState::kSearching:
       return "SEARCHING";
-    case TrackState::kLocalised:
+    case LocalisationState::kLocalised:
       return "LOCALISED";
   }
   return "?";
@@ -31,7 +31,7 @@ StateMachineError LocalisationStateMachine::Init(const StateMachineParams& p) {
 }
 
 void LocalisationStateMachine::Reset() {
-  state_ = TrackState::kLost;
+  state_ = LocalisationState::kLost;
   has_anchor_ = false;
   streak_ = 0;
   misses_ = 0;
@@ -58,16 +58,16 @@ bool LocalisationStateMachine::Consistent(const MatchObservation& obs) const {
          moved <= params_.vmax * gap + params_.index_tolerance;
 }
 
-TrackState LocalisationStateMachine::Update(const MatchObservation& obs) {
+LocalisationState LocalisationStateMachine::Update(const MatchObservation& obs) {
   switch (state_) {
-    case TrackState::kLost:
+    case LocalisationState::kLost:
       if (Good(obs)) {
         Accept(obs);
         streak_ = 1;
-        state_ = TrackState::kSearching;
+        state_ = LocalisationState::kSearching;
       }
       break;
-    case TrackState::kSearching:
+    case LocalisationState::kSearching:
       if (Good(obs)) {
         // A good frame that does not continue the candidate's track starts a new one.
         streak_ = Consistent(obs) ? streak_ + 1 : 1;
@@ -76,19 +76,19 @@ TrackState LocalisationStateMachine::Update(const MatchObservation& obs) {
         Reset();
       }
       break;
-    case TrackState::kLocalised:
+    case LocalisationState::kLocalised:
       if (Keeps(obs) && Consistent(obs)) {
         Accept(obs);
       } else if (++misses_ >= params_.drop_frames) {
-        state_ = TrackState::kSearching;
+        state_ = LocalisationState::kSearching;
         has_anchor_ = false;
         streak_ = 0;
         misses_ = 0;
       }
       break;
   }
-  if (state_ == TrackState::kSearching && streak_ >= params_.confirm_frames)
-    state_ = TrackState::kLocalised;
+  if (state_ == LocalisationState::kSearching && streak_ >= params_.confirm_frames)
+    state_ = LocalisationState::kLocalised;
   return state_;
 }
 

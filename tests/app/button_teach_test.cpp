@@ -181,7 +181,7 @@ TEST_F(ButtonTeach, WaitsForAPressTeachesUntilTheNextAndRepeatsOnTheNewRoute) {
   // While teaching (about 4 s), the SEARCHING line blinked at 0.5 Hz: on and off a few times.
   EXPECT_GE(SearchingChanges(), 4);
   // The second drive along the street localised on the new route.
-  EXPECT_GT(report.loop.state_frames[static_cast<int>(dsp::TrackState::kLocalised)], 50u);
+  EXPECT_GT(report.loop.state_frames[static_cast<int>(dsp::LocalisationState::kLocalised)], 50u);
 }
 
 TEST_F(ButtonTeach, TheOldRouteIsKeptUntilTheNewOneIsCommitted) {

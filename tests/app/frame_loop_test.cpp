@@ -66,7 +66,7 @@ class TrackingSink final : public FrameSink {
  public:
   void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
     ++frames;
-    if (r.state == dsp::TrackState::kLocalised) {
+    if (r.state == dsp::LocalisationState::kLocalised) {
       ++localised;
       const double truth = r.has_pose ? r.pose.x_m / 0.5 : -1000.0;
       const double d = static_cast<double>(r.best_index) - truth;
@@ -386,7 +386,7 @@ TEST(JsonLines, RepeatAndTeachLines) {
   r.best_index = 10;
   r.uniqueness = 0.25f;
   r.confidence = 0.75f;
-  r.state = dsp::TrackState::kSearching;
+  r.state = dsp::LocalisationState::kSearching;
   r.latency = std::chrono::microseconds(812);
   sink.OnFrame(LoopMode::kRepeat, r, 0);
   r.has_heading = true;

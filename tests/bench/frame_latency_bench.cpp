@@ -126,7 +126,7 @@ void FrameToState(benchmark::State& state, bool attitude) {
       }
     }
     (void)fixture.pipeline.Localise(frame, &r, used);
-    (void)status.Show(ToStatusState(r.state), r.confidence, clock.Now());
+    (void)status.Show(r.state, r.confidence, clock.Now());
     histogram.Record(clock.Now() - t0);
     with_heading += r.has_heading ? 1 : 0;
     benchmark::DoNotOptimize(r);

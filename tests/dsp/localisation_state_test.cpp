@@ -34,8 +34,8 @@ struct Step {
   std::uint64_t frame_gap = 1;
 };
 
-char Letter(TrackState s) {
-  return s == TrackState::kLost ? 'L' : s == TrackState::kSearching ? 'S' : 'K';
+char Letter(LocalisationState s) {
+  return s == LocalisationState::kLost ? 'L' : s == LocalisationState::kSearching ? 'S' : 'K';
 }
 
 void Expect(const std::vector<Step>& steps) {

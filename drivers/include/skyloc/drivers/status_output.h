@@ -5,14 +5,16 @@
 #include <cstdint>
 
 #include "skyloc/drivers/button_event.h"
+#include "skyloc/dsp/localisation_state.h"
 #include "skyloc/platform/clock.h"
 #include "skyloc/platform/status.h"
 
 namespace skyloc::drivers {
 
-enum class LocalisationState : std::uint8_t { kLost, kSearching, kLocalised };
-
-const char* LocalisationStateName(LocalisationState state);
+// The state machine's own states (dsp/localisation_state.h): what the lines show is what
+// it decided, with no second enum to translate into.
+using dsp::LocalisationState;
+using dsp::LocalisationStateName;
 
 class StatusOutput {
  public:

@@ -13,9 +13,9 @@
 
 namespace skyloc::dsp {
 
-enum class TrackState : std::uint8_t { kLost, kSearching, kLocalised };
+enum class LocalisationState : std::uint8_t { kLost, kSearching, kLocalised };
 
-const char* TrackStateName(TrackState state);
+const char* LocalisationStateName(LocalisationState state);
 
 struct MatchObservation {
   std::uint64_t frame = 0;  // query frame number; gaps mean dropped frames
@@ -47,10 +47,10 @@ enum class StateMachineError : std::uint8_t {
 class LocalisationStateMachine {
  public:
   StateMachineError Init(const StateMachineParams& params);
-  TrackState Update(const MatchObservation& obs);
+  LocalisationState Update(const MatchObservation& obs);
   void Reset();
 
-  TrackState state() const { return state_; }
+  LocalisationState state() const { return state_; }
   // The route index of the last accepted match (LOCALISED or the SEARCHING candidate);
   // -1 when there is none.
   std::int64_t anchor_index() const { return has_anchor_ ? anchor_.index : -1; }
@@ -66,7 +66,7 @@ class LocalisationStateMachine {
   }
 
   StateMachineParams params_;
-  TrackState state_ = TrackState::kLost;
+  LocalisationState state_ = LocalisationState::kLost;
   MatchObservation anchor_;
   bool has_anchor_ = false;
   int streak_ = 0;  // good, consistent frames in a row while searching
