@@ -1,6 +1,7 @@
 #include "frame_loop.h"
 
 #include <cstdio>
+#include <cstring>
 #include <thread>
 
 #include "skyloc/platform/signals.h"
@@ -137,6 +138,9 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         }
       }
       Status fatal = captured.status();
+      // The drivers name their camera in their errors; name it here only if one did not.
+      if (std::strstr(fatal.message(), camera.info().name) != nullptr)
+        return fatal;
       return fatal.AddContext("camera %s", camera.info().name);
     }
     errors_in_a_row = 0;

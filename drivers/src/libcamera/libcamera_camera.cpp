@@ -32,6 +32,10 @@ const FormatChoice kFormats[] = {
     {libcamera::formats::RGB888, dsp::PixelFormat::kBgr24},
 };
 
+// Set when a lost camera's CameraManager was let go of undestroyed (LibcameraCamera's
+// header, Unplug): no other can be made in this process.
+std::atomic<bool> g_manager_abandoned{false};
+
 // libcamera returns -errno.
 Status FromLibcamera(int ret, const char* camera, const char* what) {
   return Status::FromErrno(-ret, "camera %s: %s", camera, what);
@@ -52,6 +56,14 @@ LibcameraCamera::~LibcameraCamera() {
 }
 
 Status LibcameraCamera::DoOpen() {
+  // libcamera allows one CameraManager per process, and a lost camera's is never
+  // destroyed (header, Unplug): a second one would abort inside libcamera.
+  if (g_manager_abandoned.load(std::memory_order_acquire)) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "camera %s: a libcamera camera was lost earlier in this process; "
+                         "restart skyloc to open a camera through libcamera again",
+                         info_.name);
+  }
   Status s = Configure();
   if (!s.ok())
     DoClose();
@@ -219,6 +231,7 @@ Status LibcameraCamera::DoStart() {
   if (const int ret = camera_->start(&controls); ret < 0)
     return FromLibcamera(ret, info_.name, "start");
   started_ = true;
+  last_progress_ = MonotonicClock().Now();
   held_ = nullptr;
   // libcamera numbers frames afresh after start(): continue our numbering.
   have_sequence_ = false;
@@ -235,23 +248,38 @@ Status LibcameraCamera::DoStart() {
   return Status::Ok();
 }
 
+Status LibcameraCamera::Lost(const char* why) {
+  if (!lost_) {
+    lost_ = true;
+    std::snprintf(lost_why_, sizeof lost_why_, "%s", why);
+  }
+  return Status::Error(StatusCode::kFailedPrecondition,
+                       "camera %s: lost (%s); libcamera cannot reopen it in this process: "
+                       "skyloc exits and its service restarts it",
+                       info_.name, lost_why_);
+}
+
 Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
-  if (held_ != nullptr && !disconnected_.load(std::memory_order_acquire)) {
+  const MonotonicClock clock;
+  if (lost_)
+    return Lost(lost_why_);
+  if (disconnected_.load(std::memory_order_acquire))
+    return Lost("disconnected");
+  if (held_ != nullptr) {
     held_->reuse(libcamera::Request::ReuseBuffers);
     libcamera::Request* request = held_;
     held_ = nullptr;
     SKYLOC_TRY(QueueRequest(request));
   }
-  const auto deadline = MonotonicClock().Now() + timeout;
+  const Nanoseconds deadline = clock.Now() + timeout;
   libcamera::Request* request = nullptr;
   while (!completed_.TryPop(&request)) {
-    if (disconnected_.load(std::memory_order_acquire)) {
-      return Status::Error(StatusCode::kUnavailable,
-                           "camera %s: disconnected (unplugged?): reconnect it, then restart "
-                           "the stream (Close/Open)",
-                           info_.name);
-    }
-    const Nanoseconds remaining = deadline - MonotonicClock().Now();
+    if (disconnected_.load(std::memory_order_acquire))
+      return Lost("disconnected");
+    // Wait for a frame, but wake up in time to notice a stall.
+    const Nanoseconds stall_at = last_progress_ + config_.stall_timeout;
+    const Nanoseconds wake = deadline < stall_at ? deadline : stall_at;
+    const Nanoseconds remaining = wake - clock.Now();
     const int timeout_ms = remaining <= Nanoseconds(0)
                                ? 0
                                : static_cast<int>((remaining.count() + 999'999) / 1'000'000);
@@ -263,17 +291,31 @@ Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
         continue;
       return Status::FromErrno(saved, "camera %s: poll", info_.name);
     }
-    if (ready == 0) {
+    if (ready > 0) {
+      std::uint64_t count = 0;
+      (void)!::read(completed_fd_.get(), &count, sizeof(count));
+      continue;
+    }
+    const Nanoseconds now = clock.Now();
+    if (now >= stall_at) {
+      char why[64];
+      std::snprintf(why, sizeof why, "no frame for %lld ms",
+                    static_cast<long long>(config_.stall_timeout.count() / 1'000'000));
+      return Lost(why);
+    }
+    if (now >= deadline) {
       return Status::Error(StatusCode::kDeadlineExceeded, "camera %s: no frame within %lld ms",
                            info_.name, static_cast<long long>(timeout.count() / 1'000'000));
     }
-    std::uint64_t count = 0;
-    (void)!::read(completed_fd_.get(), &count, sizeof(count));
   }
   held_ = request;  // requeued at the next Capture() or dropped by Stop()
   if (request->status() == libcamera::Request::RequestCancelled) {
+    // The pipeline cancels what is in flight when the camera goes away.
+    if (disconnected_.load(std::memory_order_acquire))
+      return Lost("disconnected");
     return Status::Error(StatusCode::kUnavailable, "camera %s: request cancelled", info_.name);
   }
+  last_progress_ = clock.Now();
   const libcamera::FrameBuffer* buffer = request->findBuffer(stream_);
   const std::size_t index = static_cast<std::size_t>(request->cookie());
   if (buffer == nullptr || index >= request_count_) {
@@ -309,8 +351,8 @@ Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
 }
 
 void LibcameraCamera::DoStop() {
-  if (!started_)
-    return;
+  if (!started_ || lost_)
+    return;  // a lost camera is never stopped (header, Unplug)
   stopping_.store(true, std::memory_order_release);
   camera_->stop();  // completes (cancels) every pending request before returning
   started_ = false;
@@ -324,6 +366,32 @@ void LibcameraCamera::DoStop() {
 }
 
 void LibcameraCamera::DoClose() {
+  if (lost_) {
+    // Stopping, releasing or destroying what libcamera holds for a camera whose device is
+    // gone aborts or crashes libcamera 0.0.3 (header, Unplug). Let go of it undestroyed:
+    // our slots are disconnected so nothing calls back, the process is about to exit (or
+    // would need a restart to use libcamera again anyway), and our own mappings go.
+    if (camera_) {
+      camera_->requestCompleted.disconnect(this);
+      camera_->disconnected.disconnect(this);
+    }
+    (void)new std::shared_ptr<libcamera::Camera>(std::move(camera_));  // never freed
+    (void)manager_.release();
+    g_manager_abandoned.store(true, std::memory_order_release);
+    (void)allocator_.release();
+    (void)configuration_.release();
+    for (auto& r : requests_)
+      (void)r.release();
+    for (MappedBuffer& m : mappings_)
+      m.Unmap();
+    request_count_ = 0;
+    stream_ = nullptr;
+    started_ = false;
+    acquired_ = false;
+    held_ = nullptr;
+    completed_fd_.reset();
+    return;
+  }
   DoStop();
   if (camera_) {
     camera_->requestCompleted.disconnect(this);

@@ -57,13 +57,14 @@ run_suite gpio-sim '*/Gpiod*' Gpiod
 
 # Everything else in the binary, with every device above named. On the host some of these
 # may skip for want of a device; here none may: a new real-driver test that skips in the
-# VM too would otherwise never run anywhere. (V4l2Unplug has its own scenario.)
+# VM too would otherwise never run anywhere. (V4l2Unplug and LibcameraUnplug have their
+# own scenario.)
 echo "the rest of the suite, every device named"
 export SKYLOC_TEST_V4L2_DEVICE="$HIL_VIVID_VIDEO" SKYLOC_TEST_V4L2_SIZE=640x480
 # Left out: the device instances (run above; the IIO IMU ones in the imu_iio scenario) and
 # the one test that reads a file from the source tree (config/), which the guest does not
 # have; the host build runs it.
-rest='-*/V4l2:*/Libcamera:*/Gpiod*:*/Iio:*/IioPolling:V4l2Unplug.*:CameraFile.ShippedExampleLoads'
+rest='-*/V4l2:*/Libcamera:*/Gpiod*:*/Iio:*/IioPolling:V4l2Unplug.*:LibcameraUnplug.*:CameraFile.ShippedExampleLoads'
 "$T" --gtest_filter="$rest" --gtest_color=no >/tmp/suite-rest.log 2>&1
 rc=$?
 if [ "$rc" -eq 0 ]; then ok "rest of the suite exited 0 ($(grep -c '^\[       OK \]' /tmp/suite-rest.log) passed)"; else

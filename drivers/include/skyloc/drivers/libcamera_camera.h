@@ -14,9 +14,18 @@
 // Stop():  sets `stopping` first so nothing is queued any more (queuing while the camera
 //          stops crashed libcamera in the VM study), camera->stop() (cancels pending
 //          requests, which still come through the queue), then drains the queue.
-// Unplug:  libcamera's `disconnected` signal makes Capture() return kUnavailable from
-//          then on; unlike the V4L2 driver this one does not reopen by itself (Close()
-//          and Open() again once the camera is back).
+// Unplug:  libcamera's `disconnected` signal, or no frame for `stall_timeout` (without
+//          udevd libcamera never learns that a device went away: its requests just stop
+//          completing), makes the camera *lost*: Capture() returns kFailedPrecondition
+//          naming the camera, now and on every later call, and skyloc exits so that its
+//          service restarts it (config/skyloc.service: Restart=on-failure), and the new
+//          process finds the camera once it is back. It cannot reopen the camera itself,
+//          unlike the V4L2 driver: libcamera 0.0.3 aborts the process when a camera whose
+//          device has gone is stopped (PipelineHandler::stop asserts that its requests
+//          completed), crashes when the manager is stopped under it, and allows one
+//          CameraManager per process (measured in the VM, vimc unbound; docs/DRIVERS.md).
+//          So a lost camera is never stopped or released: Close() lets go of libcamera's
+//          objects without destroying them, and the process can exit cleanly.
 #pragma once
 
 #include <array>
@@ -49,6 +58,8 @@ struct LibcameraCameraConfig {
   bool raw = false;                // StreamRole::Raw instead of Viewfinder
   std::uint32_t buffer_count = 4;  // 1..kMaxRequests (the pipeline may raise its minimum)
   std::int32_t exposure_us = 0;    // > 0: manual exposure (AeEnable off), if supported
+  // No frame for this long while streaming: the camera is lost (see Unplug above).
+  Nanoseconds stall_timeout{std::chrono::seconds(2)};
 };
 
 class LibcameraCamera final : public Camera {
@@ -75,6 +86,8 @@ class LibcameraCamera final : public Camera {
   void OnRequestCompleted(libcamera::Request* request);
   // libcamera's thread: the camera was unplugged. Flags it and wakes Capture().
   void OnDisconnected();
+  // The camera is gone (`why`): from now on Capture() returns the error this returns.
+  Status Lost(const char* why);
 
   LibcameraCameraConfig config_;
   std::unique_ptr<libcamera::CameraManager> manager_;
@@ -90,6 +103,9 @@ class LibcameraCamera final : public Camera {
   std::size_t frame_bytes_ = 0;
   bool acquired_ = false;
   bool started_ = false;
+  bool lost_ = false;
+  char lost_why_[64] = "";
+  Nanoseconds last_progress_{0};  // when streaming started or the last frame arrived
 
   UniqueFd completed_fd_;  // eventfd: counts requests pushed into completed_
   SpscQueue<libcamera::Request*, 16> completed_;

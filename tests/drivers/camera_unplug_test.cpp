@@ -1,11 +1,14 @@
-// A real V4L2 camera disappearing mid-stream and coming back (HIL VM only; contract in
-// docs/HIL.md and docs/DRIVERS.md). The test pulls the camera itself by unbinding its
+// A real camera disappearing mid-stream and coming back (HIL VM only; contract in
+// docs/HIL.md and docs/DRIVERS.md), through each driver that reconnects by itself: V4L2
+// on vivid and libcamera on vimc. The test pulls the camera itself by unbinding its
 // platform device from the driver, so nothing depends on timing between processes:
 //
-//   SKYLOC_TEST_V4L2_DEVICE           the camera, preferably by driver:card (a rebound
-//                                     device may get another /dev/video number)
+//   SKYLOC_TEST_V4L2_DEVICE           the V4L2 camera, preferably by driver:card (a
+//                                     rebound device may get another /dev/video number)
 //   SKYLOC_TEST_V4L2_UNBIND / _BIND   the driver's sysfs unbind / bind files
 //   SKYLOC_TEST_V4L2_PLATFORM_DEVICE  what to write to them (vivid.0)
+//   SKYLOC_TEST_LIBCAMERA_CAMERA      the libcamera camera (id, or first), with
+//   SKYLOC_TEST_LIBCAMERA_UNBIND / _BIND / _PLATFORM_DEVICE  (vimc's, vimc.0)
 //   SKYLOC_TEST_GPIOCHIP, SKYLOC_TEST_GPIO_LINES, SKYLOC_TEST_GPIO_SIM_DIR
 //                                     status lines, read back through gpio-sim's sysfs
 //
@@ -28,6 +31,9 @@
 #if SKYLOC_WITH_V4L2
 #include "skyloc/drivers/v4l2_camera.h"
 #endif
+#if SKYLOC_WITH_LIBCAMERA
+#include "skyloc/drivers/libcamera_camera.h"
+#endif
 #if SKYLOC_WITH_GPIOD
 #include "gpio_sim.h"
 #include "skyloc/drivers/gpio_status_output.h"
@@ -36,7 +42,7 @@
 namespace skyloc::drivers {
 namespace {
 
-#if SKYLOC_WITH_V4L2
+#if SKYLOC_WITH_V4L2 || SKYLOC_WITH_LIBCAMERA
 
 using std::chrono::seconds;
 
@@ -110,29 +116,20 @@ class StatusLinesUnderTest {
 #endif
 };
 
-TEST(V4l2Unplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndStreamRecovers) {
-  const char* device = testing::Env("SKYLOC_TEST_V4L2_DEVICE");
-  const char* unbind = testing::Env("SKYLOC_TEST_V4L2_UNBIND");
-  const char* bind = testing::Env("SKYLOC_TEST_V4L2_BIND");
-  const char* platform_device = testing::Env("SKYLOC_TEST_V4L2_PLATFORM_DEVICE");
-  if (device == nullptr || unbind == nullptr || bind == nullptr || platform_device == nullptr) {
-    GTEST_SKIP() << "needs SKYLOC_TEST_V4L2_DEVICE, SKYLOC_TEST_V4L2_UNBIND, "
-                    "SKYLOC_TEST_V4L2_BIND and SKYLOC_TEST_V4L2_PLATFORM_DEVICE (the HIL VM "
-                    "sets them, with vivid)";
-  }
-  V4l2CameraConfig config;
-  std::snprintf(config.device, sizeof(config.device), "%s", device);
-  testing::EnvSize("SKYLOC_TEST_V4L2_SIZE", &config.width, &config.height);
-  config.recovery.backoff_max = std::chrono::milliseconds(500);
-  V4l2Camera camera(config);
+// Streams, pulls the camera (unbind), checks it is reported gone (error `gone`, naming the
+// camera) with the status lines safe, and plugs it back (bind). A driver that reopens by
+// itself (V4L2) must then resume the stream with its numbering going on; one that cannot
+// (libcamera: its header says why) must close without crashing and refuse to open again
+// in this process with an error, not an abort.
+void PullAndPlugBack(Camera& camera, const char* unbind, const char* bind,
+                     const char* platform_device, StatusCode gone, bool reopens_itself) {
   StatusLinesUnderTest status;
   const Status status_open = status.Open();
   ASSERT_TRUE(status_open.ok()) << status_open.message();
   const Status open = camera.Open();
   ASSERT_TRUE(open.ok()) << open.message();
   ASSERT_TRUE(camera.Start().ok());
-  std::printf("camera %s (%s), status lines: %s\n", camera.info().name, camera.device_path(),
-              status.kind());
+  std::printf("camera %s, status lines: %s\n", camera.info().name, status.kind());
 
   std::uint64_t last = 0;
   for (int i = 0; i < 3; ++i) {
@@ -153,10 +150,9 @@ TEST(V4l2Unplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndStreamRecovers)
       last = f->sequence;
       continue;
     }
-    ASSERT_TRUE(f.status().code() == StatusCode::kUnavailable ||
-                f.status().code() == StatusCode::kDeadlineExceeded)
+    ASSERT_TRUE(f.status().code() == gone || f.status().code() == StatusCode::kDeadlineExceeded)
         << StatusCodeName(f.status().code()) << ": " << f.status().message();
-    if (f.status().code() != StatusCode::kUnavailable)
+    if (f.status().code() != gone)
       continue;
     if (unavailable++ == 0) {
       std::printf("camera gone: %s\n", f.status().message());
@@ -166,8 +162,22 @@ TEST(V4l2Unplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndStreamRecovers)
     ASSERT_TRUE(status.output().SafeState().ok());
     EXPECT_EQ(status.Levels(), "000") << "status lines not safe while the camera is gone";
   }
-  ASSERT_GE(unavailable, 3) << "the driver never reported the camera gone (kUnavailable)";
+  ASSERT_GE(unavailable, 3) << "the driver never reported the camera gone (" << StatusCodeName(gone)
+                            << ")";
   EXPECT_EQ(camera.counters().restarts, 0u);
+
+  if (!reopens_itself) {
+    camera.Stop();
+    camera.Close();  // must not abort inside libcamera
+    ASSERT_TRUE(WriteSysfs(bind, platform_device))
+        << "cannot write " << platform_device << " to " << bind;
+    const Status again = camera.Open();
+    EXPECT_FALSE(again.ok()) << "reopened in the same process";
+    std::printf("open again in this process: %s\n", again.message());
+    EXPECT_NE(std::string(again.message()).find("restart"), std::string::npos) << again.message();
+    status.output().Close();
+    return;
+  }
 
   // Plug it back.
   ASSERT_TRUE(WriteSysfs(bind, platform_device))
@@ -188,12 +198,52 @@ TEST(V4l2Unplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndStreamRecovers)
               static_cast<unsigned long long>(camera.counters().frames),
               static_cast<unsigned long long>(camera.counters().restarts),
               static_cast<unsigned long long>(camera.counters().errors),
-              static_cast<unsigned long long>(camera.counters().dropped), camera.device_path());
+              static_cast<unsigned long long>(camera.counters().dropped), camera.info().name);
   camera.Close();
   status.output().Close();
 }
 
+#endif  // SKYLOC_WITH_V4L2 || SKYLOC_WITH_LIBCAMERA
+
+#if SKYLOC_WITH_V4L2
+TEST(V4l2Unplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndStreamRecovers) {
+  const char* device = testing::Env("SKYLOC_TEST_V4L2_DEVICE");
+  const char* unbind = testing::Env("SKYLOC_TEST_V4L2_UNBIND");
+  const char* bind = testing::Env("SKYLOC_TEST_V4L2_BIND");
+  const char* platform_device = testing::Env("SKYLOC_TEST_V4L2_PLATFORM_DEVICE");
+  if (device == nullptr || unbind == nullptr || bind == nullptr || platform_device == nullptr) {
+    GTEST_SKIP() << "needs SKYLOC_TEST_V4L2_DEVICE, SKYLOC_TEST_V4L2_UNBIND, "
+                    "SKYLOC_TEST_V4L2_BIND and SKYLOC_TEST_V4L2_PLATFORM_DEVICE (the HIL VM "
+                    "sets them, with vivid)";
+  }
+  V4l2CameraConfig config;
+  std::snprintf(config.device, sizeof(config.device), "%s", device);
+  testing::EnvSize("SKYLOC_TEST_V4L2_SIZE", &config.width, &config.height);
+  config.recovery.backoff_max = std::chrono::milliseconds(500);
+  V4l2Camera camera(config);
+  PullAndPlugBack(camera, unbind, bind, platform_device, StatusCode::kUnavailable,
+                  /*reopens_itself=*/true);
+}
 #endif  // SKYLOC_WITH_V4L2
+
+#if SKYLOC_WITH_LIBCAMERA
+TEST(LibcameraUnplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndClosesCleanly) {
+  const char* id = testing::Env("SKYLOC_TEST_LIBCAMERA_CAMERA");
+  const char* unbind = testing::Env("SKYLOC_TEST_LIBCAMERA_UNBIND");
+  const char* bind = testing::Env("SKYLOC_TEST_LIBCAMERA_BIND");
+  const char* platform_device = testing::Env("SKYLOC_TEST_LIBCAMERA_PLATFORM_DEVICE");
+  if (id == nullptr || unbind == nullptr || bind == nullptr || platform_device == nullptr) {
+    GTEST_SKIP() << "needs SKYLOC_TEST_LIBCAMERA_CAMERA, SKYLOC_TEST_LIBCAMERA_UNBIND, "
+                    "SKYLOC_TEST_LIBCAMERA_BIND and SKYLOC_TEST_LIBCAMERA_PLATFORM_DEVICE (the "
+                    "HIL VM sets them, with vimc)";
+  }
+  LibcameraCameraConfig config;
+  std::snprintf(config.camera_id, sizeof(config.camera_id), "%s", id);
+  LibcameraCamera camera(config);
+  PullAndPlugBack(camera, unbind, bind, platform_device, StatusCode::kFailedPrecondition,
+                  /*reopens_itself=*/false);
+}
+#endif  // SKYLOC_WITH_LIBCAMERA
 
 }  // namespace
 }  // namespace skyloc::drivers
