@@ -649,10 +649,16 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
                    label, args.route_path.c_str(), kept,
                    static_cast<unsigned long long>(writer.frames_lost()), shutdown.message());
     } else {
+      // The fix depends on why: a full disk needs space, anything else (EIO: a failing card
+      // or cable) needs the storage looked at first.
+      const int e = shutdown.sys_errno();
+      const bool full = e == ENOSPC || e == EFBIG || e == EDQUOT;
       std::fprintf(stderr,
-                   "%s: route %s: %llu frames kept on the disk but NOT committed (%s): free "
-                   "some space, then run 'skyloc route recover %s'\n",
-                   label, writer.write_path(), kept, shutdown.message(), writer.write_path());
+                   "%s: route %s: %llu frames kept on the disk but NOT committed (%s): %s, "
+                   "then run 'skyloc route recover %s'\n",
+                   label, writer.write_path(), kept, shutdown.message(),
+                   full ? "free some space" : "check the storage (dmesg shows the device's errors)",
+                   writer.write_path());
     }
     // The loop's own error (the failed write) is printed at the end; this was said.
     if (!shutdown.ok() && !loop_status.ok())

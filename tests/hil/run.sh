@@ -164,9 +164,17 @@ done
 # Debian's own tools for the baseline checks and for setting up vimc's media graph:
 # v4l-utils and libgpiod's tools (for arm64 from the set-up's arm64 sysroot), and on
 # amd64 libcamera's cam.
-TOOLS=(v4l2-ctl media-ctl gpiodetect gpioinfo gpioget gpioset)
+# dmsetup for the route database on a failing block device (routedb_faults).
+TOOLS=(v4l2-ctl media-ctl gpiodetect gpioinfo gpioget gpioset dmsetup)
 if [ "$ARCH" = arm64 ]; then
-  for p in "${TOOLS[@]}"; do add_program "$HIL_GUEST_SYSROOT/usr/bin/$p"; done
+  for p in "${TOOLS[@]}"; do
+    for d in usr/bin usr/sbin sbin bin; do
+      if [ -f "$HIL_GUEST_SYSROOT/$d/$p" ]; then
+        add_program "$HIL_GUEST_SYSROOT/$d/$p"
+        break
+      fi
+    done
+  done
   # A cross build with libcamera: vimc's IPA module and its data from the build's sysroot
   # (libcamera loads them from fixed paths).
   LCDIR=/usr/lib/aarch64-linux-gnu/libcamera
@@ -177,7 +185,7 @@ if [ "$ARCH" = arm64 ]; then
     cp -r "$LIB_SYSROOT/usr/share/libcamera/ipa/vimc" "$OV/usr/share/libcamera/ipa/"
   fi
 else
-  for p in "${TOOLS[@]}" cam; do add_program "$(command -v "$p")"; done
+  for p in "${TOOLS[@]}" cam; do add_program "$(PATH=$PATH:/usr/sbin:/sbin command -v "$p")"; done
   # libcamera loads its IPA modules and their data from fixed paths.
   LCDIR=/usr/lib/x86_64-linux-gnu/libcamera
   for f in "$LCDIR"/ipa_vimc.so "$LCDIR"/vimc_ipa_proxy; do add_program "$f" "$LCDIR"; done

@@ -168,7 +168,7 @@ HEADERS=/usr/src/linux-headers-$ABI-amd64
 HOST_PKGS=(busybox-static kmod cpio bc make gcc xz-utils patch "linux-headers-$ABI-amd64")
 case "$ARCH" in
   amd64)
-    HOST_PKGS+=(qemu-system-x86 v4l-utils gpiod libcamera-tools libcamera-ipa)
+    HOST_PKGS+=(qemu-system-x86 v4l-utils gpiod libcamera-tools libcamera-ipa dmsetup)
     ;;
   arm64)
     # The arm64 headers use the host's linux-kbuild and linux-headers-ABI-common, which
@@ -320,7 +320,11 @@ fi
 # Base initramfs: static busybox and the modules with everything they depend on. The
 # per-run overlay (init, test programs, their libraries) is appended by run.sh.
 BASE="$W/base.cpio.gz"
-MODULES=(vivid vimc configfs irq_sim gpio-sim gpio-mockup iio_dummy iio-trig-hrtimer)
+# dm-flakey, loop and ext4 (which mounts ext2; it asks the crypto API for crc32c at mount
+# time, so that module is named here): a route database on a block device that fails
+# writes (scenario routedb_faults).
+MODULES=(vivid vimc configfs irq_sim gpio-sim gpio-mockup iio_dummy iio-trig-hrtimer
+  dm-flakey loop ext4 crc32c_generic)
 if ! stamp base; then
   say "packing the base initramfs"
   R="$W/rootfs"
@@ -379,16 +383,19 @@ fi
 SYSROOT=
 if [ "$ARCH" = arm64 ]; then
   SYSROOT="$W/sysroot"
-  if ! fetched sysroot; then
-    say "downloading arm64 v4l-utils and gpiod with their dependencies"
+  GUEST_TOOLS=(v4l-utils gpiod dmsetup)
+  # The stamp names the packages: adding one fetches the sysroot again.
+  tools_stamp="sysroot-$(printf '%s-' "${GUEST_TOOLS[@]}")"
+  if ! fetched "$tools_stamp"; then
+    say "downloading arm64 ${GUEST_TOOLS[*]} with their dependencies"
     archives="$CACHE/debs/arm64-tools"
     rm -rf "$archives" "$SYSROOT" && mkdir -p "$archives/partial" "$SYSROOT"
     apt-get "${APT_OPTS[@]}" -o "Dir::Cache::archives=$archives" --no-install-recommends -y -qq \
-      install --download-only v4l-utils gpiod >"$archives/download.log" 2>&1 ||
-      skip "apt-get could not download arm64 v4l-utils/gpiod (see $archives/download.log)"
+      install --download-only "${GUEST_TOOLS[@]}" >"$archives/download.log" 2>&1 ||
+      skip "apt-get could not download arm64 ${GUEST_TOOLS[*]} (see $archives/download.log)"
     for deb in "$archives"/*.deb; do dpkg-deb -x "$deb" "$SYSROOT"; done
     rm -rf "$archives"
-    done_fetch sysroot
+    done_fetch "$tools_stamp"
   fi
 fi
 
