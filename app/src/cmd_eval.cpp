@@ -111,7 +111,9 @@ constexpr const char* kUsage =
     "previous file (or none), never a truncated one.\n"
     "Every run also replays the firmware's state machine ([state] of --config) over\n"
     "its matches: matches.csv gives each frame's state, metrics.json the share of\n"
-    "LOCALISED frames that are correct.\n";
+    "LOCALISED frames that are correct. Sky runs with horizon strips also print it\n"
+    "with frames whose 1D SURF score against the matched frame is below 25..400\n"
+    "counted as no match (landmark confirmation, docs/RESULTS.md).\n";
 
 enum class Method : std::uint8_t { kSky, kVanilla, kFabmap, kSurf1d };
 
@@ -662,6 +664,14 @@ struct Run {
   // (HeadingErrors), by the cross-correlation and by 1D SURF + RANSAC.
   bool heading_evaluated = false;
   dsp::HeadingErrorSummary heading_correlation, heading_surf;
+  // Landmark confirmation (issue 13 item 2, LandmarkConfirmation): LOCALISED frames and
+  // how many are correct when a frame counts as a match only if the 1D SURF recognition
+  // score of its strip against the matched frame's reaches each threshold.
+  struct Confirmation {
+    double min_score = 0;
+    int localised = 0, localised_correct = 0;
+  };
+  std::vector<Confirmation> confirmation;
 };
 
 Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOptions& o,
@@ -938,6 +948,56 @@ Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, std::vector<
     config.seqslam.matcher = Matcher::kOpenSeqSlam;
     run.states = ReplayStateMachine(config, run.matches);
     Score(gt, &run);
+  }
+  return Status::Ok();
+}
+
+// Landmark confirmation, measured (issue 13 item 2): the state machine replayed with a
+// frame counting as a match only when the 1D SURF recognition score (NN with RANSAC) of
+// its strip against the matched route frame's strip reaches a threshold; a frame below it
+// is "no match" (as a frame the matcher found nothing for). Sky runs with strips only.
+Status LandmarkConfirmation(const EvalOptions& o, const Descriptors& rd, const Descriptors& qd,
+                            const GroundTruth& gt, Run* run) {
+  if (rd.strip_columns == 0 || rd.strip_columns != qd.strip_columns)
+    return Status::Ok();
+  SKYLOC_TRY_ASSIGN(const auto ref_features, StripFeatures(rd, o.config.heading));
+  SKYLOC_TRY_ASSIGN(const auto query_features, StripFeatures(qd, o.config.heading));
+  const dsp::HeadingOptions options = HeadingOptionsFrom(o.config.heading);
+  dsp::LandmarkMatcher matcher;
+  if (const dsp::Surf1dError e = matcher.Init(options.max_features, options.matching);
+      e != dsp::Surf1dError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "surf1d: %s", dsp::Surf1dErrorMessage(e));
+  std::vector<float> score(run->matches.size(), 0.0f);
+  for (std::size_t q = 0; q < run->matches.size(); ++q) {
+    const dsp::SeqSlamMatch& m = run->matches[q];
+    if (!m.valid || m.reference < 0 || m.reference >= rd.count)
+      continue;
+    dsp::LandmarkMatch lm;
+    (void)matcher.Match(ref_features[static_cast<std::size_t>(m.reference)], query_features[q],
+                        rd.strip_columns, &lm);
+    score[q] = lm.model_found ? static_cast<float>(lm.ransac_score) : 0.0f;
+  }
+  Config config = o.config;
+  config.seqslam.matcher = run->matcher;
+  for (const double threshold : {25.0, 50.0, 100.0, 200.0, 400.0}) {
+    std::vector<dsp::SeqSlamMatch> gated = run->matches;
+    for (std::size_t q = 0; q < gated.size(); ++q)
+      if (static_cast<double>(score[q]) < threshold)
+        gated[q].valid = false;
+    const std::vector<dsp::TrackState> states = ReplayStateMachine(config, gated);
+    Run::Confirmation c;
+    c.min_score = threshold;
+    for (std::size_t q = 0; q < states.size(); ++q) {
+      if (states[q] != dsp::TrackState::kLocalised)
+        continue;
+      ++c.localised;
+      // The frame's own match, as Score judges it (LOCALISED frames always have one).
+      c.localised_correct +=
+          run->matches[q].valid && IsCorrect(gt, static_cast<int>(q), run->matches[q].reference)
+              ? 1
+              : 0;
+    }
+    run->confirmation.push_back(c);
   }
   return Status::Ok();
 }
@@ -1276,6 +1336,7 @@ Status Evaluate(EvalOptions o) {
         run.states = ReplayStateMachine(config, run.matches);
         Score(gt, &run);
         SKYLOC_TRY(HeadingErrors(o, rd, qd, ref, query, &run));
+        SKYLOC_TRY(LandmarkConfirmation(o, rd, qd, gt, &run));
         runs.push_back(std::move(run));
       }
     }
@@ -1303,6 +1364,16 @@ Status Evaluate(EvalOptions o) {
         "%.2f deg (%d estimated); 1D SURF median %.2f, p90 %.2f deg (%d estimated)\n",
         MethodName(r.method), r.matcher_name.c_str(), r.ds, c.frames, c.median_deg, c.p90_deg,
         c.estimated, s.median_deg, s.p90_deg, s.estimated);
+  }
+  for (const Run& r : runs) {
+    if (r.confirmation.empty())
+      continue;
+    std::printf("landmark confirmation %s %s ds %d: LOCALISED correct %d of %d without;",
+                MethodName(r.method), r.matcher_name.c_str(), r.ds, r.localised_correct,
+                r.localised);
+    for (const Run::Confirmation& c : r.confirmation)
+      std::printf(" score >= %.0f: %d of %d;", c.min_score, c.localised_correct, c.localised);
+    std::printf("\n");
   }
   const bool openseqslam =
       std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();
