@@ -987,15 +987,14 @@ Status LandmarkConfirmation(const EvalOptions& o, const Descriptors& rd, const D
     const std::vector<dsp::TrackState> states = ReplayStateMachine(config, gated);
     Run::Confirmation c;
     c.min_score = threshold;
-    for (std::size_t q = 0; q < states.size(); ++q) {
-      if (states[q] != dsp::TrackState::kLocalised)
+    // Counted as Score counts them: over the frames the matcher gave a match (a frame
+    // past the ends of OpenSeqSLAM's centred window has none but may still show LOCALISED).
+    for (const int q : run->evaluated_queries) {
+      const auto t = static_cast<std::size_t>(q);
+      if (states[t] != dsp::TrackState::kLocalised)
         continue;
       ++c.localised;
-      // The frame's own match, as Score judges it (LOCALISED frames always have one).
-      c.localised_correct +=
-          run->matches[q].valid && IsCorrect(gt, static_cast<int>(q), run->matches[q].reference)
-              ? 1
-              : 0;
+      c.localised_correct += IsCorrect(gt, q, run->matches[t].reference) ? 1 : 0;
     }
     run->confirmation.push_back(c);
   }

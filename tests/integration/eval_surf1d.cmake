@@ -3,6 +3,7 @@
 #  1. A route against itself: every frame's strip matches its own copy exactly (distance
 #     0, the largest score there is), so "single" must pick the query's own frame, every
 #     frame: the truth is the identity, not the matcher.
+#     The landmark confirmation replay keeps every LOCALISED frame there.
 #  2. The forest route against a dawn repeat turned by 30 degrees (the strip features do
 #     not depend on the heading): both surf1d runs appear in metrics.json and pr.svg next
 #     to sky and vanilla, with most matches correct (measured at 160x120 over 40 frames:
@@ -25,7 +26,8 @@ if(EMULATOR)
 endif()
 
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/ref --query ${WORK}/ref
-                --method surf1d --ds 5 --matcher openseqslam --out ${WORK}/self ${jobs}
+                --method sky --method surf1d --ds 5 --matcher openseqslam --out ${WORK}/self
+                ${jobs}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval (route against itself) failed (${rc}):\n${out}\n${err}")
@@ -43,6 +45,15 @@ foreach(row ${rows})
     message(FATAL_ERROR "surf1d single matched frame ${q} to ${r}, not to itself: ${row}")
   endif()
 endforeach()
+# Landmark confirmation (docs/RESULTS.md): against itself every sky match is its own frame,
+# whose strip scores far above the highest threshold, so no LOCALISED frame is lost.
+if(NOT out MATCHES "landmark confirmation sky openseqslam ds 5: LOCALISED correct ([0-9]+) of ([0-9]+) without;[^\n]* score >= 400: ([0-9]+) of ([0-9]+);")
+  message(FATAL_ERROR "eval printed no landmark confirmation line:\n${out}")
+endif()
+if(CMAKE_MATCH_2 LESS 20 OR NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_2 OR
+   NOT CMAKE_MATCH_3 EQUAL CMAKE_MATCH_1 OR NOT CMAKE_MATCH_4 EQUAL CMAKE_MATCH_2)
+  message(FATAL_ERROR "landmark confirmation of a route against itself lost frames:\n${out}")
+endif()
 
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/ref --query ${WORK}/query
                 --method sky --method vanilla --method surf1d --ds 5 --matcher openseqslam
