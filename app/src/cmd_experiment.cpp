@@ -75,8 +75,8 @@ bool ParseNumber(const char* text, double lo, double hi, double* value) {
 int ParseArgs(std::span<char* const> args, Options* o) {
   if (args.empty() || args[0][0] == '-') {
     std::fprintf(stderr,
-                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed or "
-                 "heading\n");
+                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed, "
+                 "heading or surf1d\n");
     return kExitUsage;
   }
   o->name = args[0];
@@ -84,7 +84,7 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       o->name != "heading") {
     std::fprintf(stderr,
                  "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed, "
-                 "heading)\n",
+                 "heading, surf1d)\n",
                  args[0]);
     return kExitUsage;
   }
