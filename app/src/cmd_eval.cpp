@@ -258,7 +258,7 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
     } else if (a == "--lens") {
       dsp::LensModel model;
       if (!dsp::ParseLensModel(v, &model) || model == dsp::LensModel::kKannalaBrandt ||
-          model == dsp::LensModel::kOCamCalib)
+          model == dsp::LensModel::kOCamCalib || model == dsp::LensModel::kPinhole)
         return fail(
             "--lens '%s': use equidistant, equisolid or equirectangular (other models "
             "need a camera file)",
