@@ -31,8 +31,8 @@ struct ImageFeatures {
   std::vector<dsp::Surf1dFeature> features;
 };
 
-// Scores every pair (i < j) of `images`; `same_place(i, j)` and `match(i, j)` decide which
-// pairs count and whether they match.
+// Scores every pair (i < j) of `images` (i stored, j test) that `counted(i, j)` admits;
+// `matches(i, j)` says whether it truly shows the same landmark.
 template <typename Counted, typename Matches>
 Status ScorePairs(const std::vector<ImageFeatures>& images, int n,
                   const dsp::LandmarkMatchOptions& o, Counted counted, Matches matches,
@@ -206,9 +206,10 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
     }
     features += static_cast<double>(images[k].features.size());
   }
-  forward->camera = std::string("forward pinhole ") + std::to_string(o.width) + "x" +
-                    std::to_string(o.height) + ", " + std::to_string(o.fov_deg).substr(0, 4) +
-                    " deg";
+  char camera[96];
+  std::snprintf(camera, sizeof camera, "forward pinhole %dx%d, %.3g deg", o.width, o.height,
+                o.fov_deg);
+  forward->camera = camera;
   forward->strip_columns = columns;
   forward->mean_features = features / static_cast<double>(total);
   if (progress != nullptr)
