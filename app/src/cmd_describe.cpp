@@ -88,7 +88,8 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
       const char* v = value();
       dsp::LensModel model;
       if (v == nullptr || !dsp::ParseLensModel(v, &model) ||
-          model == dsp::LensModel::kKannalaBrandt || model == dsp::LensModel::kOCamCalib)
+          model == dsp::LensModel::kKannalaBrandt || model == dsp::LensModel::kOCamCalib ||
+          model == dsp::LensModel::kPinhole)
         return Usage(
             "--lens must be equidistant, equisolid or equirectangular (other "
             "models need a camera file), not '%s'",

@@ -39,6 +39,7 @@
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/seqslam_batch.h"
 #include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/surf1d.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/platform/status.h"
 #include "svg_plot.h"
@@ -55,10 +56,15 @@ constexpr const char* kUsage =
     "Matches every query frame against the reference route and scores the matches\n"
     "against the ground truth. DIRs are dataset folders (docs/DATASETS.md).\n"
     "\n"
-    "  --method sky|vanilla|fabmap  descriptor (repeat to compare; default: sky and\n"
-    "                         vanilla, and fabmap too when --vocab is given). fabmap is\n"
+    "  --method sky|vanilla|fabmap|surf1d  descriptor (repeat to compare; default: sky\n"
+    "                         and vanilla, and fabmap too when --vocab is given). fabmap is\n"
     "                         FAB-MAP 2.0 on SIFT words (docs/FABMAP.md): one run, no\n"
-    "                         matcher or sequence length; host builds only\n"
+    "                         matcher or sequence length; host builds only. surf1d is\n"
+    "                         the 1D SURF recognition score (NN with RANSAC) of the\n"
+    "                         [heading] strips (the sky lens): \"single\" (each query's\n"
+    "                         best-scoring frame) and OpenSeqSLAM over the scores\n"
+    "                         (difference = the query's best score - score) at each --ds;\n"
+    "                         every query against every frame: slow on long routes\n"
     "  --vocab FILE           fabmap: the vocabulary from skyloc fabmap-train\n"
     "  --matcher filter|openseqslam  the matcher (repeat to compare; default: filter, the\n"
     "                         firmware's route filter; docs/SEQSLAM.md)\n"
@@ -105,9 +111,11 @@ constexpr const char* kUsage =
     "previous file (or none), never a truncated one.\n"
     "Every run also replays the firmware's state machine ([state] of --config) over\n"
     "its matches: matches.csv gives each frame's state, metrics.json the share of\n"
-    "LOCALISED frames that are correct.\n";
+    "LOCALISED frames that are correct. Sky runs with horizon strips also print it\n"
+    "with frames whose 1D SURF score against the matched frame is below 25..400\n"
+    "counted as no match (landmark confirmation, docs/RESULTS.md).\n";
 
-enum class Method : std::uint8_t { kSky, kVanilla, kFabmap };
+enum class Method : std::uint8_t { kSky, kVanilla, kFabmap, kSurf1d };
 
 const char* MethodName(Method m) {
   switch (m) {
@@ -117,6 +125,8 @@ const char* MethodName(Method m) {
       return "vanilla";
     case Method::kFabmap:
       return "fabmap";
+    case Method::kSurf1d:
+      return "surf1d";
   }
   return "?";
 }
@@ -211,8 +221,10 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
         o->methods.push_back(Method::kVanilla);
       } else if (std::strcmp(v, "fabmap") == 0) {
         o->methods.push_back(Method::kFabmap);
+      } else if (std::strcmp(v, "surf1d") == 0) {
+        o->methods.push_back(Method::kSurf1d);
       } else {
-        return fail("--method '%s': use sky, vanilla or fabmap", v);
+        return fail("--method '%s': use sky, vanilla, fabmap or surf1d", v);
       }
     } else if (a == "--vocab") {
       o->vocab = v;
@@ -246,7 +258,7 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
     } else if (a == "--lens") {
       dsp::LensModel model;
       if (!dsp::ParseLensModel(v, &model) || model == dsp::LensModel::kKannalaBrandt ||
-          model == dsp::LensModel::kOCamCalib)
+          model == dsp::LensModel::kOCamCalib || model == dsp::LensModel::kPinhole)
         return fail(
             "--lens '%s': use equidistant, equisolid or equirectangular (other models "
             "need a camera file)",
@@ -652,6 +664,14 @@ struct Run {
   // (HeadingErrors), by the cross-correlation and by 1D SURF + RANSAC.
   bool heading_evaluated = false;
   dsp::HeadingErrorSummary heading_correlation, heading_surf;
+  // Landmark confirmation (issue 13 item 2, LandmarkConfirmation): LOCALISED frames and
+  // how many are correct when a frame counts as a match only if the 1D SURF recognition
+  // score of its strip against the matched frame's reaches each threshold.
+  struct Confirmation {
+    double min_score = 0;
+    int localised = 0, localised_correct = 0;
+  };
+  std::vector<Confirmation> confirmation;
 };
 
 Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOptions& o,
@@ -790,6 +810,195 @@ void Score(const GroundTruth& gt, Run* run) {
   }
   run->label = std::string(MethodName(run->method)) + " " + run->matcher_name +
                " ds=" + std::to_string(run->ds);
+}
+
+// ---- 1D SURF as a place recogniser (issue 13 item 3) --------------------------------------
+
+// Every frame's 1D SURF features from its horizon strip as the route stores it ([heading]
+// band through the sky method's lens, rounded to bytes), the strongest surf_max_features.
+Result<std::vector<std::vector<dsp::Surf1dFeature>>> StripFeatures(const Descriptors& d,
+                                                                   const HeadingConfig& config) {
+  const dsp::HeadingOptions options = HeadingOptionsFrom(config);
+  dsp::Surf1d surf;
+  if (const dsp::Surf1dError e = surf.Init(d.strip_columns, options.features);
+      e != dsp::Surf1dError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "surf1d: %s", dsp::Surf1dErrorMessage(e));
+  const auto n = static_cast<std::size_t>(d.strip_columns);
+  std::vector<float> strip(n);
+  std::vector<dsp::Surf1dFeature> found(static_cast<std::size_t>(options.max_features));
+  std::vector<std::vector<dsp::Surf1dFeature>> features(static_cast<std::size_t>(d.count));
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    for (std::size_t c = 0; c < n; ++c)
+      strip[c] = d.strips[i * n + c];
+    int count = 0;
+    if (const dsp::Surf1dError e = surf.Detect(strip, found, &count); e != dsp::Surf1dError::kOk)
+      return Status::Error(StatusCode::kInvalidArgument, "surf1d: %s", dsp::Surf1dErrorMessage(e));
+    features[i].assign(found.begin(), found.begin() + count);
+  }
+  return features;
+}
+
+// The best-scoring reference of one query's scores (higher = more alike). Uniqueness as
+// SeqSLAM's, lower = more distinctive: the best score outside +-rwindow/2 frames of the
+// best divided by the best. No match when every score is 0 (no RANSAC line anywhere).
+dsp::SeqSlamMatch BestScore(std::span<const float> scores, int rwindow) {
+  dsp::SeqSlamMatch m;
+  const auto best = std::max_element(scores.begin(), scores.end());
+  if (best == scores.end() || !(*best > 0.0f))
+    return m;
+  const int r = static_cast<int>(best - scores.begin());
+  float runner_up = 0.0f;
+  for (int i = 0; i < static_cast<int>(scores.size()); ++i)
+    if (std::abs(i - r) > rwindow / 2)
+      runner_up = std::max(runner_up, scores[static_cast<std::size_t>(i)]);
+  m.valid = true;
+  m.reference = m.row = m.start = r;
+  m.score = *best;
+  m.uniqueness = runner_up / *best;
+  m.confidence = 1.0f - m.uniqueness;
+  return m;
+}
+
+// `--method surf1d`: the recognition score (NN with RANSAC: sum of 1 / distance over the
+// RANSAC inliers, the paper's) of every query frame against every reference frame, then
+// one run "single" (each query's best frame) and one OpenSeqSLAM run per --ds over the
+// differences best - score (SeqSLAM's local contrast enhancement normalises each column,
+// so only the order and spread of a query's scores matter).
+Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, std::vector<Run>* runs) {
+  if (o.config.heading.strip_columns == 0)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "--method surf1d needs horizon strips: [heading] strip_columns is 0 "
+                         "in --config; set it (default 360)");
+  DescriptorForms forms;  // the sky method's lens and strips; its descriptors go unused
+  forms.floats = false;
+  std::fprintf(stderr, "skyloc eval: surf1d strips...\n");
+  SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(Method::kSky, o.reference, o, forms));
+  SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(Method::kSky, o.query, o, forms));
+  if (rd.strip_columns == 0 || rd.strip_columns != qd.strip_columns)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "--method surf1d: the lens does not see the [heading] band in both "
+                         "datasets (see the message above); set the band or the camera file");
+  SKYLOC_TRY_ASSIGN(const auto ref_features, StripFeatures(rd, o.config.heading));
+  SKYLOC_TRY_ASSIGN(const auto query_features, StripFeatures(qd, o.config.heading));
+  const dsp::HeadingOptions options = HeadingOptionsFrom(o.config.heading);
+  const auto n_ref = static_cast<std::size_t>(rd.count);
+  const auto n_query = static_cast<std::size_t>(qd.count);
+  std::vector<float> scores(n_query * n_ref);  // query-major, as SeqSlamFromDifferences
+  const int workers = std::clamp(o.jobs, 1, std::max(1, qd.count));
+  std::vector<dsp::LandmarkMatcher> matchers(static_cast<std::size_t>(workers));
+  for (dsp::LandmarkMatcher& m : matchers) {
+    if (const dsp::Surf1dError e = m.Init(options.max_features, options.matching);
+        e != dsp::Surf1dError::kOk)
+      return Status::Error(StatusCode::kInvalidArgument, "surf1d: %s", dsp::Surf1dErrorMessage(e));
+  }
+  Progress progress("surf1d scores", "query frames", qd.count);
+  std::atomic<long> done{0};
+  ParallelFor(workers, qd.count, [&](int q, int worker) {
+    const auto qi = static_cast<std::size_t>(q);
+    for (std::size_t r = 0; r < n_ref; ++r) {
+      dsp::LandmarkMatch m;
+      // Sized for max_features, which bounds every feature list: cannot fail.
+      (void)matchers[static_cast<std::size_t>(worker)].Match(ref_features[r], query_features[qi],
+                                                             rd.strip_columns, &m);
+      scores[qi * n_ref + r] = m.model_found ? static_cast<float>(m.ransac_score) : 0.0f;
+    }
+    const long finished = ++done;
+    if (worker == 0)
+      progress.Update(finished);
+  });
+  progress.Finish();
+
+  Run single;
+  single.method = Method::kSurf1d;
+  single.matcher = Matcher::kOpenSeqSlam;
+  single.matcher_name = "single";
+  single.ds = 1;
+  single.matches.resize(n_query);
+  for (std::size_t q = 0; q < n_query; ++q)
+    single.matches[q] =
+        BestScore(std::span(scores).subspan(q * n_ref, n_ref), o.config.seqslam.rwindow);
+  runs->push_back(std::move(single));
+
+  std::vector<float> differences(scores.size());
+  for (std::size_t q = 0; q < n_query; ++q) {
+    const std::span<const float> column = std::span(scores).subspan(q * n_ref, n_ref);
+    const float best = *std::max_element(column.begin(), column.end());
+    for (std::size_t r = 0; r < n_ref; ++r)
+      differences[q * n_ref + r] = best - column[r];
+  }
+  for (const int ds : o.ds_list) {
+    Run run;
+    run.method = Method::kSurf1d;
+    run.matcher = Matcher::kOpenSeqSlam;
+    run.matcher_name = MatcherName(Matcher::kOpenSeqSlam);
+    run.ds = ds;
+    run.matches.resize(n_query);
+    dsp::SeqSlamParams p;
+    p.sequence_length = ds;
+    if (const dsp::SeqSlamError e = dsp::SeqSlamFromDifferences(
+            differences, rd.count, qd.count, p, dsp::SeqSlamWindow::kCentred, run.matches);
+        e != dsp::SeqSlamError::kOk)
+      return Status::Error(StatusCode::kInvalidArgument, "surf1d openseqslam ds %d: %s", ds,
+                           dsp::SeqSlamErrorMessage(e));
+    runs->push_back(std::move(run));
+  }
+  for (std::size_t i = runs->size() - 1 - o.ds_list.size(); i < runs->size(); ++i) {
+    Run& run = (*runs)[i];
+    Config config = o.config;
+    config.seqslam.matcher = Matcher::kOpenSeqSlam;
+    run.states = ReplayStateMachine(config, run.matches);
+    Score(gt, &run);
+  }
+  return Status::Ok();
+}
+
+// Landmark confirmation, measured (issue 13 item 2): the state machine replayed with a
+// frame counting as a match only when the 1D SURF recognition score (NN with RANSAC) of
+// its strip against the matched route frame's strip reaches a threshold; a frame below it
+// is "no match" (as a frame the matcher found nothing for). Sky runs with strips only.
+Status LandmarkConfirmation(const EvalOptions& o, const Descriptors& rd, const Descriptors& qd,
+                            const GroundTruth& gt, Run* run) {
+  if (rd.strip_columns == 0 || rd.strip_columns != qd.strip_columns)
+    return Status::Ok();
+  SKYLOC_TRY_ASSIGN(const auto ref_features, StripFeatures(rd, o.config.heading));
+  SKYLOC_TRY_ASSIGN(const auto query_features, StripFeatures(qd, o.config.heading));
+  const dsp::HeadingOptions options = HeadingOptionsFrom(o.config.heading);
+  dsp::LandmarkMatcher matcher;
+  if (const dsp::Surf1dError e = matcher.Init(options.max_features, options.matching);
+      e != dsp::Surf1dError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "surf1d: %s", dsp::Surf1dErrorMessage(e));
+  std::vector<float> score(run->matches.size(), 0.0f);
+  for (std::size_t q = 0; q < run->matches.size(); ++q) {
+    const dsp::SeqSlamMatch& m = run->matches[q];
+    if (!m.valid || m.reference < 0 || m.reference >= rd.count)
+      continue;
+    dsp::LandmarkMatch lm;
+    (void)matcher.Match(ref_features[static_cast<std::size_t>(m.reference)], query_features[q],
+                        rd.strip_columns, &lm);
+    score[q] = lm.model_found ? static_cast<float>(lm.ransac_score) : 0.0f;
+  }
+  Config config = o.config;
+  config.seqslam.matcher = run->matcher;
+  for (const double threshold : {25.0, 50.0, 100.0, 200.0, 400.0}) {
+    std::vector<dsp::SeqSlamMatch> gated = run->matches;
+    for (std::size_t q = 0; q < gated.size(); ++q)
+      if (static_cast<double>(score[q]) < threshold)
+        gated[q].valid = false;
+    const std::vector<dsp::LocalisationState> states = ReplayStateMachine(config, gated);
+    Run::Confirmation c;
+    c.min_score = threshold;
+    // Counted as Score counts them: over the frames the matcher gave a match (a frame
+    // past the ends of OpenSeqSLAM's centred window has none but may still show LOCALISED).
+    for (const int q : run->evaluated_queries) {
+      const auto t = static_cast<std::size_t>(q);
+      if (states[t] != dsp::LocalisationState::kLocalised)
+        continue;
+      ++c.localised;
+      c.localised_correct += IsCorrect(gt, q, run->matches[t].reference) ? 1 : 0;
+    }
+    run->confirmation.push_back(c);
+  }
+  return Status::Ok();
 }
 
 // The heading of every correctly matched query frame against its matched reference frame,
@@ -1089,6 +1298,10 @@ Status Evaluate(EvalOptions o) {
   const int n_ref = static_cast<int>(ref.frames.size());
   const int n_query = static_cast<int>(query.frames.size());
   for (const Method method : o.methods) {
+    if (method == Method::kSurf1d) {
+      SKYLOC_TRY(RunSurf1dMethod(o, gt, &runs));
+      continue;
+    }
     if (method == Method::kFabmap) {
       Run run;
       SKYLOC_TRY(RunFabmap(o, &run));
@@ -1122,6 +1335,7 @@ Status Evaluate(EvalOptions o) {
         run.states = ReplayStateMachine(config, run.matches);
         Score(gt, &run);
         SKYLOC_TRY(HeadingErrors(o, rd, qd, ref, query, &run));
+        SKYLOC_TRY(LandmarkConfirmation(o, rd, qd, gt, &run));
         runs.push_back(std::move(run));
       }
     }
@@ -1149,6 +1363,16 @@ Status Evaluate(EvalOptions o) {
         "%.2f deg (%d estimated); 1D SURF median %.2f, p90 %.2f deg (%d estimated)\n",
         MethodName(r.method), r.matcher_name.c_str(), r.ds, c.frames, c.median_deg, c.p90_deg,
         c.estimated, s.median_deg, s.p90_deg, s.estimated);
+  }
+  for (const Run& r : runs) {
+    if (r.confirmation.empty())
+      continue;
+    std::printf("landmark confirmation %s %s ds %d: LOCALISED correct %d of %d without;",
+                MethodName(r.method), r.matcher_name.c_str(), r.ds, r.localised_correct,
+                r.localised);
+    for (const Run::Confirmation& c : r.confirmation)
+      std::printf(" score >= %.0f: %d of %d;", c.min_score, c.localised_correct, c.localised);
+    std::printf("\n");
   }
   const bool openseqslam =
       std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();

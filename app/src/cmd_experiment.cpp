@@ -27,7 +27,7 @@ namespace skyloc::app {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: skyloc experiment tilt|manoeuvre|ants|speed|heading --out DIR [options]\n"
+    "usage: skyloc experiment tilt|manoeuvre|ants|speed|heading|surf1d --out DIR [options]\n"
     "\n"
     "  tilt       City loop, runs at tilt -30..30 paired alpha1 ~ -alpha2 (differences\n"
     "             0..60): recall at 100 % precision, sky vs vanilla SeqSLAM\n"
@@ -41,6 +41,8 @@ constexpr const char* kUsage =
     "  heading    manoeuvre's runs (zig-zag +-20 deg, bumps +-15 deg): heading error of the\n"
     "             horizon-strip cross-correlation and of 1D SURF + RANSAC against the\n"
     "             poses, on frames the route filter matches correctly\n"
+    "  surf1d     the 1D SURF paper's ROC experiment, turning on the spot in the city\n"
+    "             (own options: skyloc experiment surf1d --help)\n"
     "\n"
     "options:\n"
     "  --width W --height H   image size (default 320x240)\n"
@@ -73,8 +75,8 @@ bool ParseNumber(const char* text, double lo, double hi, double* value) {
 int ParseArgs(std::span<char* const> args, Options* o) {
   if (args.empty() || args[0][0] == '-') {
     std::fprintf(stderr,
-                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed or "
-                 "heading\n");
+                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed, "
+                 "heading or surf1d\n");
     return kExitUsage;
   }
   o->name = args[0];
@@ -82,7 +84,7 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       o->name != "heading") {
     std::fprintf(stderr,
                  "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed, "
-                 "heading)\n",
+                 "heading, surf1d)\n",
                  args[0]);
     return kExitUsage;
   }
@@ -436,6 +438,8 @@ int RunHeading(const Options& o, const std::string& command) {
 }  // namespace
 
 int RunExperiment(std::span<char* const> args) {
+  if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
+    return RunSurf1dExperiment(args);
   for (char* const a : args) {
     if (IsHelpFlag(a)) {
       std::fputs(kUsage, stdout);

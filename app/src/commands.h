@@ -27,6 +27,8 @@ int RunDescribe(std::span<char* const> args);
 int RunSurf1d(std::span<char* const> args);
 int RunSimulate(std::span<char* const> args);
 int RunExperiment(std::span<char* const> args);
+// `skyloc experiment surf1d` (cmd_experiment_surf1d.cpp); args[0] is "surf1d".
+int RunSurf1dExperiment(std::span<char* const> args);
 int RunFabmapTrain(std::span<char* const> args);
 
 // True for the flags that ask a command for its usage text.

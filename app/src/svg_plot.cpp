@@ -135,6 +135,56 @@ std::string PrPlotSvg(std::string_view title, std::span<const PrCurve> curves) {
   return svg + "</svg>\n";
 }
 
+std::string RocPlotSvg(std::string_view title, std::span<const RocCurveLine> curves) {
+  constexpr double kLeft = 70, kTop = 40, kSize = 400, kLegendLine = 22;
+  auto sx = [](double fpr) { return kLeft + fpr * kSize; };
+  auto sy = [](double tpr) { return kTop + (1.0 - tpr) * kSize; };
+  std::string svg;
+  AppendSvgStart(&svg, kLeft + kSize + 320,
+                 kTop + kSize + 60 + kLegendLine * static_cast<double>(curves.size()));
+  Append(&svg, "<text x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">%s</text>\n",
+         kLeft + kSize / 2, XmlEscape(title).c_str());
+  for (int i = 0; i <= 5; ++i) {
+    const double v = i / 5.0;
+    Append(&svg,
+           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
+           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
+           "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.1f</text>\n"
+           "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.1f</text>\n",
+           sx(v), sy(0), sx(v), sy(1), sx(0), sy(v), sx(1), sy(v), sx(v), sy(0) + 16, v, sx(0) - 6,
+           sy(v) + 4, v);
+  }
+  Append(&svg,
+         "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\" "
+         "stroke-dasharray=\"4 4\"/>\n"
+         "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
+         "stroke=\"black\"/>\n",
+         sx(0), sy(0), sx(1), sy(1), kLeft, kTop, kSize, kSize);
+  Append(&svg, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">False positive rate</text>\n",
+         kLeft + kSize / 2, kTop + kSize + 36);
+  Append(&svg,
+         "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 "
+         "%.1f)\">True positive rate</text>\n",
+         kTop + kSize / 2, kTop + kSize / 2);
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    const char* colour = kPalette[i % kPaletteSize];
+    const char* dash = DashAttribute(curves[i].dash);
+    Append(&svg, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"2\"%s points=\"", colour,
+           dash);
+    for (const dsp::RocPoint& p : curves[i].points)
+      Append(&svg, "%.1f,%.1f ", sx(p.false_positive_rate), sy(p.true_positive_rate));
+    svg += "\"/>\n";
+    const double legend_y = kTop + kSize + 56 + kLegendLine * static_cast<double>(i);
+    Append(&svg,
+           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
+           "stroke-width=\"2\"%s/>\n",
+           kLeft, legend_y - 4, kLeft + 30, legend_y - 4, colour, dash);
+    Append(&svg, "<text x=\"%.1f\" y=\"%.1f\">%s</text>\n", kLeft + 38, legend_y,
+           XmlEscape(curves[i].name).c_str());
+  }
+  return svg + "</svg>\n";
+}
+
 std::string CorrespondenceSvg(std::span<const CorrespondencePanel> panels, int columns) {
   // A panel's plot area and its margins for the title, the ticks and the axis names.
   constexpr double kPlotWidth = 330, kPlotHeight = 300;

@@ -26,6 +26,17 @@ struct PrCurve {
 // palette's colours, a legend line per curve below the plot.
 std::string PrPlotSvg(std::string_view title, std::span<const PrCurve> curves);
 
+struct RocCurveLine {
+  std::string name;                   // the legend text
+  std::vector<dsp::RocPoint> points;  // as dsp::RocCurve gives them: from (0, 0) to (1, 1)
+  LineDash dash = LineDash::kSolid;
+};
+
+// True positive rate (y) against false positive rate (x), both 0..1, straight segments
+// between the points (the trapezoids of dsp::RocArea), the chance diagonal in grey, a
+// legend line per curve below the plot.
+std::string RocPlotSvg(std::string_view title, std::span<const RocCurveLine> curves);
+
 struct CorrespondenceMatch {
   int query = 0;      // query frame index
   int reference = 0;  // the matched reference frame index

@@ -152,7 +152,7 @@ Status ParseLens(const toml::table& lens, const char* source, const char* base_d
     if (!name || !dsp::ParseLensModel(name->c_str(), &p->model))
       return KeyError(w,
                       "must be one of \"equidistant\", \"equisolid\", \"kannala_brandt\", "
-                      "\"ocamcalib\", \"equirectangular\"");
+                      "\"ocamcalib\", \"equirectangular\", \"pinhole\"");
   }
   const char* model = dsp::LensModelName(p->model);
   bool present = false;
@@ -180,6 +180,20 @@ Status ParseLens(const toml::table& lens, const char* source, const char* base_d
       SKYLOC_TRY(RejectFor(lens, source, model,
                            {"fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"}));
       break;
+    case LensModel::kPinhole: {
+      SKYLOC_TRY(RejectFor(lens, source, model, {"radius_px", "fx", "fy", "k", "ocamcalib_file"}));
+      const toml::node* fov = lens.get("fov_deg");
+      if (fov == nullptr)
+        return Status::Error(StatusCode::kInvalidArgument,
+                             "%s: model \"pinhole\" needs lens.fov_deg (the horizontal field "
+                             "of view across the image width, degrees, below 180)",
+                             source);
+      if (!(p->fov_deg < 180.0))
+        return KeyError(At(source, "lens", "fov_deg", *fov),
+                        "is out of range for a pinhole: use a horizontal field of view below "
+                        "180 degrees, e.g. 47.8");
+      break;
+    }
     case LensModel::kKannalaBrandt: {
       SKYLOC_TRY(RejectFor(lens, source, model, {"ocamcalib_file"}));
       bool has_fx = false, has_fy = false;
@@ -253,7 +267,11 @@ Result<std::string> CameraFileText(const dsp::Lens& lens, const char* comment) {
   int n = std::snprintf(text, sizeof text,
                         "# %s\n[image]\nwidth = %d\nheight = %d\n\n[lens]\nmodel = \"%s\"\n",
                         comment, p.width, p.height, dsp::LensModelName(p.model));
-  if (p.model != dsp::LensModel::kEquirectangular) {
+  if (p.model == dsp::LensModel::kPinhole) {
+    n += std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n),
+                       "fov_deg = %.9g\ncentre = [%.9g, %.9g]\n", p.fov_deg, lens.centre_x(),
+                       lens.centre_y());
+  } else if (p.model != dsp::LensModel::kEquirectangular) {
     n += std::snprintf(text + n, sizeof text - static_cast<std::size_t>(n),
                        "fov_deg = %.9g\ncentre = [%.9g, %.9g]\nradius_px = %.9g\n", p.fov_deg,
                        lens.centre_x(), lens.centre_y(), lens.radius_px());

@@ -56,13 +56,15 @@ const char* LensModelName(LensModel model) {
       return "ocamcalib";
     case LensModel::kEquirectangular:
       return "equirectangular";
+    case LensModel::kPinhole:
+      return "pinhole";
   }
   return "unknown";
 }
 
 bool ParseLensModel(const char* name, LensModel* model) {
   for (LensModel m : {LensModel::kEquidistant, LensModel::kEquisolid, LensModel::kKannalaBrandt,
-                      LensModel::kOCamCalib, LensModel::kEquirectangular}) {
+                      LensModel::kOCamCalib, LensModel::kEquirectangular, LensModel::kPinhole}) {
     if (std::strcmp(name, LensModelName(m)) == 0) {
       *model = m;
       return true;
@@ -79,7 +81,7 @@ const char* LensErrorMessage(LensError error) {
       return "the image size must be positive and, for OCamCalib, the size the calibration "
              "was made for";
     case LensError::kBadFieldOfView:
-      return "the field of view must be in (0, 360] degrees";
+      return "the field of view must be in (0, 360] degrees (a pinhole's in (0, 180))";
     case LensError::kBadRadius:
       return "the image-circle radius must be a positive number of pixels";
     case LensError::kBadCentre:
@@ -129,6 +131,19 @@ LensError Lens::Init(const LensParams& params) {
   }
   if (!std::isfinite(centre_x_) || !std::isfinite(centre_y_))
     return LensError::kBadCentre;
+  if (params.model == LensModel::kPinhole) {
+    if (!(params.fov_deg < 180.0))
+      return LensError::kBadFieldOfView;
+    focal_ = params.width / 2.0 / std::tan(params.fov_deg * kDegToRad / 2.0);
+    // No image circle: the "circle" reaches the farthest image corner, so only the image's
+    // own edges limit the view, and max_theta is the angle of that corner.
+    radius_px_ = 0.0;
+    for (double cx : {-0.5, params.width - 0.5})
+      for (double cy : {-0.5, params.height - 0.5})
+        radius_px_ = std::max(radius_px_, std::hypot(cx - centre_x_, cy - centre_y_));
+    max_theta_ = std::atan(radius_px_ / focal_);
+    return LensError::kOk;
+  }
   radius_px_ =
       std::isnan(params.radius_px) ? std::min(params.width, params.height) / 2.0 : params.radius_px;
   if (!(radius_px_ > 0.0) || !std::isfinite(radius_px_))
@@ -184,6 +199,7 @@ LensError Lens::Init(const LensParams& params) {
       return LensError::kOk;
     }
     case LensModel::kEquirectangular:
+    case LensModel::kPinhole:
       break;
   }
   return LensError::kOk;
@@ -288,6 +304,9 @@ bool Lens::PixelToCameraRay(double x, double y, Eigen::Vector3d* ray) const {
       *ray = v.normalized();
       return std::acos(std::clamp((*ray)(2), -1.0, 1.0)) <= max_theta_;
     }
+    case LensModel::kPinhole:
+      theta = std::atan(r / focal_);
+      break;
     case LensModel::kEquirectangular:
       return false;
   }
@@ -346,6 +365,10 @@ bool Lens::CameraRayToPixel(const Eigen::Vector3d& ray, double* x, double* y) co
       px = ox * o.e + oy + o.column_centre;
       break;
     }
+    case LensModel::kPinhole:
+      px = centre_x_ + focal_ * d(0) / d(2);
+      py = centre_y_ + focal_ * d(1) / d(2);
+      break;
     case LensModel::kEquirectangular:
       return false;
   }

@@ -140,4 +140,42 @@ HeadingErrorSummary SummariseHeadingErrors(std::span<double> errors_deg, int fra
   return s;
 }
 
+std::size_t RocCurve(std::span<const ScoredPair> pairs, std::span<std::size_t> order,
+                     std::span<RocPoint> curve) {
+  const std::size_t n = pairs.size();
+  if (order.size() < n || curve.size() < n + 1)
+    return 0;
+  std::size_t positives = 0;
+  for (const ScoredPair& p : pairs)
+    positives += p.match ? 1 : 0;
+  const std::size_t negatives = n - positives;
+  if (positives == 0 || negatives == 0)
+    return 0;
+  std::iota(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n), std::size_t{0});
+  // Ties are consumed together below, so their order among themselves does not matter.
+  std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n),
+            [&](std::size_t a, std::size_t b) { return pairs[a].score > pairs[b].score; });
+  std::size_t points = 0;
+  curve[points++] = {std::numeric_limits<double>::infinity(), 0.0, 0.0};
+  std::size_t tp = 0, fp = 0, i = 0;
+  while (i < n) {
+    const double threshold = pairs[order[i]].score;
+    while (i < n && pairs[order[i]].score == threshold) {
+      (pairs[order[i]].match ? tp : fp) += 1;
+      ++i;
+    }
+    curve[points++] = {threshold, static_cast<double>(fp) / static_cast<double>(negatives),
+                       static_cast<double>(tp) / static_cast<double>(positives)};
+  }
+  return points;
+}
+
+double RocArea(std::span<const RocPoint> curve) {
+  double area = 0;
+  for (std::size_t i = 1; i < curve.size(); ++i)
+    area += (curve[i].false_positive_rate - curve[i - 1].false_positive_rate) *
+            (curve[i].true_positive_rate + curve[i - 1].true_positive_rate) / 2.0;
+  return area;
+}
+
 }  // namespace skyloc::dsp

@@ -244,8 +244,8 @@ struct LensDiff {
 }  // namespace
 
 const char* RouteDbLensModelName(std::uint32_t model) {
-  static constexpr const char* kNames[] = {"equidistant", "equisolid", "kannala_brandt",
-                                           "ocamcalib", "equirectangular"};
+  static constexpr const char* kNames[] = {"equidistant", "equisolid",       "kannala_brandt",
+                                           "ocamcalib",   "equirectangular", "pinhole"};
   return model < std::size(kNames) ? kNames[model] : "unknown";
 }
 

@@ -352,7 +352,7 @@ TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
 TEST(RouteLens, ModelNamesMatchDsp) {
   for (auto m :
        {dsp::LensModel::kEquidistant, dsp::LensModel::kEquisolid, dsp::LensModel::kKannalaBrandt,
-        dsp::LensModel::kOCamCalib, dsp::LensModel::kEquirectangular})
+        dsp::LensModel::kOCamCalib, dsp::LensModel::kEquirectangular, dsp::LensModel::kPinhole})
     EXPECT_STREQ(RouteDbLensModelName(static_cast<std::uint32_t>(m)), dsp::LensModelName(m));
 }
 

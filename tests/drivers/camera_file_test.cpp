@@ -84,7 +84,14 @@ TEST(CameraFile, WrittenTextReadsBackAsTheSameLens) {
   dsp::LensParams eq;  // defaults: centre and radius unset, written as their effective values
   eq.width = 96;
   eq.height = 72;
-  for (const dsp::LensParams& p : {kb, eq}) {
+  dsp::LensParams pinhole;  // no radius_px written: the file refuses it for a pinhole
+  pinhole.model = dsp::LensModel::kPinhole;
+  pinhole.width = 640;
+  pinhole.height = 480;
+  pinhole.fov_deg = 47.8;
+  pinhole.roll_deg = -90;
+  pinhole.yaw_deg = -90;
+  for (const dsp::LensParams& p : {kb, eq, pinhole}) {
     dsp::Lens lens;
     ASSERT_EQ(lens.Init(p), dsp::LensError::kOk);
     Result<std::string> text = CameraFileText(lens, "a test");
@@ -105,6 +112,20 @@ TEST(CameraFile, WrittenTextReadsBackAsTheSameLens) {
     EXPECT_NEAR(back->yaw_deg, p.yaw_deg, 1e-6);
     EXPECT_NEAR(back->pitch_deg, p.pitch_deg, 1e-6);
   }
+}
+
+TEST(CameraFile, PinholeNeedsItsFieldOfViewAndHasNoImageCircle) {
+  const std::string image = "[image]\nwidth = 640\nheight = 480\n";
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"pinhole\"\n")),
+              HasSubstr("needs lens.fov_deg"));
+  EXPECT_THAT(Message(Parse(image + "[lens]\nmodel = \"pinhole\"\nfov_deg = 200\n")),
+              HasSubstr("below 180"));
+  EXPECT_THAT(
+      Message(Parse(image + "[lens]\nmodel = \"pinhole\"\nfov_deg = 60\nradius_px = 200\n")),
+      HasSubstr("lens.radius_px"));
+  Result<dsp::LensParams> ok = Parse(image + "[lens]\nmodel = \"pinhole\"\nfov_deg = 47.8\n");
+  ASSERT_TRUE(ok.ok()) << ok.status().message();
+  EXPECT_EQ(ok->model, dsp::LensModel::kPinhole);
 }
 
 TEST(CameraFile, ErrorsNameTheFileTheKeyAndTheFix) {

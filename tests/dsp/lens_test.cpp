@@ -258,6 +258,52 @@ TEST(Lens, EquirectangularCoversTheSphereWithRowZeroAtTheZenith) {
   ASSERT_TRUE(lens.RayToPixel({0, 0, -1}, &x, &y));  // everything is visible
 }
 
+// The Nao's camera of the 1D SURF paper: 640 x 480, 47.8 degrees across the width. A point
+// (X, Y, Z) in the camera frame lands at (cx + f X / Z, cy + f Y / Z) with
+// f = 320 / tan(23.9 degrees): the textbook perspective projection, written out here.
+TEST(Lens, PinholeProjectsAsTheTextbookPerspectiveFormula) {
+  LensParams p;
+  p.model = LensModel::kPinhole;
+  p.width = 640;
+  p.height = 480;
+  p.fov_deg = 47.8;
+  Lens lens;
+  ASSERT_EQ(lens.Init(p), LensError::kOk);
+  const double f = 320.0 / std::tan(23.9 * kPi / 180.0);
+  const double points[][3] = {{0, 0, 1}, {1, 0, 4}, {-2, 1.5, 9}, {0.3, -0.2, 0.7}};
+  for (const auto& q : points) {
+    double x, y;
+    ASSERT_TRUE(lens.CameraRayToPixel({q[0], q[1], q[2]}, &x, &y));
+    EXPECT_NEAR(x, 319.5 + f * q[0] / q[2], 1e-9);
+    EXPECT_NEAR(y, 239.5 + f * q[1] / q[2], 1e-9);
+  }
+  // The image's left and right edges are 23.9 degrees off the axis.
+  Eigen::Vector3d ray;
+  ASSERT_TRUE(lens.PixelToCameraRay(639.5, 239.5, &ray));
+  EXPECT_NEAR(std::atan2(ray(0), ray(2)) * 180.0 / kPi, 23.9, 1e-9);
+  ASSERT_TRUE(lens.PixelToCameraRay(-0.5, -0.5, &ray));  // every corner is in view
+  ASSERT_TRUE(lens.PixelToCameraRay(639.5, 479.5, &ray));
+  double x, y;
+  EXPECT_FALSE(lens.CameraRayToPixel({0, 0, -1}, &x, &y));    // behind the camera
+  EXPECT_FALSE(lens.CameraRayToPixel({1, 0, 1}, &x, &y));     // 45 degrees: beyond the edge
+  EXPECT_FALSE(lens.CameraRayToPixel({1, 0, 1e-9}, &x, &y));  // nearly sideways
+  // Pixel -> ray -> pixel over the image (ExpectRoundTrips' random rays would mostly miss
+  // a 48-degree view).
+  for (double px = 0.0; px <= 639.0; px += 31.9) {
+    for (double py = 0.0; py <= 479.0; py += 23.9) {
+      ASSERT_TRUE(lens.PixelToRay(px, py, &ray)) << px << "," << py;
+      ASSERT_TRUE(lens.RayToPixel(ray, &x, &y)) << px << "," << py;
+      EXPECT_NEAR(x, px, 1e-9);
+      EXPECT_NEAR(y, py, 1e-9);
+    }
+  }
+  p.fov_deg = 180.0;
+  EXPECT_EQ(lens.Init(p), LensError::kBadFieldOfView);
+  LensModel m;
+  ASSERT_TRUE(ParseLensModel("pinhole", &m));
+  EXPECT_EQ(m, LensModel::kPinhole);
+}
+
 TEST(Lens, MountRotationAppliesRollPitchYawInOrder) {
   LensParams p = Fisheye(LensModel::kEquidistant, 480, 480, 185.0);
   p.pitch_deg = 90.0;

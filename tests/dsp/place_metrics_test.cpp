@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <span>
 #include <vector>
 
@@ -165,6 +166,60 @@ TEST(PlaceMetrics, AClosedLoopWrapsFrameDistances) {
   EXPECT_TRUE(MatchIsCorrect(2, TruthAtFrame(97), loop, {}, {}));
   EXPECT_FALSE(MatchIsCorrect(3, TruthAtFrame(97), loop, {}, {}));
   EXPECT_FALSE(MatchIsCorrect(50, TruthAtFrame(0), loop, {}, {}));
+}
+
+// The ROC area against its independent definition: the Mann-Whitney statistic counted pair
+// by pair (a matching pair above a non-matching one scores 1, a tie 1/2), on random score
+// sets with many ties (integer scores 0..9) and without (continuous scores).
+TEST(RocCurve, AreaEqualsTheMannWhitneyStatisticCountedPairByPair) {
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 40; ++trial) {
+    const bool ties = trial % 2 == 0;
+    std::uniform_int_distribution<int> digit(0, 9);
+    std::uniform_real_distribution<double> real(0.0, 1.0);
+    std::vector<ScoredPair> pairs(static_cast<std::size_t>(5 + trial * 7));
+    for (ScoredPair& p : pairs) {
+      p.match = real(rng) < 0.3;
+      // Matches score higher on average, so the area is away from 1/2.
+      p.score = (ties ? digit(rng) : real(rng) * 10.0) + (p.match ? 2.0 : 0.0);
+    }
+    pairs[0].match = true;
+    pairs[1].match = false;
+    double u = 0;
+    int positives = 0, negatives = 0;
+    for (const ScoredPair& a : pairs) {
+      (a.match ? positives : negatives) += 1;
+      for (const ScoredPair& b : pairs)
+        if (a.match && !b.match)
+          u += a.score > b.score ? 1.0 : a.score == b.score ? 0.5 : 0.0;
+    }
+    std::vector<std::size_t> order(pairs.size());
+    std::vector<RocPoint> curve(pairs.size() + 1);
+    const std::size_t n = RocCurve(pairs, order, curve);
+    ASSERT_GE(n, 2u);
+    EXPECT_NEAR(RocArea(std::span(curve).first(n)), u / (positives * negatives), 1e-12)
+        << "trial " << trial;
+    EXPECT_EQ(curve[0].false_positive_rate, 0.0);
+    EXPECT_EQ(curve[n - 1].false_positive_rate, 1.0);
+    EXPECT_EQ(curve[n - 1].true_positive_rate, 1.0);
+  }
+}
+
+// By hand: scores 5 (match), 4 (no), 4 (match), 2 (no). Points: (0,0), (0,1/2) at 5,
+// (1/2,1) at 4 (the tie called together), (1,1) at 2. Area = 1/2 * 3/4 + 1/2 * 1 = 7/8.
+TEST(RocCurve, HandComputedCurveAndDegenerateInput) {
+  const std::vector<ScoredPair> pairs = {{4, false}, {5, true}, {2, false}, {4, true}};
+  std::vector<std::size_t> order(4);
+  std::vector<RocPoint> curve(5);
+  ASSERT_EQ(RocCurve(pairs, order, curve), 4u);
+  EXPECT_EQ(curve[1].threshold, 5.0);
+  EXPECT_EQ(curve[1].true_positive_rate, 0.5);
+  EXPECT_EQ(curve[2].false_positive_rate, 0.5);
+  EXPECT_EQ(curve[2].true_positive_rate, 1.0);
+  EXPECT_DOUBLE_EQ(RocArea(std::span(curve).first(4)), 7.0 / 8.0);
+  const std::vector<ScoredPair> only_matches = {{1, true}, {2, true}};
+  EXPECT_EQ(RocCurve(only_matches, order, curve), 0u);
+  EXPECT_EQ(RocCurve(pairs, std::span(order).first(3), curve), 0u);  // scratch too small
 }
 
 }  // namespace

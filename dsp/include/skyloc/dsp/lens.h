@@ -18,6 +18,10 @@
 //                    cam2world), invpol (angle -> pixel radius, world2cam), centre xc (row)
 //                    yc (column), affine c d e. Ray -> pixel starts from invpol and refines
 //                    with Newton on ss, so the two directions agree exactly.
+//   pinhole          r = f * tan(theta): an undistorted perspective camera; fov_deg is the
+//                    full horizontal field of view across the image width (below 180), so
+//                    f = (W / 2) / tan(fov / 2); no image circle (every pixel of the image
+//                    is in view; radius_px is not used)
 //   equirectangular  an unfolded full-sphere panorama: row 0 is the zenith side, theta =
 //                    (y + 0.5) * pi / H; columns are azimuth phi = (x + 0.5) * 2 pi / W
 //                    measured from +x towards +y.
@@ -36,10 +40,11 @@ enum class LensModel : std::uint8_t {
   kKannalaBrandt,
   kOCamCalib,
   kEquirectangular,
+  kPinhole,
 };
 
 // The camera-file spelling: "equidistant", "equisolid", "kannala_brandt", "ocamcalib",
-// "equirectangular".
+// "equirectangular", "pinhole".
 const char* LensModelName(LensModel model);
 // Parses that spelling; false for anything else.
 bool ParseLensModel(const char* name, LensModel* model);
@@ -71,7 +76,8 @@ struct LensParams {
   // half the shorter image side. Not used by equirectangular.
   double radius_px = kUnset;
   // Full field of view (degrees) across the image circle: directions beyond fov/2 from
-  // the optical axis are not visible. For equidistant/equisolid it also fixes f.
+  // the optical axis are not visible. For equidistant/equisolid it also fixes f. For
+  // pinhole: the horizontal field of view across the image width, which fixes f.
   double fov_deg = 185.0;
   // Kannala-Brandt focal lengths (pixels) and distortion k1..k4.
   double fx = 0.0;
@@ -87,7 +93,7 @@ struct LensParams {
 enum class LensError : std::uint8_t {
   kOk,
   kBadImageSize,    // width/height <= 0, or not the size an OCamCalib file was made for
-  kBadFieldOfView,  // fov outside (0, 360]
+  kBadFieldOfView,  // fov outside (0, 360], or a pinhole's outside (0, 180)
   kBadRadius,       // radius <= 0 or not finite
   kBadCentre,       // centre not finite
   kBadFocalLength,  // Kannala-Brandt fx/fy <= 0

@@ -125,4 +125,34 @@ struct HeadingErrorSummary {
 // `errors_deg` is overwritten with the sorted absolute errors (no allocation).
 HeadingErrorSummary SummariseHeadingErrors(std::span<double> errors_deg, int frames);
 
+// ---- ROC of a recognition score (the 1D SURF paper's Fig. 4 and Table 1) ----------------
+//
+// Pairs of images with a score (higher = more alike) and whether they truly match. At
+// threshold t every pair with score >= t is called a match: true positive rate = called
+// matches among the matching pairs, false positive rate = called matches among the others.
+// One point per distinct score (ties are called together), from (0, 0) at +infinity to
+// (1, 1). The area under it by the trapezoid rule equals the Mann-Whitney statistic: the
+// chance that a random matching pair scores above a random non-matching one, ties counting
+// one half.
+
+struct ScoredPair {
+  double score = 0;
+  bool match = false;
+};
+
+struct RocPoint {
+  double threshold = 0;  // call pairs with score >= threshold a match
+  double false_positive_rate = 0;
+  double true_positive_rate = 0;
+};
+
+// Fills `curve` (needs pairs.size() + 1 points) and returns the number of points written;
+// 0 when there is not at least one pair of each kind. `order` is scratch of pairs.size()
+// indices. Allocates nothing.
+std::size_t RocCurve(std::span<const ScoredPair> pairs, std::span<std::size_t> order,
+                     std::span<RocPoint> curve);
+
+// The trapezoid area under a curve from RocCurve (0 for an empty curve).
+double RocArea(std::span<const RocPoint> curve);
+
 }  // namespace skyloc::dsp

@@ -11,7 +11,9 @@
 //               camera): equidistant 185 degrees across the shorter side by default. The
 //               lens's own "body" frame (its mount rotation applied) is taken as the
 //               camera frame above, so a camera file's mount angles tilt the view too.
-//               Pixels outside the image circle are black.
+//               Pixels outside the image circle are black. A pinhole lens mounted with
+//               roll -90, yaw -90 (camera z = body +x, image right = body -y) is a
+//               forward camera (the 1D SURF experiment, surf1d_experiment.h).
 //
 // Init() allocates a table of per-pixel ray directions; Render() allocates nothing and is
 // deterministic: the same world, pose, lighting and frame seed give the same bytes.
