@@ -236,8 +236,9 @@ Status Pipeline::Init(const Config& config) {
                          dsp::SeqSlamErrorMessage(matcher_error));
 
   const dsp::StateMachineParams sm = StateMachineParamsFrom(config);
-  if (state_.Init(sm) != dsp::StateMachineError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[state]: inconsistent thresholds");
+  if (const dsp::StateMachineError e = state_.Init(sm); e != dsp::StateMachineError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "[state]: %s",
+                         dsp::StateMachineErrorMessage(e));
 
   route_settings_ = {};
   route_settings_.descriptor_kind = kDescriptorSkyShAmplitudes;

@@ -14,6 +14,23 @@ const char* LocalisationStateName(LocalisationState state) {
   return "?";
 }
 
+const char* StateMachineErrorMessage(StateMachineError error) {
+  switch (error) {
+    case StateMachineError::kOk:
+      return "ok";
+    case StateMachineError::kBadConfidence:
+      return "enter_confidence and stay_confidence must be in 0..1, with stay_confidence not "
+             "above enter_confidence";
+    case StateMachineError::kBadUniqueness:
+      return "max_uniqueness must be in 0..1";
+    case StateMachineError::kBadCounts:
+      return "confirm_frames, drop_frames and lost_frames must be at least 1";
+    case StateMachineError::kBadVelocity:
+      return "the velocity band must have 0 <= vmin <= vmax and a tolerance of at least 0";
+  }
+  return "unknown state machine error";
+}
+
 StateMachineError LocalisationStateMachine::Init(const StateMachineParams& p) {
   const bool unit = p.enter_confidence >= 0 && p.enter_confidence <= 1 && p.stay_confidence >= 0 &&
                     p.stay_confidence <= 1;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace skyloc::dsp {
@@ -142,6 +143,18 @@ TEST(LocalisationState, RejectsBadParameters) {
   p = Params();
   p.vmin = 2.0;
   EXPECT_EQ(m.Init(p), StateMachineError::kBadVelocity);
+}
+
+// Each refusal reaches the user as a sentence naming the keys to fix.
+TEST(LocalisationState, EachErrorNamesTheKeysToFix) {
+  const std::pair<StateMachineError, const char*> cases[] = {
+      {StateMachineError::kBadConfidence, "stay_confidence"},
+      {StateMachineError::kBadUniqueness, "max_uniqueness"},
+      {StateMachineError::kBadCounts, "confirm_frames"},
+      {StateMachineError::kBadVelocity, "vmin"},
+  };
+  for (const auto& [error, key] : cases)
+    EXPECT_NE(std::string(StateMachineErrorMessage(error)).find(key), std::string::npos) << key;
 }
 
 }  // namespace

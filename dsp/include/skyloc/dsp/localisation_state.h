@@ -44,6 +44,8 @@ enum class StateMachineError : std::uint8_t {
   kBadVelocity,  // vmin > vmax, negative, or negative tolerance
 };
 
+const char* StateMachineErrorMessage(StateMachineError error);
+
 class LocalisationStateMachine {
  public:
   StateMachineError Init(const StateMachineParams& params);
