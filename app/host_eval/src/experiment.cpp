@@ -1,4 +1,4 @@
-#include "skyloc/sim/experiment.h"
+#include "skyloc/host_eval/experiment.h"
 
 #include <algorithm>
 #include <array>
@@ -11,7 +11,27 @@
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/sim/imu_model.h"
 
-namespace skyloc::sim {
+namespace skyloc::host_eval {
+
+// The simulator's worlds, renderer and motion, which the experiments drive.
+using sim::BuildTrajectory;
+using sim::DefaultSimLens;
+using sim::EstimateAttitudes;
+using sim::ImuModelConfig;
+using sim::ImuSeedForRun;
+using sim::LightingPreset;
+using sim::LoadRouteCsv;
+using sim::LoadSevilleWorld;
+using sim::MakeProceduralWorld;
+using sim::MotionConfig;
+using sim::Point2;
+using sim::Renderer;
+using sim::Sampling;
+using sim::Spectrum;
+using sim::TrajectoryPoint;
+using sim::World;
+using sim::WorldKind;
+using sim::WorldKindName;
 
 const char* AttitudeInputName(AttitudeInput input) {
   switch (input) {
@@ -650,4 +670,4 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
   return Status::Ok();
 }
 
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval

@@ -1,8 +1,8 @@
-#include "skyloc/sim/experiment.h"
+#include "skyloc/host_eval/experiment.h"
 
 #include <gtest/gtest.h>
 
-namespace skyloc::sim {
+namespace skyloc::host_eval {
 namespace {
 
 // The paper's central claim on a short simulated City: at a 40 degree tilt difference
@@ -43,4 +43,4 @@ TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
 }
 
 }  // namespace
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval
