@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <span>
 #include <string>
 #include <utility>
@@ -24,6 +25,7 @@
 #include "svg_plot.h"
 #if SKYLOC_WITH_HOST_EVAL
 #include "skyloc/host_eval/experiment.h"
+#include "skyloc/host_eval/vocabulary.h"
 #endif
 
 namespace skyloc::app {
@@ -59,11 +61,15 @@ constexpr const char* kUsage =
     "  --zenith M             --attitude image's method: skyline (the skyline's mean plane;\n"
     "                         default) or centroid (the sky's centroid)\n"
     "  --cap-elevation DEG    the cap's lower edge, 0..80 (default: from the experiment's\n"
-    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n";
+    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n"
+    "  --vocab VOCAB          tilt, manoeuvre: add FAB-MAP 2.0 on the visible images (the\n"
+    "                         fabmap column) with a vocabulary from `skyloc fabmap-train`,\n"
+    "                         trained on a run of another world (docs/FABMAP.md)\n";
 
 #if SKYLOC_WITH_HOST_EVAL
 struct Options {
   std::string name, out, data_dir = "../shared/data/seville2009";
+  std::string vocabulary_path;  // --vocab: FAB-MAP 2.0 (tilt, manoeuvre)
   host_eval::ExperimentOptions experiment;
   bool spacing_given = false;
 };
@@ -107,6 +113,13 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       o->out = v;
     } else if (std::strcmp(flag, "--data") == 0) {
       o->data_dir = v;
+    } else if (std::strcmp(flag, "--vocab") == 0) {
+      if (o->name != "tilt" && o->name != "manoeuvre") {
+        std::fprintf(stderr, "skyloc experiment %s: --vocab (FAB-MAP) is for tilt and manoeuvre\n",
+                     o->name.c_str());
+        return kExitUsage;
+      }
+      o->vocabulary_path = v;
     } else if (std::strcmp(flag, "--width") == 0) {
       if (!ParseNumber(v, 16, 4096, &d) || d != std::floor(d))
         return bad("pixels within 16..4096");
@@ -299,6 +312,8 @@ constexpr MethodName kDescriptorMethods[] = {
     {"sky_filter", "Route filter (sky)"},
     {"sky_cap", "SeqSLAM (sky, gravity-aligned cap)"},
     {"sky_cap_filter", "Route filter (sky, gravity-aligned cap)"}};
+// The column after them in tilt and manoeuvre with --vocab.
+constexpr MethodName kFabmapMethod = {"fabmap", "FAB-MAP 2.0 (visible, SIFT)"};
 constexpr MethodName kMatcherMethods[] = {
     {"openseqslam", "OpenSeqSLAM (sky)"},
     {"filter", "Route filter (sky)"},
@@ -467,9 +482,32 @@ int RunExperiment(std::span<char* const> args) {
   std::vector<host_eval::AntsRow> ants;
   std::vector<host_eval::SpeedRow> speed;
   const bool cap = o.experiment.attitude != host_eval::AttitudeInput::kNone;
-  std::span<const MethodName> methods = kDescriptorMethods;
+  std::vector<MethodName> methods(std::begin(kDescriptorMethods), std::end(kDescriptorMethods));
   if (!cap || o.name == "ants")
-    methods = methods.first(kDescriptorMethodsWithoutCap);
+    methods.resize(kDescriptorMethodsWithoutCap);
+  host_eval::Vocabulary vocabulary;
+  const bool fabmap = !o.vocabulary_path.empty();
+  if (fabmap) {
+    Result<host_eval::Vocabulary> v = host_eval::LoadVocabulary(o.vocabulary_path);
+    if (!v.ok()) {
+      std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), v.status().message());
+      return kExitFailure;
+    }
+    vocabulary = std::move(*v);
+    o.experiment.fabmap_vocabulary = &vocabulary;
+    methods.push_back(kFabmapMethod);
+  }
+  // Tilt and manoeuvre rows: the descriptor methods in use, then FAB-MAP.
+  auto descriptor_scores = [&](const auto& r) {
+    std::vector<const host_eval::MethodScore*> s = {&r.sky, &r.vanilla, &r.sky_filter};
+    if (cap) {
+      s.push_back(&r.sky_cap);
+      s.push_back(&r.sky_cap_filter);
+    }
+    if (fabmap)
+      s.push_back(&r.fabmap);
+    return s;
+  };
   std::string header, separator;
   if (o.name == "tilt") {
     const int differences[] = {0, 10, 20, 30, 40, 50, 60};
@@ -483,7 +521,7 @@ int RunExperiment(std::span<char* const> args) {
                       Format("\"tilt_difference_deg\": %.0f, \"reference_tilt_deg\": %.0f, "
                              "\"query_tilt_deg\": %.0f, ",
                              r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
-                      {&r.sky, &r.vanilla, &r.sky_filter, &r.sky_cap, &r.sky_cap_filter}});
+                      descriptor_scores(r)});
     }
   } else if (o.name == "manoeuvre") {
     const int ds[] = {1, 10, 20};
@@ -496,15 +534,15 @@ int RunExperiment(std::span<char* const> args) {
                       Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
                       Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world),
                              r.sequence_length),
-                      {&r.sky, &r.vanilla, &r.sky_filter, &r.sky_cap, &r.sky_cap_filter}});
+                      descriptor_scores(r)});
     }
   } else if (o.name == "speed") {
     o.experiment.sampling = sim::Sampling::kTime;
     const int ds[] = {1, 5, 10, 20};
     status = host_eval::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
-    methods = kMatcherMethods;
+    methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
     if (!cap)
-      methods = methods.first(kMatcherMethodsWithoutCap);
+      methods.resize(kMatcherMethodsWithoutCap);
     header =
         "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
     separator = "|---|---|---|---|---|---|---|";
@@ -587,6 +625,16 @@ int RunExperiment(std::span<char* const> args) {
       add(rows[i].label, manoeuvre[i].reference_zenith, manoeuvre[i].query_zenith);
     std::fputs(table.c_str(), stdout);
     notes += table;
+  }
+  if (fabmap) {
+    notes += Format(
+        "\nFAB-MAP 2.0 (fabmap columns, docs/FABMAP.md): each query frame's visible image "
+        "localised alone against every reference frame (no sequence: the same score on every "
+        "ds row), uniqueness 1 - p(matched place). Vocabulary %s: %d words, SIFT at %dx%d "
+        "(at most %d a frame), %zu new-place samples, detector p(z|e) %.2f, p(z|not e) %.2f.\n",
+        o.vocabulary_path.c_str(), vocabulary.words, vocabulary.features.width,
+        vocabulary.features.height, vocabulary.features.max_features, vocabulary.samples.size(),
+        vocabulary.p_z_given_e, vocabulary.p_z_given_not_e);
   }
   if (o.name == "ants")
     notes += std::string("Reference route ") + host_eval::kAntsReferenceRoute + ".\n";

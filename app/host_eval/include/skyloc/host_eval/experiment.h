@@ -23,6 +23,8 @@
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/zenith_estimate.h"
+#include "skyloc/host_eval/chow_liu.h"
+#include "skyloc/host_eval/vocabulary.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/sim/motion.h"
 #include "skyloc/sim/renderer.h"
@@ -70,6 +72,9 @@ struct ExperimentOptions {
   // byte per column) for the heading (issue 13); false: none (every other experiment).
   bool strips = false;
   dsp::HorizonStripOptions strip;  // the firmware's [heading] defaults
+  // FAB-MAP 2.0 (tilt and manoeuvre): the visible image's words over this vocabulary (not
+  // owned; trained on runs of another world, docs/FABMAP.md). Null: no FAB-MAP column.
+  const Vocabulary* fabmap_vocabulary = nullptr;
 };
 
 // How far the cap's zenith was from the true one over a run's frames (degrees).
@@ -90,7 +95,8 @@ struct RunDescriptors {
   std::vector<dsp::Attitude> attitude;  // per frame: the zenith the cap used
   ZenithError zenith_error;             // of `attitude` against the true poses
   double mean_sky_fraction = 0;
-  std::vector<std::uint8_t> strips;  // frames x strip.n_azimuth (options.strips)
+  std::vector<std::uint8_t> strips;    // frames x strip.n_azimuth (options.strips)
+  std::vector<WordList> fabmap_words;  // per frame (options.fabmap_vocabulary)
 };
 
 struct RunSpec {
@@ -115,7 +121,9 @@ struct MethodScore {
 };
 
 // Which descriptor of a run is scored.
-enum class RunDescriptor : std::uint8_t { kSky, kSkyCap, kVanilla };
+// kFabmap is FAB-MAP 2.0 on the visible image's words: each query frame localised alone
+// (no sequence, no matcher), uniqueness 1 - p(matched place).
+enum class RunDescriptor : std::uint8_t { kSky, kSkyCap, kVanilla, kFabmap };
 
 // Which matcher scores a pair of runs: OpenSeqSLAM (batch, centred window, as the paper)
 // or the route filter (the firmware's, causal).
@@ -139,6 +147,7 @@ struct TiltRow {
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
   // The gravity-aligned cap (options.attitude != kNone): OpenSeqSLAM and the route filter.
   MethodScore sky_cap, sky_cap_filter;
+  MethodScore fabmap;                          // options.fabmap_vocabulary set
   ZenithError reference_zenith, query_zenith;  // the cap's zenith against the truth
 };
 
@@ -157,6 +166,8 @@ struct ManoeuvreRow {
   MethodScore sky, vanilla;
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
   MethodScore sky_cap, sky_cap_filter;  // the gravity-aligned cap, as TiltRow
+  // FAB-MAP 2.0 (options.fabmap_vocabulary set): single images, the same on every ds row.
+  MethodScore fabmap;
   ZenithError reference_zenith, query_zenith;
 };
 
