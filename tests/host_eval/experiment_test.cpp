@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 namespace skyloc::host_eval {
 namespace {
 
@@ -40,6 +42,18 @@ TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
             tilted.vanilla.summary.precision_at_full_recall + 0.1);
   EXPECT_GE(tilted.sky.summary.recall_at_full_precision,
             tilted.vanilla.summary.recall_at_full_precision);
+}
+
+// FAB-MAP needs the runs' words: runs described without a vocabulary are refused by name,
+// not scored as if every frame had seen nothing.
+TEST(Experiment, FabmapWithoutWordsIsAnError) {
+  RunDescriptors run;
+  run.trajectory.resize(3);
+  ExperimentOptions options;
+  MethodScore score;
+  const Status s = ScoreRuns(run, run, RunDescriptor::kFabmap, options, &score);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("FAB-MAP"), std::string::npos) << s.message();
 }
 
 }  // namespace
