@@ -627,14 +627,18 @@ int RunExperiment(std::span<char* const> args) {
     notes += table;
   }
   if (fabmap) {
-    notes += Format(
-        "\nFAB-MAP 2.0 (fabmap columns, docs/FABMAP.md): each query frame's visible image "
-        "localised alone against every reference frame (no sequence: the same score on every "
-        "ds row), uniqueness 1 - p(matched place). Vocabulary %s: %d words, SIFT at %dx%d "
-        "(at most %d a frame), %zu new-place samples, detector p(z|e) %.2f, p(z|not e) %.2f.\n",
-        o.vocabulary_path.c_str(), vocabulary.words, vocabulary.features.width,
-        vocabulary.features.height, vocabulary.features.max_features, vocabulary.samples.size(),
-        vocabulary.p_z_given_e, vocabulary.p_z_given_not_e);
+    // Format holds 511 characters: the path, of any length, goes in on its own.
+    notes += std::string(
+                 "\nFAB-MAP 2.0 (fabmap columns, docs/FABMAP.md): each query frame's visible "
+                 "image localised alone against every reference frame (no sequence") +
+             (o.name == "manoeuvre" ? ": the same score on every ds row" : "") +
+             "), uniqueness 1 - p(matched place). Vocabulary " + o.vocabulary_path +
+             Format(
+                 ": %d words, SIFT at %dx%d (at most %d a frame), %zu new-place samples, "
+                 "detector p(z|e) %.2f, p(z|not e) %.2f.\n",
+                 vocabulary.words, vocabulary.features.width, vocabulary.features.height,
+                 vocabulary.features.max_features, vocabulary.samples.size(),
+                 vocabulary.p_z_given_e, vocabulary.p_z_given_not_e);
   }
   if (o.name == "ants")
     notes += std::string("Reference route ") + host_eval::kAntsReferenceRoute + ".\n";
