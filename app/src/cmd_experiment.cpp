@@ -1,7 +1,8 @@
 // `skyloc experiment NAME --out DIR`: the paper's experiments on simulated runs (issue 5,
 // docs/RESULTS.md). Each writes DIR/results.md (a markdown table and the command that
 // made it), DIR/metrics.json, precision-recall plots DIR/pr_sky.svg and DIR/pr_vanilla.svg,
-// and frame correspondences DIR/correspondence.svg.
+// and frame correspondences DIR/correspondence.svg. The experiments are host evaluation
+// code (skyloc::host_eval): a build without SKYLOC_HOST_EVAL says they are not in it.
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <span>
 #include <string>
 #include <utility>
@@ -20,8 +22,11 @@
 #include "config.h"
 #include "pipeline.h"
 #include "skyloc/dsp/localisation_state.h"
-#include "skyloc/sim/experiment.h"
 #include "svg_plot.h"
+#if SKYLOC_WITH_HOST_EVAL
+#include "skyloc/host_eval/experiment.h"
+#include "skyloc/host_eval/vocabulary.h"
+#endif
 
 namespace skyloc::app {
 namespace {
@@ -58,11 +63,16 @@ constexpr const char* kUsage =
     "  --zenith M             --attitude image's method: skyline (the skyline's mean plane;\n"
     "                         default) or centroid (the sky's centroid)\n"
     "  --cap-elevation DEG    the cap's lower edge, 0..80 (default: from the experiment's\n"
-    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n";
+    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n"
+    "  --vocab VOCAB          tilt, manoeuvre: add FAB-MAP 2.0 on the visible images (the\n"
+    "                         fabmap column) with a vocabulary from `skyloc fabmap-train`,\n"
+    "                         trained on a run of another world (docs/FABMAP.md)\n";
 
+#if SKYLOC_WITH_HOST_EVAL
 struct Options {
   std::string name, out, data_dir = "../shared/data/seville2009";
-  sim::ExperimentOptions experiment;
+  std::string vocabulary_path;  // --vocab: FAB-MAP 2.0 (tilt, manoeuvre)
+  host_eval::ExperimentOptions experiment;
   bool spacing_given = false;
 };
 
@@ -100,11 +110,18 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       std::fprintf(stderr, "skyloc experiment: %s '%s': expected %s\n", flag, v, expected);
       return kExitUsage;
     };
-    sim::ExperimentOptions& e = o->experiment;
+    host_eval::ExperimentOptions& e = o->experiment;
     if (std::strcmp(flag, "--out") == 0) {
       o->out = v;
     } else if (std::strcmp(flag, "--data") == 0) {
       o->data_dir = v;
+    } else if (std::strcmp(flag, "--vocab") == 0) {
+      if (o->name != "tilt" && o->name != "manoeuvre") {
+        std::fprintf(stderr, "skyloc experiment %s: --vocab (FAB-MAP) is for tilt and manoeuvre\n",
+                     o->name.c_str());
+        return kExitUsage;
+      }
+      o->vocabulary_path = v;
     } else if (std::strcmp(flag, "--width") == 0) {
       if (!ParseNumber(v, 16, 4096, &d) || d != std::floor(d))
         return bad("pixels within 16..4096");
@@ -128,13 +145,13 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       e.max_frames = static_cast<int>(d);
     } else if (std::strcmp(flag, "--attitude") == 0) {
       if (std::strcmp(v, "none") == 0)
-        e.attitude = sim::AttitudeInput::kNone;
+        e.attitude = host_eval::AttitudeInput::kNone;
       else if (std::strcmp(v, "truth") == 0)
-        e.attitude = sim::AttitudeInput::kTruth;
+        e.attitude = host_eval::AttitudeInput::kTruth;
       else if (std::strcmp(v, "imu") == 0)
-        e.attitude = sim::AttitudeInput::kSimulatedImu;
+        e.attitude = host_eval::AttitudeInput::kSimulatedImu;
       else if (std::strcmp(v, "image") == 0)
-        e.attitude = sim::AttitudeInput::kImage;
+        e.attitude = host_eval::AttitudeInput::kImage;
       else
         return bad("none, truth, imu or image");
     } else if (std::strcmp(flag, "--zenith") == 0) {
@@ -176,7 +193,7 @@ struct Row {
   std::string label;    // also the plot legend
   std::string columns;  // markdown cells before the metrics
   std::string json;     // JSON fields before the metrics
-  std::vector<const sim::MethodScore*> scores;
+  std::vector<const host_eval::MethodScore*> scores;
 };
 
 // printf into a std::string; for short pieces (at most 511 characters).
@@ -190,7 +207,7 @@ std::string Format(const char* format, ...) {
   return buffer;
 }
 
-std::string SummaryJson(const sim::MethodScore& m) {
+std::string SummaryJson(const host_eval::MethodScore& m) {
   std::string s = Format(
       "{\"evaluated\": %d, \"with_ground_truth\": %d, \"correct\": %d, "
       "\"precision_at_100_recall\": %.4f, \"recall_at_100_precision\": %.4f, \"auc\": %.4f, "
@@ -228,7 +245,7 @@ std::string CorrespondencePlot(const std::vector<Row>& rows, std::span<const Met
   std::vector<CorrespondencePanel> panels;
   for (const Row& r : rows) {
     for (std::size_t k = methods.size(); k-- > 0;) {
-      const sim::MethodScore& m = *r.scores[k];
+      const host_eval::MethodScore& m = *r.scores[k];
       CorrespondencePanel panel{std::string(methods[k].key) + ": " + r.label, {}, 1, {}};
       for (std::size_t q = 0; q < m.truth.size(); ++q) {
         panel.ground_truth.push_back(m.truth[q].nearest);
@@ -262,9 +279,9 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
     md += r.columns;
-    for (const sim::MethodScore* m : r.scores)
+    for (const host_eval::MethodScore* m : r.scores)
       md += Format(" %.0f %% |", 100 * m->summary.precision_at_full_recall);
-    for (const sim::MethodScore* m : r.scores)
+    for (const host_eval::MethodScore* m : r.scores)
       md += Format(" %.0f %% |", 100 * m->summary.recall_at_full_precision);
     md += "\n";
     json += "    {" + r.json;
@@ -297,6 +314,8 @@ constexpr MethodName kDescriptorMethods[] = {
     {"sky_filter", "Route filter (sky)"},
     {"sky_cap", "SeqSLAM (sky, gravity-aligned cap)"},
     {"sky_cap_filter", "Route filter (sky, gravity-aligned cap)"}};
+// The column after them in tilt and manoeuvre with --vocab.
+constexpr MethodName kFabmapMethod = {"fabmap", "FAB-MAP 2.0 (visible, SIFT)"};
 constexpr MethodName kMatcherMethods[] = {
     {"openseqslam", "OpenSeqSLAM (sky)"},
     {"filter", "Route filter (sky)"},
@@ -307,7 +326,7 @@ constexpr std::size_t kMatcherMethodsWithoutCap = 2;
 
 // The firmware's state machine (default [state] settings, the filter's motion limits)
 // over a filter run: how many frames it shows LOCALISED, and how many of those are right.
-std::pair<int, int> LocalisedFrames(const sim::MethodScore& m) {
+std::pair<int, int> LocalisedFrames(const host_eval::MethodScore& m) {
   Config config;
   config.seqslam.matcher = Matcher::kRouteFilter;
   const std::vector<dsp::LocalisationState> states = ReplayStateMachine(config, m.matches);
@@ -325,7 +344,7 @@ void PrintProgress(const char* what, void* /*context*/) {
   std::fprintf(stderr, "skyloc experiment: rendering %s\n", what);
 }
 
-std::string CommonNotes(const sim::ExperimentOptions& e) {
+std::string CommonNotes(const host_eval::ExperimentOptions& e) {
   const std::string sampling =
       e.sampling == sim::Sampling::kTime
           ? Format(
@@ -365,15 +384,16 @@ std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
 
 // `skyloc experiment heading`: its own tables (errors, not precision-recall).
 int RunHeading(const Options& o, const std::string& command) {
-  std::vector<sim::HeadingRow> rows;
-  if (Status s = sim::RunHeadingExperiment(o.experiment, &rows, PrintProgress, nullptr); !s.ok()) {
+  std::vector<host_eval::HeadingRow> rows;
+  if (Status s = host_eval::RunHeadingExperiment(o.experiment, &rows, PrintProgress, nullptr);
+      !s.ok()) {
     std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
     return kExitFailure;
   }
   // All worlds together: the done-when figure.
   std::vector<double> pooled_correlation, pooled_surf;
   int pooled_frames = 0;
-  for (const sim::HeadingRow& r : rows) {
+  for (const host_eval::HeadingRow& r : rows) {
     pooled_frames += r.correlation.frames;
     pooled_correlation.insert(pooled_correlation.end(), r.correlation_errors_deg.begin(),
                               r.correlation_errors_deg.end());
@@ -391,7 +411,7 @@ int RunHeading(const Options& o, const std::string& command) {
   std::string json =
       "{\n  \"experiment\": \"heading\",\n  \"command\": \"" + command + "\",\n  \"rows\": [\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    const sim::HeadingRow& r = rows[i];
+    const host_eval::HeadingRow& r = rows[i];
     md += Format("| %s | %d | %d | %s | %s | %s | %s |\n", sim::WorldKindName(r.world),
                  r.query_frames, r.match.summary.correct, HeadingCell(r.correlation).c_str(),
                  HeadingCell(r.surf).c_str(), HeadingCell(r.correlation_level).c_str(),
@@ -435,8 +455,11 @@ int RunHeading(const Options& o, const std::string& command) {
   return kExitOk;
 }
 
+#endif  // SKYLOC_WITH_HOST_EVAL
+
 }  // namespace
 
+#if SKYLOC_WITH_HOST_EVAL
 int RunExperiment(std::span<char* const> args) {
   if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
     return RunSurf1dExperiment(args);
@@ -458,52 +481,76 @@ int RunExperiment(std::span<char* const> args) {
   std::vector<Row> rows;
   Status status;
   // Results live here so the rows can point at them.
-  std::vector<sim::TiltRow> tilt;
-  std::vector<sim::ManoeuvreRow> manoeuvre;
-  std::vector<sim::AntsRow> ants;
-  std::vector<sim::SpeedRow> speed;
-  const bool cap = o.experiment.attitude != sim::AttitudeInput::kNone;
-  std::span<const MethodName> methods = kDescriptorMethods;
+  std::vector<host_eval::TiltRow> tilt;
+  std::vector<host_eval::ManoeuvreRow> manoeuvre;
+  std::vector<host_eval::AntsRow> ants;
+  std::vector<host_eval::SpeedRow> speed;
+  const bool cap = o.experiment.attitude != host_eval::AttitudeInput::kNone;
+  std::vector<MethodName> methods(std::begin(kDescriptorMethods), std::end(kDescriptorMethods));
   if (!cap || o.name == "ants")
-    methods = methods.first(kDescriptorMethodsWithoutCap);
+    methods.resize(kDescriptorMethodsWithoutCap);
+  host_eval::Vocabulary vocabulary;
+  const bool fabmap = !o.vocabulary_path.empty();
+  if (fabmap) {
+    Result<host_eval::Vocabulary> v = host_eval::LoadVocabulary(o.vocabulary_path);
+    if (!v.ok()) {
+      std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), v.status().message());
+      return kExitFailure;
+    }
+    vocabulary = std::move(*v);
+    o.experiment.fabmap_vocabulary = &vocabulary;
+    methods.push_back(kFabmapMethod);
+  }
+  // Tilt and manoeuvre rows: the descriptor methods in use, then FAB-MAP.
+  auto descriptor_scores = [&](const auto& r) {
+    std::vector<const host_eval::MethodScore*> s = {&r.sky, &r.vanilla, &r.sky_filter};
+    if (cap) {
+      s.push_back(&r.sky_cap);
+      s.push_back(&r.sky_cap_filter);
+    }
+    if (fabmap)
+      s.push_back(&r.fabmap);
+    return s;
+  };
   std::string header, separator;
   if (o.name == "tilt") {
     const int differences[] = {0, 10, 20, 30, 40, 50, 60};
-    status = sim::RunTiltExperiment(o.experiment, differences, &tilt, PrintProgress, nullptr);
+    status = host_eval::RunTiltExperiment(o.experiment, differences, &tilt, PrintProgress, nullptr);
     header = "| tilt difference | reference / query tilt |";
     separator = "|---|---|";
-    for (const sim::TiltRow& r : tilt) {
+    for (const host_eval::TiltRow& r : tilt) {
       rows.push_back({Format("%.0f deg", r.tilt_difference_deg),
                       Format("| %.0f° | %+.0f° / %+.0f° |", r.tilt_difference_deg,
                              r.reference_tilt_deg, r.query_tilt_deg),
                       Format("\"tilt_difference_deg\": %.0f, \"reference_tilt_deg\": %.0f, "
                              "\"query_tilt_deg\": %.0f, ",
                              r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
-                      {&r.sky, &r.vanilla, &r.sky_filter, &r.sky_cap, &r.sky_cap_filter}});
+                      descriptor_scores(r)});
     }
   } else if (o.name == "manoeuvre") {
     const int ds[] = {1, 10, 20};
-    status = sim::RunManoeuvreExperiment(o.experiment, ds, &manoeuvre, PrintProgress, nullptr);
+    status =
+        host_eval::RunManoeuvreExperiment(o.experiment, ds, &manoeuvre, PrintProgress, nullptr);
     header = "| world | ds |";
     separator = "|---|---|";
-    for (const sim::ManoeuvreRow& r : manoeuvre) {
+    for (const host_eval::ManoeuvreRow& r : manoeuvre) {
       rows.push_back({Format("%s ds %d", sim::WorldKindName(r.world), r.sequence_length),
                       Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
                       Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world),
                              r.sequence_length),
-                      {&r.sky, &r.vanilla, &r.sky_filter, &r.sky_cap, &r.sky_cap_filter}});
+                      descriptor_scores(r)});
     }
   } else if (o.name == "speed") {
     o.experiment.sampling = sim::Sampling::kTime;
     const int ds[] = {1, 5, 10, 20};
-    status = sim::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
-    methods = kMatcherMethods;
+    status = host_eval::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
+    methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
     if (!cap)
-      methods = methods.first(kMatcherMethodsWithoutCap);
+      methods.resize(kMatcherMethodsWithoutCap);
     header =
         "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
     separator = "|---|---|---|---|---|---|---|";
-    for (const sim::SpeedRow& r : speed) {
+    for (const host_eval::SpeedRow& r : speed) {
       const auto [localised, correct] = LocalisedFrames(r.filter);
       rows.push_back(
           {Format("%s %.1fx %s %s ds %d", sim::WorldKindName(r.world), r.speed_ratio,
@@ -525,11 +572,11 @@ int RunExperiment(std::span<char* const> args) {
       o.experiment.spacing_m = 0.05;
     o.experiment.max_offset_m = 0.25;
     const double heights[] = {0.01, 0.1};
-    status =
-        sim::RunAntsExperiment(o.experiment, o.data_dir, heights, &ants, PrintProgress, nullptr);
+    status = host_eval::RunAntsExperiment(o.experiment, o.data_dir, heights, &ants, PrintProgress,
+                                          nullptr);
     header = "| query route | same ant | camera height | frames with truth |";
     separator = "|---|---|---|---|";
-    for (const sim::AntsRow& r : ants) {
+    for (const host_eval::AntsRow& r : ants) {
       rows.push_back({Format("%s %.2f m", r.query.c_str(), r.camera_height_m),
                       Format("| %s | %s | %.2f m | %.0f %% |", r.query.c_str(),
                              r.same_ant ? "yes" : "no", r.camera_height_m, 100 * r.truth_fraction),
@@ -551,8 +598,8 @@ int RunExperiment(std::span<char* const> args) {
     notes += Format(
         "Gravity-aligned cap (sky_cap columns): zenith from %s; lower edge %s, taper %.3g "
         "degrees.\n",
-        o.experiment.attitude == sim::AttitudeInput::kTruth ? "the true poses"
-        : o.experiment.attitude == sim::AttitudeInput::kImage
+        o.experiment.attitude == host_eval::AttitudeInput::kTruth ? "the true poses"
+        : o.experiment.attitude == host_eval::AttitudeInput::kImage
             ? (o.experiment.zenith.method == dsp::ZenithMethod::kSkylinePlane
                    ? "the image alone (dsp::ZenithEstimator: the skyline's mean plane)"
                    : "the image alone (dsp::ZenithEstimator: the sky's centroid)")
@@ -568,11 +615,11 @@ int RunExperiment(std::span<char* const> args) {
         "\nThe cap's zenith against the true poses (degrees: mean / p95 / max over the run's "
         "frames; frames with no estimate, then assumed level):\n\n"
         "| row | reference run | query run | no estimate (ref / query) |\n|---|---|---|---|\n";
-    auto cell = [](const sim::ZenithError& z) {
+    auto cell = [](const host_eval::ZenithError& z) {
       return Format("%.2f / %.2f / %.2f", z.mean_deg, z.p95_deg, z.max_deg);
     };
-    auto add = [&](const std::string& label, const sim::ZenithError& ref,
-                   const sim::ZenithError& query) {
+    auto add = [&](const std::string& label, const host_eval::ZenithError& ref,
+                   const host_eval::ZenithError& query) {
       table += Format("| %s | %s | %s | %d / %d |\n", label.c_str(), cell(ref).c_str(),
                       cell(query).c_str(), ref.no_estimate, query.no_estimate);
     };
@@ -583,8 +630,22 @@ int RunExperiment(std::span<char* const> args) {
     std::fputs(table.c_str(), stdout);
     notes += table;
   }
+  if (fabmap) {
+    // Format holds 511 characters: the path, of any length, goes in on its own.
+    notes += std::string(
+                 "\nFAB-MAP 2.0 (fabmap columns, docs/FABMAP.md): each query frame's visible "
+                 "image localised alone against every reference frame (no sequence") +
+             (o.name == "manoeuvre" ? ": the same score on every ds row" : "") +
+             "), uniqueness 1 - p(matched place). Vocabulary " + o.vocabulary_path +
+             Format(
+                 ": %d words, SIFT at %dx%d (at most %d a frame), %zu new-place samples, "
+                 "detector p(z|e) %.2f, p(z|not e) %.2f.\n",
+                 vocabulary.words, vocabulary.features.width, vocabulary.features.height,
+                 vocabulary.features.max_features, vocabulary.samples.size(),
+                 vocabulary.p_z_given_e, vocabulary.p_z_given_not_e);
+  }
   if (o.name == "ants")
-    notes += std::string("Reference route ") + sim::kAntsReferenceRoute + ".\n";
+    notes += std::string("Reference route ") + host_eval::kAntsReferenceRoute + ".\n";
   if (const Status s = WriteOutputs(o, command, header, separator, methods, rows, notes); !s.ok()) {
     std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), s.message());
     return kExitFailure;
@@ -596,5 +657,21 @@ int RunExperiment(std::span<char* const> args) {
               o.out.c_str(), files.c_str());
   return kExitOk;
 }
+
+#else
+// The experiments are host evaluation code (skyloc::host_eval), left out of cross builds.
+int RunExperiment(std::span<char* const> args) {
+  for (char* const a : args) {
+    if (IsHelpFlag(a)) {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    }
+  }
+  std::fprintf(stderr,
+               "skyloc experiment: not in this build: the experiments are host evaluation tools, "
+               "left out of cross builds; use a host build (SKYLOC_HOST_EVAL=ON)\n");
+  return kExitFailure;
+}
+#endif  // SKYLOC_WITH_HOST_EVAL
 
 }  // namespace skyloc::app

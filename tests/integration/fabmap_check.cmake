@@ -35,13 +35,49 @@ foreach(f matches.csv pr.svg correspondence.svg)
     message(FATAL_ERROR "skyloc eval did not write ${f}")
   endif()
 endforeach()
+file(WRITE ${WORK}/foreign.fabmap "not a vocabulary at all\n")
+# `skyloc experiment tilt --vocab`: the FAB-MAP column beside sky and vanilla, on the same
+# runs and PR metrics (a tiny tilt: 20 frames a run; the vocabulary is the forest's, the
+# experiment's world is the city). Every row has a fabmap summary with finite numbers
+# (a NaN would print as nan and fail to parse) and one match per query frame.
+run(experiment tilt --frames 20 --width 160 --height 120 --bands 8 --spacing 4
+    --vocab ${WORK}/v.fabmap --out ${WORK}/tilt)
+file(READ ${WORK}/tilt/results.md md)
+if(NOT md MATCHES "fabmap P@R100 \\|" OR NOT md MATCHES "fabmap R@P100 \\|")
+  message(FATAL_ERROR "experiment tilt --vocab: no fabmap columns in results.md:\n${md}")
+endif()
+if(NOT EXISTS ${WORK}/tilt/pr_fabmap.svg)
+  message(FATAL_ERROR "experiment tilt --vocab did not write pr_fabmap.svg")
+endif()
+file(READ ${WORK}/tilt/metrics.json json)
+string(JSON rows LENGTH "${json}" rows)
+math(EXPR last "${rows} - 1")
+foreach(i RANGE ${last})
+  string(JSON evaluated GET "${json}" rows ${i} fabmap evaluated)
+  string(JSON p GET "${json}" rows ${i} fabmap precision_at_100_recall)
+  string(JSON r GET "${json}" rows ${i} fabmap recall_at_100_precision)
+  if(NOT evaluated EQUAL 20 OR p LESS 0 OR p GREATER 1 OR r LESS 0 OR r GREATER 1)
+    message(FATAL_ERROR "tilt row ${i}: fabmap evaluated ${evaluated}, P@R100 ${p}, R@P100 ${r}")
+  endif()
+endforeach()
+# The experiment refuses a foreign vocabulary the same way, and --vocab where it has no use.
+execute_process(COMMAND ${CMD} experiment tilt --frames 20 --vocab ${WORK}/foreign.fabmap
+                --out ${WORK}/tilt2 RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "foreign.fabmap is not a skyloc FAB-MAP vocabulary")
+  message(FATAL_ERROR "experiment with a foreign vocabulary: exit ${rc}, stderr:\n${err}")
+endif()
+execute_process(COMMAND ${CMD} experiment speed --vocab ${WORK}/v.fabmap --out ${WORK}/speed
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT err MATCHES "--vocab \\(FAB-MAP\\) is for tilt and manoeuvre")
+  message(FATAL_ERROR "experiment speed --vocab: exit ${rc}, stderr:\n${err}")
+endif()
 # A file that is not a vocabulary: one error naming the file, exit 1 (the unit tests
 # damage real vocabularies byte by byte: tests/host_eval/fabmap_vocabulary_test.cpp).
-file(WRITE ${WORK}/foreign.fabmap "not a vocabulary at all\n")
 execute_process(COMMAND ${CMD} eval --reference ${WORK}/ref --query ${WORK}/query
                 --vocab ${WORK}/foreign.fabmap --method fabmap --out ${WORK}/out2
                 RESULT_VARIABLE rc ERROR_VARIABLE err)
 if(NOT rc EQUAL 1 OR NOT err MATCHES "foreign.fabmap is not a skyloc FAB-MAP vocabulary")
   message(FATAL_ERROR "a foreign vocabulary: exit ${rc}, stderr:\n${err}")
 endif()
+file(REMOVE_RECURSE ${WORK})
 message(STATUS "all fabmap checks passed")

@@ -18,22 +18,16 @@ double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_cloc
 
 }  // namespace
 
-Result<std::vector<FabmapQueryMatch>> MatchWithFabmap(const std::string& vocabulary_path,
-                                                      const std::string& reference_dir,
-                                                      const std::string& query_dir,
-                                                      FabMapParams params,
-                                                      FabmapEvalTiming* timing) {
-  SKYLOC_TRY_ASSIGN(const Vocabulary v, LoadVocabulary(vocabulary_path));
+Result<std::vector<FabmapQueryMatch>> LocaliseWithFabmap(const Vocabulary& v,
+                                                         std::span<const WordList> ref,
+                                                         std::span<const WordList> query,
+                                                         FabMapParams params) {
   params.p_z_given_e = v.p_z_given_e;
   params.p_z_given_not_e = v.p_z_given_not_e;
   FabMap2 fm;
   SKYLOC_TRY(fm.Init(v.tree, params));
   for (const WordList& s : v.samples)
     SKYLOC_TRY(fm.AddTrainingSample(s));
-  const auto t0 = std::chrono::steady_clock::now();
-  SKYLOC_TRY_ASSIGN(const std::vector<WordList> ref, DatasetWords(reference_dir, v));
-  SKYLOC_TRY_ASSIGN(const std::vector<WordList> query, DatasetWords(query_dir, v));
-  const auto t1 = std::chrono::steady_clock::now();
   for (const WordList& w : ref)
     SKYLOC_TRY(fm.AddPlace(w));
   std::vector<FabmapQueryMatch> out(query.size());
@@ -58,6 +52,20 @@ Result<std::vector<FabmapQueryMatch>> MatchWithFabmap(const std::string& vocabul
     q.p_new = std::exp(log_new);
     q.uniqueness = std::min(1.0, std::exp(m + std::log(sum)));
   }
+  return out;
+}
+
+Result<std::vector<FabmapQueryMatch>> MatchWithFabmap(const std::string& vocabulary_path,
+                                                      const std::string& reference_dir,
+                                                      const std::string& query_dir,
+                                                      FabMapParams params,
+                                                      FabmapEvalTiming* timing) {
+  SKYLOC_TRY_ASSIGN(const Vocabulary v, LoadVocabulary(vocabulary_path));
+  const auto t0 = std::chrono::steady_clock::now();
+  SKYLOC_TRY_ASSIGN(const std::vector<WordList> ref, DatasetWords(reference_dir, v));
+  SKYLOC_TRY_ASSIGN(const std::vector<WordList> query, DatasetWords(query_dir, v));
+  const auto t1 = std::chrono::steady_clock::now();
+  SKYLOC_TRY_ASSIGN(std::vector<FabmapQueryMatch> out, LocaliseWithFabmap(v, ref, query, params));
   const auto t2 = std::chrono::steady_clock::now();
   if (timing != nullptr) {
     timing->features_s = Seconds(t0, t1);

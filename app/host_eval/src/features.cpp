@@ -125,6 +125,13 @@ Status Quantise(std::span<const float> descriptors, std::span<const float> centr
   return Status::Ok();
 }
 
+Status ImageWords(const dsp::ImageView& image, const Vocabulary& vocabulary,
+                  std::vector<float>* descriptors, WordList* out) {
+  descriptors->clear();
+  SKYLOC_TRY(ExtractSift(image, vocabulary.features, descriptors));
+  return Quantise(*descriptors, vocabulary.centres, vocabulary.features.descriptor_dim, out);
+}
+
 namespace {
 
 // Calls fn(index, descriptors) for every frame of the dataset.

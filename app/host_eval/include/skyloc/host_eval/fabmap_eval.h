@@ -2,10 +2,12 @@
 // place, every query frame is localised against them (docs/FABMAP.md, "Evaluation").
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
 #include "skyloc/host_eval/fabmap.h"
+#include "skyloc/host_eval/vocabulary.h"
 #include "skyloc/platform/status.h"
 
 namespace skyloc::host_eval {
@@ -25,6 +27,14 @@ struct FabmapEvalTiming {
   int queries = 0;
   int places = 0;
 };
+
+// Every query image localised against the reference images, each one place, with the
+// vocabulary's Chow-Liu tree, detector model (replacing params') and new-place samples.
+// `skyloc eval --method fabmap` and `skyloc experiment` both localise through this.
+Result<std::vector<FabmapQueryMatch>> LocaliseWithFabmap(const Vocabulary& vocabulary,
+                                                         std::span<const WordList> reference,
+                                                         std::span<const WordList> query,
+                                                         FabMapParams params);
 
 // Loads the vocabulary (params' detector model is replaced by the file's), computes the
 // words of both runs and localises every query frame.

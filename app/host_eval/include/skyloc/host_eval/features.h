@@ -31,6 +31,11 @@ Status ClusterWords(std::span<const float> descriptors, int dim, int words, std:
 Status Quantise(std::span<const float> descriptors, std::span<const float> centres, int dim,
                 WordList* out);
 
+// The words of one image over the vocabulary: its SIFT features (the vocabulary's feature
+// settings), each assigned to its nearest centre. `descriptors` is scratch space.
+Status ImageWords(const dsp::ImageView& image, const Vocabulary& vocabulary,
+                  std::vector<float>* descriptors, WordList* out);
+
 // Every frame of the dataset folder `dir` as a WordList over the vocabulary's words.
 Result<std::vector<WordList>> DatasetWords(const std::string& dir, const Vocabulary& vocabulary);
 

@@ -7,7 +7,9 @@
 // eval`): a query frame's truth is the interval of reference frames tied for nearest to it
 // (x, y, z); a match is correct within `tolerance_frames` of that interval (the paper: 5),
 // and a query frame farther than `max_offset_m` from every reference frame has no ground
-// truth. Start-up/offline work: everything here allocates.
+// truth. Start-up/offline work: everything here allocates. Host evaluation only (it is in
+// skyloc::host_eval, left out of the ARM firmware build); the worlds, renderer and motion
+// it uses are skyloc::sim.
 #pragma once
 
 #include <cstdint>
@@ -21,12 +23,14 @@
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/zenith_estimate.h"
+#include "skyloc/host_eval/chow_liu.h"
+#include "skyloc/host_eval/vocabulary.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/sim/motion.h"
 #include "skyloc/sim/renderer.h"
 #include "skyloc/sim/world.h"
 
-namespace skyloc::sim {
+namespace skyloc::host_eval {
 
 // Where the gravity-aligned descriptor's zenith comes from (issue 12).
 enum class AttitudeInput : std::uint8_t {
@@ -46,10 +50,10 @@ struct ExperimentOptions {
   // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
   // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its
   // RunSpec::motion.speed_ratio scales its cruise speed).
-  Sampling sampling = Sampling::kDistance;
+  sim::Sampling sampling = sim::Sampling::kDistance;
   double spacing_m = 1.0;  // frame spacing along the route
   double fps = 10;
-  SpeedProfile speed;
+  sim::SpeedProfile speed;
   double camera_height_m = 1.0;
   int max_frames = 0;  // 0: the whole route
   std::uint64_t world_seed = 1;
@@ -68,6 +72,9 @@ struct ExperimentOptions {
   // byte per column) for the heading (issue 13); false: none (every other experiment).
   bool strips = false;
   dsp::HorizonStripOptions strip;  // the firmware's [heading] defaults
+  // FAB-MAP 2.0 (tilt and manoeuvre): the visible image's words over this vocabulary (not
+  // owned; trained on runs of another world, docs/FABMAP.md). Null: no FAB-MAP column.
+  const Vocabulary* fabmap_vocabulary = nullptr;
 };
 
 // How far the cap's zenith was from the true one over a run's frames (degrees).
@@ -80,7 +87,7 @@ struct ZenithError {
 // One simulated run: its trajectory and the descriptors of every frame.
 struct RunDescriptors {
   std::string label;
-  std::vector<TrajectoryPoint> trajectory;
+  std::vector<sim::TrajectoryPoint> trajectory;
   bool closed_loop = false;    // one full lap of a closed route (scored with wrap-around)
   std::vector<float> sky;      // frames x bands
   std::vector<float> vanilla;  // frames x dsp::kVanillaDescriptorSize
@@ -88,19 +95,20 @@ struct RunDescriptors {
   std::vector<dsp::Attitude> attitude;  // per frame: the zenith the cap used
   ZenithError zenith_error;             // of `attitude` against the true poses
   double mean_sky_fraction = 0;
-  std::vector<std::uint8_t> strips;  // frames x strip.n_azimuth (options.strips)
+  std::vector<std::uint8_t> strips;    // frames x strip.n_azimuth (options.strips)
+  std::vector<WordList> fabmap_words;  // per frame (options.fabmap_vocabulary)
 };
 
 struct RunSpec {
   std::string label;
   // Sampling, spacing, fps, speed profile, height and max_frames come from the options;
   // the rest (seed, manoeuvres, speed_ratio) is the run's own.
-  MotionConfig motion;
-  Lighting lighting;
+  sim::MotionConfig motion;
+  sim::Lighting lighting;
 };
 
 // Renders the run (UV and visible) and describes every frame.
-Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
+Status DescribeRun(const sim::World& world, std::span<const sim::Point2> route, bool closed,
                    const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out);
 
 struct MethodScore {
@@ -113,7 +121,9 @@ struct MethodScore {
 };
 
 // Which descriptor of a run is scored.
-enum class RunDescriptor : std::uint8_t { kSky, kSkyCap, kVanilla };
+// kFabmap is FAB-MAP 2.0 on the visible image's words: each query frame localised alone
+// (no sequence, no matcher), uniqueness 1 - p(matched place).
+enum class RunDescriptor : std::uint8_t { kSky, kSkyCap, kVanilla, kFabmap };
 
 // Which matcher scores a pair of runs: OpenSeqSLAM (batch, centred window, as the paper)
 // or the route filter (the firmware's, causal).
@@ -137,6 +147,7 @@ struct TiltRow {
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
   // The gravity-aligned cap (options.attitude != kNone): OpenSeqSLAM and the route filter.
   MethodScore sky_cap, sky_cap_filter;
+  MethodScore fabmap;                          // options.fabmap_vocabulary set
   ZenithError reference_zenith, query_zenith;  // the cap's zenith against the truth
 };
 
@@ -150,11 +161,13 @@ Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> 
 // Manoeuvre (BMX Track and Disposal Site): a smooth reference run at noon against a query
 // run at dawn with zig-zag and bumps; scored at several sequence lengths.
 struct ManoeuvreRow {
-  WorldKind world = WorldKind::kForest;
+  sim::WorldKind world = sim::WorldKind::kForest;
   int sequence_length = 10;
   MethodScore sky, vanilla;
   MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
   MethodScore sky_cap, sky_cap_filter;  // the gravity-aligned cap, as TiltRow
+  // FAB-MAP 2.0 (options.fabmap_vocabulary set): single images, the same on every ds row.
+  MethodScore fabmap;
   ZenithError reference_zenith, query_zenith;
 };
 
@@ -169,7 +182,7 @@ Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const 
 // frames' horizon strips, (b) circular cross-correlation (dsp::AlignStrips) and (a) 1D
 // SURF + RANSAC, against the truth: the query pose's yaw minus the reference pose's.
 struct HeadingRow {
-  WorldKind world = WorldKind::kForest;
+  sim::WorldKind world = sim::WorldKind::kForest;
   int query_frames = 0;
   MethodScore match;  // the route filter on the sky descriptor
   dsp::HeadingErrorSummary correlation, surf;
@@ -201,7 +214,7 @@ inline constexpr const char* kAntsReferenceRoute = "ant1_route1";
 // level and with +-15 degree bumps, in the forest and city worlds; sky descriptor, both
 // matchers at each ds.
 struct SpeedRow {
-  WorldKind world = WorldKind::kForest;
+  sim::WorldKind world = sim::WorldKind::kForest;
   double speed_ratio = 1;
   bool stops = true;
   double bumps_deg = 0;
@@ -219,4 +232,4 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
                          std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
                          ProgressFn progress = nullptr, void* context = nullptr);
 
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval

@@ -1,8 +1,10 @@
-#include "skyloc/sim/experiment.h"
+#include "skyloc/host_eval/experiment.h"
 
 #include <gtest/gtest.h>
 
-namespace skyloc::sim {
+#include <string>
+
+namespace skyloc::host_eval {
 namespace {
 
 // The paper's central claim on a short simulated City: at a 40 degree tilt difference
@@ -42,5 +44,17 @@ TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
             tilted.vanilla.summary.recall_at_full_precision);
 }
 
+// FAB-MAP needs the runs' words: runs described without a vocabulary are refused by name,
+// not scored as if every frame had seen nothing.
+TEST(Experiment, FabmapWithoutWordsIsAnError) {
+  RunDescriptors run;
+  run.trajectory.resize(3);
+  ExperimentOptions options;
+  MethodScore score;
+  const Status s = ScoreRuns(run, run, RunDescriptor::kFabmap, options, &score);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("FAB-MAP"), std::string::npos) << s.message();
+}
+
 }  // namespace
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval
