@@ -16,8 +16,12 @@
 #include <vector>
 
 #include "commands.h"
-#include "skyloc/sim/surf1d_experiment.h"
+#if SKYLOC_WITH_HOST_EVAL
+#include "skyloc/host_eval/surf1d_experiment.h"
+#endif
 #include "svg_plot.h"
+
+#if SKYLOC_WITH_HOST_EVAL  // the experiment is host evaluation code (app/host_eval)
 
 namespace skyloc::app {
 namespace {
@@ -95,7 +99,7 @@ std::string RocJson(const std::vector<dsp::RocPoint>& full) {
   return s + "]";
 }
 
-std::string CameraJson(const char* key, const sim::Surf1dCameraResult& r) {
+std::string CameraJson(const char* key, const host_eval::Surf1dCameraResult& r) {
   return Format(
              "  \"%s\": {\"camera\": \"%s\", \"strip_columns\": %d, \"mean_features\": %.1f, "
              "\"matched_pairs\": %d, \"unmatched_pairs\": %d, \"auc_nn\": %.4f, "
@@ -112,7 +116,7 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   std::string command = "skyloc experiment";
   for (char* const a : args)
     command += std::string(" ") + a;
-  sim::Surf1dExperimentOptions o;
+  host_eval::Surf1dExperimentOptions o;
   std::string out;
   for (std::size_t i = 1; i < args.size(); ++i) {
     const char* flag = args[i];
@@ -175,8 +179,9 @@ int RunSurf1dExperiment(std::span<char* const> args) {
                  "results.md, metrics.json, roc.svg)\n");
     return kExitUsage;
   }
-  sim::Surf1dCameraResult forward, fisheye;
-  if (Status s = sim::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress, nullptr); !s.ok()) {
+  host_eval::Surf1dCameraResult forward, fisheye;
+  if (Status s = host_eval::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress, nullptr);
+      !s.ok()) {
     std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());
     return kExitFailure;
   }
@@ -186,7 +191,7 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   md +=
       "| paper: Nao forward camera, office (Table 1) | 160 | 59.2 | 480 / 2065 | 88.0 % | "
       "89.6 % |\n";
-  for (const sim::Surf1dCameraResult* r : {&forward, &fisheye})
+  for (const host_eval::Surf1dCameraResult* r : {&forward, &fisheye})
     md += Format("| %s | %d | %.1f | %d / %d | %.1f %% | %.1f %% |\n", r->camera.c_str(),
                  r->strip_columns, r->mean_features, r->matched_pairs, r->unmatched_pairs,
                  100 * r->auc_nn, 100 * r->auc_ransac);
@@ -245,3 +250,5 @@ int RunSurf1dExperiment(std::span<char* const> args) {
 }
 
 }  // namespace skyloc::app
+
+#endif  // SKYLOC_WITH_HOST_EVAL

@@ -1,4 +1,4 @@
-#include "skyloc/sim/surf1d_experiment.h"
+#include "skyloc/host_eval/surf1d_experiment.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,13 @@
 
 #include "skyloc/sim/renderer.h"
 
-namespace skyloc::sim {
+namespace skyloc::host_eval {
 namespace {
+
+using sim::Material;
+using sim::Renderer;
+using sim::Texture;
+using sim::World;
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
@@ -79,4 +84,4 @@ TEST(PinholeRenderer, ForwardCameraHorizonIsTheAnalyticRow) {
 }
 
 }  // namespace
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval

@@ -1,4 +1,4 @@
-#include "skyloc/sim/surf1d_experiment.h"
+#include "skyloc/host_eval/surf1d_experiment.h"
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -10,7 +10,18 @@
 
 #include "skyloc/sim/world.h"
 
-namespace skyloc::sim {
+namespace skyloc::host_eval {
+
+// The simulator's worlds and renderer, which the experiment drives.
+using sim::BodyToWorld;
+using sim::DefaultSimLens;
+using sim::MakeProceduralWorld;
+using sim::Point2;
+using sim::Renderer;
+using sim::Rotation;
+using sim::Spectrum;
+using sim::World;
+using sim::WorldKind;
 namespace {
 
 Status Surf1dStatus(const char* what, dsp::Surf1dError e) {
@@ -285,4 +296,4 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
       images, m, o.match, [](std::size_t, std::size_t) { return true; }, same_place, fisheye);
 }
 
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval

@@ -31,11 +31,11 @@
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/surf1d.h"
+#include "skyloc/host_eval/experiment.h"
 #include "skyloc/platform/status.h"
-#include "skyloc/sim/experiment.h"
 #include "skyloc/sim/renderer.h"
 
-namespace skyloc::sim {
+namespace skyloc::host_eval {
 
 struct Surf1dExperimentOptions {
   int images_per_place = 88;
@@ -43,7 +43,7 @@ struct Surf1dExperimentOptions {
   double match_below_deg = 20.0;
   double camera_height_m = 1.0;
   std::uint64_t world_seed = 1;
-  Lighting lighting;  // the renderer's defaults
+  sim::Lighting lighting;  // the renderer's defaults
   // Forward pinhole camera.
   int width = 640;
   int height = 480;
@@ -86,4 +86,4 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
                            Surf1dCameraResult* fisheye, ProgressFn progress = nullptr,
                            void* context = nullptr);
 
-}  // namespace skyloc::sim
+}  // namespace skyloc::host_eval
