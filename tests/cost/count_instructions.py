@@ -35,13 +35,13 @@ DEFAULT_CASES = [
 # The cost model (a model, not a measurement; docs/BENCHMARKS.md, "ARM cost, measured",
 # gives the sources): time = instructions / (IPC x clock), except the route scan (the
 # functions named *DifferenceRows*), which takes at least its bytes / memory bandwidth
-# because a route of 10,000 frames and more does not fit in L2 (512 KiB on the Pi 3's
-# BCM2837, 1 MiB on the Pi 4's BCM2711). IPC is a range: a low and a high assumption under
+# when the route does not fit in L2 (512 KiB on the Pi 3's BCM2837, 1 MiB on the Pi 4's
+# BCM2711): from about 2,000 (float) or 3,500 (bfloat16) frames of 64 bands up. IPC is a range: a low and a high assumption under
 # the core's issue width (Cortex-A53: 2, in order; Cortex-A72: 3, out of order).
 CORES = [
-    # name, clock Hz, IPC low, IPC high, sustained single-core read bandwidth bytes/s
-    ("A53@1.2GHz", 1.2e9, 0.7, 1.0, 2.0e9),
-    ("A72@1.5GHz", 1.5e9, 1.2, 1.8, 4.0e9),
+    # name, clock Hz, IPC low, IPC high, sustained single-core bandwidth bytes/s, L2 bytes
+    ("A53@1.2GHz", 1.2e9, 0.7, 1.0, 2.0e9, 512 << 10),
+    ("A72@1.5GHz", 1.5e9, 1.2, 1.8, 4.0e9, 1 << 20),
 ]
 
 QEMU = {"aarch64": "qemu-aarch64-static", "armhf": "qemu-arm-static", "x86_64": "qemu-x86_64-static"}
@@ -120,8 +120,9 @@ def run_cases(a, images):
             if not scan:
                 scan_bytes = 0  # no route scan in this stage
             parts = []
-            for name, clock, ipc_low, ipc_high, bandwidth in CORES:
-                ms = [1e3 * ((per - scan) / (ipc * clock) + max(scan / (ipc * clock), scan_bytes / bandwidth))
+            for name, clock, ipc_low, ipc_high, bandwidth, l2 in CORES:
+                memory = scan_bytes / bandwidth if scan_bytes > l2 else 0.0  # else it stays in L2
+                ms = [1e3 * ((per - scan) / (ipc * clock) + max(scan / (ipc * clock), memory))
                       for ipc in (ipc_low, ipc_high)]
                 parts.append(f"{name} {ms[1]:.3f}-{ms[0]:.3f} ms")
             print(f"    model: {', '.join(parts)} (scan {scan:.0f} instructions, {scan_bytes} bytes)")
