@@ -1,0 +1,274 @@
+// stage_cost: runs one stage of the firmware's frame path a given number of times, and
+// nothing else, so an instruction counter outside the program (tests/cost/count_instructions.py
+// under qemu-user, or callgrind) measures that stage exactly. Set-up (the lens table, the SH
+// tables, a route of N frames) costs the same whatever the count, so the counter runs each
+// stage for R and 2R repetitions and takes the difference: the instructions of R repetitions
+// with the set-up subtracted. Not a benchmark: it measures no time.
+//
+//   stage_cost STAGE REPETITIONS [ROUTE_FRAMES [float32|bfloat16 [IMAGE_DIR]]]
+//
+// Stages (the default configuration, config/skyloc.toml, one 640x480 grey frame):
+//   segmentation  the Otsu threshold of the frame (histogram over the lens's visible pixels)
+//   descriptor    the whole sky descriptor: segmentation, samples, SH projection, amplitudes
+//   strip         the horizon strip for the heading ([heading] strip_columns)
+//   heading       dsp::HeadingEstimator on two strips ([heading] defaults: correlation + SURF)
+//   correlation   the same with surf = false (the cross-correlation only)
+//   filter        one dsp::RouteFilter step against ROUTE_FRAMES rows (the default matcher)
+//   frame         app::Pipeline::Localise: descriptor + strip + filter + state + heading
+//   render        renders the street frames into IMAGE_DIR for the stages above (set-up only)
+// It prints what it ran and a checksum of the results (so no stage can be optimised away).
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pipeline.h"
+#include "skyloc/dsp/heading.h"
+#include "skyloc/dsp/route_filter.h"
+#include "skyloc/dsp/segmentation.h"
+#include "street_camera.h"
+
+namespace {
+
+using namespace skyloc;
+using namespace skyloc::app;
+
+constexpr int kWidth = 640, kHeight = 480, kImages = 2;
+
+int Fail(const char* what) {
+  std::fprintf(stderr, "stage_cost: %s\n", what);
+  return 1;
+}
+
+// kImages frames of the simulated street (the descriptor's cost depends a little on the
+// sky's shape: the segmentation's histogram is the same work for any frame, Otsu's search
+// too). Rendering them is most of the set-up's instructions, and the counter runs under qemu
+// with every block logged: `stage_cost render 0 0 float32 DIR` renders them once into DIR
+// (street0.grey, street1.grey: 640x480 bytes), and the other stages read them from there
+// when given DIR.
+std::string ImagePath(const std::string& dir, int i) {
+  return dir + "/street" + std::to_string(i) + ".grey";
+}
+
+bool RenderImages(std::vector<std::vector<std::uint8_t>>* images) {
+  StreetCameraOptions o;
+  o.width = kWidth;
+  o.height = kHeight;
+  o.seed = 5;
+  o.frames = kImages;
+  StreetCamera camera(o);
+  if (!camera.Open().ok() || !camera.Start().ok())
+    return false;
+  for (int i = 0; i < kImages; ++i) {
+    Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1));
+    if (!f.ok())
+      return false;
+    images->emplace_back(f->image.data, f->image.data + kWidth * kHeight);
+  }
+  return true;
+}
+
+bool ReadImages(const std::string& dir, std::vector<std::vector<std::uint8_t>>* images) {
+  for (int i = 0; i < kImages; ++i) {
+    std::vector<std::uint8_t> image(static_cast<std::size_t>(kWidth * kHeight));
+    std::FILE* f = std::fopen(ImagePath(dir, i).c_str(), "rb");
+    if (f == nullptr)
+      return false;
+    const std::size_t got = std::fread(image.data(), 1, image.size(), f);
+    std::fclose(f);
+    if (got != image.size())
+      return false;
+    images->push_back(std::move(image));
+  }
+  return true;
+}
+
+bool WriteImages(const std::string& dir, const std::vector<std::vector<std::uint8_t>>& images) {
+  for (int i = 0; i < kImages; ++i) {
+    std::FILE* f = std::fopen(ImagePath(dir, i).c_str(), "wb");
+    if (f == nullptr)
+      return false;
+    const std::size_t put = std::fwrite(images[static_cast<std::size_t>(i)].data(), 1,
+                                        images[static_cast<std::size_t>(i)].size(), f);
+    if (std::fclose(f) != 0 || put != images[static_cast<std::size_t>(i)].size())
+      return false;
+  }
+  return true;
+}
+
+dsp::ImageView View(const std::vector<std::uint8_t>& image) {
+  return {image.data(), kWidth, kHeight, static_cast<std::size_t>(kWidth),
+          dsp::PixelFormat::kGrey8};
+}
+
+// Route frame i: random amplitudes in [0, 1) (no two alike, so FinishRoute merges no rows and
+// the step scans all N; the step's work does not depend on the values). xorshift32, seeded
+// per frame: a cheap generator keeps the set-up of a 100,000-frame route short under qemu.
+void RouteDescriptor(int i, std::vector<float>* d) {
+  std::uint32_t x = 2463534242u ^ (static_cast<std::uint32_t>(i) * 2654435761u);
+  for (float& v : *d) {
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    v = static_cast<float>(x >> 8) * 0x1p-24f;
+  }
+}
+
+// The bytes one route filter step reads and writes per route row (descriptor, cost and
+// difference columns), for the cost model's memory term.
+std::size_t ScanBytes(int route_frames, int dim, bool bfloat16) {
+  return static_cast<std::size_t>(route_frames) *
+         dsp::RouteFilter::BytesPerReference(
+             dim, bfloat16 ? dsp::ReferenceStorage::kBFloat16 : dsp::ReferenceStorage::kFloat32);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3)
+    return Fail(
+        "usage: stage_cost STAGE REPETITIONS [ROUTE_FRAMES [float32|bfloat16 [IMAGE_DIR]]]");
+  const std::string stage = argv[1];
+  const long repetitions = std::strtol(argv[2], nullptr, 10);
+  const int route_frames = argc > 3 ? static_cast<int>(std::strtol(argv[3], nullptr, 10)) : 10000;
+  const bool bfloat16 = argc > 4 && std::strcmp(argv[4], "bfloat16") == 0;
+  const std::string image_dir = argc > 5 ? argv[5] : "";
+  if (repetitions < 0 || route_frames < 1)
+    return Fail("REPETITIONS >= 0 and ROUTE_FRAMES >= 1");
+
+  Config config = DefaultConfig();
+  config.capacities.route_frames = route_frames;
+  config.capacities.route_storage = bfloat16 ? RouteStorage::kBFloat16 : RouteStorage::kFloat32;
+  const bool heading_stage = stage == "heading" || stage == "correlation" || stage == "strip";
+  if (stage == "descriptor" || stage == "segmentation")
+    config.heading.strip_columns = 0;  // Describe() without the strip
+  if (stage == "correlation")
+    config.heading.surf = false;
+  double checksum = 0;
+  if (stage == "render") {
+    std::vector<std::vector<std::uint8_t>> images;
+    if (image_dir.empty() || !RenderImages(&images) || !WriteImages(image_dir, images))
+      return Fail("render: cannot render the street or write its frames into IMAGE_DIR");
+    return 0;
+  }
+  if (stage == "filter") {
+    // The route filter alone, as Pipeline::Init configures it (no pipeline, no frames).
+    dsp::RouteFilter filter;
+    const int dim = config.descriptor.bands;
+    if (filter.Init(RouteFilterParamsFrom(config), dim, route_frames,
+                    bfloat16 ? dsp::ReferenceStorage::kBFloat16
+                             : dsp::ReferenceStorage::kFloat32) != dsp::SeqSlamError::kOk)
+      return Fail("filter Init");
+    std::vector<float> d(static_cast<std::size_t>(dim));
+    for (int i = 0; i < route_frames; ++i) {
+      RouteDescriptor(i, &d);
+      (void)filter.AddReference(d);
+    }
+    if (filter.FinishRoute() != dsp::SeqSlamError::kOk)
+      return Fail("FinishRoute");
+    if (filter.rows() != route_frames)
+      return Fail("FinishRoute merged rows: the step would not scan ROUTE_FRAMES rows");
+    for (long r = 0; r < repetitions; ++r) {
+      RouteDescriptor(static_cast<int>((r * 37) % route_frames), &d);
+      dsp::SeqSlamMatch match;
+      (void)filter.Step(d, &match);
+      checksum += static_cast<double>(match.row);
+    }
+    std::printf("stage filter x %ld, route %d %s: checksum %.6g, route bytes per step %zu\n",
+                repetitions, route_frames, bfloat16 ? "bfloat16" : "float32", checksum,
+                ScanBytes(route_frames, dim, bfloat16));
+    return 0;
+  }
+  Pipeline pipeline;
+  if (Status s = pipeline.Init(config); !s.ok())
+    return Fail(s.message());
+  std::vector<std::vector<std::uint8_t>> images;
+  if (image_dir.empty() ? !RenderImages(&images) : !ReadImages(image_dir, &images))
+    return Fail("no frames: the street camera failed, or IMAGE_DIR holds no rendered frames");
+
+  if (stage == "segmentation") {
+    dsp::SkySegmenter segmenter;
+    if (segmenter.Init(pipeline.lens(), {}) != dsp::SegmentationError::kOk)
+      return Fail("segmenter Init");
+    for (long r = 0; r < repetitions; ++r) {
+      dsp::SegmentationResult result;
+      (void)segmenter.Threshold(View(images[static_cast<std::size_t>(r % kImages)]), &result);
+      checksum += result.threshold;
+    }
+  } else if (stage == "descriptor" || stage == "strip") {
+    for (long r = 0; r < repetitions; ++r) {
+      FrameResult result;
+      if (!pipeline.Describe(View(images[static_cast<std::size_t>(r % kImages)]), &result).ok())
+        return Fail("Describe");
+      checksum += static_cast<double>(pipeline.descriptor()[1]);
+    }
+  } else if (heading_stage) {
+    // Strips of two different frames of the street (a turned query would cost the same).
+    std::vector<std::vector<float>> strips;
+    for (int i = 0; i < 2; ++i) {
+      FrameResult result;
+      if (!pipeline.Describe(View(images[static_cast<std::size_t>(i)]), &result).ok())
+        return Fail("Describe");
+      strips.emplace_back(pipeline.strip().begin(), pipeline.strip().end());
+    }
+    dsp::HeadingEstimator heading;
+    if (heading.Init(config.heading.strip_columns, HeadingOptionsFrom(config.heading)) !=
+        dsp::HeadingError::kOk)
+      return Fail("heading Init");
+    for (long r = 0; r < repetitions; ++r) {
+      dsp::HeadingEstimate estimate;
+      (void)heading.Estimate(strips[0], strips[1], &estimate);
+      checksum += estimate.correlation_deg + estimate.surf_inliers;
+    }
+  } else if (stage == "frame") {
+    // The route: the street's frames' descriptors and strips, each copy offset a little so
+    // no two are equal (as frame_latency_bench builds it).
+    RouteFrames route;
+    if (!route
+             .Allocate(static_cast<std::size_t>(route_frames),
+                       static_cast<std::size_t>(pipeline.dim()), pipeline.strip_settings().columns)
+             .ok())
+      return Fail("route Allocate");
+    std::vector<std::vector<float>> descriptors;
+    std::vector<std::vector<std::uint8_t>> strips;
+    for (const std::vector<std::uint8_t>& image : images) {
+      FrameResult result;
+      if (!pipeline.Describe(View(image), &result).ok())
+        return Fail("Describe");
+      descriptors.emplace_back(pipeline.descriptor().begin(), pipeline.descriptor().end());
+      strips.emplace_back(pipeline.strip().begin(), pipeline.strip().end());
+    }
+    for (int i = 0; i < route_frames; ++i) {
+      std::vector<float> d = descriptors[static_cast<std::size_t>(i % kImages)];
+      for (float& v : d)
+        v += 1e-4f * static_cast<float>(i / kImages);
+      if (!route.Append({}, d, strips[static_cast<std::size_t>(i % kImages)]))
+        return Fail("route Append");
+    }
+    if (!pipeline.SetRoute(route).ok() || !pipeline.heading_enabled())
+      return Fail("SetRoute");
+    std::uint64_t with_heading = 0;
+    for (long r = 0; r < repetitions; ++r) {
+      drivers::Frame frame;
+      frame.image = View(images[static_cast<std::size_t>(r % kImages)]);
+      frame.sequence = static_cast<std::uint64_t>(r);
+      FrameResult result;
+      if (!pipeline.Localise(frame, &result).ok())
+        return Fail("Localise");
+      with_heading += result.has_heading ? 1 : 0;
+      checksum += static_cast<double>(result.confidence);
+    }
+    std::printf("frames with heading: %llu of %ld\n", static_cast<unsigned long long>(with_heading),
+                repetitions);
+  } else {
+    return Fail("unknown STAGE");
+  }
+  std::printf("stage %s x %ld, route %d %s: checksum %.6g, route bytes per step %zu\n",
+              stage.c_str(), repetitions, route_frames, bfloat16 ? "bfloat16" : "float32", checksum,
+              stage == "frame" ? ScanBytes(route_frames, pipeline.dim(), bfloat16) : 0);
+  return 0;
+}
