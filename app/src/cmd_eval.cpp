@@ -26,6 +26,7 @@
 
 #include "commands.h"
 #include "config.h"
+#include "output_file.h"
 #include "parallel.h"
 #include "pipeline.h"
 #include "progress.h"
@@ -1047,77 +1048,6 @@ Status HeadingErrors(const EvalOptions& o, const Descriptors& ref_d, const Descr
 
 // ---- Output files ------------------------------------------------------------------------
 
-// An output file written to a temporary file in the same folder and renamed into place only
-// after write + fflush + fsync + fclose succeeded: a full disk or a crash leaves the
-// previous file (or none), never a truncated one. Errors name the file and errno's text.
-class OutFile {
- public:
-  Status Open(const std::string& path) {
-    path_ = path;
-    const std::size_t slash = path.rfind('/');
-    const std::size_t name_at = slash == std::string::npos ? 0 : slash + 1;
-    tmp_ = path.substr(0, name_at) + "." + path.substr(name_at) + ".tmp.XXXXXX";
-    const int fd = ::mkstemp(tmp_.data());
-    if (fd < 0) {
-      const int saved = errno;
-      tmp_.clear();
-      return Status::FromErrno(saved, "cannot create a temporary file for %s", path.c_str());
-    }
-    ::fchmod(fd, 0644);  // mkstemp's 0600 is not what a result file needs
-    f_ = ::fdopen(fd, "w");
-    if (f_ == nullptr) {
-      const int saved = errno;
-      ::close(fd);
-      Discard();
-      return Status::FromErrno(saved, "cannot open %s", tmp_.c_str());
-    }
-    return Status::Ok();
-  }
-  std::FILE* get() { return f_; }
-  Status Close() {
-    int saved = 0;
-    // Every step, errno saved at once; the first failure is the one reported.
-    if (std::ferror(f_) != 0)
-      saved = errno != 0 ? errno : EIO;
-    if (saved == 0 && std::fflush(f_) != 0)
-      saved = errno;
-    if (saved == 0 && ::fsync(::fileno(f_)) != 0)
-      saved = errno;
-    const int closed = std::fclose(f_);
-    if (saved == 0 && closed != 0)
-      saved = errno;
-    f_ = nullptr;
-    if (saved != 0) {
-      Discard();
-      return Status::FromErrno(saved, "cannot write %s (the previous file, if any, is kept)",
-                               path_.c_str());
-    }
-    if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      saved = errno;
-      Discard();
-      return Status::FromErrno(saved, "cannot rename the new %s into place", path_.c_str());
-    }
-    tmp_.clear();
-    return Status::Ok();
-  }
-  ~OutFile() {
-    if (f_ != nullptr)
-      std::fclose(f_);
-    Discard();
-  }
-
- private:
-  void Discard() {
-    if (!tmp_.empty())
-      ::unlink(tmp_.c_str());
-    tmp_.clear();
-  }
-
-  std::string path_;
-  std::string tmp_;
-  std::FILE* f_ = nullptr;
-};
-
 // --out must be new or empty unless --force: an earlier evaluation is not replaced
 // silently. Checked before any work is done.
 Status CheckOutFolder(const EvalOptions& o) {
@@ -1227,18 +1157,6 @@ Status WriteMetricsJson(const std::string& path, const EvalOptions& o, const Gro
     std::fprintf(out, "]}%s\n", i + 1 < runs.size() ? "," : "");
   }
   std::fprintf(out, "  ]\n}\n");
-  return f.Close();
-}
-
-Status WriteText(const std::string& path, const std::string& text) {
-  OutFile f;
-  SKYLOC_TRY(f.Open(path));
-  if (std::fwrite(text.data(), 1, text.size(), f.get()) != text.size()) {
-    const int saved = errno;
-    (void)f.Close();  // discards the temporary file
-    return Status::FromErrno(saved, "cannot write %s (the previous file, if any, is kept)",
-                             path.c_str());
-  }
   return f.Close();
 }
 

@@ -20,6 +20,7 @@
 
 #include "commands.h"
 #include "config.h"
+#include "output_file.h"
 #include "pipeline.h"
 #include "skyloc/dsp/localisation_state.h"
 #include "svg_plot.h"
@@ -197,16 +198,6 @@ struct Row {
 };
 
 // printf into a std::string; for short pieces (at most 511 characters).
-std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string Format(const char* format, ...) {
-  char buffer[512];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(buffer, sizeof buffer, format, args);
-  va_end(args);
-  return buffer;
-}
-
 std::string SummaryJson(const host_eval::MethodScore& m) {
   std::string s = Format(
       "{\"evaluated\": %d, \"with_ground_truth\": %d, \"correct\": %d, "
@@ -218,17 +209,6 @@ std::string SummaryJson(const host_eval::MethodScore& m) {
   for (std::size_t i = 0; i < m.curve.size(); ++i)
     s += Format("%s[%.4f, %.4f]", i ? ", " : "", m.curve[i].recall, m.curve[i].precision);
   return s + "]}";
-}
-
-Status WriteFile(const std::string& path, const std::string& text) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr)
-    return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  std::fwrite(text.data(), 1, text.size(), f);
-  const bool failed = std::ferror(f) != 0;
-  if (std::fclose(f) != 0 || failed)
-    return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  return Status::Ok();
 }
 
 // Precision-recall curves of one method, one per row.
@@ -298,13 +278,13 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
       "precision. Plots: " +
       plots + "correspondence.svg.\n\n" + notes;
   json += "  ]\n}\n";
-  SKYLOC_TRY(WriteFile(o.out + "/results.md", md));
-  SKYLOC_TRY(WriteFile(o.out + "/metrics.json", json));
+  SKYLOC_TRY(WriteText(o.out + "/results.md", md));
+  SKYLOC_TRY(WriteText(o.out + "/metrics.json", json));
   for (std::size_t k = 0; k < methods.size(); ++k) {
     SKYLOC_TRY(
-        WriteFile(o.out + "/pr_" + methods[k].key + ".svg", PrPlot(methods[k].title, rows, k)));
+        WriteText(o.out + "/pr_" + methods[k].key + ".svg", PrPlot(methods[k].title, rows, k)));
   }
-  SKYLOC_TRY(WriteFile(o.out + "/correspondence.svg", CorrespondencePlot(rows, methods)));
+  SKYLOC_TRY(WriteText(o.out + "/correspondence.svg", CorrespondencePlot(rows, methods)));
   return Status::Ok();
 }
 
@@ -445,7 +425,7 @@ int RunHeading(const Options& o, const std::string& command) {
     return kExitFailure;
   }
   for (const auto& [name, text] : {std::pair{"/results.md", &md}, {"/metrics.json", &json}}) {
-    if (Status s = WriteFile(o.out + name, *text); !s.ok()) {
+    if (Status s = WriteText(o.out + name, *text); !s.ok()) {
       std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
       return kExitFailure;
     }

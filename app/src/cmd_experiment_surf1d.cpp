@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "output_file.h"
 #if SKYLOC_WITH_HOST_EVAL
 #include "skyloc/host_eval/surf1d_experiment.h"
 #endif
@@ -49,27 +50,6 @@ bool ParseNumber(const char* text, double lo, double hi, double* value) {
   char* end = nullptr;
   *value = std::strtod(text, &end);
   return end != text && *end == '\0' && *value >= lo && *value <= hi;
-}
-
-std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string Format(const char* format, ...) {
-  char buffer[1024];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(buffer, sizeof buffer, format, args);
-  va_end(args);
-  return buffer;
-}
-
-Status WriteText(const std::string& path, const std::string& text) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr)
-    return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  std::fwrite(text.data(), 1, text.size(), f);
-  const bool failed = std::ferror(f) != 0;
-  if (std::fclose(f) != 0 || failed)
-    return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  return Status::Ok();
 }
 
 void PrintProgress(const char* what, void* /*context*/) {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "output_file.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
 #include "skyloc/sim/motion.h"
@@ -303,17 +304,6 @@ int ParseArgs(std::span<char* const> args, Options* o) {
     return kExitUsage;
   }
   return kExitOk;
-}
-
-Status WriteText(const std::string& path, const std::string& text) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr)
-    return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  std::fwrite(text.data(), 1, text.size(), f);
-  const bool failed = std::ferror(f) != 0;
-  if (std::fclose(f) != 0 || failed)
-    return Status::FromErrno(errno, "cannot write '%s'", path.c_str());
-  return Status::Ok();
 }
 
 Result<std::string> ReadText(const std::string& path) {
