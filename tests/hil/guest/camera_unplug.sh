@@ -67,11 +67,6 @@ rm -f /tmp/unplug-after.raw
 
 echo "our V4L2 camera: the drivers suite's V4l2Unplug tests"
 T=/hil/bin/skyloc_drivers_tests
-pending() {
-  echo "  PENDING: $*"
-  [ "$failures" -eq 0 ] && exit 77
-  finish_scenario
-}
 [ -x "$T" ] || pending "skyloc_drivers_tests is not in this image"
 # Only the suite named V4l2Unplug counts: it drives the real device through the files
 # below. (Tests of the same behaviour against a fake device are unit tests and run on
@@ -116,23 +111,12 @@ if [ -z "$VDEV" ]; then
   bad "no vimc platform device bound in $VDRV"
   finish_scenario
 fi
-# udevd's part, for which this guest has no daemon: a udev database entry for every
-# character device, new ones included (libcamera's enumerator skips nodes without one,
-# and vimc's nodes come back with new numbers after the bind).
-(
-  while :; do
-    for d in /sys/dev/char/*; do
-      [ -e /run/udev/data/c"${d##*/}" ] || echo "I:1" >/run/udev/data/c"${d##*/}"
-    done
-    sleep 0.2
-  done
-) &
-udev_stub=$!
+udev_stub_start
 SKYLOC_TEST_LIBCAMERA_CAMERA=first SKYLOC_TEST_LIBCAMERA_UNBIND="$VDRV/unbind" \
   SKYLOC_TEST_LIBCAMERA_BIND="$VDRV/bind" SKYLOC_TEST_LIBCAMERA_PLATFORM_DEVICE="$VDEV" \
   "$T" --gtest_filter='LibcameraUnplug.*' --gtest_color=no >/tmp/unplug-libcamera.log 2>&1
 rc=$?
-kill "$udev_stub" 2>/dev/null
+udev_stub_stop
 sed 's/^/    /' /tmp/unplug-libcamera.log | grep -v '^    [[:space:]]*$' | tail -n 25
 if [ "$rc" -eq 0 ]; then ok "LibcameraUnplug exited 0"; else bad "LibcameraUnplug exited $rc"; fi
 passed=$(grep -c '^\[       OK \] LibcameraUnplug\.' /tmp/unplug-libcamera.log)

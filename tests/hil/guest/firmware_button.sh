@@ -12,11 +12,6 @@
 . /hil/tests/lib.sh
 
 SKYLOC=/hil/bin/skyloc
-pending() {
-  echo "  PENDING: $*"
-  [ "$failures" -eq 0 ] && exit 77
-  finish_scenario
-}
 [ -x "$SKYLOC" ] || pending "skyloc is not in this image"
 
 card=$(v4l2-ctl -d "$HIL_VIVID_VIDEO" --info | sed -n 's/^[[:space:]]*Card type *: //p')
@@ -37,25 +32,15 @@ bands = 16
 [capacities]
 route_frames = 400
 
-[status]
-kind = "gpio"
-chip = "$HIL_GPIOCHIP"
-line_lost = 0
-line_searching = 1
-line_localised = 2
-encoding = "per-state"
+EOF
+status_gpio_config >>"$CONFIG"
+cat >>"$CONFIG" <<EOF
 button_line = 7
 # Pressed reads high: gpio-sim's pull-up is the press, its pull-down the release.
 button_active_low = false
 button_debounce_ms = 30
 EOF
 
-levels() { # the three status lines as read back from gpio-sim, line 0 first: "100"
-  echo "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio0/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio1/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio2/value")"
-}
-held_by_skyloc() { # lines 0-2 and 7 requested by consumer "skyloc"
-  gpioinfo "$HIL_GPIOCHIP" | sed -n '2,4p;9p' | grep -c '"skyloc"'
-}
 json_lines() {
   n=$(grep -c '^{' /tmp/button.out 2>/dev/null)
   echo "${n:-0}"
@@ -82,14 +67,14 @@ echo "repeat with no route, waiting for the button on line 7"
 "$SKYLOC" repeat --route "$ROUTE" --config "$CONFIG" >/tmp/button.out 2>/tmp/button.err &
 skyloc=$!
 i=0
-while [ "$(held_by_skyloc)" -lt 4 ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 300 ]; do
+while [ "$(lines_held_by_skyloc "2,4p;9p")" -lt 4 ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 300 ]; do
   sleep 0.1
   i=$((i + 1))
 done
-expect_eq "status lines and button held by consumer skyloc" "$(held_by_skyloc)" 4
+expect_eq "status lines and button held by consumer skyloc" "$(lines_held_by_skyloc "2,4p;9p")" 4
 sleep 1
 expect_eq "JSON lines while waiting for the button" "$(json_lines)" 0
-expect_eq "status lines while waiting (safe)" "$(levels)" 000
+expect_eq "status lines while waiting (safe)" "$(status_levels)" 000
 if [ -e "$ROUTE" ]; then bad "a route file exists before any press"; else ok "no route file before the press"; fi
 
 echo "press 1: teach"
@@ -126,7 +111,7 @@ if [ "$(json_lines)" -ge "$((at_commit + 10))" ]; then ok "repeat runs on the ta
   bad "repeat printed $(($(json_lines) - at_commit)) frames in 30 s after the commit"
 fi
 grep -q '"best_index"' /tmp/button.out || bad "no repeat JSON line (best_index) after the commit"
-lit=$(levels)
+lit=$(status_levels)
 case "$lit" in
   100 | 010 | 001) ok "one status line lit ($lit)" ;;
   *) bad "status lines read $lit while repeating; per-state encoding lights exactly one" ;;
@@ -136,7 +121,7 @@ kill -TERM "$skyloc" 2>/dev/null
 wait "$skyloc"
 rc=$?
 expect_eq "repeat exit status after SIGTERM" "$rc" 0
-expect_eq "lines released at exit" "$(held_by_skyloc)" 0
+expect_eq "lines released at exit" "$(lines_held_by_skyloc "2,4p;9p")" 0
 if [ -e "$ROUTE.tmp" ]; then bad "$ROUTE.tmp left after the commit"; fi
 if "$SKYLOC" route info "$ROUTE" >/tmp/button.info 2>&1 && grep -q "committed" /tmp/button.info; then
   ok "the route loads: $(grep -m 1 'frames in' /tmp/button.info)"

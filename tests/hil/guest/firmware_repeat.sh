@@ -13,11 +13,6 @@
 . /hil/tests/lib.sh
 
 SKYLOC=/hil/bin/skyloc
-pending() {
-  echo "  PENDING: $*"
-  [ "$failures" -eq 0 ] && exit 77
-  finish_scenario
-}
 [ -x "$SKYLOC" ] || pending "skyloc is not in this image"
 "$SKYLOC" repeat --help >/dev/null 2>&1 || pending "this skyloc has no repeat command"
 
@@ -42,21 +37,9 @@ bands = 16
 [capacities]
 route_frames = 200
 
-[status]
-kind = "gpio"
-chip = "$HIL_GPIOCHIP"
-line_lost = 0
-line_searching = 1
-line_localised = 2
-encoding = "per-state"
 EOF
+status_gpio_config >>"$CONFIG"
 
-levels() { # the three status lines as read back from gpio-sim, line 0 first: "100"
-  echo "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio0/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio1/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio2/value")"
-}
-held_by_skyloc() { # number of lines 0-2 requested by consumer "skyloc"
-  gpioinfo "$HIL_GPIOCHIP" | sed -n '2,4p' | grep -c '"skyloc"'
-}
 holds_video() { # PID: 0 when the process has a /dev/video* node open
   for f in /proc/"$1"/fd/*; do
     case "$(readlink "$f")" in /dev/video*) return 0 ;; esac
@@ -95,19 +78,19 @@ if [ "$(json_lines)" -ge 10 ]; then ok "repeat runs ($(json_lines) frames so far
   bad "repeat printed $(json_lines) frames in 60 s"
   sed 's/^/       | /' /tmp/repeat.err | tail -n 10
 fi
-lit=$(levels)
+lit=$(status_levels)
 case "$lit" in
   100 | 010 | 001) ok "one status line lit ($lit: LOST/SEARCHING/LOCALISED on lines 0/1/2)" ;;
   *) bad "status lines read $lit; per-state encoding lights exactly one" ;;
 esac
-expect_eq "status lines held by consumer skyloc" "$(held_by_skyloc)" 3
+expect_eq "status lines held by consumer skyloc" "$(lines_held_by_skyloc 2,4p)" 3
 
 echo "unplug the camera mid-run ($DEV unbound)"
 echo "$DEV" >"$DRV/unbind"
 safe=
 i=0
 while [ "$i" -lt 100 ] && kill -0 "$skyloc" 2>/dev/null; do
-  if [ "$(levels)" = 000 ] && [ "$(held_by_skyloc)" = 3 ]; then
+  if [ "$(status_levels)" = 000 ] && [ "$(lines_held_by_skyloc 2,4p)" = 3 ]; then
     safe=yes
     break
   fi
@@ -117,7 +100,7 @@ done
 if [ -n "$safe" ]; then
   ok "status lines driven to the safe state (000) within $((i / 10)).$((i % 10)) s, still held"
 elif kill -0 "$skyloc" 2>/dev/null; then
-  bad "status lines read $(levels) 10 s after the unplug; the safe state is 000"
+  bad "status lines read $(status_levels) 10 s after the unplug; the safe state is 000"
 fi
 
 if kill -0 "$skyloc" 2>/dev/null; then
@@ -142,7 +125,7 @@ if kill -0 "$skyloc" 2>/dev/null; then
   wait "$skyloc"
   rc=$?
   expect_eq "repeat exit status after SIGTERM" "$rc" 0
-  expect_eq "status lines released at exit" "$(held_by_skyloc)" 0
+  expect_eq "status lines released at exit" "$(lines_held_by_skyloc 2,4p)" 0
 else
   # Stopped instead of recovering: acceptable when reported cleanly.
   wait "$skyloc"

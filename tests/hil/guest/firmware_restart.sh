@@ -10,11 +10,6 @@
 . /hil/tests/lib.sh
 
 SKYLOC=/hil/bin/skyloc
-pending() {
-  echo "  PENDING: $*"
-  [ "$failures" -eq 0 ] && exit 77
-  finish_scenario
-}
 [ -x "$SKYLOC" ] || pending "skyloc is not in this image"
 ls /hil/lib/libcamera.so.* >/dev/null 2>&1 || pending "this build has no libcamera driver"
 
@@ -42,20 +37,8 @@ bands = 16
 [capacities]
 route_frames = 200
 
-[status]
-kind = "gpio"
-chip = "$HIL_GPIOCHIP"
-line_lost = 0
-line_searching = 1
-line_localised = 2
-encoding = "per-state"
 EOF
-levels() {
-  echo "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio0/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio1/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio2/value")"
-}
-held_by_skyloc() {
-  gpioinfo "$HIL_GPIOCHIP" | sed -n '2,4p' | grep -c '"skyloc"'
-}
+status_gpio_config >>"$CONFIG"
 json_lines() {
   n=$(grep -c '^{' "$1" 2>/dev/null)
   echo "${n:-0}"
@@ -68,18 +51,7 @@ wait_json() { # FILE COUNT SECONDS: until FILE has COUNT JSON lines or skyloc ex
   done
   [ "$(json_lines "$1")" -ge "$2" ]
 }
-# udevd's part, for which this guest has no daemon: a udev database entry for every
-# character device, new ones included (libcamera's enumerator skips nodes without one,
-# and vimc's nodes come back with new numbers after the bind).
-(
-  while :; do
-    for d in /sys/dev/char/*; do
-      [ -e /run/udev/data/c"${d##*/}" ] || echo "I:1" >/run/udev/data/c"${d##*/}"
-    done
-    sleep 0.2
-  done
-) &
-udev_stub=$!
+udev_stub_start
 
 echo "teach 20 frames through libcamera (vimc)"
 if "$SKYLOC" teach --route "$ROUTE" --config "$CONFIG" --frames 20 >/tmp/lc-teach.out 2>/tmp/lc-teach.err; then
@@ -87,7 +59,7 @@ if "$SKYLOC" teach --route "$ROUTE" --config "$CONFIG" --frames 20 >/tmp/lc-teac
 else
   bad "teach exited non-zero"
   sed 's/^/       | /' /tmp/lc-teach.err | grep -v ' INFO \| WARN ' | tail -n 8
-  kill "$udev_stub"
+  udev_stub_stop
   finish_scenario
 fi
 
@@ -116,8 +88,8 @@ else
   bad "no error naming the lost camera"
   sed 's/^/       | /' /tmp/lc-repeat.err | grep -v ' INFO \| WARN ' | tail -n 8
 fi
-expect_eq "status lines after the exit (safe)" "$(levels)" 000
-expect_eq "status lines released" "$(held_by_skyloc)" 0
+expect_eq "status lines after the exit (safe)" "$(status_levels)" 000
+expect_eq "status lines released" "$(lines_held_by_skyloc 2,4p)" 0
 
 echo "plug it back ($VDEV bound) and restart, as systemd does after RestartSec"
 echo "$VDEV" >"$VDRV/bind"
@@ -133,5 +105,5 @@ fi
 kill -TERM "$skyloc" 2>/dev/null
 wait "$skyloc"
 expect_eq "restarted repeat exit status after SIGTERM" "$?" 0
-kill "$udev_stub"
+udev_stub_stop
 finish_scenario

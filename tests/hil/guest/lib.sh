@@ -25,6 +25,42 @@ expect_node() {
   if [ -n "$2" ] && test "$1" "$2"; then ok "$3 $2"; else bad "$3 missing ('$2')"; fi
 }
 file_size() { wc -c <"$1" | tr -d ' '; }
+# A scenario whose subject is not in this build yet: SKIPPED (77), never passed; after a
+# failed check it fails instead.
+pending() {
+  echo "  PENDING: $*"
+  [ "$failures" -eq 0 ] && exit 77
+  finish_scenario
+}
+# The three status lines (gpio-sim lines 0-2) as read back, line 0 first: "100".
+status_levels() {
+  echo "$(cat "$HIL_GPIO_SIM_DIR/sim_gpio0/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio1/value")$(cat "$HIL_GPIO_SIM_DIR/sim_gpio2/value")"
+}
+# lines_held_by_skyloc SED_SCRIPT: how many of the gpioinfo lines that SED_SCRIPT prints
+# ('2,4p': lines 0-2, the status lines) are requested by consumer "skyloc".
+lines_held_by_skyloc() {
+  gpioinfo "$HIL_GPIOCHIP" | sed -n "$1" | grep -c '"skyloc"'
+}
+# The [status] table of a firmware configuration: gpio-sim lines 0-2, one per state.
+status_gpio_config() {
+  printf '[status]\nkind = "gpio"\nchip = "%s"\nline_lost = 0\nline_searching = 1\nline_localised = 2\nencoding = "per-state"\n' "$HIL_GPIOCHIP"
+}
+# udevd's part, for which this guest has no daemon: a udev database entry for every
+# character device, new ones included (libcamera's enumerator skips nodes without one,
+# and vimc's nodes come back with new numbers after a bind). udev_stub_start runs it in
+# the background, udev_stub_stop ends it.
+udev_stub_start() {
+  (
+    while :; do
+      for d in /sys/dev/char/*; do
+        [ -e /run/udev/data/c"${d##*/}" ] || echo "I:1" >/run/udev/data/c"${d##*/}"
+      done
+      sleep 0.2
+    done
+  ) &
+  udev_stub=$!
+}
+udev_stub_stop() { kill "$udev_stub" 2>/dev/null; }
 have() { command -v "$1" >/dev/null 2>&1; }
 # Exit status of a scenario: 0 when every check passed.
 finish_scenario() {
