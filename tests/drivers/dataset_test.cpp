@@ -147,7 +147,7 @@ TEST(Dataset, CsvErrorsNameFileAndLine) {
     EXPECT_NE(msg.find(dir), std::string::npos) << c.name << ": " << msg;
     // The text alone (what the fuzzer drives) gives the same error, unless the error is
     // about the folder: an image that is not there, or no frames at all.
-    if (c.name == "missing_image" || c.name == "no_frames")
+    if (std::string(c.name) == "missing_image" || std::string(c.name) == "no_frames")
       continue;
     Dataset parsed;
     const Status from_text = ParseDatasetCsv(c.csv, dir + "/frames.csv", &parsed);
