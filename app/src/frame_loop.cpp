@@ -145,7 +145,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     }
     errors_in_a_row = 0;
     unavailable_since = Nanoseconds{-1};
-    latency.Record(pipeline.stage_capture, t1 - t0);
+    latency.Record(pipeline.stages().capture, t1 - t0);
     const drivers::Frame& frame = *captured;
 
     if (options.paced) {
@@ -204,7 +204,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
                      frame.pose->roll_deg, frame.pose->pitch_deg, frame.pose->yaw_deg};
       }
       {
-        StageTimer timer(latency, pipeline.stage_output, clock);
+        StageTimer timer(latency, pipeline.stages().output, clock);
         SKYLOC_TRY(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
         if (status != nullptr && options.show_teaching) {
           const Nanoseconds now = clock.Now();
@@ -225,13 +225,13 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         ++s.capture_errors;
         continue;
       }
-      StageTimer timer(latency, pipeline.stage_output, clock);
+      StageTimer timer(latency, pipeline.stages().output, clock);
       if (status != nullptr)
         SKYLOC_TRY(status->Show(result.state, result.confidence, clock.Now()));
     }
     const Nanoseconds done = clock.Now();
     result.latency = done - t1;
-    latency.Record(pipeline.stage_total, done - t1);
+    latency.Record(pipeline.stages().total, done - t1);
     ++s.state_frames[static_cast<int>(result.state)];
     ++s.frames;
     if (sink != nullptr)

@@ -80,9 +80,12 @@ std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
 
 class Pipeline {
  public:
-  // Latency stages, in the order the table prints them.
-  int stage_capture = -1, stage_descriptor = -1, stage_seqslam = -1, stage_heading = -1,
-      stage_output = -1, stage_total = -1;
+  // The latency table's stage ids, in the order it prints them: set by Init, read by the
+  // frame loop, which times the stages the pipeline does not see (capture, output, total).
+  struct LatencyStages {
+    int capture = -1, descriptor = -1, seqslam = -1, heading = -1, output = -1, total = -1;
+  };
+  const LatencyStages& stages() const { return stages_; }
 
   Status Init(const Config& config);
 
@@ -123,6 +126,7 @@ class Pipeline {
   const LatencyTable& latency() const { return latency_; }
 
  private:
+  LatencyStages stages_;
   dsp::Lens lens_;
   dsp::SkyDescriptor descriptor_;
   Matcher matcher_ = Matcher::kRouteFilter;

@@ -152,7 +152,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_FALSE(json.write_failed());
   // Most frames were matched, so the heading ran thousands of times under the counter.
-  EXPECT_GT(pipeline.latency().stage(pipeline.stage_heading).count(), 5000u);
+  EXPECT_GT(pipeline.latency().stage(pipeline.stages().heading).count(), 5000u);
   std::fclose(null);
 }
 
