@@ -865,16 +865,14 @@ dsp::SeqSlamMatch BestScore(std::span<const float> scores, int rwindow) {
 // one run "single" (each query's best frame) and one OpenSeqSLAM run per --ds over the
 // differences best - score (SeqSLAM's local contrast enhancement normalises each column,
 // so only the order and spread of a query's scores matter).
-Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, std::vector<Run>* runs) {
+// `rd` and `qd` are the sky method's descriptors of the two runs: surf1d reads their
+// horizon strips.
+Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, const Descriptors& rd,
+                       const Descriptors& qd, std::vector<Run>* runs) {
   if (o.config.heading.strip_columns == 0)
     return Status::Error(StatusCode::kInvalidArgument,
                          "--method surf1d needs horizon strips: [heading] strip_columns is 0 "
                          "in --config; set it (default 360)");
-  DescriptorForms forms;  // the sky method's lens and strips; its descriptors go unused
-  forms.floats = false;
-  std::fprintf(stderr, "skyloc eval: surf1d strips...\n");
-  SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(Method::kSky, o.reference, o, forms));
-  SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(Method::kSky, o.query, o, forms));
   if (rd.strip_columns == 0 || rd.strip_columns != qd.strip_columns)
     return Status::Error(StatusCode::kInvalidArgument,
                          "--method surf1d: the lens does not see the [heading] band in both "
@@ -1215,9 +1213,27 @@ Status Evaluate(EvalOptions o) {
   std::vector<Run> runs;
   const int n_ref = static_cast<int>(ref.frames.size());
   const int n_query = static_cast<int>(query.frames.size());
+  // The sky descriptors and their strips, computed once for the sky method and surf1d
+  // (which reads only the strips: without sky, no floats are kept).
+  const bool with_sky =
+      std::find(o.methods.begin(), o.methods.end(), Method::kSky) != o.methods.end();
+  std::optional<Descriptors> sky_ref, sky_query;
+  const auto sky_descriptors = [&]() -> Status {
+    if (sky_ref.has_value())
+      return Status::Ok();
+    std::fprintf(stderr, "skyloc eval: sky descriptors of %d + %d frames...\n", n_ref, n_query);
+    DescriptorForms forms;
+    forms.floats = with_sky;
+    SKYLOC_TRY_ASSIGN(Descriptors rd, ComputeDescriptors(Method::kSky, o.reference, o, forms));
+    SKYLOC_TRY_ASSIGN(Descriptors qd, ComputeDescriptors(Method::kSky, o.query, o, forms));
+    sky_ref = std::move(rd);
+    sky_query = std::move(qd);
+    return Status::Ok();
+  };
   for (const Method method : o.methods) {
     if (method == Method::kSurf1d) {
-      SKYLOC_TRY(RunSurf1dMethod(o, gt, &runs));
+      SKYLOC_TRY(sky_descriptors());
+      SKYLOC_TRY(RunSurf1dMethod(o, gt, *sky_ref, *sky_query, &runs));
       continue;
     }
     if (method == Method::kFabmap) {
@@ -1228,18 +1244,25 @@ Status Evaluate(EvalOptions o) {
       runs.push_back(std::move(run));
       continue;
     }
-    std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
-                 n_ref, n_query);
-    // Vanilla in bytes is read only by OpenSeqSLAM's batch engine; the route filter and
-    // the streaming engine read floats.
-    const bool batch_openseqslam =
-        !o.streaming &&
-        std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) != o.matchers.end();
-    DescriptorForms forms;
-    forms.bytes = method == Method::kVanilla && o.vanilla_bytes && batch_openseqslam;
-    forms.floats = !forms.bytes || o.matchers.size() > 1 || !batch_openseqslam;
-    SKYLOC_TRY_ASSIGN(const Descriptors rd, ComputeDescriptors(method, o.reference, o, forms));
-    SKYLOC_TRY_ASSIGN(const Descriptors qd, ComputeDescriptors(method, o.query, o, forms));
+    std::optional<Descriptors> vanilla_ref, vanilla_query;
+    if (method == Method::kSky) {
+      SKYLOC_TRY(sky_descriptors());
+    } else {
+      std::fprintf(stderr, "skyloc eval: %s descriptors of %d + %d frames...\n", MethodName(method),
+                   n_ref, n_query);
+      // Vanilla in bytes is read only by OpenSeqSLAM's batch engine; the route filter and
+      // the streaming engine read floats.
+      const bool batch_openseqslam =
+          !o.streaming && std::find(o.matchers.begin(), o.matchers.end(), Matcher::kOpenSeqSlam) !=
+                              o.matchers.end();
+      DescriptorForms forms;
+      forms.bytes = method == Method::kVanilla && o.vanilla_bytes && batch_openseqslam;
+      forms.floats = !forms.bytes || o.matchers.size() > 1 || !batch_openseqslam;
+      SKYLOC_TRY_ASSIGN(vanilla_ref, ComputeDescriptors(method, o.reference, o, forms));
+      SKYLOC_TRY_ASSIGN(vanilla_query, ComputeDescriptors(method, o.query, o, forms));
+    }
+    const Descriptors& rd = method == Method::kSky ? *sky_ref : *vanilla_ref;
+    const Descriptors& qd = method == Method::kSky ? *sky_query : *vanilla_query;
     for (const Matcher matcher : o.matchers) {
       for (const int ds : o.ds_list) {
         Run run;
