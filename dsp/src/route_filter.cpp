@@ -84,6 +84,8 @@ void RouteFilter::ClearReferences() {
 
 void RouteFilter::ResetQueries() {
   steps_ = 0;
+  track_row_ = -1;
+  track_frames_ = 0;
 }
 
 SeqSlamError RouteFilter::FinishRoute() {
@@ -249,17 +251,28 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   // weight); per frame on average:
   out->score = static_cast<float>(static_cast<double>(best_cost) /
                                   static_cast<double>(params_.sequence_length));
-  if (second == kInf) {
-    // No row outside the window: nothing shows this match is distinctive.
-    out->uniqueness = 1.0f;
-  } else {
+  // The track: does this best row continue the last one as the motion allows (at most
+  // +-uniqueness_window/2 rows back, the same place, and K + that forward)? When the best
+  // row jumps, two paths of the filter are close and a frame ago the other one led; the
+  // new leader has not yet shown it keeps leading.
+  const bool continues =
+      track_row_ >= 0 && best >= track_row_ - half && best <= track_row_ + advance + half;
+  track_frames_ = continues ? track_frames_ + 1 : 0;
+  track_row_ = best;
+  double confidence = 0;
+  if (second != kInf) {
     // The margin in column standard deviations of evidence, however many frames it took
     // to gather: the same threshold means the same evidence at every ds, and right after a
-    // reset the confidence starts low and grows with the evidence.
+    // reset the confidence starts low and grows with the evidence. With no row outside
+    // the window nothing shows this match is distinctive: confidence 0.
     const double margin = static_cast<double>(second) - static_cast<double>(best_cost);
-    out->uniqueness = static_cast<float>(std::exp(-margin));
+    confidence = 1.0 - std::exp(-margin);
   }
-  out->confidence = 1.0f - out->uniqueness;
+  // Trust in a track grows over the 2 ds frames after it began: the filter's memory twice
+  // over, the time a new path takes to gather its own evidence (docs/SEQSLAM.md, Design 4).
+  confidence *= std::min(1.0, (track_frames_ + 1.0) / (2.0 * params_.sequence_length));
+  out->confidence = static_cast<float>(confidence);
+  out->uniqueness = 1.0f - out->confidence;
   return SeqSlamError::kOk;
 }
 

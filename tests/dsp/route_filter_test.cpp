@@ -177,6 +177,8 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
   const int rows = static_cast<int>(out.first.size());
   const double lambda = 1.0 - 1.0 / p.sequence_length;
   std::vector<double> cost(static_cast<std::size_t>(rows), 0.0);
+  int track_best = -1;   // the best row of the frame before
+  int track_length = 0;  // frames the best row has continued its track, this one included
   for (int t = 0; t < query.frames(); ++t) {
     std::vector<double> d(static_cast<std::size_t>(rows));
     for (int r = 0; r < rows; ++r)
@@ -232,9 +234,18 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
     const int first = out.first[static_cast<std::size_t>(best)];
     const int last = out.last[static_cast<std::size_t>(best)];
     out.reference.push_back(first + static_cast<int>(std::floor((0.5 + offset) * (last - first))));
-    out.confidence.push_back(
-        std::isinf(second) ? 0.0
-                           : 1.0 - std::exp(-(second - cost[static_cast<std::size_t>(best)])));
+    // A best row that moved against the motion model (more than window/2 rows back, or
+    // more than K + window/2 forward) starts a new track; a track's confidence is scaled by
+    // its length over 2 ds frames, up to 1.
+    const bool moved_as_allowed = track_best >= 0 &&
+                                  best - track_best >= -p.uniqueness_window / 2 &&
+                                  best - track_best <= p.max_advance + p.uniqueness_window / 2;
+    track_length = moved_as_allowed ? track_length + 1 : 1;
+    track_best = best;
+    const double margin_confidence =
+        std::isinf(second) ? 0.0 : 1.0 - std::exp(-(second - cost[static_cast<std::size_t>(best)]));
+    out.confidence.push_back(margin_confidence *
+                             std::min(1.0, track_length / (2.0 * p.sequence_length)));
     out.gap.push_back(next_lowest - cost[static_cast<std::size_t>(best)]);
   }
   return out;
@@ -475,6 +486,52 @@ TEST(RouteFilter, RelocalisesAfterAKidnap) {
         << "frame " << t;
 }
 
+// A best row that jumps against the motion (further back than the uniqueness window, or
+// further forward than K rows and the window) ends the track it was on: the new track has
+// not yet shown it keeps leading, and its confidence grows over 2 ds frames. Carried back
+// 30 m, the filter's best row must jump; the frames right after are trusted less than the
+// margin alone would say, and the track is fully trusted again 2 ds frames later.
+TEST(RouteFilter, ABestRowThatJumpsBackStartsATrackWhoseConfidenceGrows) {
+  Scenario sc;
+  sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, 33);
+  std::vector<double> s = SampleInTime({{10, 1.0}}, 10, 40.0);
+  const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, 10.0);
+  s.insert(s.end(), after.begin(), after.end());
+  sc.query = MakeRun(sc.field, s, 0.02f, 34);
+  RouteFilterParams p;
+  p.sequence_length = 10;
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+  const int half = p.uniqueness_window / 2;
+  int jumps = 0, last_jump = -1;
+  for (std::size_t t = 1; t < m.size(); ++t) {
+    const int move = m[t].row - m[t - 1].row;
+    if (move < -half || move > p.max_advance + half) {
+      ++jumps;
+      last_jump = static_cast<int>(t);
+      // The first frame of a track: at most 1 / (2 ds) of the margin's confidence.
+      EXPECT_LE(m[t].confidence, 1.0f / (2.0f * static_cast<float>(p.sequence_length)))
+          << "frame " << t;
+    }
+  }
+  ASSERT_GE(jumps, 1);
+  ASSERT_GE(last_jump, 100);  // the jump back comes after the carry
+  // Frame k of the new track (k = 1 at the jump): at most k / (2 ds).
+  for (int t = last_jump; t < last_jump + 2 * p.sequence_length; ++t)
+    EXPECT_LE(
+        m[static_cast<std::size_t>(t)].confidence,
+        static_cast<float>(t - last_jump + 1) / (2.0f * static_cast<float>(p.sequence_length)))
+        << "frame " << t;
+  // Settled on the new track: as confident as before the carry.
+  for (std::size_t t = static_cast<std::size_t>(last_jump + 4 * p.sequence_length); t < m.size();
+       ++t)
+    EXPECT_GT(m[t].confidence, 0.9f) << "frame " << t;
+  for (std::size_t t = 2 * 10; t < 100; ++t)
+    EXPECT_GT(m[t].confidence, 0.9f) << "frame " << t;
+}
+
 TEST(RouteFilter, SingleImageIsNearestNeighbour) {
   const Scenario sc = StopsAndSpeeds();
   const int dim = sc.field.dim();
@@ -547,12 +604,12 @@ TEST(RouteFilter, ConfidenceFallsOnAnUntaughtRoute) {
   const std::vector<SeqSlamMatch> on = Repeat(filter, sc.query, sc.field.dim());
   filter.ResetQueries();
   const std::vector<SeqSlamMatch> off = Repeat(filter, untaught, sc.field.dim());
-  // Every on-route frame after warm-up is more confident than the most confident
-  // off-route frame.
+  // Every on-route frame after warm-up (2 ds frames: the confidence of a new track grows
+  // over them) is more confident than the most confident off-route frame.
   float off_max = 0;
   for (const SeqSlamMatch& m : off)
     off_max = std::max(off_max, m.confidence);
-  for (std::size_t t = 10; t < on.size(); ++t)
+  for (std::size_t t = 2 * 10; t < on.size(); ++t)
     EXPECT_GT(on[t].confidence, off_max) << "frame " << t;
 }
 

@@ -31,6 +31,12 @@
 //     deviations of evidence the best path is ahead by. confidence = 1 - exp(-margin),
 //     uniqueness = exp(-margin) (so confidence = 1 - uniqueness, as for SeqSLAM). Right
 //     after a reset the costs hold little evidence, so the confidence starts low and grows.
+//     The track: a best row more than uniqueness_window/2 rows behind the last frame's,
+//     or more than K + uniqueness_window/2 ahead, moved against the motion model: another
+//     path of the filter took the lead, and it has not yet shown it keeps it. The
+//     confidence is scaled by min(1, k / (2 ds)) on the k-th frame of a track (k = 1 where
+//     it began, also the first frame after a reset): where the evidence is flat and the
+//     best row swings between two paths, no frame of the swing is trusted.
 //  5. The frame a merged row reports. A row that merged a stop spans many taught frames;
 //     its middle is right while the robot stands there, and half the stop wrong while it
 //     arrives or leaves (the frames just before and after the stop are where it is).
@@ -122,8 +128,10 @@ class RouteFilter {
   int frames_ = 0;
   int rows_ = 0;
   bool finished_ = false;
-  int steps_ = 0;     // query frames since the last reset
-  float lambda_ = 0;  // 1 - 1/ds
+  int steps_ = 0;         // query frames since the last reset
+  int track_row_ = -1;    // the best row of the last step (-1: none since the reset)
+  int track_frames_ = 0;  // steps since the best row last jumped
+  float lambda_ = 0;      // 1 - 1/ds
   float keyframe_threshold_ = 0;
   ReferenceRows route_;            // taught frames, then (FinishRoute) the keyframe rows
   std::vector<int> first_frame_;   // capacity
