@@ -13,7 +13,7 @@
 
 #include "frame_loop.h"
 #include "pipeline.h"
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 namespace skyloc::app {
 

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "session.h"
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 namespace skyloc::app {
 namespace {

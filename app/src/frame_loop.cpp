@@ -198,11 +198,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       SKYLOC_TRY(pipeline.Describe(frame.image, &result, attitude_used));
       RouteFrameMeta meta;
       meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
-      if (frame.pose) {
-        meta.has_pose = true;
-        meta.pose = {frame.pose->x_m,      frame.pose->y_m,       frame.pose->z_m,
-                     frame.pose->roll_deg, frame.pose->pitch_deg, frame.pose->yaw_deg};
-      }
+      meta.pose = frame.pose;
       {
         StageTimer timer(latency, pipeline.stages().output, clock);
         SKYLOC_TRY(route->Append(meta, pipeline.descriptor(), pipeline.strip()));

@@ -13,7 +13,7 @@
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/status_output.h"
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 namespace skyloc::app {
 

@@ -21,7 +21,7 @@
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/latency.h"
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 namespace skyloc::app {
 

@@ -61,8 +61,8 @@ class ResultRecorder final : public FrameSink {
 // of either run. A route frame without a pose is NaN, never near anything.
 dsp::Position3 GroundPosition(const RouteFrameMeta& meta) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  return meta.has_pose ? dsp::Position3{meta.pose[0], meta.pose[1], 0}
-                       : dsp::Position3{nan, nan, 0};
+  return meta.pose ? dsp::Position3{meta.pose->x_m, meta.pose->y_m, 0}
+                   : dsp::Position3{nan, nan, 0};
 }
 
 // Precision/recall of the recorded matches, with ground truth from the poses by the rule of

@@ -50,8 +50,8 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
     FrameResult r;
     ASSERT_TRUE(pipeline.Describe(f->image, &r).ok());
     RouteFrameMeta meta;
-    meta.has_pose = true;
-    meta.pose[0] = f->pose->x_m;
+    meta.pose = drivers::Pose{};
+    meta.pose->x_m = f->pose->x_m;
     ASSERT_TRUE(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
   }
 }

@@ -18,12 +18,12 @@
 #include <string>
 #include <vector>
 
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 namespace {
 
 std::vector<std::uint8_t> ValidRouteFile() {
-  using namespace skyloc;
+  using namespace skyloc::app;
   const std::string path = "/tmp/skyloc_route_fuzz_" + std::to_string(::getpid()) + ".db";
   RouteDbSettings settings;
   settings.descriptor_kind = 1;
@@ -39,7 +39,8 @@ std::vector<std::uint8_t> ValidRouteFile() {
   for (int i = 0; i < 7; ++i) {
     RouteFrameMeta meta;
     meta.timestamp_ns = static_cast<std::uint64_t>(i);
-    meta.has_pose = i % 2 == 0;
+    if (i % 2 == 0)
+      meta.pose = skyloc::drivers::Pose{1, 2, 3, 4, 5, 6};
     const float d[4] = {static_cast<float>(i), 1, 2, 3};
     if (!writer.Append(meta, d).ok())
       std::abort();
@@ -56,7 +57,7 @@ std::vector<std::uint8_t> ValidRouteFile() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using namespace skyloc;
+  using namespace skyloc::app;
   static const std::vector<std::uint8_t> kValid = ValidRouteFile();
   static RouteFrames frames;
   static const bool allocated = frames.Allocate(64, 4).ok();
@@ -80,7 +81,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
        {RouteDbLoadPolicy::kStrict, RouteDbLoadPolicy::kRecoverInterrupted,
         RouteDbLoadPolicy::kSalvage}) {
     RouteDbLoadReport report;
-    const Status s = ParseRouteDb(bytes, nullptr, policy, &frames, &report);
+    const skyloc::Status s = ParseRouteDb(bytes, nullptr, policy, &frames, &report);
     if (!s.ok()) {
       if (s.message()[0] == '\0')
         std::abort();

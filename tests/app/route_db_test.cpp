@@ -1,6 +1,6 @@
 // The route database: round trip, rejection of every kind of damage with the chunk named,
 // settings checks, and crash safety (a child killed with SIGKILL while teaching).
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -26,7 +26,7 @@
 #include "support/emulator.h"
 #include "support/scratch_dir.h"
 
-namespace skyloc {
+namespace skyloc::app {
 namespace {
 
 constexpr std::uint32_t kDim = 5;
@@ -79,9 +79,11 @@ std::vector<std::uint8_t> AsVersion(std::vector<std::uint8_t> b, std::uint32_t v
 // Frame i's content: every value depends on i, so a misplaced record is noticed.
 void FrameContent(std::size_t i, RouteFrameMeta* meta, float* descriptor) {
   meta->timestamp_ns = 1000000ull * i + 7;
-  meta->has_pose = i % 3 != 0;
-  for (std::size_t k = 0; k < 6; ++k)
-    meta->pose[k] = meta->has_pose ? static_cast<double>(i) * 0.5 + static_cast<double>(k) : 0.0;
+  meta->pose.reset();
+  if (i % 3 != 0) {
+    const double base = static_cast<double>(i) * 0.5;
+    meta->pose = drivers::Pose{base, base + 1, base + 2, base + 3, base + 4, base + 5};
+  }
   for (std::size_t k = 0; k < kDim; ++k)
     descriptor[k] = static_cast<float>(i) + 0.25f * static_cast<float>(k);
 }
@@ -93,8 +95,16 @@ void ExpectFrames(const RouteFrames& frames, std::size_t n) {
     float d[kDim];
     FrameContent(i, &want, d);
     ASSERT_EQ(frames.meta(i).timestamp_ns, want.timestamp_ns) << i;
-    ASSERT_EQ(frames.meta(i).has_pose, want.has_pose) << i;
-    ASSERT_EQ(frames.meta(i).pose, want.pose) << i;
+    ASSERT_EQ(frames.meta(i).pose.has_value(), want.pose.has_value()) << i;
+    if (want.pose) {
+      const drivers::Pose& got = *frames.meta(i).pose;
+      ASSERT_EQ(got.x_m, want.pose->x_m) << i;
+      ASSERT_EQ(got.y_m, want.pose->y_m) << i;
+      ASSERT_EQ(got.z_m, want.pose->z_m) << i;
+      ASSERT_EQ(got.roll_deg, want.pose->roll_deg) << i;
+      ASSERT_EQ(got.pitch_deg, want.pose->pitch_deg) << i;
+      ASSERT_EQ(got.yaw_deg, want.pose->yaw_deg) << i;
+    }
     for (std::size_t k = 0; k < kDim; ++k)
       ASSERT_EQ(frames.descriptor(i)[k], d[k]) << i << "," << k;
   }
@@ -824,4 +834,4 @@ TEST_F(RouteDbTest, SurvivesKillDuringTeach) {
 }
 
 }  // namespace
-}  // namespace skyloc
+}  // namespace skyloc::app

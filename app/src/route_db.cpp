@@ -1,4 +1,4 @@
-#include "skyloc/platform/route_db.h"
+#include "route_db.h"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -17,11 +17,29 @@
 #include "skyloc/platform/bytes.h"
 #include "skyloc/platform/crc32.h"
 
-namespace skyloc {
+namespace skyloc::app {
 
 // The file is little-endian (StoreBytes/LoadBytes, platform/bytes.h).
 
 namespace {
+
+// A frame record's pose: six little-endian doubles, x, y, z (m), roll, pitch, yaw (deg),
+// zero when the camera did not know it (docs/ROUTE_DB.md).
+void StorePose(const drivers::Pose& pose, std::uint8_t* p) {
+  const double values[6] = {pose.x_m,      pose.y_m,       pose.z_m,
+                            pose.roll_deg, pose.pitch_deg, pose.yaw_deg};
+  for (int i = 0; i < 6; ++i)
+    StoreBytes<double>(p + 8 * i, values[i]);
+}
+
+drivers::Pose LoadPose(const std::uint8_t* p) {
+  drivers::Pose pose;
+  double* const fields[6] = {&pose.x_m,      &pose.y_m,       &pose.z_m,
+                             &pose.roll_deg, &pose.pitch_deg, &pose.yaw_deg};
+  for (int i = 0; i < 6; ++i)
+    *fields[i] = LoadBytes<double>(p + 8 * i);
+  return pose;
+}
 
 constexpr char kMagic[8] = {'S', 'K', 'Y', 'L', 'O', 'C', 'R', 'T'};
 constexpr std::uint32_t kChunkMagic = 0x4B4E4843u;  // "CHNK"
@@ -535,8 +553,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
         const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
         RouteFrameMeta meta;
         meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
-        meta.has_pose = (LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0;
-        std::memcpy(meta.pose.data(), rec + 16, sizeof meta.pose);
+        if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0)
+          meta.pose = LoadPose(rec + 16);
         // Copied byte-wise: the input need not be aligned for float.
         const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
         if (slot.descriptor.size() != s.dim)
@@ -861,8 +879,9 @@ Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> 
                       pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns);
   std::memset(rec, 0, kRouteDbRecordFixedBytes);
   StoreBytes<std::uint64_t>(rec, meta.timestamp_ns);
-  StoreBytes<std::uint32_t>(rec + 8, meta.has_pose ? kHasPose : 0u);
-  std::memcpy(rec + 16, meta.pose.data(), sizeof meta.pose);
+  StoreBytes<std::uint32_t>(rec + 8, meta.pose ? kHasPose : 0u);
+  if (meta.pose)
+    StorePose(*meta.pose, rec + 16);
   std::memcpy(rec + kRouteDbRecordFixedBytes, descriptor.data(), descriptor.size_bytes());
   if (!strip.empty())
     std::memcpy(rec + kRouteDbRecordFixedBytes + descriptor.size_bytes(), strip.data(),
@@ -930,4 +949,4 @@ Status RouteDbWriter::Commit() {
   return flushed;
 }
 
-}  // namespace skyloc
+}  // namespace skyloc::app

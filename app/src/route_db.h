@@ -5,19 +5,22 @@
 // chunk per flush followed by fdatasync, so a crash loses at most the frames since the
 // last flush, and the loader finds every flushed frame intact.
 //
-// This layer knows the settings only as numbers to compare; app/ gives them meaning.
+// It lives in app/ beside the pipeline and the frame loop that teach and load it, and
+// stores the camera's drivers::Pose as the camera reports it.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 
+#include "skyloc/drivers/camera.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/platform/unique_fd.h"
 
-namespace skyloc {
+namespace skyloc::app {
 
 // The lens a route was taught with (version 3: the lens record after the header). Effective
 // values: the centre and radius are what the lens used, never "unset". Numbers only; app/
@@ -94,9 +97,7 @@ struct RouteDbSettings {
 
 struct RouteFrameMeta {
   std::uint64_t timestamp_ns = 0;
-  bool has_pose = false;
-  // x, y, z (m), roll, pitch, yaw (deg): drivers::Pose's fields, when the camera knew them.
-  std::array<double, 6> pose{};
+  std::optional<drivers::Pose> pose;  // when the camera knew it
 };
 
 inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
@@ -275,4 +276,4 @@ class RouteDbWriter {
   std::uint64_t durable_ = 0;
 };
 
-}  // namespace skyloc
+}  // namespace skyloc::app
