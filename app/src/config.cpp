@@ -31,9 +31,10 @@ constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
     {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
 constexpr EnumName<GridPreset> kGridPresets[] = {
     {"auto", GridPreset::kAuto}, {"paper", GridPreset::kPaper}, {"custom", GridPreset::kCustom}};
-constexpr EnumName<Normalisation> kNormalisations[] = {{"none", Normalisation::kNone},
-                                                       {"divide_by_a0", Normalisation::kDivideByA0},
-                                                       {"unit_l2", Normalisation::kUnitL2}};
+constexpr EnumName<dsp::AmplitudeNormalisation> kNormalisations[] = {
+    {"none", dsp::AmplitudeNormalisation::kNone},
+    {"divide_by_a0", dsp::AmplitudeNormalisation::kDivideByA0},
+    {"unit_l2", dsp::AmplitudeNormalisation::kUnitL2}};
 constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
                                                              {"sim", StatusOutputKind::kSim},
                                                              {"gpio", StatusOutputKind::kGpio}};
@@ -117,6 +118,13 @@ class SectionReader {
       return;
     }
     *out = v;
+  }
+  // A float parameter of dsp (the state machine's thresholds): read as a double, range
+  // checked, then rounded to float once.
+  void Float(const char* key, float* out, double lo, double hi) {
+    double v = static_cast<double>(*out);
+    Double(key, &v, lo, hi);
+    *out = static_cast<float>(v);
   }
   void Bool(const char* key, bool* out) {
     const toml::node* node = Find(key);
@@ -282,7 +290,7 @@ const char* SegmentationMethodName(SegmentationMethod method) {
 const char* GridPresetName(GridPreset preset) {
   return NameOf(kGridPresets, preset);
 }
-const char* NormalisationName(Normalisation normalisation) {
+const char* NormalisationName(dsp::AmplitudeNormalisation normalisation) {
   return NameOf(kNormalisations, normalisation);
 }
 const char* StatusOutputKindName(StatusOutputKind kind) {
@@ -416,9 +424,9 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   }
   {
     SectionReader r(section("state"), "state", source_name, &error);
-    r.Double("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
-    r.Double("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
-    r.Double("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
+    r.Float("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
+    r.Float("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
+    r.Float("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
     r.Int("confirm_frames", &c.state.confirm_frames, 1, 1000);
     r.Int("drop_frames", &c.state.drop_frames, 1, 1000);
     r.Int("lost_frames", &c.state.lost_frames, 1, 10000);

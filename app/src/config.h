@@ -8,6 +8,10 @@
 #include <string>
 #include <string_view>
 
+#include "skyloc/dsp/heading.h"
+#include "skyloc/dsp/horizon_strip.h"
+#include "skyloc/dsp/localisation_state.h"
+#include "skyloc/dsp/spherical_harmonics.h"
 #include "skyloc/platform/status.h"
 
 namespace skyloc::app {
@@ -15,7 +19,6 @@ namespace skyloc::app {
 enum class CameraKind : std::uint8_t { kSim, kV4l2, kLibcamera, kDataset };
 enum class SegmentationMethod : std::uint8_t { kOtsu, kFixed };
 enum class GridPreset : std::uint8_t { kAuto, kPaper, kCustom };
-enum class Normalisation : std::uint8_t { kNone, kDivideByA0, kUnitL2 };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
 enum class RouteStorage : std::uint8_t { kFloat32, kBFloat16 };
@@ -24,7 +27,7 @@ enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 const char* CameraKindName(CameraKind kind);
 const char* SegmentationMethodName(SegmentationMethod method);
 const char* GridPresetName(GridPreset preset);
-const char* NormalisationName(Normalisation normalisation);
+const char* NormalisationName(dsp::AmplitudeNormalisation normalisation);
 const char* StatusOutputKindName(StatusOutputKind kind);
 const char* StatusEncodingName(StatusEncoding encoding);
 const char* AttitudeKindName(AttitudeKind kind);
@@ -74,7 +77,7 @@ struct DescriptorConfig {
   int longitudes = 0;
   // There is no distance key: streaming SeqSLAM compares descriptors by mean absolute
   // difference (L1), as OpenSeqSLAM does.
-  Normalisation normalisation = Normalisation::kNone;
+  dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kNone;
 
   bool operator==(const DescriptorConfig&) const = default;
 };
@@ -108,18 +111,6 @@ struct CapacityConfig {
   RouteStorage route_storage = RouteStorage::kFloat32;
 
   bool operator==(const CapacityConfig&) const = default;
-};
-
-struct StateMachineConfig {
-  double enter_confidence = 0.3;  // a frame is "good" at or above this confidence
-  double stay_confidence = 0.15;  // once localised, frames at or above this keep it
-  double max_uniqueness = 0.95;   // best/second-best score ratio; above it the match is ambiguous
-  int confirm_frames = 5;         // consecutive good, consistent frames to become LOCALISED
-  int drop_frames = 5;            // consecutive misses to fall from LOCALISED to SEARCHING
-  int lost_frames = 10;           // consecutive misses to fall from SEARCHING to LOST
-  double index_tolerance = 2.0;   // route frames of slack around the velocity band
-
-  bool operator==(const StateMachineConfig&) const = default;
 };
 
 struct StatusConfig {
@@ -212,7 +203,9 @@ struct Config {
   DescriptorConfig descriptor;
   SeqSlamConfig seqslam;
   CapacityConfig capacities;
-  StateMachineConfig state;
+  // [state]: the state machine's own parameters (docs/STATE_MACHINE.md). Its velocity band
+  // (vmin, vmax) is not a key: it follows the matcher (StateMachineParamsFrom).
+  dsp::StateMachineParams state;
   StatusConfig status;
   RealtimeConfig realtime;
   RouteDbConfig route_db;

@@ -9,18 +9,6 @@
 namespace skyloc::app {
 namespace {
 
-dsp::AmplitudeNormalisation ToDsp(Normalisation n) {
-  switch (n) {
-    case Normalisation::kNone:
-      return dsp::AmplitudeNormalisation::kNone;
-    case Normalisation::kDivideByA0:
-      return dsp::AmplitudeNormalisation::kDivideByA0;
-    case Normalisation::kUnitL2:
-      return dsp::AmplitudeNormalisation::kUnitL2;
-  }
-  return dsp::AmplitudeNormalisation::kNone;
-}
-
 void HashBytes(std::uint64_t* h, const void* data, std::size_t n) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (std::size_t i = 0; i < n; ++i) {
@@ -122,19 +110,12 @@ RouteDbLens RouteLensFrom(const dsp::Lens& lens) {
 }
 
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
-  dsp::StateMachineParams sm;
-  sm.enter_confidence = static_cast<float>(config.state.enter_confidence);
-  sm.stay_confidence = static_cast<float>(config.state.stay_confidence);
-  sm.max_uniqueness = static_cast<float>(config.state.max_uniqueness);
-  sm.confirm_frames = config.state.confirm_frames;
-  sm.drop_frames = config.state.drop_frames;
-  sm.lost_frames = config.state.lost_frames;
+  dsp::StateMachineParams sm = config.state;
   // Route-index consistency in the matcher's rows: the filter's position stands still or
   // advances up to max_advance rows per frame; OpenSeqSLAM's moves at vmin..vmax.
   const bool filter = config.seqslam.matcher == Matcher::kRouteFilter;
   sm.vmin = filter ? 0.0 : config.seqslam.vmin;
   sm.vmax = filter ? config.seqslam.max_advance : config.seqslam.vmax;
-  sm.index_tolerance = config.state.index_tolerance;
   return sm;
 }
 
@@ -194,7 +175,7 @@ Status Pipeline::Init(const Config& config) {
   options.grid.longitudes = config.descriptor.longitudes;
   options.segmentation.fixed_threshold =
       config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold : -1;
-  options.normalisation = ToDsp(config.descriptor.normalisation);
+  options.normalisation = config.descriptor.normalisation;
   if (config.attitude.kind != AttitudeKind::kNone) {
     // The cap from the largest expected tilt and what the lens sees (max_theta: half its
     // field of view, whatever the model).

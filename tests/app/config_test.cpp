@@ -97,7 +97,7 @@ stale_ms = 100
   EXPECT_EQ(c->segmentation.threshold, 90);
   EXPECT_EQ(c->descriptor.rings, 12);
   EXPECT_EQ(c->descriptor.longitudes, 64);
-  EXPECT_EQ(c->descriptor.normalisation, Normalisation::kUnitL2);
+  EXPECT_EQ(c->descriptor.normalisation, dsp::AmplitudeNormalisation::kUnitL2);
   EXPECT_EQ(c->seqslam.ds, 1);
   EXPECT_EQ(c->capacities.route_storage, RouteStorage::kBFloat16);
   EXPECT_TRUE(c->realtime.mlockall);

@@ -34,6 +34,8 @@ struct StateMachineParams {
   double vmin = 0.8;  // route frames per query frame
   double vmax = 1.2;
   double index_tolerance = 2.0;  // route frames
+
+  bool operator==(const StateMachineParams&) const = default;
 };
 
 enum class StateMachineError : std::uint8_t {
