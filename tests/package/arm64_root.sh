@@ -38,6 +38,12 @@ fail() {
   exit 1
 }
 
+mkdir -p "$CACHE"
+# One maker at a time per cache (two ctest runs of the same build folder, say): the second
+# waits, then finds the image made. Not CACHE/lock: setup.sh, called below, takes that one.
+exec 8>"$DIR.lock"
+flock 8
+
 suite=$("$ROOT/toolchains/debian-sources.sh" --suite)
 want=$(printf '%s\n' "format $ROOT_FORMAT" arm64 "$suite" "${PACKAGES[*]}" | sha256sum | cut -d' ' -f1)
 if [ -f "$DIR/root.img" ] && [ "$(cat "$DIR/stamp" 2>/dev/null)" = "$want" ]; then
