@@ -286,7 +286,8 @@ cmd_test() {
   run_ctest tsan -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
   configure_and_build aarch64
   # Every aarch64 test, the hil ones included: those boot an arm64 kernel in
-  # qemu-system-aarch64 with the cross-built binaries (the rest run under qemu-user).
+  # qemu-system-aarch64 with the cross-built binaries (the rest run under qemu-user),
+  # package.deb_arm64 too (the arm64 .deb installed in an arm64 Debian root in the VM).
   # The slow soak runs are the host build's job.
   run_ctest aarch64 -LE "slow|hil"
   run_ctest aarch64 -L hil --repeat until-pass:2
@@ -385,7 +386,8 @@ cmd_package() {
   mkdir -p "$lintian_tmp"
   TMPDIR="$lintian_tmp" lintian --fail-on error,warning "$deb" || die "lintian rejects $deb (above): fix it, or override a tag with its reason in packaging/lintian-overrides"
   rm -rf "$lintian_tmp"
-  # An ARM package cannot be installed here (no binfmt_misc for its maintainer scripts,
+  # An ARM package cannot be installed on this machine (no binfmt_misc for its maintainer
+  # scripts; the aarch64 build's package.deb_arm64 installs an arm64 one in the arm64 VM,
   # docs/PACKAGING.md); its binary at least runs from the package under qemu-user.
   if [ ${#sysroot[@]} -gt 0 ]; then
     local qemu=qemu-aarch64-static unpacked="$BUILD_ROOT/package-$kind/unpacked" version

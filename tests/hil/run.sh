@@ -2,7 +2,8 @@
 # run.sh: boots the HIL VM (QEMU, TCG) with real kernel test drivers and runs scenarios.
 #
 #   run.sh --arch amd64|arm64 --tests a,b [--bin FILE]... [--name NAME] [--log FILE]
-#          [--timeout SECONDS] [--cache DIR] [--lib-sysroot DIR]
+#          [--timeout SECONDS] [--cache DIR] [--lib-sysroot DIR] [--file FILE]...
+#          [--disk IMAGE | --snapshot-disk IMAGE] [--scenario-timeout SECONDS]
 #
 # --tests   scenarios from tests/hil/guest/<name>.sh, run in order inside the VM
 # --bin     a program copied to /hil/bin in the guest, with the shared libraries it needs
@@ -10,6 +11,11 @@
 # --lib-sysroot  the cross build's target sysroot (build/sysroot-arm64): the libraries
 #           (and the loader) the --bin programs were linked against, searched first
 # --log     where the guest console goes (default build/hil-logs/NAME.log)
+# --file    a data file copied to /hil/files in the guest (a .deb, a script)
+# --disk    (arm64) a raw disk image the guest sees as /dev/vda; its writes are kept
+# --snapshot-disk  the same, but the guest's writes go to a temporary overlay QEMU
+#           discards, so IMAGE stays as it was (a cached image shared by test runs)
+# --scenario-timeout  the guest's limit for each scenario (default 240 s, inside --timeout)
 #
 # Needs tests/hil/setup.sh ARCH to have run (CTest: the hil.setup fixture). Exit status:
 # the guest's HIL-RESULT rc (0 passed, 77 skipped); 77 with the reason when the set-up
@@ -27,7 +33,11 @@ LOG=
 TIMEOUT=300
 CACHE=${SKYLOC_HIL_CACHE:-$ROOT/build/hil-cache}
 BINS=()
+FILES=()
 LIB_SYSROOT=
+DISK=
+DISK_SNAPSHOT=off
+SCENARIO_TIMEOUT=240
 while [ $# -gt 0 ]; do
   case "$1" in
     --arch) ARCH=$2 ;;
@@ -38,15 +48,19 @@ while [ $# -gt 0 ]; do
     --timeout) TIMEOUT=$2 ;;
     --cache) CACHE=$2 ;;
     --lib-sysroot) LIB_SYSROOT=$2 ;;
+    --file) FILES+=("$2") ;;
+    --disk) DISK=$2 DISK_SNAPSHOT=off ;;
+    --snapshot-disk) DISK=$2 DISK_SNAPSHOT=on ;;
+    --scenario-timeout) SCENARIO_TIMEOUT=$2 ;;
     *)
-      sed -n '2,16p' "$0" >&2
+      sed -n '2,23p' "$0" >&2
       exit 2
       ;;
   esac
   shift 2
 done
 if [ -z "$ARCH" ] || [ -z "$TESTS" ]; then
-  sed -n '2,16p' "$0" >&2
+  sed -n '2,23p' "$0" >&2
   exit 2
 fi
 NAME=${NAME:-hil.$ARCH.${TESTS//,/+}}
@@ -161,6 +175,16 @@ for b in "${BINS[@]}"; do
   }
   add_program "$b"
 done
+if [ ${#FILES[@]} -gt 0 ]; then
+  mkdir -p "$OV/hil/files"
+  for f in "${FILES[@]}"; do
+    [ -f "$f" ] || {
+      echo "run.sh: --file $f does not exist" >&2
+      exit 1
+    }
+    cp -L "$f" "$OV/hil/files/"
+  done
+fi
 # Debian's own tools for the baseline checks and for setting up vimc's media graph:
 # v4l-utils and libgpiod's tools (for arm64 from the set-up's arm64 sysroot), and on
 # amd64 libcamera's cam.
@@ -206,17 +230,33 @@ base_size=$(stat -c %s "$HIL_BASE_INITRD")
 
 # ---------------------------------------------------------------------------------------
 mkdir -p "$(dirname "$LOG")"
-APPEND="console=$CONSOLE quiet loglevel=4 panic=-1 rdinit=/init hil.tests=$TESTS"
+APPEND="console=$CONSOLE quiet loglevel=4 panic=-1 rdinit=/init hil.tests=$TESTS hil.timeout=$SCENARIO_TIMEOUT"
 # shellcheck disable=SC2054 # the commas are QEMU's option syntax
 CMD=("$QEMU" -accel tcg,thread=multi "${MACHINE[@]}" -m 1024 -smp 1 -nodefaults -no-user-config
   -display none -serial stdio -monitor none -no-reboot
   -kernel "$HIL_KERNEL" -initrd "$WORK/initrd" -append "$APPEND")
+if [ -n "$DISK" ]; then
+  [ -f "$DISK" ] || {
+    echo "run.sh: disk image $DISK does not exist" >&2
+    exit 1
+  }
+  # virtio-mmio: the virt machine's own transport (virtio_mmio and virtio_blk are in the
+  # arm64 initramfs); the pc machine would need virtio-pci, which the amd64 one lacks.
+  [ "$ARCH" = arm64 ] || {
+    echo "run.sh: --disk is for --arch arm64 only (the amd64 initramfs has no virtio_pci)" >&2
+    exit 2
+  }
+  # shellcheck disable=SC2054 # the commas are QEMU's option syntax
+  CMD+=(-drive "file=$DISK,format=raw,if=none,id=disk0,snapshot=$DISK_SNAPSHOT"
+    -device virtio-blk-device,drive=disk0)
+fi
 echo "run.sh: ${CMD[*]}" >"$LOG"
 echo "run.sh: console log: $LOG"
 start=$(date +%s.%N)
 rc=0
 # panic=-1 with -no-reboot makes QEMU exit on a kernel panic; timeout catches a hang.
-timeout --foreground -k 5 "$TIMEOUT" "${CMD[@]}" </dev/null 2>&1 | tr -d '\r' | tee -a "$LOG" || rc=$?
+# TMPDIR: QEMU's overlay for --snapshot-disk goes in the work folder, which is removed.
+TMPDIR=$WORK timeout --foreground -k 5 "$TIMEOUT" "${CMD[@]}" </dev/null 2>&1 | tr -d '\r' | tee -a "$LOG" || rc=$?
 elapsed=$(echo "$(date +%s.%N) - $start" | bc)
 printf 'run.sh: %s: guest ran %.1f s\n' "$NAME" "$elapsed" | tee -a "$LOG"
 

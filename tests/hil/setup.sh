@@ -325,6 +325,9 @@ BASE="$W/base.cpio.gz"
 # writes (scenario routedb_faults).
 MODULES=(vivid vimc configfs irq_sim gpio-sim gpio-mockup iio_dummy iio-trig-hrtimer
   dm-flakey loop ext4 crc32c_generic)
+# arm64: a virtio disk on the virt machine's virtio-mmio transport, for the Debian root
+# the arm64 package test installs into (tests/package, run.sh --disk).
+if [ "$ARCH" = arm64 ]; then MODULES+=(virtio_mmio virtio_blk); fi
 if ! stamp base; then
   say "packing the base initramfs"
   R="$W/rootfs"

@@ -1,14 +1,19 @@
 #!/bin/sh
-# mmdebstrap customize hook of package.deb_host (deb_test.sh): $1 is a Debian root in which
-# apt has just installed skyloc_*.deb. Prints "in-root: ..." lines; exits non-zero on the
-# first thing that is wrong.
+# The checks of an installed skyloc .deb, shared by both package tests: $1 is a Debian root
+# in which apt has just installed skyloc_*.deb. package.deb_host (deb_test.sh) runs it as
+# mmdebstrap's customize hook on the build machine; package.deb_arm64 in the arm64 HIL VM
+# (tests/hil/guest/deb_install.sh), under busybox sh, on the arm64 root on its disk.
+# Prints "in-root: ..." lines; exits non-zero on the first thing that is wrong.
 set -eu
 root=$1
 fail() {
   echo "in-root: FAILED: $*" >&2
   exit 1
 }
-in_root() { chroot "$root" "$@"; }
+# The root's programs through its own env, by absolute path, in a plain environment: the
+# VM's busybox chroot would otherwise run its own applets (dpkg, id, stat) for names
+# without a path, and the VM's LD_LIBRARY_PATH is for its initramfs.
+in_root() { chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root LC_ALL=C "$@"; }
 
 version=$(in_root /usr/bin/skyloc --version) || fail "/usr/bin/skyloc --version does not run"
 echo "in-root: /usr/bin/skyloc --version: $version"

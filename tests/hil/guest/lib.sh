@@ -127,3 +127,36 @@ vimc_configure_rgb() { # WIDTH HEIGHT
     v4l2-ctl -d "$HIL_VIMC_RAW0" -v "width=$w,height=$h,pixelformat=RGGB" &&
     v4l2-ctl -d "$HIL_VIMC_RGB" -v "width=$w,height=$h,pixelformat=RGB3"
 }
+
+# The Debian root on the virtio disk (/dev/vda: run.sh --disk or --snapshot-disk), made by
+# tests/package/arm64_root.sh: debian_root_mount mounts it on $DEBIAN_ROOT with /dev,
+# /proc and /sys inside (dpkg, apt and the maintainer scripts need them);
+# in_debian_root runs a command of the root chrooted there with a plain Debian
+# environment, not the guest's (LD_LIBRARY_PATH=/hil/lib and PATH=/hil/bin are for this
+# initramfs's programs).
+DEBIAN_ROOT=/mnt/debian
+debian_root_mount() {
+  # No udev here to load modules for new devices: the disk's and the file system's by
+  # hand (ext4 asks the crypto API for crc32c at mount time, so that is named too).
+  for m in virtio_mmio virtio_blk crc32c_generic ext4; do modprobe "$m" || return 1; done
+  i=0
+  while [ ! -b /dev/vda ] && [ $i -lt 50 ]; do
+    sleep 0.1
+    i=$((i + 1))
+  done
+  mkdir -p "$DEBIAN_ROOT" &&
+    mount -t ext4 /dev/vda "$DEBIAN_ROOT" &&
+    mount --bind /dev "$DEBIAN_ROOT/dev" &&
+    mount -t proc proc "$DEBIAN_ROOT/proc" &&
+    mount -t sysfs sysfs "$DEBIAN_ROOT/sys"
+}
+debian_root_umount() {
+  umount "$DEBIAN_ROOT/sys" "$DEBIAN_ROOT/proc" "$DEBIAN_ROOT/dev" &&
+    umount "$DEBIAN_ROOT"
+}
+# The root's own env, by its absolute path: this busybox prefers its applets to programs
+# named without a path (chroot dpkg would run busybox's dpkg, sh its ash).
+in_debian_root() {
+  chroot "$DEBIAN_ROOT" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root LC_ALL=C \
+    DEBIAN_FRONTEND=noninteractive "$@"
+}
