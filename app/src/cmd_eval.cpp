@@ -413,11 +413,10 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
   }
   // The firmware's horizon strip, for the heading of the correctly matched frames.
   dsp::HorizonStrip horizon;
-  if (method == Method::kSky && o.config.heading.strip_columns > 0) {
-    if (const dsp::HorizonStripError e =
-            horizon.Init(lens_of_run, HorizonStripOptionsFrom(o.config.heading));
+  if (method == Method::kSky && o.config.heading.enabled()) {
+    if (const dsp::HorizonStripError e = horizon.Init(lens_of_run, o.config.heading.strip);
         e == dsp::HorizonStripError::kOk)
-      d.strip_columns = o.config.heading.strip_columns;
+      d.strip_columns = o.config.heading.strip.n_azimuth;
     else
       std::fprintf(stderr, "skyloc eval: %s: no heading: %s\n", dir.c_str(),
                    dsp::HorizonStripErrorMessage(e));
@@ -688,9 +687,8 @@ Status RunMatcher(const Descriptors& ref, const Descriptors& query, const EvalOp
   Progress progress(what, "query frames matched", query.count);
   if (run->matcher == Matcher::kRouteFilter) {
     // The firmware's engine, as repeat runs it: causal, one query at a time.
-    Config config = o.config;
-    config.seqslam.ds = run->ds;
-    const dsp::RouteFilterParams p = RouteFilterParamsFrom(config);
+    dsp::RouteFilterParams p = o.config.seqslam.filter;
+    p.sequence_length = run->ds;
     dsp::RouteFilter engine;
     e = engine.Init(p, ref.dim, std::max(1, ref.count));
     for (int r = 0; e == dsp::SeqSlamError::kOk && r < ref.count; ++r)
@@ -819,7 +817,7 @@ void Score(const GroundTruth& gt, Run* run) {
 // band through the sky method's lens, rounded to bytes), the strongest surf_max_features.
 Result<std::vector<std::vector<dsp::Surf1dFeature>>> StripFeatures(const Descriptors& d,
                                                                    const HeadingConfig& config) {
-  const dsp::HeadingOptions options = HeadingOptionsFrom(config);
+  const dsp::HeadingOptions& options = config.estimate;
   dsp::Surf1d surf;
   if (const dsp::Surf1dError e = surf.Init(d.strip_columns, options.features);
       e != dsp::Surf1dError::kOk)
@@ -869,7 +867,7 @@ dsp::SeqSlamMatch BestScore(std::span<const float> scores, int rwindow) {
 // horizon strips.
 Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, const Descriptors& rd,
                        const Descriptors& qd, std::vector<Run>* runs) {
-  if (o.config.heading.strip_columns == 0)
+  if (!o.config.heading.enabled())
     return Status::Error(StatusCode::kInvalidArgument,
                          "--method surf1d needs horizon strips: [heading] strip_columns is 0 "
                          "in --config; set it (default 360)");
@@ -879,7 +877,7 @@ Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, const Descri
                          "datasets (see the message above); set the band or the camera file");
   SKYLOC_TRY_ASSIGN(const auto ref_features, StripFeatures(rd, o.config.heading));
   SKYLOC_TRY_ASSIGN(const auto query_features, StripFeatures(qd, o.config.heading));
-  const dsp::HeadingOptions options = HeadingOptionsFrom(o.config.heading);
+  const dsp::HeadingOptions& options = o.config.heading.estimate;
   const auto n_ref = static_cast<std::size_t>(rd.count);
   const auto n_query = static_cast<std::size_t>(qd.count);
   std::vector<float> scores(n_query * n_ref);  // query-major, as SeqSlamFromDifferences
@@ -915,7 +913,7 @@ Status RunSurf1dMethod(const EvalOptions& o, const GroundTruth& gt, const Descri
   single.matches.resize(n_query);
   for (std::size_t q = 0; q < n_query; ++q)
     single.matches[q] =
-        BestScore(std::span(scores).subspan(q * n_ref, n_ref), o.config.seqslam.rwindow);
+        BestScore(std::span(scores).subspan(q * n_ref, n_ref), o.config.seqslam.rwindow());
   runs->push_back(std::move(single));
 
   std::vector<float> differences(scores.size());
@@ -961,7 +959,7 @@ Status LandmarkConfirmation(const EvalOptions& o, const Descriptors& rd, const D
     return Status::Ok();
   SKYLOC_TRY_ASSIGN(const auto ref_features, StripFeatures(rd, o.config.heading));
   SKYLOC_TRY_ASSIGN(const auto query_features, StripFeatures(qd, o.config.heading));
-  const dsp::HeadingOptions options = HeadingOptionsFrom(o.config.heading);
+  const dsp::HeadingOptions& options = o.config.heading.estimate;
   dsp::LandmarkMatcher matcher;
   if (const dsp::Surf1dError e = matcher.Init(options.max_features, options.matching);
       e != dsp::Surf1dError::kOk)
@@ -1010,8 +1008,7 @@ Status HeadingErrors(const EvalOptions& o, const Descriptors& ref_d, const Descr
     return Status::Ok();
   const auto n = static_cast<std::size_t>(ref_d.strip_columns);
   dsp::HeadingEstimator estimator;
-  if (const dsp::HeadingError e =
-          estimator.Init(ref_d.strip_columns, HeadingOptionsFrom(o.config.heading));
+  if (const dsp::HeadingError e = estimator.Init(ref_d.strip_columns, o.config.heading.estimate);
       e != dsp::HeadingError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
                          dsp::HeadingErrorMessage(e));
@@ -1198,9 +1195,9 @@ Status Evaluate(EvalOptions o) {
     SKYLOC_TRY_ASSIGN(o.config, LoadConfigFile(o.config_file.c_str()));
   }
   if (o.max_advance)
-    o.config.seqslam.max_advance = *o.max_advance;
+    o.config.seqslam.filter.max_advance = *o.max_advance;
   if (o.keyframe_noise_factor)
-    o.config.seqslam.keyframe_noise_factor = *o.keyframe_noise_factor;
+    o.config.seqslam.filter.keyframe_noise_factor = static_cast<float>(*o.keyframe_noise_factor);
   SKYLOC_TRY_ASSIGN(const drivers::Dataset ref, drivers::ReadDataset(o.reference));
   SKYLOC_TRY_ASSIGN(const drivers::Dataset query, drivers::ReadDataset(o.query));
   SKYLOC_TRY_ASSIGN(const GroundTruth gt, MakeGroundTruth(o, ref, query));

@@ -46,8 +46,8 @@ constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNon
                                                      {"iio", AttitudeKind::kIio},
                                                      {"dataset", AttitudeKind::kDataset},
                                                      {"sim", AttitudeKind::kSim}};
-constexpr EnumName<RouteStorage> kRouteStorages[] = {{"float32", RouteStorage::kFloat32},
-                                                     {"bfloat16", RouteStorage::kBFloat16}};
+constexpr EnumName<dsp::ReferenceStorage> kRouteStorages[] = {
+    {"float32", dsp::ReferenceStorage::kFloat32}, {"bfloat16", dsp::ReferenceStorage::kBFloat16}};
 
 template <typename E, std::size_t N>
 const char* NameOf(const EnumName<E> (&names)[N], E value) {
@@ -404,15 +404,21 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   {
     SectionReader r(section("seqslam"), "seqslam", source_name, &error);
     r.Enum("matcher", &c.seqslam.matcher, kMatchers);
-    r.Int("ds", &c.seqslam.ds, 1, 100);
-    r.Int("max_advance", &c.seqslam.max_advance, 1, 64);
-    r.Double("keyframe_noise_factor", &c.seqslam.keyframe_noise_factor, 0.0, 100.0);
-    r.Double("vmin", &c.seqslam.vmin, 0.1, 10.0);
-    r.Double("vmax", &c.seqslam.vmax, 0.1, 10.0);
-    r.Double("vstep", &c.seqslam.vstep, 0.01, 10.0);
-    r.Int("rwindow", &c.seqslam.rwindow, 0, 1000);
-    r.Int("contrast_r", &c.seqslam.contrast_r, 0, 1000);
-    if (error.ok() && c.seqslam.vmax < c.seqslam.vmin)
+    dsp::RouteFilterParams& filter = c.seqslam.filter;
+    dsp::SeqSlamParams& open = c.seqslam.openseqslam;
+    int ds = c.seqslam.ds(), rwindow = c.seqslam.rwindow();
+    r.Int("ds", &ds, 1, 100);
+    c.seqslam.set_ds(ds);
+    r.Int("max_advance", &filter.max_advance, 1, 64);
+    r.Float("keyframe_noise_factor", &filter.keyframe_noise_factor, 0.0, 100.0);
+    r.Float("vmin", &open.v_min, 0.1, 10.0);
+    r.Float("vmax", &open.v_max, 0.1, 10.0);
+    r.Float("vstep", &open.v_step, 0.01, 10.0);
+    r.Int("rwindow", &rwindow, 0, 1000);
+    filter.uniqueness_window = rwindow;
+    open.uniqueness_window = rwindow;
+    r.Int("contrast_r", &open.contrast_window, 0, 1000);
+    if (error.ok() && open.v_max < open.v_min)
       r.Invalid("vmax", "must not be smaller than vmin");
     r.Finish();
   }
@@ -513,16 +519,17 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   }
   {
     SectionReader r(section("heading"), "heading", source_name, &error);
-    HeadingConfig& h = c.heading;
-    r.Int("strip_columns", &h.strip_columns, 0, 4096);
+    dsp::HorizonStripOptions& h = c.heading.strip;
+    dsp::HeadingOptions& e = c.heading.estimate;
+    r.Int("strip_columns", &h.n_azimuth, 0, 4096);
     r.Int("band_rows", &h.band_rows, 1, 256);
     r.Double("elevation_min_deg", &h.elevation_min_deg, -90.0, 90.0);
     r.Double("elevation_max_deg", &h.elevation_max_deg, -90.0, 90.0);
-    r.Bool("surf", &h.surf);
-    r.Double("surf_threshold", &h.surf_threshold, 0.0, 255.0);
-    r.Int("surf_max_features", &h.surf_max_features, 1, 4096);
-    r.Int("surf_min_inliers", &h.surf_min_inliers, 2, 4096);
-    if (error.ok() && h.strip_columns != 0 && h.strip_columns < 148)
+    r.Bool("surf", &e.surf);
+    r.Float("surf_threshold", &e.features.threshold, 0.0, 255.0);
+    r.Int("surf_max_features", &e.max_features, 1, 4096);
+    r.Int("surf_min_inliers", &e.min_surf_inliers, 2, 4096);
+    if (error.ok() && h.n_azimuth != 0 && h.n_azimuth < 148)
       r.Invalid("strip_columns",
                 "must be 0 (no heading) or at least 148: 1D SURF's widest filter spans 147 "
                 "columns");

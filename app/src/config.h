@@ -11,6 +11,8 @@
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/localisation_state.h"
+#include "skyloc/dsp/route_filter.h"
+#include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/spherical_harmonics.h"
 #include "skyloc/platform/status.h"
 
@@ -21,7 +23,6 @@ enum class SegmentationMethod : std::uint8_t { kOtsu, kFixed };
 enum class GridPreset : std::uint8_t { kAuto, kPaper, kCustom };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
-enum class RouteStorage : std::uint8_t { kFloat32, kBFloat16 };
 enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 
 const char* CameraKindName(CameraKind kind);
@@ -88,19 +89,21 @@ enum class Matcher : std::uint8_t {
   kOpenSeqSlam,  // dsp/seqslam.h streaming engine: OpenSeqSLAM's enhancement and search
 };
 
+// The two matchers' own parameter structs. The keys: ds and rwindow set both
+// (sequence_length, uniqueness_window); max_advance and keyframe_noise_factor are the
+// filter's; vmin, vmax, vstep (v_min, v_max, v_step) and contrast_r (contrast_window)
+// OpenSeqSLAM's. The file keeps the paper's short names.
 struct SeqSlamConfig {
   Matcher matcher = Matcher::kRouteFilter;
-  int ds = 10;
-  // Route filter: route rows the position may advance per frame, and the keyframe merge
-  // threshold in multiples of the route's noise floor (0 keeps every frame).
-  int max_advance = 8;
-  double keyframe_noise_factor = 2.0;
-  // OpenSeqSLAM: velocity band and contrast enhancement window.
-  double vmin = 0.8;
-  double vmax = 1.2;
-  double vstep = 0.1;
-  int rwindow = 10;
-  int contrast_r = 10;
+  dsp::RouteFilterParams filter;
+  dsp::SeqSlamParams openseqslam;
+
+  int ds() const { return filter.sequence_length; }
+  void set_ds(int ds) {
+    filter.sequence_length = ds;
+    openseqslam.sequence_length = ds;
+  }
+  int rwindow() const { return filter.uniqueness_window; }
 
   bool operator==(const SeqSlamConfig&) const = default;
 };
@@ -108,7 +111,7 @@ struct SeqSlamConfig {
 struct CapacityConfig {
   int route_frames = 10000;  // the largest route teach records and repeat loads
   // How the matcher holds the route in memory (the route file always stores floats).
-  RouteStorage route_storage = RouteStorage::kFloat32;
+  dsp::ReferenceStorage route_storage = dsp::ReferenceStorage::kFloat32;
 
   bool operator==(const CapacityConfig&) const = default;
 };
@@ -178,20 +181,18 @@ struct AttitudeConfig {
 // The heading of a recognised place (docs/SURF1D.md, "Heading in the firmware"): every
 // route frame stores a horizon strip, and repeat turns the query's strip against the
 // matched frame's.
+// dsp's own option structs, filled from the keys: strip_columns -> strip.n_azimuth,
+// band_rows, elevation_min_deg, elevation_max_deg -> strip; surf -> estimate.surf,
+// surf_threshold -> estimate.features.threshold (strip grey levels), surf_max_features ->
+// estimate.max_features, surf_min_inliers -> estimate.min_surf_inliers.
 struct HeadingConfig {
-  // Azimuth columns of the strip over 360 degrees, 0 (no heading, no strips) or 148..4096
-  // (1D SURF's widest filter needs more than 147). The route stores one byte per column
-  // per frame.
-  int strip_columns = 360;
-  int band_rows = 16;              // elevations averaged per column
-  double elevation_min_deg = 0.0;  // the band, degrees above the horizon
-  double elevation_max_deg = 20.0;
-  // The second estimate, 1D SURF + RANSAC on the same strips (heading_surf_deg); off
-  // saves its time (~0.3 ms per frame, docs/BENCHMARKS.md).
-  bool surf = true;
-  double surf_threshold = 2.0;  // Surf1dOptions::threshold, strip grey levels
-  int surf_max_features = 256;  // per strip; the strongest are kept
-  int surf_min_inliers = 10;    // fewer RANSAC inliers: heading_surf_deg is null
+  // strip.n_azimuth: azimuth columns over 360 degrees, 0 (no heading, no strips) or
+  // 148..4096 (1D SURF's widest filter needs more than 147). The route stores one byte per
+  // column per frame. estimate.surf: the second estimate, 1D SURF + RANSAC on the same
+  // strips (heading_surf_deg); off saves its time (~0.3 ms per frame, docs/BENCHMARKS.md).
+  dsp::HorizonStripOptions strip;
+  dsp::HeadingOptions estimate;
+  bool enabled() const { return strip.n_azimuth > 0; }
 
   bool operator==(const HeadingConfig&) const = default;
 };

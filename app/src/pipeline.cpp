@@ -114,36 +114,10 @@ dsp::StateMachineParams StateMachineParamsFrom(const Config& config) {
   // Route-index consistency in the matcher's rows: the filter's position stands still or
   // advances up to max_advance rows per frame; OpenSeqSLAM's moves at vmin..vmax.
   const bool filter = config.seqslam.matcher == Matcher::kRouteFilter;
-  sm.vmin = filter ? 0.0 : config.seqslam.vmin;
-  sm.vmax = filter ? config.seqslam.max_advance : config.seqslam.vmax;
+  sm.vmin = filter ? 0.0 : static_cast<double>(config.seqslam.openseqslam.v_min);
+  sm.vmax = filter ? config.seqslam.filter.max_advance
+                   : static_cast<double>(config.seqslam.openseqslam.v_max);
   return sm;
-}
-
-dsp::HorizonStripOptions HorizonStripOptionsFrom(const HeadingConfig& config) {
-  dsp::HorizonStripOptions strip;
-  strip.n_azimuth = config.strip_columns;
-  strip.band_rows = config.band_rows;
-  strip.elevation_min_deg = config.elevation_min_deg;
-  strip.elevation_max_deg = config.elevation_max_deg;
-  return strip;
-}
-
-dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config) {
-  dsp::HeadingOptions heading;
-  heading.surf = config.surf;
-  heading.features.threshold = static_cast<float>(config.surf_threshold);
-  heading.max_features = config.surf_max_features;
-  heading.min_surf_inliers = config.surf_min_inliers;
-  return heading;
-}
-
-dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config) {
-  dsp::RouteFilterParams filter;
-  filter.sequence_length = config.seqslam.ds;
-  filter.max_advance = config.seqslam.max_advance;
-  filter.uniqueness_window = config.seqslam.rwindow;
-  filter.keyframe_noise_factor = static_cast<float>(config.seqslam.keyframe_noise_factor);
-  return filter;
 }
 
 std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
@@ -193,24 +167,14 @@ Status Pipeline::Init(const Config& config) {
   SKYLOC_TRY(amplitudes_.Allocate(static_cast<std::size_t>(descriptor_.bands())));
 
   matcher_ = config.seqslam.matcher;
-  const dsp::ReferenceStorage storage = config.capacities.route_storage == RouteStorage::kBFloat16
-                                            ? dsp::ReferenceStorage::kBFloat16
-                                            : dsp::ReferenceStorage::kFloat32;
+  const dsp::ReferenceStorage storage = config.capacities.route_storage;
   dsp::SeqSlamError matcher_error = dsp::SeqSlamError::kOk;
   if (matcher_ == Matcher::kRouteFilter) {
-    const dsp::RouteFilterParams filter = RouteFilterParamsFrom(config);
-    matcher_error =
-        filter_.Init(filter, descriptor_.bands(), config.capacities.route_frames, storage);
+    matcher_error = filter_.Init(config.seqslam.filter, descriptor_.bands(),
+                                 config.capacities.route_frames, storage);
   } else {
-    dsp::SeqSlamParams seq;
-    seq.sequence_length = config.seqslam.ds;
-    seq.v_min = static_cast<float>(config.seqslam.vmin);
-    seq.v_max = static_cast<float>(config.seqslam.vmax);
-    seq.v_step = static_cast<float>(config.seqslam.vstep);
-    seq.uniqueness_window = config.seqslam.rwindow;
-    seq.contrast_window = config.seqslam.contrast_r;
-    matcher_error =
-        seqslam_.Init(seq, descriptor_.bands(), config.capacities.route_frames, storage);
+    matcher_error = seqslam_.Init(config.seqslam.openseqslam, descriptor_.bands(),
+                                  config.capacities.route_frames, storage);
   }
   if (matcher_error != dsp::SeqSlamError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[seqslam]: %s",
@@ -252,28 +216,27 @@ Status Pipeline::Init(const Config& config) {
 Status Pipeline::InitHeading(const HeadingConfig& config) {
   route_settings_.strip = {};
   route_strip_frames_ = 0;
-  const auto columns = static_cast<std::size_t>(config.strip_columns);
+  const auto columns = static_cast<std::size_t>(config.strip.n_azimuth);
   // Zero-sized buffers when heading is off: strip() is then empty and teach stores none.
   SKYLOC_TRY(strip_.Allocate(columns));
   SKYLOC_TRY(strip_bytes_.Allocate(columns));
   SKYLOC_TRY(stored_strip_.Allocate(columns));
   if (columns == 0)
     return Status::Ok();
-  const dsp::HorizonStripOptions strip = HorizonStripOptionsFrom(config);
+  const dsp::HorizonStripOptions& strip = config.strip;
   if (const dsp::HorizonStripError e = horizon_.Init(lens_, strip);
       e != dsp::HorizonStripError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
                          dsp::HorizonStripErrorMessage(e));
   // The band as the route records it: hundredths of a degree, so a value written to the
   // config file and read back compares equal.
-  route_settings_.strip.columns = static_cast<std::uint32_t>(config.strip_columns);
-  route_settings_.strip.band_rows = static_cast<std::uint32_t>(config.band_rows);
+  route_settings_.strip.columns = static_cast<std::uint32_t>(strip.n_azimuth);
+  route_settings_.strip.band_rows = static_cast<std::uint32_t>(strip.band_rows);
   route_settings_.strip.elevation_min_cdeg =
-      static_cast<std::int32_t>(std::lround(config.elevation_min_deg * 100));
+      static_cast<std::int32_t>(std::lround(strip.elevation_min_deg * 100));
   route_settings_.strip.elevation_max_cdeg =
-      static_cast<std::int32_t>(std::lround(config.elevation_max_deg * 100));
-  const dsp::HeadingOptions heading = HeadingOptionsFrom(config);
-  if (const dsp::HeadingError e = heading_.Init(config.strip_columns, heading);
+      static_cast<std::int32_t>(std::lround(strip.elevation_max_deg * 100));
+  if (const dsp::HeadingError e = heading_.Init(strip.n_azimuth, config.estimate);
       e != dsp::HeadingError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
                          dsp::HeadingErrorMessage(e));

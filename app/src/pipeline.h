@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "config.h"
+#include "route_db.h"
 #include "skyloc/drivers/camera.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
@@ -21,7 +22,6 @@
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/latency.h"
-#include "route_db.h"
 
 namespace skyloc::app {
 
@@ -69,10 +69,7 @@ RouteDbLens RouteLensFrom(const dsp::Lens& lens);
 // The state machine's parameters from [state] and the matcher's motion limits.
 dsp::StateMachineParams StateMachineParamsFrom(const Config& config);
 // The horizon strip and the heading estimator from [heading] (strip_columns > 0).
-dsp::HorizonStripOptions HorizonStripOptionsFrom(const HeadingConfig& config);
-dsp::HeadingOptions HeadingOptionsFrom(const HeadingConfig& config);
 // The route filter's parameters from [seqslam].
-dsp::RouteFilterParams RouteFilterParamsFrom(const Config& config);
 // The firmware's state machine replayed over per-frame matches, as repeat would have shown
 // them (offline: eval and the experiments). Allocates the result.
 std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,

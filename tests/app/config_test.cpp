@@ -98,8 +98,9 @@ stale_ms = 100
   EXPECT_EQ(c->descriptor.rings, 12);
   EXPECT_EQ(c->descriptor.longitudes, 64);
   EXPECT_EQ(c->descriptor.normalisation, dsp::AmplitudeNormalisation::kUnitL2);
-  EXPECT_EQ(c->seqslam.ds, 1);
-  EXPECT_EQ(c->capacities.route_storage, RouteStorage::kBFloat16);
+  EXPECT_EQ(c->seqslam.ds(), 1);
+  EXPECT_EQ(c->seqslam.openseqslam.sequence_length, 1);
+  EXPECT_EQ(c->capacities.route_storage, dsp::ReferenceStorage::kBFloat16);
   EXPECT_TRUE(c->realtime.mlockall);
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
   EXPECT_EQ(c->status.kind, StatusOutputKind::kGpio);

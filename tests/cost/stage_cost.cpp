@@ -142,12 +142,13 @@ int main(int argc, char** argv) {
 
   Config config = DefaultConfig();
   config.capacities.route_frames = route_frames;
-  config.capacities.route_storage = bfloat16 ? RouteStorage::kBFloat16 : RouteStorage::kFloat32;
+  config.capacities.route_storage =
+      bfloat16 ? dsp::ReferenceStorage::kBFloat16 : dsp::ReferenceStorage::kFloat32;
   const bool heading_stage = stage == "heading" || stage == "correlation" || stage == "strip";
   if (stage == "descriptor" || stage == "segmentation")
-    config.heading.strip_columns = 0;  // Describe() without the strip
+    config.heading.strip.n_azimuth = 0;  // Describe() without the strip
   if (stage == "correlation")
-    config.heading.surf = false;
+    config.heading.estimate.surf = false;
   double checksum = 0;
   if (stage == "render") {
     std::vector<std::vector<std::uint8_t>> images;
@@ -159,7 +160,7 @@ int main(int argc, char** argv) {
     // The route filter alone, as Pipeline::Init configures it (no pipeline, no frames).
     dsp::RouteFilter filter;
     const int dim = config.descriptor.bands;
-    if (filter.Init(RouteFilterParamsFrom(config), dim, route_frames,
+    if (filter.Init(config.seqslam.filter, dim, route_frames,
                     bfloat16 ? dsp::ReferenceStorage::kBFloat16
                              : dsp::ReferenceStorage::kFloat32) != dsp::SeqSlamError::kOk)
       return Fail("filter Init");
@@ -216,7 +217,7 @@ int main(int argc, char** argv) {
       strips.emplace_back(pipeline.strip().begin(), pipeline.strip().end());
     }
     dsp::HeadingEstimator heading;
-    if (heading.Init(config.heading.strip_columns, HeadingOptionsFrom(config.heading)) !=
+    if (heading.Init(config.heading.strip.n_azimuth, config.heading.estimate) !=
         dsp::HeadingError::kOk)
       return Fail("heading Init");
     for (long r = 0; r < repetitions; ++r) {

@@ -30,8 +30,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Require(c->segmentation.threshold >= 0 && c->segmentation.threshold <= 254);
   Require(c->descriptor.bands >= 1 && c->descriptor.bands <= 256);
   Require(c->descriptor.rings >= 1 && c->descriptor.longitudes >= 4);
-  Require(c->seqslam.ds >= 1 && c->seqslam.ds <= 100);
-  Require(c->seqslam.vmin <= c->seqslam.vmax);
+  Require(c->seqslam.ds() >= 1 && c->seqslam.ds() <= 100);
+  Require(c->seqslam.openseqslam.sequence_length == c->seqslam.ds());
+  Require(c->seqslam.openseqslam.v_min <= c->seqslam.openseqslam.v_max);
   Require(c->capacities.route_frames >= 1 && c->capacities.route_frames <= 1000000);
   Require(c->state.stay_confidence <= c->state.enter_confidence);
   Require(c->realtime.sched_fifo_priority >= 0 && c->realtime.sched_fifo_priority <= 99);

@@ -34,6 +34,8 @@ struct HeadingOptions {
   // manoeuvre runs, models with fewer than 10 inliers hold most of the errors above 10
   // degrees).
   int min_surf_inliers = 10;
+
+  bool operator==(const HeadingOptions&) const = default;
 };
 
 struct HeadingEstimate {

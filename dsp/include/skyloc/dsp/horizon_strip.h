@@ -31,6 +31,8 @@ struct HorizonStripOptions {
   int band_rows = 16;   // elevations sampled per column
   double elevation_min_deg = 0.0;
   double elevation_max_deg = 20.0;
+
+  bool operator==(const HorizonStripOptions&) const = default;
 };
 
 enum class HorizonStripError : std::uint8_t {

@@ -75,6 +75,8 @@ struct RouteFilterParams {
   // Merge a frame into the current route row while it differs from the row's first
   // frame by at most this x the route's noise floor (0..100; 0 keeps every frame).
   float keyframe_noise_factor = 2.0f;
+
+  bool operator==(const RouteFilterParams&) const = default;
 };
 
 SeqSlamError ValidateRouteFilterParams(const RouteFilterParams& params);

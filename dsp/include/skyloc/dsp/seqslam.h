@@ -77,6 +77,8 @@ struct SeqSlamParams {
   float v_step = 0.1f;
   int uniqueness_window = 10;  // Rwindow: starts within +-Rwindow/2 of the best are excluded
   int contrast_window = 10;    // R: enhancement uses the +-R/2 neighbouring reference rows
+
+  bool operator==(const SeqSlamParams&) const = default;
 };
 
 SeqSlamError ValidateSeqSlamParams(const SeqSlamParams& params);

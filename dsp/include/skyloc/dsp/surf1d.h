@@ -45,6 +45,8 @@ struct Surf1dOptions {
   // false: maximum along the strip at its own layer (the paper). true: also greater than
   // the neighbouring layers (SURF's scale-space test; fewer, better-localised features).
   bool suppress_across_scale = false;
+
+  bool operator==(const Surf1dOptions&) const = default;
 };
 
 inline constexpr int kSurf1dDescriptorSize = 6;
@@ -117,6 +119,8 @@ struct LandmarkMatchOptions {
   float inlier_threshold = 2.0f;  // columns
   float max_scale = 1.25f;        // b_s within [1 / max_scale, max_scale] (> 0)
   std::uint64_t seed = 1;         // the same inputs always give the same answer
+
+  bool operator==(const LandmarkMatchOptions&) const = default;
 };
 
 struct LandmarkMatch {
