@@ -202,6 +202,9 @@ Status Pipeline::Init(const Config& config) {
   }
 
   SKYLOC_TRY(InitHeading(config.heading));
+  // The route's strips, once: the loader hands them here (RouteSink), not kept elsewhere.
+  SKYLOC_TRY(route_strips_.Allocate(static_cast<std::size_t>(config.capacities.route_frames) *
+                                    strip_.size()));
 
   latency_ = LatencyTable();
   stages_.capture = latency_.AddStage("capture");
@@ -243,6 +246,40 @@ Status Pipeline::InitHeading(const HeadingConfig& config) {
   return Status::Ok();
 }
 
+void Pipeline::BeginRoute() {
+  if (matcher_ == Matcher::kRouteFilter)
+    filter_.ClearReferences();
+  else
+    seqslam_.ClearReferences();
+  route_frames_added_ = 0;
+  route_strips_complete_ = true;
+  route_strip_frames_ = 0;
+}
+
+Status Pipeline::AddFrame(std::span<const float> descriptor, std::span<const std::uint8_t> strip) {
+  if (descriptor.size() != static_cast<std::size_t>(dim())) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "route has %zu-value descriptors, the pipeline %d", descriptor.size(),
+                         dim());
+  }
+  if (const dsp::SeqSlamError e = matcher_ == Matcher::kRouteFilter
+                                      ? filter_.AddReference(descriptor)
+                                      : seqslam_.AddReference(descriptor);
+      e != dsp::SeqSlamError::kOk)
+    return Status::Error(StatusCode::kResourceExhausted, "route frame %zu: %s", route_frames_added_,
+                         dsp::SeqSlamErrorMessage(e));
+  // Strips of another length cannot be compared (the route loader refuses them; this
+  // guards a route built in memory): a route with any frame without one has no heading.
+  const std::size_t columns = strip_.size();
+  if (columns != 0 && strip.size() == columns &&
+      (route_frames_added_ + 1) * columns <= route_strips_.size())
+    std::memcpy(route_strips_.data() + route_frames_added_ * columns, strip.data(), columns);
+  else
+    route_strips_complete_ = false;
+  ++route_frames_added_;
+  return Status::Ok();
+}
+
 Status Pipeline::SetRoute(const RouteFrames& route) {
   if (route.dim() != static_cast<std::size_t>(dim())) {
     return Status::Error(StatusCode::kFailedPrecondition,
@@ -250,32 +287,22 @@ Status Pipeline::SetRoute(const RouteFrames& route) {
                          "pipeline %d",
                          route.dim(), dim());
   }
-  const bool filter = matcher_ == Matcher::kRouteFilter;
-  if (filter)
-    filter_.ClearReferences();
-  else
-    seqslam_.ClearReferences();
-  for (std::size_t i = 0; i < route.size(); ++i) {
-    if (const dsp::SeqSlamError e = filter ? filter_.AddReference(route.descriptor(i))
-                                           : seqslam_.AddReference(route.descriptor(i));
-        e != dsp::SeqSlamError::kOk)
-      return Status::Error(StatusCode::kResourceExhausted, "route frame %zu: %s", i,
-                           dsp::SeqSlamErrorMessage(e));
+  if (route.sink() != static_cast<const RouteSink*>(this)) {
+    // A route kept in memory (tests, tools): hand its frames over as the loader would.
+    BeginRoute();
+    for (std::size_t i = 0; i < route.size(); ++i)
+      SKYLOC_TRY(AddFrame(route.descriptor(i), route.strip(i)));
+  } else if (route_frames_added_ != route.size()) {
+    return Status::Error(StatusCode::kInternal,
+                         "route: %zu frames loaded, the matcher received %zu", route.size(),
+                         route_frames_added_);
   }
-  if (filter) {
+  if (matcher_ == Matcher::kRouteFilter) {
     if (const dsp::SeqSlamError e = filter_.FinishRoute(); e != dsp::SeqSlamError::kOk)
       return Status::Error(StatusCode::kFailedPrecondition, "route: %s",
                            dsp::SeqSlamErrorMessage(e));
   }
-  // Strips of another length cannot be compared (the route loader refuses them; this
-  // guards a route built in memory).
-  route_strip_frames_ = 0;
-  if (route.has_strips() && route.strip_columns() == strip_.size() && !strip_.empty()) {
-    SKYLOC_TRY(route_strips_.Allocate(route.size() * strip_.size()));
-    for (std::size_t i = 0; i < route.size(); ++i)
-      std::memcpy(route_strips_.data() + i * strip_.size(), route.strip(i).data(), strip_.size());
-    route_strip_frames_ = route.size();
-  }
+  route_strip_frames_ = route.has_strips() && route_strips_complete_ ? route_frames_added_ : 0;
   ResetTracking();
   return Status::Ok();
 }

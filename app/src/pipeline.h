@@ -75,7 +75,7 @@ dsp::StateMachineParams StateMachineParamsFrom(const Config& config);
 std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
                                                        std::span<const dsp::SeqSlamMatch> matches);
 
-class Pipeline {
+class Pipeline final : private RouteSink {
  public:
   // The latency table's stage ids, in the order it prints them: set by Init, read by the
   // frame loop, which times the stages the pipeline does not see (capture, output, total).
@@ -91,9 +91,14 @@ class Pipeline {
   int width() const { return lens_.params().width; }
   int height() const { return lens_.params().height; }
 
-  // Replaces the route SeqSLAM matches against (start-up, after loading the database),
-  // copying its descriptors and, when it has them, its horizon strips (the heading reads
-  // its own copy: the route need not outlive the call).
+  // Where a route loader hands the frames (RouteFrames::Allocate's sink): each descriptor
+  // goes straight into the matcher at its configured storage type and each strip to the
+  // heading, so the route is held once (RouteFrames keeps only times and poses).
+  RouteSink* route_sink() { return this; }
+  // Makes the route SeqSLAM matches against (start-up, after loading the database). A
+  // route loaded through route_sink() is already here: this finishes it (keyframes). Any
+  // other route's descriptors and, when it has them, horizon strips are copied (the
+  // route need not outlive the call).
   Status SetRoute(const RouteFrames& route);
   // Heading is estimated: [heading] strip_columns > 0 and the route has strips.
   bool heading_enabled() const { return route_strip_frames_ > 0; }
@@ -139,8 +144,13 @@ class Pipeline {
   FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the route stores it
   FixedArray<float> stored_strip_;        // the matched route frame's strip as floats
   dsp::HeadingEstimator heading_;
-  FixedArray<std::uint8_t> route_strips_;  // route frames x strip columns (SetRoute)
-  std::size_t route_strip_frames_ = 0;
+  // RouteSink: the loader's frames.
+  void BeginRoute() override;
+  Status AddFrame(std::span<const float> descriptor, std::span<const std::uint8_t> strip) override;
+  FixedArray<std::uint8_t> route_strips_;  // capacity x strip columns (Init), filled by AddFrame
+  std::size_t route_frames_added_ = 0;
+  bool route_strips_complete_ = true;   // every frame added had a strip of our length
+  std::size_t route_strip_frames_ = 0;  // frames with strips after SetRoute (0: no heading)
   RouteDbSettings route_settings_;
   LatencyTable latency_;
   MonotonicClock clock_;

@@ -344,9 +344,12 @@ void FormatRouteDbLens(const RouteDbLens& l, char* out, std::size_t size) {
 // ---------------------------------------------------------------------------------------
 // RouteFrames
 
-Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns) {
-  SKYLOC_TRY(descriptors_.Allocate(capacity * dim));
-  SKYLOC_TRY(strips_.Allocate(capacity * strip_columns));
+Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns,
+                             RouteSink* sink) {
+  sink_ = sink;
+  const std::size_t kept = sink != nullptr ? 1 : capacity;
+  SKYLOC_TRY(descriptors_.Allocate(kept * dim));
+  SKYLOC_TRY(strips_.Allocate(kept * strip_columns));
   SKYLOC_TRY(meta_.Allocate(capacity));
   dim_ = dim;
   strip_columns_ = strip_columns;
@@ -364,7 +367,17 @@ bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> desc
   std::memcpy(slot.descriptor.data(), descriptor.data(), slot.descriptor.size_bytes());
   if (!strip.empty())
     std::memcpy(slot.strip.data(), strip.data(), strip.size());
+  if (!Complete(slot).ok()) {
+    --size_;  // the sink refused it (full): the frame is not part of the route
+    return false;
+  }
   return true;
+}
+
+Status RouteFrames::Complete(const Slot& slot) {
+  if (sink_ == nullptr)
+    return Status::Ok();
+  return sink_->AddFrame(slot.descriptor, slot.strip);
 }
 
 RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_strip) {
@@ -376,9 +389,9 @@ RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_str
     return {};
   meta_[size_] = meta;
   Slot slot;
-  slot.descriptor = {descriptors_.data() + size_ * dim_, dim_};
+  slot.descriptor = {descriptors_.data() + (sink_ != nullptr ? 0 : size_ * dim_), dim_};
   if (with_strip)
-    slot.strip = {strips_.data() + size_ * strip_columns_, strip_columns_};
+    slot.strip = {strips_.data() + (sink_ != nullptr ? 0 : size_ * strip_columns_), strip_columns_};
   ++size_;
   return slot;
 }
@@ -564,6 +577,10 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
         if (keep_strips)
           std::memcpy(slot.strip.data(), rec + kRouteDbRecordFixedBytes + 4 * std::size_t{s.dim},
                       slot.strip.size());
+        if (Status added = out->Complete(slot); !added.ok()) {
+          return Status::Error(added.code(), "route frame %zu: %s", out->size() - 1,
+                               added.message());
+        }
       }
     }
     r.frames += count;

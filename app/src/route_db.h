@@ -122,15 +122,35 @@ constexpr std::size_t RouteDbRecordBytes(std::size_t dim, std::size_t strip_colu
   return kRouteDbRecordFixedBytes + 4 * dim + strip_columns;
 }
 
+// Where a route's descriptors and strips go when RouteFrames does not keep them: the
+// firmware's pipeline (its matcher and its heading), so the route is in memory once, the
+// descriptors at the matcher's configured storage type (float32 or bfloat16), not also
+// as floats here (issue 18). RouteFrames then keeps only each frame's time and pose.
+class RouteSink {
+ public:
+  virtual void BeginRoute() = 0;  // a route starts: forget the frames added before
+  // strip: empty when the route has none.
+  virtual Status AddFrame(std::span<const float> descriptor,
+                          std::span<const std::uint8_t> strip) = 0;
+
+ protected:
+  ~RouteSink() = default;
+};
+
 // The frames of a route in memory, at a capacity fixed at start-up. strip_columns: room
 // for a horizon strip per frame (0: none); has_strips() says whether the loaded route
-// filled them (a file before version 4, or taught without strips, does not).
+// filled them (a file before version 4, or taught without strips, does not). With a
+// sink, descriptors and strips are handed to it as they arrive and not kept:
+// descriptor(i) and strip(i) are then empty.
 class RouteFrames {
  public:
-  Status Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns = 0);
+  Status Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns = 0,
+                  RouteSink* sink = nullptr);
   void Clear() {
     size_ = 0;
     has_strips_ = false;
+    if (sink_ != nullptr)
+      sink_->BeginRoute();
   }
   // False when full, or when `strip` is neither empty nor strip_columns() long. Every
   // frame of a route has a strip or none does: the first Append decides.
@@ -142,12 +162,16 @@ class RouteFrames {
   std::size_t dim() const { return dim_; }
   std::size_t strip_columns() const { return strip_columns_; }
   bool has_strips() const { return has_strips_; }
+  // The sink the descriptors went to; nullptr: they are kept here.
+  const RouteSink* sink() const { return sink_; }
   std::span<const float> descriptor(std::size_t i) const {
+    if (sink_ != nullptr)
+      return {};
     return {descriptors_.data() + i * dim_, dim_};
   }
   // Frame i's horizon strip; empty when the route has none.
   std::span<const std::uint8_t> strip(std::size_t i) const {
-    if (!has_strips_)
+    if (!has_strips_ || sink_ != nullptr)
       return {};
     return {strips_.data() + i * strip_columns_, strip_columns_};
   }
@@ -155,16 +179,19 @@ class RouteFrames {
 
   // Adds a frame and returns its storage to fill in (the loader copies straight into it):
   // the descriptor, and the strip when `with_strip` (which the first frame decides for
-  // the route). Empty spans when full or when with_strip disagrees with the route.
+  // the route). Empty spans when full or when with_strip disagrees with the route. Once
+  // filled, Complete(slot) hands the descriptor to the sink, if there is one.
   struct Slot {
     std::span<float> descriptor;
     std::span<std::uint8_t> strip;
   };
   [[nodiscard]] Slot Emplace(const RouteFrameMeta& meta, bool with_strip);
+  [[nodiscard]] Status Complete(const Slot& slot);
 
  private:
-  FixedArray<float> descriptors_;
-  FixedArray<std::uint8_t> strips_;
+  RouteSink* sink_ = nullptr;
+  FixedArray<float> descriptors_;    // capacity x dim; with a sink: one frame, to fill
+  FixedArray<std::uint8_t> strips_;  // capacity x strip columns; with a sink: one frame
   FixedArray<RouteFrameMeta> meta_;
   std::size_t dim_ = 0;
   std::size_t strip_columns_ = 0;

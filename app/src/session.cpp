@@ -474,9 +474,11 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
                             config.status.button_line >= 0 &&
                             config.status.kind != StatusOutputKind::kNone;
   if (args.mode == LoopMode::kRepeat) {
+    // The descriptors and strips go straight to the pipeline (held once, at the matcher's
+    // storage type); `route` keeps each frame's time and pose for the replay's truth.
     SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
                               static_cast<std::size_t>(pipeline.dim()),
-                              pipeline.strip_settings().columns));
+                              pipeline.strip_settings().columns, pipeline.route_sink()));
     RouteDbLoadReport loaded;
     const RouteDbSettings want = pipeline.route_settings();
     struct stat st {};
