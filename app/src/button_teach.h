@@ -37,7 +37,8 @@ struct ButtonTeachReport {
 };
 
 // `options` is the repeat loop's (its mode and button are set here; max_frames applies to
-// each phase). The debouncer must be the one whose clock is options.clock.
+// each phase). The loop gives the debouncer times from the pipeline's clock
+// (setup.pipeline->clock()), which must be the one the button's edges are stamped with.
 Status RunRepeatWithButton(const ButtonTeachSetup& setup, const LoopOptions& options,
                            ButtonDebouncer* button, ButtonTeachReport* report);
 

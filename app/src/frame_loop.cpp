@@ -55,13 +55,96 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
     failed_ = true;
 }
 
+namespace {
+
+// What this loop has put on the status lines, so it can keep them moving between frames.
+enum class Shown : std::uint8_t { kNothing, kState, kTeaching };
+
+Nanoseconds Mod(Nanoseconds t, Nanoseconds period) {
+  Nanoseconds phase = t % period;
+  return phase < Nanoseconds(0) ? phase + period : phase;
+}
+
+// Teach with show_teaching: SEARCHING for the first half of every kTeachingPeriod, the
+// safe state for the second.
+Status ShowTeaching(drivers::StatusOutput& status, Nanoseconds now) {
+  if (Mod(now, kTeachingPeriod) < kTeachingPeriod / 2)
+    return status.Show(drivers::LocalisationState::kSearching, 0.0f, now);
+  return status.SafeState();
+}
+
+// When the lines next change if no frame comes first.
+Nanoseconds NextLineChange(const drivers::StatusOutput* status, Shown shown, Nanoseconds now) {
+  if (status == nullptr || shown == Shown::kNothing)
+    return drivers::StatusOutput::kNever;
+  const Nanoseconds blink = status->NextChange(now);
+  if (shown == Shown::kState)
+    return blink;
+  const Nanoseconds half = kTeachingPeriod / 2;
+  const Nanoseconds teaching = now + (half - Mod(now, half));
+  return teaching < blink ? teaching : blink;
+}
+
+// The lines as they are at `now` (a blink edge, or the teaching indicator's half period).
+Status MoveLines(drivers::StatusOutput* status, Shown shown, Nanoseconds now) {
+  if (status == nullptr || shown == Shown::kNothing)
+    return Status::Ok();
+  if (shown == Shown::kTeaching)
+    return ShowTeaching(*status, now);
+  return status->Refresh(now);
+}
+
+// The next frame, waiting until `deadline` at most, and moving the status lines at each
+// of their edges before it. A failure to move them goes to *lines_failed (fatal, as a
+// failed Show() is); the capture's own result is returned.
+Result<drivers::Frame> CaptureMovingLines(drivers::Camera& camera, drivers::StatusOutput* status,
+                                          Shown shown, const Clock& clock, Nanoseconds deadline,
+                                          Status* lines_failed) {
+  for (;;) {
+    const Nanoseconds now = clock.Now();
+    const Nanoseconds edge = NextLineChange(status, shown, now);
+    const Nanoseconds until = edge < deadline ? edge : deadline;
+    Result<drivers::Frame> captured = camera.Capture(until > now ? until - now : Nanoseconds(0));
+    if (edge >= deadline || captured.ok() ||
+        captured.status().code() != StatusCode::kDeadlineExceeded)
+      return captured;
+    // Past the deadline, a camera that gave up before the time it was given (its own
+    // time-out, a fake that does not wait) or a signal: the caller decides.
+    const Nanoseconds woken = clock.Now();
+    if (woken >= deadline || woken < until || StopRequested())
+      return captured;
+    if (Status moved = MoveLines(status, shown, woken); !moved.ok()) {
+      *lines_failed = moved;
+      return captured;
+    }
+  }
+}
+
+// Sleeps until `due` (pacing), moving the status lines at each of their edges before it.
+Status SleepMovingLines(drivers::StatusOutput* status, Shown shown, const Clock& clock,
+                        Nanoseconds due) {
+  Nanoseconds now = clock.Now();
+  while (due > now) {
+    const Nanoseconds edge = NextLineChange(status, shown, now);
+    const Nanoseconds wake = edge < due ? edge : due;
+    std::this_thread::sleep_for(wake - now);
+    if (wake == due)
+      break;
+    const Nanoseconds woken = clock.Now();
+    now = woken > wake ? woken : wake;  // a ManualClock does not move while we sleep
+    SKYLOC_TRY(MoveLines(status, shown, now));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
                     RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
                     LoopSummary* summary, drivers::AttitudeSource* attitude) {
   if (options.mode == LoopMode::kTeach && route == nullptr)
     return Status::Error(StatusCode::kInternal, "teach without a route database");
-  MonotonicClock monotonic;
-  const Clock& clock = options.clock != nullptr ? *options.clock : monotonic;
+  const Clock& clock = pipeline.clock();
   LatencyTable& latency = pipeline.latency();
   LoopSummary s;
   // The caller's summary is written on every way out, the SKYLOC_TRY returns of a failed
@@ -77,7 +160,8 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
   Nanoseconds loop_start = clock.Now();
   std::uint64_t last_sequence = 0;
   bool have_sequence = false;
-  bool attitude_outage = false;  // warned about; cleared when an attitude comes back
+  bool attitude_outage = false;   // warned about; cleared when an attitude comes back
+  Shown shown = Shown::kNothing;  // what the caller left on the lines is theirs
 
   while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
     if (TakeReportRequest()) {
@@ -102,8 +186,11 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       }
     }
     const Nanoseconds t0 = clock.Now();
-    Result<drivers::Frame> captured = camera.Capture(options.capture_timeout);
+    Status lines_failed;
+    Result<drivers::Frame> captured = CaptureMovingLines(
+        camera, status, shown, clock, t0 + options.capture_timeout, &lines_failed);
     const Nanoseconds t1 = clock.Now();
+    SKYLOC_TRY(lines_failed);
     if (!captured.ok()) {
       const StatusCode code = captured.status().code();
       if (code == StatusCode::kOutOfRange) {
@@ -117,6 +204,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       // again, and the SeqSLAM sequence starts over (it needs consecutive frames).
       if (status != nullptr)
         (void)status->SafeState();
+      shown = Shown::kNothing;
       pipeline.ResetTracking();
       if (code == StatusCode::kDataLoss && options.recorded) {
         return captured.status();
@@ -154,9 +242,7 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         loop_start = t1;
       }
       const Nanoseconds due = loop_start + (frame.timestamp - first_timestamp);
-      const Nanoseconds now = clock.Now();
-      if (due > now)
-        std::this_thread::sleep_for(due - now);
+      SKYLOC_TRY(SleepMovingLines(status, shown, clock, due));
     }
     // A jump in the sequence numbers (dropped frames) is fine for SeqSLAM's velocity
     // band up to a point; a long gap breaks the sequence: start it again.
@@ -203,11 +289,8 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         StageTimer timer(latency, pipeline.stages().output, clock);
         SKYLOC_TRY(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
         if (status != nullptr && options.show_teaching) {
-          const Nanoseconds now = clock.Now();
-          if (now % kTeachingPeriod < kTeachingPeriod / 2)
-            SKYLOC_TRY(status->Show(drivers::LocalisationState::kSearching, 0.0f, now));
-          else
-            SKYLOC_TRY(status->SafeState());
+          SKYLOC_TRY(ShowTeaching(*status, clock.Now()));
+          shown = Shown::kTeaching;
         }
       }
     } else {
@@ -222,8 +305,10 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
         continue;
       }
       StageTimer timer(latency, pipeline.stages().output, clock);
-      if (status != nullptr)
+      if (status != nullptr) {
         SKYLOC_TRY(status->Show(result.state, result.confidence, clock.Now()));
+        shown = Shown::kState;
+      }
     }
     const Nanoseconds done = clock.Now();
     result.latency = done - t1;

@@ -81,15 +81,13 @@ struct LoopOptions {
   // How long a camera may stay unavailable (unplugged; the V4L2 driver reopens it with
   // backoff) before the loop gives up; 0: at once.
   Nanoseconds reconnect_timeout = std::chrono::seconds(30);
-  // What the reconnect time, pacing and latencies are measured with; null: CLOCK_MONOTONIC.
-  // Tests pass a ManualClock their camera advances, so time-outs are exact, not timed.
-  const Clock* clock = nullptr;
   // --record: every captured frame (with its attitude when there is one) is offered to the
   // recorder, which copies it and never blocks; null: no recording.
   FrameRecorder* recorder = nullptr;
   // The teach button: before each frame the status output's pending edges go through this
   // debouncer, and an accepted press ends the loop (LoopSummary::button_pressed); its
-  // clock is `clock`, which must be the one the edges are stamped with. null: no button.
+  // clock is the pipeline's, which must be the one the edges are stamped with. null: no
+  // button.
   ButtonDebouncer* button = nullptr;
   // Teach: the status lines show that a route is being taught (see kTeachingPeriod),
   // where a plain teach leaves them in the safe state.
@@ -115,6 +113,16 @@ struct LoopSummary {
 };
 
 // Runs until stopped. `status` and `sink` may be null; `route` is required for teach.
+// Time is the pipeline's clock (Pipeline::clock()): the reconnect time, pacing, the
+// latencies and the status lines' blink are measured with it (tests pass a ManualClock
+// their camera advances, so time-outs and blink edges are exact, not timed).
+//
+// The status lines move with time, not with frames: while waiting for a frame (and while
+// pacing) the loop wakes at the lines' next change (StatusOutput::NextChange, and the
+// teaching indicator's half periods) and applies it, so a blink faster than the frames
+// does not alias and a flash shorter than the gap between two frames still shows. A
+// wake-up is a Capture() with the time left to the edge as its time-out (the camera's
+// counters count it as an error); the capture time-out still runs from the first call.
 // A fatal error (the camera gone for good, the route database unwritable) is returned;
 // the caller then flushes what it has and drives the status lines to the safe state.
 // `attitude` (may be null) gives each frame's roll and pitch when the pipeline uses them.

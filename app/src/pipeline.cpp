@@ -320,7 +320,7 @@ void Pipeline::ResetTracking() {
 
 Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
                           const dsp::Attitude* attitude) {
-  StageTimer timer(latency_, stages_.descriptor, clock_);
+  StageTimer timer(latency_, stages_.descriptor, *clock_);
   dsp::SegmentationResult segmentation;
   if (const dsp::DescriptorError e =
           descriptor_.Compute(image, amplitudes_.span(), &segmentation, attitude);
@@ -346,7 +346,7 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
 }
 
 void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
-  StageTimer timer(latency_, stages_.heading, clock_);
+  StageTimer timer(latency_, stages_.heading, *clock_);
   const std::uint8_t* stored = route_strips_.data() + route_frame * strip_.size();
   for (std::size_t j = 0; j < strip_.size(); ++j)
     stored_strip_[j] = stored[j];
@@ -375,7 +375,7 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
   SKYLOC_TRY(Describe(frame.image, result, attitude));
   dsp::SeqSlamMatch match;
   {
-    StageTimer timer(latency_, stages_.seqslam, clock_);
+    StageTimer timer(latency_, stages_.seqslam, *clock_);
     if (const dsp::SeqSlamError e = matcher_ == Matcher::kRouteFilter
                                         ? filter_.Step(amplitudes_.span(), &match)
                                         : seqslam_.Step(amplitudes_.span(), &match);

@@ -4,6 +4,8 @@
 // Init() is the start-up: the lens, the sampling table, the SH tables, the SeqSLAM route
 // database at [capacities] route_frames, the ring of the last ds columns. After it,
 // Describe() and Localise() allocate nothing (tests/app/frame_loop_test.cpp proves it).
+// Time is an input: the Clock the pipeline is built with times its stages, and the frame
+// loop reads the same one (clock()), so one run never mixes two clocks.
 #pragma once
 
 #include <cstdint>
@@ -77,6 +79,12 @@ std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
 
 class Pipeline final : private RouteSink {
  public:
+  // `clock` times the stages (LatencyTable) and, through clock(), the frame loop: the
+  // firmware passes a MonotonicClock, tests a ManualClock so latencies and time-outs are
+  // exact. It must outlive the pipeline.
+  explicit Pipeline(const Clock& clock) : clock_(&clock) {}
+  const Clock& clock() const { return *clock_; }
+
   // The latency table's stage ids, in the order it prints them: set by Init, read by the
   // frame loop, which times the stages the pipeline does not see (capture, output, total).
   struct LatencyStages {
@@ -153,7 +161,7 @@ class Pipeline final : private RouteSink {
   std::size_t route_strip_frames_ = 0;  // frames with strips after SetRoute (0: no heading)
   RouteDbSettings route_settings_;
   LatencyTable latency_;
-  MonotonicClock clock_;
+  const Clock* clock_;
   std::uint64_t matched_frames_ = 0;
   bool uses_attitude_ = false;
 };

@@ -461,7 +461,10 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
                          config.camera.height);
   }
 
-  Pipeline pipeline;
+  // One clock for the run: the pipeline's stages, the frame loop (through the pipeline),
+  // the simulated status output and its button's edges.
+  MonotonicClock clock;
+  Pipeline pipeline(clock);
   SKYLOC_TRY(pipeline.Init(config));
   AttitudeParts attitude;
   SKYLOC_TRY(MakeAttitudeSource(config, source, &attitude));
@@ -517,7 +520,6 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
     }
   }
 
-  MonotonicClock clock;
   SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status,
                     MakeStatusOutput(config, &clock));
   if (status) {
@@ -607,7 +609,6 @@ Status Run(const SessionArgs& args, Config config, SessionReport* report) {
   Status loop_status;
   if (teach_button) {
     ButtonDebouncer button(std::chrono::milliseconds(config.status.button_debounce_ms));
-    loop.clock = &clock;  // the simulated button stamps its edges with it
     ButtonTeachSetup setup;
     setup.camera = camera;
     setup.status = status.get();

@@ -9,16 +9,16 @@ namespace skyloc::drivers {
 
 SimulatedStatusOutput::SimulatedStatusOutput(const SimulatedStatusOutputConfig& config,
                                              const Clock* clock)
-    : config_(config), pattern_(config.mode), clock_(clock), lines_(pattern_.Safe()) {}
+    : StatusOutput(config.mode, "simulated status output"),
+      config_(config),
+      clock_(clock),
+      recorded_(levels()) {}
 
 SimulatedStatusOutput::~SimulatedStatusOutput() {
-  SimulatedStatusOutput::Close();
+  Close();
 }
 
-Status SimulatedStatusOutput::Open() {
-  if (open_) {
-    return Status::Error(StatusCode::kFailedPrecondition, "simulated status output: already open");
-  }
+Status SimulatedStatusOutput::DoOpen() {
   if (clock_ == nullptr || config_.history_capacity == 0) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "simulated status output: needs a clock and history_capacity > 0");
@@ -39,42 +39,34 @@ Status SimulatedStatusOutput::Open() {
     button_level_ = false;
   }
   // Lines are requested in the safe state, and that counts as a recorded level.
-  lines_ = pattern_.Safe();
-  open_ = true;
+  recorded_ = levels();
   const Nanoseconds now = clock_->Now();
-  for (std::size_t i = 0; i < lines_.count; ++i)
+  for (std::size_t i = 0; i < recorded_.count; ++i)
     history_.PushOverwrite(LineChange{now, static_cast<std::uint8_t>(i), false});
   return Status::Ok();
 }
 
-void SimulatedStatusOutput::Apply(const StatusLines& lines, Nanoseconds now) {
+void SimulatedStatusOutput::Record(const StatusLines& lines, Nanoseconds now) {
   for (std::size_t i = 0; i < lines.count; ++i) {
-    if (lines.level[i] != lines_.level[i])
+    if (lines.level[i] != recorded_.level[i])
       history_.PushOverwrite(LineChange{now, static_cast<std::uint8_t>(i), lines.level[i]});
   }
-  lines_ = lines;
+  recorded_ = lines;
 }
 
-Status SimulatedStatusOutput::Show(LocalisationState state, float confidence, Nanoseconds now) {
-  if (!open_) {
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "simulated status output: Show() before Open()");
-  }
-  Apply(pattern_.Levels(state, confidence, now), now);
+Status SimulatedStatusOutput::DoWrite(const StatusLines& lines, Nanoseconds now) {
+  Record(lines, now);
   return Status::Ok();
 }
 
-Status SimulatedStatusOutput::SafeState() {
-  if (open_)
-    Apply(pattern_.Safe(), clock_->Now());
+Status SimulatedStatusOutput::DoSafeState() {
+  StatusLines off = recorded_;
+  off.level.fill(false);
+  Record(off, clock_->Now());
   return Status::Ok();
 }
 
-void SimulatedStatusOutput::Close() {
-  if (!open_)
-    return;
-  (void)SafeState();
-  open_ = false;
+void SimulatedStatusOutput::DoClose() {
   button_fd_.reset();
 }
 
@@ -95,11 +87,7 @@ Result<bool> SimulatedStatusOutput::ButtonPressed() const {
   return button_level_;
 }
 
-Result<ButtonEvent> SimulatedStatusOutput::ReadButtonEvent() {
-  if (!button_fd_.is_valid()) {
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "simulated status output: no button configured, or not open");
-  }
+Result<ButtonEvent> SimulatedStatusOutput::DoReadButtonEvent() {
   if (button_events_.empty()) {
     return Status::Error(StatusCode::kDeadlineExceeded,
                          "simulated status output: no button edge pending");

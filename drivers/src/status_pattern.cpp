@@ -46,6 +46,20 @@ StatusLines StatusPattern::Levels(LocalisationState state, float confidence,
   return lines;
 }
 
+Nanoseconds StatusPattern::NextEdge(LocalisationState state, float confidence,
+                                    Nanoseconds now) const {
+  if (mode_ != StatusLineMode::kBlink)
+    return Nanoseconds::max();
+  const Blink blink = BlinkFor(state, confidence);
+  Nanoseconds phase = now % blink.period;
+  if (phase < Nanoseconds(0))
+    phase += blink.period;
+  // On until on_time, off until the period ends.
+  if (phase < blink.on_time)
+    return now + (blink.on_time - phase);
+  return now + (blink.period - phase);
+}
+
 Result<StatusLineMode> ParseStatusLineMode(const char* text) {
   if (text != nullptr && std::strcmp(text, "per-state") == 0)
     return StatusLineMode::kLinePerState;

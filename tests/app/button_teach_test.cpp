@@ -109,9 +109,7 @@ class ButtonTeach : public ::testing::Test {
     return s;
   }
   LoopOptions Options() {
-    LoopOptions o;
-    o.clock = &clock_;
-    return o;
+    return LoopOptions{};  // the loop's clock is the pipeline's, clock_
   }
   // Opens and starts the camera and runs repeat with a 50 ms debounced button until the
   // camera's script requests a stop.
@@ -134,7 +132,7 @@ class ButtonTeach : public ::testing::Test {
   }
 
   ManualClock clock_{std::chrono::seconds(1)};
-  Pipeline pipeline_;
+  Pipeline pipeline_{clock_};
   RouteFrames route_;
   std::unique_ptr<drivers::SimulatedStatusOutput> status_;
   const skyloc::testing::ScratchDir scratch_{"skyloc_button_"};

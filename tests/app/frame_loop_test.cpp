@@ -8,12 +8,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "recording_status_output.h"
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/simulated_imu.h"
+#include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
 #include "small_config.h"
@@ -24,6 +26,10 @@ namespace skyloc::app {
 namespace {
 
 using testing::SmallConfig;
+
+// The clock of the tests that run in real time (the street camera stamps its frames with
+// CLOCK_MONOTONIC too).
+const MonotonicClock kMonotonic;
 
 StreetCameraOptions Street(std::uint64_t frames) {
   StreetCameraOptions o;
@@ -89,7 +95,7 @@ StreetCameraOptions Repeat(std::uint64_t frames) {
 
 TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   ClearSignalFlags();
-  Pipeline pipeline;
+  Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
   Teach(pipeline, 300, &route);
@@ -122,7 +128,7 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
 TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   ASSERT_TRUE(AllocationCounterActive());
   ClearSignalFlags();
-  Pipeline pipeline;
+  Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
   Teach(pipeline, 300, &route);
@@ -162,7 +168,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
 // strip code.
 TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
   ClearSignalFlags();
-  Pipeline pipeline;
+  Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
   Teach(pipeline, 300, &route);
@@ -216,7 +222,7 @@ TEST(FrameLoop, AttitudeOnAllocatesNothingAndADeadImuLeavesFramesLevel) {
   ClearSignalFlags();
   Config config = SmallConfig();
   config.attitude.kind = AttitudeKind::kSim;
-  Pipeline pipeline;
+  Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(config).ok());
   ASSERT_TRUE(pipeline.uses_attitude());
   EXPECT_NE(pipeline.route_settings().gravity_cap_cdeg, kNoGravityCap);
@@ -261,7 +267,7 @@ TEST(FrameLoop, AttitudeOnAllocatesNothingAndADeadImuLeavesFramesLevel) {
 TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   ASSERT_TRUE(AllocationCounterActive());
   ClearSignalFlags();
-  Pipeline pipeline;
+  Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   const skyloc::testing::ScratchDir scratch("skyloc_loop_");
   const std::string path = scratch.path() + "/route.db";
@@ -293,7 +299,7 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
 TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
   const skyloc::testing::ScratchDir scratch("skyloc_lens_");
   const std::string path = scratch.path() + "/route.db";
-  Pipeline taught;
+  Pipeline taught(kMonotonic);
   ASSERT_TRUE(taught.Init(SmallConfig()).ok());
   {
     RouteDbWriter writer;
@@ -320,7 +326,7 @@ TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
     Config c = SmallConfig();
     c.camera.width = c.camera.height = size;
     c.camera.lens_file = camera_file;
-    Pipeline now;
+    Pipeline now(kMonotonic);
     const Status init = now.Init(c);
     EXPECT_TRUE(init.ok()) << init.message();
     *settings = now.route_settings();
@@ -358,7 +364,7 @@ TEST(RouteLens, ModelNamesMatchDsp) {
 
 TEST(FrameLoop, StopsOnRequestedStop) {
   ClearSignalFlags();
-  Pipeline pipeline;
+  Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
   Teach(pipeline, 50, &route);
@@ -488,7 +494,9 @@ class FrameLoopFaults : public ::testing::Test {
     ASSERT_TRUE(pipeline_.SetRoute(route).ok());
     ASSERT_TRUE(status_.Open().ok());
   }
-  Pipeline pipeline_;
+  // The loop's time (the pipeline's clock): it stands still unless a camera moves it.
+  ManualClock clock_;
+  Pipeline pipeline_{clock_};
   RecordingStatusOutput status_;
 };
 
@@ -595,14 +603,12 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
   // Each failed capture takes 50 ms of the loop's (manual) clock, as a driver's reopen
   // attempt would. The first failure ends at t, and the loop keeps trying while less than
   // 200 ms have passed since: at t, t+50, t+100, t+150 (4 errors); at t+200 it gives up.
-  ManualClock clock;
-  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable, &status_, &clock,
+  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable, &status_, &clock_,
                      std::chrono::milliseconds(50));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
   options.reconnect_timeout = std::chrono::milliseconds(200);
-  options.clock = &clock;
   LoopSummary summary;
   const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
@@ -611,6 +617,260 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
   EXPECT_EQ(summary.capture_errors, 4u);
   EXPECT_EQ(camera.safe_at_call().size(), 3u + 5u);
   EXPECT_TRUE(status_.is_safe());
+}
+
+}  // namespace
+}  // namespace skyloc::app
+
+// Time as an input: the loop's clock is the pipeline's, so a ManualClock that the camera
+// moves makes every time the loop acts on exact. The status lines' blink then follows
+// that clock, not the frames: at 2 fps the 100 ms LOST flash still shows, at 30 fps a
+// 10 Hz blink does not alias; only an injected clock lets a test say "at 2.000 s on, at
+// 2.100 s off" and mean it.
+namespace skyloc::app {
+namespace {
+
+// Frames every `period` from `first` on the ManualClock (images from the street). A
+// Capture() whose time-out ends before the next frame moves the clock to that end and
+// times out, as a real driver's poll() would; otherwise the clock moves to the frame.
+class TimedCamera final : public drivers::Camera {
+ public:
+  TimedCamera(ManualClock* clock, Nanoseconds first, Nanoseconds period,
+              const StreetCameraOptions& street)
+      : street_(street), clock_(clock), first_(first), period_(period) {}
+  std::uint64_t timeouts() const { return timeouts_; }
+
+ private:
+  Status DoOpen() override {
+    SKYLOC_TRY(street_.Open());
+    info_ = street_.info();
+    return Status::Ok();
+  }
+  Status DoStart() override { return street_.Start(); }
+  Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
+    const Nanoseconds due = first_ + period_ * static_cast<std::int64_t>(next_);
+    const Nanoseconds now = clock_->Now();
+    if (due > now + timeout) {
+      clock_->Set(now + timeout);
+      ++timeouts_;
+      return Status::Error(StatusCode::kDeadlineExceeded, "no frame yet");
+    }
+    clock_->Set(due);
+    Result<drivers::Frame> frame = street_.Capture(timeout);
+    if (frame.ok()) {
+      frame->timestamp = due;
+      ++next_;
+    }
+    return frame;
+  }
+  void DoStop() override { street_.Stop(); }
+  void DoClose() override { street_.Close(); }
+
+  StreetCamera street_;
+  ManualClock* clock_;
+  Nanoseconds first_, period_;
+  std::uint64_t next_ = 0, timeouts_ = 0;
+};
+
+// What each frame showed, and when (the loop's clock when the sink sees it is the time
+// of its Show(): the ManualClock does not move in between). Fixed capacity: no
+// allocation in the loop.
+class ShownSink final : public FrameSink {
+ public:
+  struct Shown {
+    Nanoseconds at;
+    dsp::LocalisationState state;
+    float confidence;
+    Nanoseconds latency;
+  };
+  explicit ShownSink(const Clock& clock) : clock_(clock) { shown_.reserve(256); }
+  void OnFrame(LoopMode, const FrameResult& r, std::uint64_t) override {
+    if (shown_.size() < shown_.capacity())
+      shown_.push_back({clock_.Now(), r.state, r.confidence, r.latency});
+  }
+  const std::vector<Shown>& shown() const { return shown_; }
+
+ private:
+  const Clock& clock_;
+  std::vector<Shown> shown_;
+};
+
+class FrameLoopBlink : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ClearSignalFlags();
+    ASSERT_TRUE(pipeline_.Init(SmallConfig()).ok());
+    drivers::SimulatedStatusOutputConfig c;
+    c.mode = drivers::StatusLineMode::kBlink;
+    c.history_capacity = 4096;
+    status_ = std::make_unique<drivers::SimulatedStatusOutput>(c, &clock_);
+    ASSERT_TRUE(status_->Open().ok());
+    status_->ClearHistory();
+  }
+
+  // The street taught (its frames localise), or a route of one frame of it 100 times:
+  // no place in it is unique, so every frame is LOST.
+  void SetRoute(bool street) {
+    RouteFrames route;
+    Teach(pipeline_, street ? 100 : 1, &route);
+    while (route.size() < 100) {
+      const std::span<const std::uint8_t> strip =
+          pipeline_.strip_settings().columns > 0 ? route.strip(0) : std::span<const std::uint8_t>{};
+      ASSERT_TRUE(route.Append({}, route.descriptor(0), strip));
+    }
+    ASSERT_TRUE(pipeline_.SetRoute(route).ok());
+  }
+
+  // Runs `frames` street frames `period` apart from `first`, with the allocation counter
+  // armed.
+  void Run(Nanoseconds first, Nanoseconds period, std::uint64_t frames,
+           drivers::StatusOutput* status = nullptr) {
+    camera_ = std::make_unique<TimedCamera>(&clock_, first, period, Street(frames));
+    ASSERT_TRUE(camera_->Open().ok());
+    ASSERT_TRUE(camera_->Start().ok());
+    LoopOptions options;
+    LoopSummary summary;
+    Status s;
+    {
+      AllocationScope scope;
+      s = RunFrameLoop(*camera_, status != nullptr ? status : status_.get(), pipeline_, nullptr,
+                       &sink_, options, &summary);
+      EXPECT_EQ(scope.allocations(), 0u) << "the loop allocated while moving the lines";
+    }
+    ASSERT_TRUE(s.ok()) << s.message();
+    ASSERT_EQ(summary.frames, frames);
+    EXPECT_EQ(summary.capture_errors, 0u) << "a wake-up for an edge is not a capture error";
+    ASSERT_EQ(sink_.shown().size(), frames);
+  }
+
+  // The line changes the pattern makes from the first frame's Show() to `until`, the
+  // state of each frame held until the next: what the history must be, edge for edge.
+  std::vector<drivers::LineChange> Expected(Nanoseconds until) const {
+    const drivers::StatusPattern pattern(drivers::StatusLineMode::kBlink);
+    std::vector<drivers::LineChange> out;
+    bool level = false;  // Open(): off
+    const auto& shown = sink_.shown();
+    for (std::size_t k = 0; k < shown.size(); ++k) {
+      const ShownSink::Shown& f = shown[k];
+      const Nanoseconds end = k + 1 < shown.size() ? shown[k + 1].at : until;
+      for (Nanoseconds t = f.at; t < end; t = pattern.NextEdge(f.state, f.confidence, t)) {
+        const bool now = pattern.Levels(f.state, f.confidence, t).level[0];
+        if (now != level)
+          out.push_back({t, 0, now});
+        level = now;
+      }
+    }
+    return out;
+  }
+
+  ::testing::AssertionResult HistoryIs(const std::vector<drivers::LineChange>& expected) const {
+    const auto& h = status_->history();
+    if (status_->overwritten() != 0)
+      return ::testing::AssertionFailure() << "the history overflowed";
+    for (std::size_t i = 0; i < h.size() && i < expected.size(); ++i) {
+      if (h[i].time != expected[i].time || h[i].level != expected[i].level)
+        return ::testing::AssertionFailure()
+               << "change " << i << ": line went " << (h[i].level ? "on" : "off") << " at "
+               << h[i].time.count() << " ns, expected " << (expected[i].level ? "on" : "off")
+               << " at " << expected[i].time.count() << " ns";
+    }
+    if (h.size() != expected.size())
+      return ::testing::AssertionFailure()
+             << h.size() << " line changes, expected " << expected.size();
+    return ::testing::AssertionSuccess();
+  }
+
+  bool HasChange(Nanoseconds at, bool level) const {
+    const auto& h = status_->history();
+    for (std::size_t i = 0; i < h.size(); ++i)
+      if (h[i].time == at && h[i].level == level)
+        return true;
+    return false;
+  }
+
+  ManualClock clock_{std::chrono::seconds(1)};
+  Pipeline pipeline_{clock_};
+  std::unique_ptr<drivers::SimulatedStatusOutput> status_;
+  std::unique_ptr<TimedCamera> camera_;
+  ShownSink sink_{clock_};
+};
+
+// 2 fps, frames at 1.25, 1.75, 2.25 ... s: no frame falls inside a LOST flash (on 0-100 ms
+// of every 2 s), so a blink that moved only with frames would never show it.
+TEST_F(FrameLoopBlink, AtTwoFramesASecondTheLostFlashStillShows) {
+  using std::chrono::milliseconds;
+  SetRoute(/*street=*/false);
+  Run(milliseconds(1250), milliseconds(500), 12);
+  for (const ShownSink::Shown& f : sink_.shown())
+    ASSERT_EQ(f.state, dsp::LocalisationState::kLost) << "at " << f.at.count() << " ns";
+  EXPECT_TRUE(HasChange(milliseconds(2000), true)) << "the LOST flash at 2.0 s is missing";
+  EXPECT_TRUE(HasChange(milliseconds(2100), false)) << "the LOST flash did not end at 2.1 s";
+  EXPECT_TRUE(HistoryIs(Expected(clock_.Now())));
+  EXPECT_GT(camera_->timeouts(), 0u);
+}
+
+// 30 fps over a localised stretch: every edge of every state shown, at its exact time,
+// whatever the frames' phase (a 10 Hz blink sampled at 30 fps would alias).
+TEST_F(FrameLoopBlink, AtThirtyFramesASecondEveryEdgeIsOnTime) {
+  using std::chrono::milliseconds;
+  SetRoute(/*street=*/true);
+  Run(milliseconds(1010), Nanoseconds(33'333'333), 90);
+  bool localised = false;
+  for (const ShownSink::Shown& f : sink_.shown())
+    localised = localised || f.state == dsp::LocalisationState::kLocalised;
+  EXPECT_TRUE(localised) << "the run never localised: the fast blinks went untested";
+  EXPECT_TRUE(HistoryIs(Expected(clock_.Now())));
+}
+
+// A status output whose lines take `takes` of the ManualClock to change (one per state).
+class SlowStatusOutput final : public drivers::StatusOutput {
+ public:
+  SlowStatusOutput(ManualClock* clock, Nanoseconds takes)
+      : StatusOutput(drivers::StatusLineMode::kLinePerState, "slow status output"),
+        clock_(clock),
+        takes_(takes) {}
+  ~SlowStatusOutput() override { Close(); }
+  int writes = 0;
+
+ private:
+  Status DoOpen() override { return Status::Ok(); }
+  Status DoWrite(const drivers::StatusLines&, Nanoseconds) override {
+    clock_->Advance(takes_);
+    ++writes;
+    return Status::Ok();
+  }
+  Status DoSafeState() override { return Status::Ok(); }
+  void DoClose() override {}
+  ManualClock* clock_;
+  Nanoseconds takes_;
+};
+
+// The latency the loop reports (capture out to state shown) on the injected clock: the
+// pipeline's stages take no time on it, so each frame's latency is exactly what the
+// status lines took, 3 ms when they changed and 0 when they did not. A loop or pipeline
+// that read CLOCK_MONOTONIC would report the host's speed instead.
+TEST_F(FrameLoopBlink, LatencyIsMeasuredOnTheInjectedClock) {
+  using std::chrono::milliseconds;
+  SetRoute(/*street=*/true);
+  SlowStatusOutput slow(&clock_, milliseconds(3));
+  ASSERT_TRUE(slow.Open().ok());
+  pipeline_.latency().Clear();
+  Run(milliseconds(1010), milliseconds(100), 40, &slow);
+  int changed = 0;
+  dsp::LocalisationState last{};
+  for (std::size_t k = 0; k < sink_.shown().size(); ++k) {
+    const ShownSink::Shown& f = sink_.shown()[k];
+    const bool changes = k == 0 || f.state != last;
+    changed += changes ? 1 : 0;
+    EXPECT_EQ(f.latency, changes ? milliseconds(3) : Nanoseconds(0)) << "frame " << k;
+    last = f.state;
+  }
+  EXPECT_EQ(slow.writes, changed);
+  EXPECT_GE(changed, 2);  // LOST or SEARCHING first, LOCALISED later
+  const LatencyTable& table = pipeline_.latency();
+  EXPECT_EQ(table.stage(pipeline_.stages().output).max(), milliseconds(3));
+  EXPECT_EQ(table.stage(pipeline_.stages().total).max(), milliseconds(3));
+  EXPECT_EQ(table.stage(pipeline_.stages().descriptor).max(), Nanoseconds(0));
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
-// Test helper: a status output that only remembers what it was told (the state shown
-// last, how often it changed, whether the lines are in the safe state), so frame-loop
-// tests can check the shutdown and fault paths in one line. The product's simulated
-// output is drivers::SimulatedStatusOutput.
+// Test helper: a status output (one line per state) that only remembers what it was told
+// (the state shown last, how often the lines changed, whether they are in the safe state),
+// so frame-loop tests can check the shutdown and fault paths in one line. The product's
+// simulated output is drivers::SimulatedStatusOutput.
 #pragma once
 
 #include <cstdint>
@@ -12,42 +12,29 @@ namespace skyloc::app {
 
 class RecordingStatusOutput final : public drivers::StatusOutput {
  public:
-  Status Open() override {
-    open_ = true;
-    return SafeState();
-  }
-  Status Show(drivers::LocalisationState state, float confidence, Nanoseconds now) override {
-    if (!open_)
-      return Status::Error(StatusCode::kFailedPrecondition, "status output is not open");
-    if (safe_ || state != last_)
-      ++changes_;
-    last_ = state;
-    confidence_ = confidence;
-    last_time_ = now;
-    safe_ = false;
-    return Status::Ok();
-  }
-  Status SafeState() override {
-    safe_ = true;
-    return Status::Ok();
-  }
-  void Close() override {
-    (void)SafeState();
-    open_ = false;
-  }
+  RecordingStatusOutput()
+      : StatusOutput(drivers::StatusLineMode::kLinePerState, "recording status output") {}
+  ~RecordingStatusOutput() override { Close(); }
 
-  bool is_safe() const { return safe_; }
-  bool is_open() const { return open_; }
+  bool is_safe() const { return !is_showing(); }
   drivers::LocalisationState last_state() const { return last_; }
-  float last_confidence() const { return confidence_; }
   std::uint64_t changes() const { return changes_; }
 
  private:
-  bool open_ = false;
-  bool safe_ = true;
+  Status DoOpen() override { return Status::Ok(); }
+  // Called when the lit line changes: a new state, or a state after the safe state.
+  Status DoWrite(const drivers::StatusLines& lines, Nanoseconds) override {
+    for (std::size_t i = 0; i < lines.count; ++i) {
+      if (lines.level[i])
+        last_ = static_cast<drivers::LocalisationState>(i);
+    }
+    ++changes_;
+    return Status::Ok();
+  }
+  Status DoSafeState() override { return Status::Ok(); }
+  void DoClose() override {}
+
   drivers::LocalisationState last_ = drivers::LocalisationState::kLost;
-  float confidence_ = 0;
-  Nanoseconds last_time_{0};
   std::uint64_t changes_ = 0;
 };
 

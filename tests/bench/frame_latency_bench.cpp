@@ -27,7 +27,8 @@ using namespace skyloc::app;
 constexpr int kWidth = 640, kHeight = 480, kFrames = 32, kRouteFrames = 10000;
 
 struct Fixture {
-  Pipeline pipeline;
+  MonotonicClock clock;
+  Pipeline pipeline{clock};
   std::vector<std::vector<std::uint8_t>> images;
   bool ok = false;
 

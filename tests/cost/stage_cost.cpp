@@ -184,7 +184,8 @@ int main(int argc, char** argv) {
                 ScanBytes(route_frames, dim, bfloat16));
     return 0;
   }
-  Pipeline pipeline;
+  const MonotonicClock clock;
+  Pipeline pipeline(clock);
   if (Status s = pipeline.Init(config); !s.ok())
     return Fail(s.message());
   std::vector<std::vector<std::uint8_t>> images;

@@ -120,6 +120,41 @@ TEST(StatusPattern, ConfidenceIsClampedAndNanIsTreatedAsZero) {
             slow.period);
 }
 
+// NextEdge() against the pattern itself, sampled every 0.5 ms: from any time, the edge it
+// names is the first sample at which Levels() differs, for every state and a spread of
+// confidences (the LOCALISED periods are whole microseconds, not milliseconds).
+TEST(StatusPattern, NextEdgeIsTheFirstChangeOfTheLevel) {
+  const StatusPattern pattern(StatusLineMode::kBlink);
+  using std::chrono::microseconds;
+  struct Case {
+    LocalisationState state;
+    float confidence;
+  };
+  const Case cases[] = {{LocalisationState::kLost, 0.0f},
+                        {LocalisationState::kSearching, 0.5f},
+                        {LocalisationState::kLocalised, 0.0f},
+                        {LocalisationState::kLocalised, 0.37f},
+                        {LocalisationState::kLocalised, 1.0f}};
+  for (const Case& c : cases) {
+    for (Nanoseconds t = milliseconds(3000); t < milliseconds(5500); t += microseconds(12'345)) {
+      const bool level = pattern.Levels(c.state, c.confidence, t).level[0];
+      const Nanoseconds edge = pattern.NextEdge(c.state, c.confidence, t);
+      ASSERT_GT(edge, t);
+      // Unchanged up to just before the edge, changed at it.
+      EXPECT_EQ(pattern.Levels(c.state, c.confidence, edge - Nanoseconds(1)).level[0], level)
+          << LocalisationStateName(c.state) << " c=" << c.confidence << " t=" << t.count();
+      EXPECT_NE(pattern.Levels(c.state, c.confidence, edge).level[0], level)
+          << LocalisationStateName(c.state) << " c=" << c.confidence << " t=" << t.count();
+      for (Nanoseconds u = t; u < edge; u += microseconds(500))
+        ASSERT_EQ(pattern.Levels(c.state, c.confidence, u).level[0], level) << u.count();
+    }
+  }
+  // One line per state never changes by itself.
+  const StatusPattern per_state(StatusLineMode::kLinePerState);
+  EXPECT_EQ(per_state.NextEdge(LocalisationState::kLocalised, 1.0f, milliseconds(7)),
+            Nanoseconds::max());
+}
+
 TEST(StatusPattern, ParsesModeNames) {
   ASSERT_TRUE(ParseStatusLineMode("blink").ok());
   EXPECT_EQ(*ParseStatusLineMode("blink"), StatusLineMode::kBlink);

@@ -265,6 +265,53 @@ TEST_P(StatusOutputSuite, CloseLeavesTheLinesOffAndReopens) {
   output().Close();  // harmless
 }
 
+// Between frames: the state shown last moves on with time alone (Refresh at the edges
+// NextChange names), and nothing moves once the lines are safe.
+TEST_P(StatusOutputSuite, RefreshMovesTheBlinkAtTheEdgesNextChangeNames) {
+  ASSERT_OK(output().Open());
+  EXPECT_EQ(output().NextChange(milliseconds(0)), StatusOutput::kNever);  // nothing shown
+  ASSERT_OK(output().Show(LocalisationState::kLost, 0.0f, milliseconds(4050)));
+  if (GetParam().mode == StatusLineMode::kLinePerState) {
+    EXPECT_EQ(output().NextChange(milliseconds(4050)), StatusOutput::kNever);
+    ASSERT_OK(output().Refresh(milliseconds(9999)));
+    EXPECT_EQ(ReadAll(), "100");
+  } else {
+    // LOST: on 4000-4100 ms, off until 6000 ms.
+    EXPECT_EQ(ReadAll(), "1");
+    EXPECT_EQ(output().NextChange(milliseconds(4050)), milliseconds(4100));
+    ASSERT_OK(output().Refresh(milliseconds(4099)));
+    EXPECT_EQ(ReadAll(), "1");
+    ASSERT_OK(output().Refresh(milliseconds(4100)));
+    EXPECT_EQ(ReadAll(), "0");
+    EXPECT_EQ(output().NextChange(milliseconds(4100)), milliseconds(6000));
+    ASSERT_OK(output().Refresh(milliseconds(6000)));
+    EXPECT_EQ(ReadAll(), "1");
+  }
+  ASSERT_OK(output().SafeState());
+  EXPECT_EQ(output().NextChange(milliseconds(6000)), StatusOutput::kNever);
+  ASSERT_OK(output().Refresh(milliseconds(8000)));  // LOST would be lit: the lines stay safe
+  EXPECT_EQ(ReadAll(), Off());
+}
+
+// The call order is checked once, in StatusOutput, for every implementation.
+TEST_P(StatusOutputSuite, CallsOutOfOrderAreRefusedTheSameWay) {
+  EXPECT_FALSE(output().is_open());
+  EXPECT_FALSE(output().has_button());
+  EXPECT_EQ(output().ReadButtonEvent().status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_TRUE(output().Refresh(milliseconds(0)).ok());  // nothing shown: nothing to do
+  EXPECT_EQ(output().NextChange(milliseconds(0)), StatusOutput::kNever);
+  ASSERT_OK(output().Open());
+  EXPECT_TRUE(output().is_open());
+  EXPECT_EQ(output().Open().code(), StatusCode::kFailedPrecondition);
+  EXPECT_TRUE(output().is_open());  // the refused Open() left it as it was
+  ASSERT_OK(output().Show(LocalisationState::kSearching, 0.0f, milliseconds(100)));
+  EXPECT_TRUE(output().is_showing());
+  output().Close();
+  EXPECT_FALSE(output().is_showing());
+  EXPECT_EQ(output().Show(LocalisationState::kSearching, 0.0f, milliseconds(100)).code(),
+            StatusCode::kFailedPrecondition);
+}
+
 TEST_P(StatusOutputSuite, ShowAndSafeStateDoNotAllocate) {
   ASSERT_TRUE(AllocationCounterActive());
   ASSERT_OK(output().Open());
@@ -272,8 +319,11 @@ TEST_P(StatusOutputSuite, ShowAndSafeStateDoNotAllocate) {
   for (int t = 0; t < 3000; t += 10) {
     const auto state = static_cast<LocalisationState>((t / 1000) % 3);
     const Status s = output().Show(state, 0.7f, milliseconds(t));
-    if (!s.ok()) {
-      ADD_FAILURE() << s.message();
+    // Between frames: the next edge and the lines moved to it.
+    const Nanoseconds edge = output().NextChange(milliseconds(t));
+    const Status r = output().Refresh(edge < milliseconds(t + 10) ? edge : milliseconds(t + 5));
+    if (!s.ok() || !r.ok()) {
+      ADD_FAILURE() << s.message() << r.message();
       break;
     }
   }

@@ -24,7 +24,8 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   config.descriptor.rings = 8;
   config.descriptor.longitudes = 32;
   config.capacities.route_frames = 2000;
-  Pipeline pipeline;
+  const MonotonicClock clock;
+  Pipeline pipeline(clock);
   ASSERT_TRUE(pipeline.Init(config).ok());
 
   StreetCameraOptions street;

@@ -2,8 +2,10 @@
 
 #include <gpiod.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdio>
+#include <utility>
 
 namespace skyloc::drivers {
 namespace {
@@ -20,20 +22,20 @@ void GpiodLineReleaser::operator()(gpiod_line* line) const {
 }
 
 GpioStatusOutput::GpioStatusOutput(const GpioStatusOutputConfig& config)
-    : config_(config), pattern_(config.mode), levels_(pattern_.Safe()) {
+    : StatusOutput(config.mode, "GPIO chip"), config_(config) {
   config_.chip[sizeof(config_.chip) - 1] = '\0';
+  char name[96];
+  std::snprintf(name, sizeof name, "GPIO chip %s", config_.chip);
+  SetName(name);
 }
 
 GpioStatusOutput::~GpioStatusOutput() {
-  // Last resort: whatever happened, the lines end off.
-  GpioStatusOutput::Close();
+  // Last resort: whatever happened, the lines end off (and the owners below release
+  // whatever Close() did not).
+  Close();
 }
 
-Status GpioStatusOutput::Open() {
-  if (chip_ != nullptr) {
-    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: already open",
-                         config_.chip);
-  }
+Status GpioStatusOutput::DoOpen() {
   errno = 0;
   GpiodChip chip(::gpiod_chip_open_lookup(config_.chip));
   if (chip == nullptr) {
@@ -44,7 +46,7 @@ Status GpioStatusOutput::Open() {
                              config_.chip);
   }
 
-  const std::size_t count = pattern_.line_count();
+  const std::size_t count = line_count();
   gpiod_line_bulk bulk;
   gpiod_line_bulk_init(&bulk);
   // Not ours to release until requested: until then the chip owns them (an early return
@@ -69,32 +71,33 @@ Status GpioStatusOutput::Open() {
         config_.chip, config_.lines[0], count > 1 ? config_.lines[1] : config_.lines[0],
         count > 2 ? config_.lines[2] : config_.lines[0]);
   }
-  std::snprintf(chip_name_, sizeof(chip_name_), "%s", ::gpiod_chip_name(chip.get()));
-  chip_ = std::move(chip);
+  // Owned from here on: any return below releases them (locals go in reverse order, the
+  // lines before their chip); only a complete Open() hands them to the members.
+  std::array<GpiodLineRequest, StatusLines::kMaxLines> lines;
   for (std::size_t i = 0; i < count; ++i)
-    lines_[i].reset(found[i]);
-  levels_ = pattern_.Safe();
+    lines[i].reset(found[i]);
 
+  GpiodLineRequest button;
   if (config_.button_line >= 0) {
-    gpiod_line* button =
-        ::gpiod_chip_get_line(chip_.get(), static_cast<unsigned>(config_.button_line));
+    gpiod_line* line =
+        ::gpiod_chip_get_line(chip.get(), static_cast<unsigned>(config_.button_line));
     const int bflags = config_.button_active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
-    if (button == nullptr ||
-        ::gpiod_line_request_both_edges_events_flags(button, kConsumer, bflags) != 0) {
+    if (line == nullptr ||
+        ::gpiod_line_request_both_edges_events_flags(line, kConsumer, bflags) != 0) {
       const int saved = errno;
-      Close();  // the status lines are requested: drive them off, then release them
       return Status::FromErrno(saved, "GPIO chip %s: cannot request button line %d for edge events",
                                config_.chip, config_.button_line);
     }
-    button_.reset(button);
-    button_fd_ = ::gpiod_line_event_get_fd(button_.get());
+    button.reset(line);
   }
+  std::snprintf(chip_name_, sizeof(chip_name_), "%s", ::gpiod_chip_name(chip.get()));
+  chip_ = std::move(chip);
+  lines_ = std::move(lines);
+  button_ = std::move(button);
   return Status::Ok();
 }
 
 Status GpioStatusOutput::Write(const StatusLines& lines) {
-  if (lines == levels_)
-    return Status::Ok();
   gpiod_line_bulk bulk;
   gpiod_line_bulk_init(&bulk);
   int values[StatusLines::kMaxLines] = {};
@@ -106,37 +109,31 @@ Status GpioStatusOutput::Write(const StatusLines& lines) {
     const int saved = errno;
     return Status::FromErrno(saved, "GPIO chip %s: setting the status lines", config_.chip);
   }
-  levels_ = lines;
   return Status::Ok();
 }
 
-Status GpioStatusOutput::Show(LocalisationState state, float confidence, Nanoseconds now) {
-  if (chip_ == nullptr || lines_[0] == nullptr) {
-    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: Show() before Open()",
-                         config_.chip);
-  }
-  return Write(pattern_.Levels(state, confidence, now));
+Status GpioStatusOutput::DoWrite(const StatusLines& lines, Nanoseconds) {
+  return Write(lines);
 }
 
-Status GpioStatusOutput::SafeState() {
-  if (chip_ == nullptr || lines_[0] == nullptr)
-    return Status::Ok();
-  // Force the write even if we believe the lines are off already.
-  levels_.level.fill(true);
-  return Write(pattern_.Safe());
+Status GpioStatusOutput::DoSafeState() {
+  StatusLines off;
+  off.count = line_count();
+  return Write(off);
 }
 
-void GpioStatusOutput::Close() {
-  if (chip_ == nullptr)
-    return;
-  (void)SafeState();
+void GpioStatusOutput::DoClose() {
+  // Each owner releases its request; the chip goes after its lines.
   button_.reset();
-  button_fd_ = -1;
   for (GpiodLineRequest& line : lines_)
     line.reset();
-  chip_.reset();  // after its lines
+  chip_.reset();
   chip_name_[0] = '\0';
-  levels_ = pattern_.Safe();
+}
+
+int GpioStatusOutput::button_event_fd() const {
+  // Owned by libgpiod, released with the line.
+  return button_ != nullptr ? ::gpiod_line_event_get_fd(button_.get()) : -1;
 }
 
 Result<bool> GpioStatusOutput::ButtonPressed() const {
@@ -153,11 +150,7 @@ Result<bool> GpioStatusOutput::ButtonPressed() const {
   return value == 1;
 }
 
-Result<ButtonEvent> GpioStatusOutput::ReadButtonEvent() {
-  if (button_ == nullptr) {
-    return Status::Error(StatusCode::kFailedPrecondition, "GPIO chip %s: no button line open",
-                         config_.chip);
-  }
+Result<ButtonEvent> GpioStatusOutput::DoReadButtonEvent() {
   const timespec no_wait{0, 0};
   const int ready = ::gpiod_line_event_wait(button_.get(), &no_wait);
   if (ready < 0) {

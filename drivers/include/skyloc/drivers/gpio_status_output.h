@@ -54,35 +54,30 @@ class GpioStatusOutput final : public StatusOutput {
   explicit GpioStatusOutput(const GpioStatusOutputConfig& config);
   ~GpioStatusOutput() override;
 
-  Status Open() override;
-  Status Show(LocalisationState state, float confidence, Nanoseconds now) override;
-  Status SafeState() override;
-  void Close() override;
-
-  bool is_open() const { return chip_ != nullptr; }
   // The kernel's name of the opened chip ("gpiochip3"); empty before Open().
   const char* chip_name() const { return chip_name_; }
-  const StatusLines& levels() const { return levels_; }
 
   // --- the button (kFailedPrecondition when none is configured or not open) ---
-  int button_event_fd() const { return button_fd_; }
+  int button_event_fd() const;
   Result<bool> ButtonPressed() const;
-  // The next edge, or kDeadlineExceeded when none is pending. Timestamps are the
-  // kernel's (CLOCK_MONOTONIC on Linux >= 5.7).
-  bool has_button() const override { return button_ != nullptr; }
-  Result<ButtonEvent> ReadButtonEvent() override;
 
  private:
+  Status DoOpen() override;
+  Status DoWrite(const StatusLines& lines, Nanoseconds now) override;
+  Status DoSafeState() override;
+  void DoClose() override;
+  bool DoHasButton() const override { return button_ != nullptr; }
+  // The next edge, or kDeadlineExceeded when none is pending. Timestamps are the
+  // kernel's (CLOCK_MONOTONIC on Linux >= 5.7).
+  Result<ButtonEvent> DoReadButtonEvent() override;
+
   Status Write(const StatusLines& lines);
 
   GpioStatusOutputConfig config_;
-  StatusPattern pattern_;
   // Declared before the lines: members are destroyed in reverse, lines first.
   GpiodChip chip_;
   std::array<GpiodLineRequest, StatusLines::kMaxLines> lines_;  // requested outputs
   GpiodLineRequest button_;
-  int button_fd_ = -1;  // owned by libgpiod (released with the line)
-  StatusLines levels_;
   char chip_name_[32] = {};
 };
 

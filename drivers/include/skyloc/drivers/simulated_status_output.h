@@ -38,19 +38,15 @@ class SimulatedStatusOutput final : public StatusOutput {
  public:
   static constexpr std::size_t kMaxButtonEvents = 16;
 
-  // `clock` stamps the changes made by Open/SafeState/Close (Show uses its `now`).
+  // `clock` stamps the changes made by Open/SafeState/Close (Show and Refresh use their
+  // `now`) and the button's edges.
   SimulatedStatusOutput(const SimulatedStatusOutputConfig& config, const Clock* clock);
   ~SimulatedStatusOutput() override;
 
-  Status Open() override;
-  Status Show(LocalisationState state, float confidence, Nanoseconds now) override;
-  Status SafeState() override;
-  void Close() override;
-
-  bool is_open() const { return open_; }
   // Current logical level of line `line` (false when closed: released lines are off).
-  bool Level(std::size_t line) const { return open_ && line < lines_.count && lines_.level[line]; }
-  std::size_t line_count() const { return pattern_.line_count(); }
+  bool Level(std::size_t line) const {
+    return is_open() && line < levels().count && levels().level[line];
+  }
   const RingBuffer<LineChange>& history() const { return history_; }
   std::uint64_t overwritten() const { return history_.overwritten(); }
   void ClearHistory() { history_.Clear(); }
@@ -58,20 +54,23 @@ class SimulatedStatusOutput final : public StatusOutput {
   // --- the button ---
   int button_event_fd() const { return button_fd_.get(); }
   Result<bool> ButtonPressed() const;
-  bool has_button() const override { return button_fd_.is_valid(); }
-  Result<ButtonEvent> ReadButtonEvent() override;  // kDeadlineExceeded when no edge is pending
   void PressButton() { InjectButton(true); }
   void ReleaseButton() { InjectButton(false); }
 
  private:
-  void Apply(const StatusLines& lines, Nanoseconds now);
+  Status DoOpen() override;
+  Status DoWrite(const StatusLines& lines, Nanoseconds now) override;
+  Status DoSafeState() override;
+  void DoClose() override;
+  bool DoHasButton() const override { return button_fd_.is_valid(); }
+  Result<ButtonEvent> DoReadButtonEvent() override;  // kDeadlineExceeded when none pending
+
+  void Record(const StatusLines& lines, Nanoseconds now);
   void InjectButton(bool pressed);
 
   SimulatedStatusOutputConfig config_;
-  StatusPattern pattern_;
   const Clock* clock_;
-  bool open_ = false;
-  StatusLines lines_;
+  StatusLines recorded_;  // the levels the history ends with
   FixedArray<LineChange> history_storage_;
   RingBuffer<LineChange> history_;
 

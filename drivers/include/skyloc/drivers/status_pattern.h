@@ -10,6 +10,9 @@
 //                    LOCALISED  2 Hz at confidence 0 up to 10 Hz at confidence 1, 50 % duty
 //                  Blinking is phase-locked to the monotonic clock (time modulo the
 //                  period), so the pattern needs no state and restarts cleanly.
+//                  NextEdge() says when the line next changes, so the frame loop can
+//                  wake for it between frames (a blink faster than the frames, or a
+//                  100 ms flash between two frames 500 ms apart, still shows).
 // The safe state, in both modes, is every line off (inactive).
 #pragma once
 
@@ -17,11 +20,16 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "skyloc/drivers/status_output.h"
+#include "skyloc/dsp/localisation_state.h"
 #include "skyloc/platform/clock.h"
 #include "skyloc/platform/status.h"
 
 namespace skyloc::drivers {
+
+// The state machine's own states (dsp/localisation_state.h): what the lines show is what
+// it decided, with no second enum to translate into.
+using dsp::LocalisationState;
+using dsp::LocalisationStateName;
 
 enum class StatusLineMode : std::uint8_t { kLinePerState, kBlink };
 
@@ -52,6 +60,9 @@ class StatusPattern {
     Nanoseconds on_time;
   };
   static Blink BlinkFor(LocalisationState state, float confidence);
+  // The first time after `now` at which Levels(state, confidence, .) differs from its
+  // value at `now`: the next blink edge; Nanoseconds::max() in kLinePerState mode.
+  Nanoseconds NextEdge(LocalisationState state, float confidence, Nanoseconds now) const;
 
  private:
   StatusLineMode mode_;
