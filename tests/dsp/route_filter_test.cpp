@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "skyloc/dsp/localisation_state.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/platform/alloc_counter.h"
 
@@ -530,6 +531,59 @@ TEST(RouteFilter, ABestRowThatJumpsBackStartsATrackWhoseConfidenceGrows) {
     EXPECT_GT(m[t].confidence, 0.9f) << "frame " << t;
   for (std::size_t t = 2 * 10; t < 100; ++t)
     EXPECT_GT(m[t].confidence, 0.9f) << "frame " << t;
+}
+
+// The firmware's state machine (default [state], the filter's band of 0..K rows) on the
+// filter's output, carried forward 45 m or back 30 m mid-run: how many frames until it
+// is LOCALISED again at the right place, and LOCALISED is wrong only in the drop_frames
+// frames right after the carry (the hysteresis: a LOCALISED robot needs drop_frames
+// misses to drop). The bound is what docs/STATE_MACHINE.md states: the filter's own 2 ds
+// to find the new place, the track's 2 ds of growing trust, and confirm_frames.
+TEST(RouteFilter, TheStateMachineRelocalisesAfterAKidnapAndNeverLocalisesWrong) {
+  for (const double carried_to_m : {50.0, 10.0}) {
+    Scenario sc;
+    sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, 35);
+    std::vector<double> s = SampleInTime({{10, 1.0}}, 10, 40.0 - (carried_to_m > 40 ? 35 : 0));
+    const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, carried_to_m);
+    s.insert(s.end(), after.begin(), after.end());
+    sc.query = MakeRun(sc.field, s, 0.02f, 36);
+    RouteFilterParams p;
+    RouteFilter filter;
+    ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
+    ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+    const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+    StateMachineParams sp;
+    sp.vmin = 0;
+    sp.vmax = p.max_advance;
+    LocalisationStateMachine machine;
+    ASSERT_EQ(machine.Init(sp), StateMachineError::kOk);
+    int localised_again = -1, wrong_localised = 0;
+    for (std::size_t t = 0; t < m.size(); ++t) {
+      MatchObservation obs;
+      obs.frame = t;
+      obs.index = m[t].row;
+      obs.uniqueness = m[t].uniqueness;
+      obs.confidence = m[t].confidence;
+      const LocalisationState state = machine.Update(obs);
+      if (state != LocalisationState::kLocalised)
+        continue;
+      if (!Within(sc.reference, s[t], m[t].reference, 5)) {
+        EXPECT_GE(t, 100u) << "carried to " << carried_to_m << " m: frame " << t;
+        ++wrong_localised;
+        continue;
+      }
+      if (t >= 100 && localised_again < 0)
+        localised_again = static_cast<int>(t) - 100;
+    }
+    ASSERT_GE(localised_again, 0) << "carried to " << carried_to_m << " m";
+    EXPECT_LE(localised_again, 4 * p.sequence_length + sp.confirm_frames)
+        << "carried to " << carried_to_m << " m";
+    // The wrong LOCALISED frames: the old place, until drop_frames misses in a row drop it.
+    EXPECT_LE(wrong_localised, sp.drop_frames + 1) << "carried to " << carried_to_m << " m";
+    std::printf(
+        "carried to %.0f m: LOCALISED again %d frames after the carry, %d wrong LOCALISED\n",
+        carried_to_m, localised_again, wrong_localised);
+  }
 }
 
 TEST(RouteFilter, SingleImageIsNearestNeighbour) {
