@@ -183,8 +183,8 @@ TEST(SyntheticSkySource, RendersEveryFormatWithTheSameLuminance) {
   constexpr int kW = 16, kH = 12;
   std::uint8_t yuyv[kW * 2 * kH];
   std::uint8_t rgb[kW * 3 * kH];
-  source.Render(7, {yuyv, kW, kH, kW * 2, dsp::PixelFormat::kYuyv}, nullptr);
-  source.Render(7, {rgb, kW, kH, kW * 3, dsp::PixelFormat::kRgb24}, nullptr);
+  ASSERT_TRUE(source.Render(7, {yuyv, kW, kH, kW * 2, dsp::PixelFormat::kYuyv}, nullptr).ok());
+  ASSERT_TRUE(source.Render(7, {rgb, kW, kH, kW * 3, dsp::PixelFormat::kRgb24}, nullptr).ok());
   for (int y = 0; y < kH; ++y) {
     for (int x = 0; x < kW; ++x) {
       const std::uint8_t g = source.GreyAt(7, x, y, kW, kH);
