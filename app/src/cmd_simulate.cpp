@@ -17,8 +17,9 @@
 #include "output_file.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/simulated_camera.h"
 #include "skyloc/sim/motion.h"
-#include "skyloc/sim/rendered_camera.h"
+#include "skyloc/sim/rendered_source.h"
 #include "skyloc/sim/world.h"
 
 namespace skyloc::app {
@@ -377,7 +378,8 @@ struct Output {
   sim::Spectrum spectrum = sim::Spectrum::kUv;
   std::string dir;
   drivers::DatasetWriter writer;
-  std::optional<sim::RenderedCamera> camera;
+  std::optional<sim::RenderedSource> source;
+  std::optional<drivers::SimulatedCamera> camera;
 };
 
 class Progress {
@@ -494,6 +496,7 @@ int RunSimulate(std::span<char* const> args) {
   if (!o.flare)
     lighting.flare = 0;
 
+  ManualClock clock;  // unused for stamps: the trajectory's times stamp the frames
   Output storage[2];
   std::size_t count = 0;
   auto add_output = [&](sim::Spectrum spectrum, std::string dir) {
@@ -520,16 +523,17 @@ int RunSimulate(std::span<char* const> args) {
   for (Output& out : outputs) {
     if (Status s = out.writer.Open(out.dir, /*with_poses=*/true); !s.ok())
       return Fail(s);
-    sim::RenderedCameraConfig config;
+    sim::RenderedSourceConfig config;
     config.lens = lens;
     config.spectrum = out.spectrum;
     config.lighting = lighting;
-    out.camera.emplace(&world, trajectory, config);
+    out.source.emplace(&world, trajectory, config);
+    out.camera.emplace(out.source->camera_config(), &*out.source, &clock);
     if (Status s = out.camera->Open(); !s.ok())
       return Fail(s);
     if (Status s = out.camera->Start(); !s.ok())
       return Fail(s);
-    if (Status s = WriteCameraFile(out.dir, o, out.camera->renderer().lens()); !s.ok())
+    if (Status s = WriteCameraFile(out.dir, o, out.source->renderer().lens()); !s.ok())
       return Fail(s);
     if (Status s = WriteSimulationToml(out.dir, o, out.spectrum, lighting, motion); !s.ok())
       return Fail(s);

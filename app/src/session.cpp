@@ -13,6 +13,7 @@
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
 #include "skyloc/drivers/iio_imu.h"
+#include "skyloc/drivers/simulated_camera.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #if SKYLOC_WITH_V4L2
@@ -30,9 +31,9 @@
 #include "skyloc/platform/signals.h"
 #include "skyloc/sim/imu_model.h"
 #include "skyloc/sim/motion.h"
-#include "skyloc/sim/rendered_camera.h"
+#include "skyloc/sim/rendered_source.h"
+#include "skyloc/sim/street_source.h"
 #include "skyloc/sim/world.h"
-#include "street_camera.h"
 
 namespace skyloc::app {
 namespace {
@@ -116,6 +117,8 @@ void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, do
 struct CameraSource {
   std::unique_ptr<sim::World> world;
   std::vector<sim::TrajectoryPoint> trajectory;
+  MonotonicClock clock;                              // a simulated camera's
+  std::unique_ptr<drivers::FrameSource> sim_source;  // what a simulated camera films
   std::unique_ptr<drivers::Camera> camera;
   std::size_t frames = 0;   // a finite source's length; 0 = endless
   std::string camera_file;  // a dataset's own camera.toml, if it has one
@@ -190,7 +193,7 @@ Status MakeAttitudeSource(const Config& config, const CameraSource& camera, Atti
 
 Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* source) {
   if (config.camera.sim_world == "street") {
-    StreetCameraOptions o;
+    sim::StreetOptions o;
     o.width = config.camera.width;
     o.height = config.camera.height;
     o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
@@ -201,7 +204,10 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
     o.tilt_deg = run.tilt_deg;
     o.zigzag_deg = run.zigzag_deg;
     o.brightness = run.lighting == "dawn" ? 0.6 : run.lighting == "overcast" ? 0.8 : 1.0;
-    source->camera = std::make_unique<StreetCamera>(o);
+    auto street = std::make_unique<sim::StreetSource>(o);
+    source->camera = std::make_unique<drivers::SimulatedCamera>(street->camera_config(),
+                                                                street.get(), &source->clock);
+    source->sim_source = std::move(street);
     return Status::Ok();
   }
   sim::WorldKind kind{};
@@ -235,15 +241,18 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
   source->run_seed = run.run_seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));
-  sim::RenderedCameraConfig camera;
+  sim::RenderedSourceConfig camera;
   SKYLOC_TRY_ASSIGN(camera.lens, LensFromConfig(config));
   if (!sim::LightingPreset(run.lighting.c_str(), run.run_seed, &camera.lighting))
     return Status::Error(StatusCode::kInvalidArgument,
                          "lighting \"%s\" is not dawn, noon or "
                          "overcast",
                          run.lighting.c_str());
-  source->camera =
-      std::make_unique<sim::RenderedCamera>(source->world.get(), source->trajectory, camera);
+  auto rendered =
+      std::make_unique<sim::RenderedSource>(source->world.get(), source->trajectory, camera);
+  source->camera = std::make_unique<drivers::SimulatedCamera>(rendered->camera_config(),
+                                                              rendered.get(), &source->clock);
+  source->sim_source = std::move(rendered);
   source->frames = source->trajectory.size();
   return Status::Ok();
 }

@@ -494,8 +494,7 @@ Status DatasetCamera::DoOpen() {
 }
 
 Status DatasetCamera::DoStart() {
-  next_ = 0;
-  return Status::Ok();
+  return Status::Ok();  // a stopped replay goes on where it stopped, as a camera's stream does
 }
 
 Result<Frame> DatasetCamera::DoCapture(Nanoseconds /*timeout*/) {

@@ -1,13 +1,17 @@
 #include "skyloc/drivers/simulated_camera.h"
 
 #include <cstdio>
+#include <thread>
 
 namespace skyloc::drivers {
 
 SimulatedCamera::SimulatedCamera(const SimulatedCameraConfig& config, FrameSource* source,
                                  const Clock* clock)
     : config_(config), source_(source), clock_(clock) {
-  std::snprintf(info_.name, sizeof(info_.name), "%s", config.name != nullptr ? config.name : "sim");
+  const char* name = config.name;
+  if (name == nullptr)
+    name = source != nullptr ? source->name() : "sim";
+  std::snprintf(info_.name, sizeof(info_.name), "%s", name);
   info_.width = config.width;
   info_.height = config.height;
   info_.format = config.format;
@@ -54,6 +58,12 @@ Status SimulatedCamera::DoOpen() {
   // which the macro would keep past its lifetime.
   if (Status s = pixels_.Allocate(stride_ * static_cast<std::size_t>(config_.height)); !s.ok())
     return s.AddContext("camera %s: frame buffer", info_.name);
+  if (Status s = source_->Prepare(config_.width, config_.height, config_.format); !s.ok())
+    return s.AddContext("camera %s", info_.name);
+  frame_count_ = config_.frame_count;
+  const std::uint64_t source_frames = source_->frame_count();
+  if (source_frames != 0 && (frame_count_ == 0 || source_frames < frame_count_))
+    frame_count_ = source_frames;
   next_index_ = 0;
   have_timestamp_ = false;
   for (std::size_t i = 0; i < fault_count_; ++i)
@@ -62,6 +72,8 @@ Status SimulatedCamera::DoOpen() {
 }
 
 Status SimulatedCamera::DoStart() {
+  start_index_ = next_index_;
+  start_time_ = clock_->Now();
   stalls_left_ = 0;
   unplugged_left_ = 0;
   reconnect_pending_ = false;
@@ -85,9 +97,9 @@ Result<Frame> SimulatedCamera::DoCapture(Nanoseconds /*timeout*/) {
       return Status::Error(StatusCode::kDeadlineExceeded,
                            "camera %s: no frame within the timeout (simulated stall)", info_.name);
     }
-    if (config_.frame_count != 0 && next_index_ >= config_.frame_count) {
+    if (frame_count_ != 0 && next_index_ >= frame_count_) {
       return Status::Error(StatusCode::kOutOfRange, "camera %s: end of source after %llu frames",
-                           info_.name, static_cast<unsigned long long>(config_.frame_count));
+                           info_.name, static_cast<unsigned long long>(frame_count_));
     }
     ScheduledFault* scheduled = FaultAt(next_index_);
     if (scheduled == nullptr)
@@ -119,12 +131,24 @@ Result<Frame> SimulatedCamera::DoCapture(Nanoseconds /*timeout*/) {
   const dsp::MutableImageView out{pixels_.data(), config_.width, config_.height, stride_,
                                   config_.format};
   Frame frame;
-  frame.sequence = next_index_;
-  source_->Render(next_index_, out, &frame.pose);
-  ++next_index_;
+  const std::uint64_t index = next_index_++;
+  frame.sequence = index;
+  if (Status s = source_->Render(index, out, &frame.pose); !s.ok())
+    return s.AddContext("camera %s: frame %llu", info_.name,
+                        static_cast<unsigned long long>(index));
+  if (config_.paced) {
+    const Nanoseconds due =
+        start_time_ + config_.frame_interval * static_cast<std::int64_t>(index - start_index_);
+    const Nanoseconds now = clock_->Now();
+    if (now < due)
+      std::this_thread::sleep_for(due - now);
+  }
   Nanoseconds stamp = clock_->Now();
-  if (have_timestamp_ && stamp < last_timestamp_ + config_.frame_interval)
+  if (const std::optional<Nanoseconds> at = source_->TimeOf(index)) {
+    stamp = *at;
+  } else if (have_timestamp_ && stamp < last_timestamp_ + config_.frame_interval) {
     stamp = last_timestamp_ + config_.frame_interval;
+  }
   last_timestamp_ = stamp;
   have_timestamp_ = true;
   frame.timestamp = stamp;

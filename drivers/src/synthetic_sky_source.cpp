@@ -42,8 +42,8 @@ std::uint8_t SyntheticSkySource::GreyAt(std::uint64_t index, int x, int y, int w
   return elevation > SkylineElevation(az) ? config_.sky_level : config_.obstacle_level;
 }
 
-void SyntheticSkySource::Render(std::uint64_t index, dsp::MutableImageView out,
-                                std::optional<Pose>* pose) {
+Status SyntheticSkySource::Render(std::uint64_t index, dsp::MutableImageView out,
+                                  std::optional<Pose>* pose) {
   for (int y = 0; y < out.height; ++y) {
     std::uint8_t* row = out.Row(y);
     for (int x = 0; x < out.width; ++x) {
@@ -72,6 +72,7 @@ void SyntheticSkySource::Render(std::uint64_t index, dsp::MutableImageView out,
     p.yaw_deg = YawDeg(index);
     *pose = p;
   }
+  return Status::Ok();
 }
 
 }  // namespace skyloc::drivers

@@ -14,8 +14,8 @@
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
+#include "skyloc/sim/street_source.h"
 #include "small_config.h"
-#include "street_camera.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::app {
@@ -25,8 +25,8 @@ constexpr Nanoseconds kFramePeriod = std::chrono::milliseconds(33);
 
 using testing::SmallConfig;
 
-StreetCameraOptions Street(std::uint64_t run_seed) {
-  StreetCameraOptions o;
+sim::StreetOptions Street(std::uint64_t run_seed) {
+  sim::StreetOptions o;
   o.width = 64;
   o.height = 64;
   o.seed = 7;
@@ -50,31 +50,31 @@ class ScriptedCamera final : public drivers::Camera {
 
  private:
   Status DoOpen() override {
-    SKYLOC_TRY(first_.Open());
-    SKYLOC_TRY(second_.Open());
-    info_ = first_.info();
+    SKYLOC_TRY(first_.camera.Open());
+    SKYLOC_TRY(second_.camera.Open());
+    info_ = first_.camera.info();
     return Status::Ok();
   }
   Status DoStart() override {
-    SKYLOC_TRY(first_.Start());
-    return second_.Start();
+    SKYLOC_TRY(first_.camera.Start());
+    return second_.camera.Start();
   }
   Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
     const std::uint64_t call = calls_++;
     clock_->Advance(kFramePeriod);
     script_(call);
-    return call < second_from_ ? first_.Capture(timeout) : second_.Capture(timeout);
+    return call < second_from_ ? first_.camera.Capture(timeout) : second_.camera.Capture(timeout);
   }
   void DoStop() override {
-    first_.Stop();
-    second_.Stop();
+    first_.camera.Stop();
+    second_.camera.Stop();
   }
   void DoClose() override {
-    first_.Close();
-    second_.Close();
+    first_.camera.Close();
+    second_.camera.Close();
   }
 
-  StreetCamera first_, second_;
+  sim::FilmedStreet first_, second_;
   ManualClock* clock_;
   std::uint64_t second_from_;
   std::function<void(std::uint64_t)> script_;
@@ -187,7 +187,8 @@ TEST_F(ButtonTeach, TheOldRouteIsKeptUntilTheNewOneIsCommitted) {
   {
     RouteDbWriter old;
     ASSERT_TRUE(old.Create(path_.c_str(), pipeline_.route_settings(), 25, false).ok());
-    StreetCamera street(Street(1));
+    sim::FilmedStreet filmed(Street(1));
+    drivers::Camera& street = filmed.camera;
     ASSERT_TRUE(street.Open().ok());
     ASSERT_TRUE(street.Start().ok());
     LoopOptions o;
@@ -229,7 +230,8 @@ TEST_F(ButtonTeach, RepeatWithTheButtonPolledAllocatesNothing) {
   ASSERT_TRUE(AllocationCounterActive());
   RouteFrames taught;
   {
-    StreetCamera street(Street(1));
+    sim::FilmedStreet filmed(Street(1));
+    drivers::Camera& street = filmed.camera;
     ASSERT_TRUE(street.Open().ok());
     ASSERT_TRUE(street.Start().ok());
     for (int i = 0; i < 200; ++i) {
@@ -243,7 +245,8 @@ TEST_F(ButtonTeach, RepeatWithTheButtonPolledAllocatesNothing) {
     }
   }
   ASSERT_TRUE(pipeline_.SetRoute(route_).ok());
-  StreetCamera camera(Street(2));
+  sim::FilmedStreet filmed(Street(2));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   ButtonDebouncer button(std::chrono::milliseconds(50));
@@ -268,7 +271,8 @@ TEST_F(ButtonTeach, TeachingWithTheButtonAndItsPatternAllocatesNothing) {
   ASSERT_TRUE(AllocationCounterActive());
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path_.c_str(), pipeline_.route_settings(), 25, false).ok());
-  StreetCamera camera(Street(1));
+  sim::FilmedStreet filmed(Street(1));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   ButtonDebouncer button(std::chrono::milliseconds(50));

@@ -18,8 +18,8 @@
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/signals.h"
+#include "skyloc/sim/street_source.h"
 #include "small_config.h"
-#include "street_camera.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::app {
@@ -31,8 +31,8 @@ using testing::SmallConfig;
 // CLOCK_MONOTONIC too).
 const MonotonicClock kMonotonic;
 
-StreetCameraOptions Street(std::uint64_t frames) {
-  StreetCameraOptions o;
+sim::StreetOptions Street(std::uint64_t frames) {
+  sim::StreetOptions o;
   o.width = 64;
   o.height = 64;
   o.seed = 7;
@@ -42,7 +42,8 @@ StreetCameraOptions Street(std::uint64_t frames) {
 
 // Teaches `frames` frames of the street into `route` through the teach-mode pipeline.
 void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
-  StreetCamera camera(Street(frames));
+  sim::FilmedStreet filmed(Street(frames));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   ASSERT_TRUE(route
@@ -86,8 +87,8 @@ class TrackingSink final : public FrameSink {
 // A second drive along the taught street: other sensor noise and +-20 % speed jitter, so
 // no repeat frame is a copy of a taught one and the route index drifts from the frame
 // number (a matcher that only finds identical frames, or that assumes equal speed, fails).
-StreetCameraOptions Repeat(std::uint64_t frames) {
-  StreetCameraOptions o = Street(frames);
+sim::StreetOptions Repeat(std::uint64_t frames) {
+  sim::StreetOptions o = Street(frames);
   o.run_seed = 2;
   o.speed_jitter = 0.2;
   return o;
@@ -103,7 +104,8 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
 
   // 280 frames stay inside the 150 m route at up to 20 % above the taught speed on average.
-  StreetCamera camera(Repeat(280));
+  sim::FilmedStreet filmed(Repeat(280));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;
@@ -135,7 +137,8 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
   // The heading path runs on every matched frame (strip, correlation, 1D SURF + RANSAC).
   ASSERT_TRUE(pipeline.heading_enabled());
-  StreetCamera camera(Repeat(0));  // endless: the street goes on past the route
+  sim::FilmedStreet filmed(Repeat(0));
+  drivers::Camera& camera = filmed.camera;  // endless: the street goes on past the route
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;
@@ -174,9 +177,10 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
   Teach(pipeline, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
   for (const double yaw : {25.0, -40.0}) {
-    StreetCameraOptions o = Repeat(200);
+    sim::StreetOptions o = Repeat(200);
     o.yaw_deg = yaw;
-    StreetCamera camera(o);
+    sim::FilmedStreet filmed(o);
+    drivers::Camera& camera = filmed.camera;
     ASSERT_TRUE(camera.Open().ok());
     ASSERT_TRUE(camera.Start().ok());
     char* text = nullptr;
@@ -239,7 +243,8 @@ TEST(FrameLoop, AttitudeOnAllocatesNothingAndADeadImuLeavesFramesLevel) {
   ASSERT_TRUE(imu.InjectFault({drivers::ImuFault::Kind::kVanish, 4000, 1}).ok());  // at 20 s
   drivers::ImuAttitudeSource attitude(&imu, {});
   ASSERT_TRUE(attitude.Open().ok());
-  StreetCamera camera(Repeat(0));
+  sim::FilmedStreet filmed(Repeat(0));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -273,7 +278,8 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   const std::string path = scratch.path() + "/route.db";
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path.c_str(), pipeline.route_settings(), 25, false).ok());
-  StreetCamera camera(Street(0));
+  sim::FilmedStreet filmed(Street(0));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -369,7 +375,8 @@ TEST(FrameLoop, StopsOnRequestedStop) {
   RouteFrames route;
   Teach(pipeline, 50, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
-  StreetCamera camera(Street(0));
+  sim::FilmedStreet filmed(Street(0));
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RequestStop();
@@ -433,19 +440,17 @@ TEST(JsonLines, RepeatAndTeachLines) {
 namespace skyloc::app {
 namespace {
 
-// A camera that fails on the frames a test chooses, delegating the others to the street.
-// It notes whether the status lines were in the safe state at every capture call (what
-// the loop showed after the previous call), and a failing call can advance a ManualClock
-// as a driver waiting for its device would.
-class FlakyCamera final : public drivers::Camera {
+// The street filmed by the product's simulated camera with one of its injected faults
+// (drivers::CameraFault), seen through a probe that notes whether the status lines were in
+// the safe state at every capture call (what the loop showed after the previous call) and
+// lets a failing call take time on a ManualClock, as a driver waiting for its device would.
+class FaultyStreet final : public drivers::Camera {
  public:
-  FlakyCamera(std::uint64_t fail_from, std::uint64_t fail_count, StatusCode code,
-              const RecordingStatusOutput* lines = nullptr, ManualClock* clock = nullptr,
-              Nanoseconds failure_takes = Nanoseconds{0})
+  FaultyStreet(drivers::CameraFault::Kind kind, std::uint64_t at_frame, std::uint32_t count,
+               const RecordingStatusOutput* lines = nullptr, ManualClock* clock = nullptr,
+               Nanoseconds failure_takes = Nanoseconds{0})
       : street_(Street(0)),
-        fail_from_(fail_from),
-        fail_count_(fail_count),
-        code_(code),
+        fault_{kind, at_frame, count},
         lines_(lines),
         clock_(clock),
         failure_takes_(failure_takes) {}
@@ -455,34 +460,33 @@ class FlakyCamera final : public drivers::Camera {
 
  private:
   Status DoOpen() override {
-    SKYLOC_TRY(street_.Open());
-    info_ = street_.info();
+    street_.camera.ClearFaults();
+    SKYLOC_TRY(street_.camera.InjectFault(fault_));
+    SKYLOC_TRY(street_.camera.Open());
+    info_ = street_.camera.info();
     return Status::Ok();
   }
-  Status DoStart() override { return street_.Start(); }
+  Status DoStart() override { return street_.camera.Start(); }
   Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
-    const std::uint64_t call = calls_++;
     if (lines_ != nullptr)
       safe_at_call_.push_back(lines_->is_safe());
-    if (call >= fail_from_ && call < fail_from_ + fail_count_) {
-      if (clock_ != nullptr)
-        clock_->Advance(failure_takes_);
-      return Status::Error(code_, "injected fault at call %llu",
-                           static_cast<unsigned long long>(call));
-    }
-    return street_.Capture(timeout);
+    Result<drivers::Frame> frame = street_.camera.Capture(timeout);
+    if (!frame.ok() && clock_ != nullptr)
+      clock_->Advance(failure_takes_);
+    return frame;
   }
-  void DoStop() override { street_.Stop(); }
-  void DoClose() override { street_.Close(); }
+  void DoStop() override { street_.camera.Stop(); }
+  void DoClose() override { street_.camera.Close(); }
 
-  StreetCamera street_;
-  std::uint64_t fail_from_, fail_count_, calls_ = 0;
-  StatusCode code_;
+  sim::FilmedStreet street_;
+  drivers::CameraFault fault_;
   const RecordingStatusOutput* lines_;
   ManualClock* clock_;
   Nanoseconds failure_takes_;
   std::vector<bool> safe_at_call_;
 };
+
+using Fault = drivers::CameraFault::Kind;
 
 class FrameLoopFaults : public ::testing::Test {
  protected:
@@ -501,7 +505,7 @@ class FrameLoopFaults : public ::testing::Test {
 };
 
 TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
-  FlakyCamera camera(40, 3, StatusCode::kDeadlineExceeded, &status_);
+  FaultyStreet camera(Fault::kStall, 40, 3, &status_);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -528,7 +532,7 @@ TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
 // A recording's frame of another size or format (the dataset camera's kDataLoss) is a
 // fatal error naming it, not one more skipped "capture error" with exit 0.
 TEST_F(FrameLoopFaults, ARecordedFrameThatIsWrongIsFatal) {
-  FlakyCamera camera(12, 1, StatusCode::kDataLoss);
+  FaultyStreet camera(Fault::kCorruptSize, 12, 1);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -537,15 +541,14 @@ TEST_F(FrameLoopFaults, ARecordedFrameThatIsWrongIsFatal) {
   LoopSummary summary;
   const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
   EXPECT_EQ(s.code(), StatusCode::kDataLoss);
-  EXPECT_NE(std::string(s.message()).find("injected fault at call 12"), std::string::npos)
-      << s.message();
+  EXPECT_NE(std::string(s.message()).find("frame 12 has"), std::string::npos) << s.message();
   EXPECT_EQ(summary.frames, 12u);
   EXPECT_TRUE(status_.is_safe());
 }
 
 // The same fault from a live camera is skipped and counted: its next frame may be fine.
 TEST_F(FrameLoopFaults, ALiveCamerasCorruptFrameIsSkipped) {
-  FlakyCamera camera(12, 1, StatusCode::kDataLoss);
+  FaultyStreet camera(Fault::kCorruptSize, 12, 1);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -557,7 +560,7 @@ TEST_F(FrameLoopFaults, ALiveCamerasCorruptFrameIsSkipped) {
 }
 
 TEST_F(FrameLoopFaults, AStalledCameraIsFatalAndNamed) {
-  FlakyCamera camera(5, 1000, StatusCode::kDeadlineExceeded);
+  FaultyStreet camera(Fault::kStall, 5, 1000);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopSummary summary;
@@ -569,7 +572,7 @@ TEST_F(FrameLoopFaults, AStalledCameraIsFatalAndNamed) {
 }
 
 TEST_F(FrameLoopFaults, AVanishedCameraIsFatalWithoutReconnectTime) {
-  FlakyCamera camera(7, 1000, StatusCode::kUnavailable);
+  FaultyStreet camera(Fault::kDisconnect, 7, 1000);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -584,7 +587,7 @@ TEST_F(FrameLoopFaults, AVanishedCameraIsFatalWithoutReconnectTime) {
 
 TEST_F(FrameLoopFaults, AnUnpluggedCameraThatComesBackIsFollowed) {
   // Unavailable for 4 captures (the driver reopening it), then frames again.
-  FlakyCamera camera(20, 4, StatusCode::kUnavailable);
+  FaultyStreet camera(Fault::kDisconnect, 20, 4);
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -603,7 +606,7 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
   // Each failed capture takes 50 ms of the loop's (manual) clock, as a driver's reopen
   // attempt would. The first failure ends at t, and the loop keeps trying while less than
   // 200 ms have passed since: at t, t+50, t+100, t+150 (4 errors); at t+200 it gives up.
-  FlakyCamera camera(3, 1000000, StatusCode::kUnavailable, &status_, &clock_,
+  FaultyStreet camera(Fault::kDisconnect, 3, 1000000, &status_, &clock_,
                      std::chrono::milliseconds(50));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -636,17 +639,17 @@ namespace {
 class TimedCamera final : public drivers::Camera {
  public:
   TimedCamera(ManualClock* clock, Nanoseconds first, Nanoseconds period,
-              const StreetCameraOptions& street)
+              const sim::StreetOptions& street)
       : street_(street), clock_(clock), first_(first), period_(period) {}
   std::uint64_t timeouts() const { return timeouts_; }
 
  private:
   Status DoOpen() override {
-    SKYLOC_TRY(street_.Open());
-    info_ = street_.info();
+    SKYLOC_TRY(street_.camera.Open());
+    info_ = street_.camera.info();
     return Status::Ok();
   }
-  Status DoStart() override { return street_.Start(); }
+  Status DoStart() override { return street_.camera.Start(); }
   Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
     const Nanoseconds due = first_ + period_ * static_cast<std::int64_t>(next_);
     const Nanoseconds now = clock_->Now();
@@ -656,17 +659,17 @@ class TimedCamera final : public drivers::Camera {
       return Status::Error(StatusCode::kDeadlineExceeded, "no frame yet");
     }
     clock_->Set(due);
-    Result<drivers::Frame> frame = street_.Capture(timeout);
+    Result<drivers::Frame> frame = street_.camera.Capture(timeout);
     if (frame.ok()) {
       frame->timestamp = due;
       ++next_;
     }
     return frame;
   }
-  void DoStop() override { street_.Stop(); }
-  void DoClose() override { street_.Close(); }
+  void DoStop() override { street_.camera.Stop(); }
+  void DoClose() override { street_.camera.Close(); }
 
-  StreetCamera street_;
+  sim::FilmedStreet street_;
   ManualClock* clock_;
   Nanoseconds first_, period_;
   std::uint64_t next_ = 0, timeouts_ = 0;

@@ -17,7 +17,7 @@
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/latency.h"
-#include "street_camera.h"
+#include "skyloc/sim/street_source.h"
 
 namespace {
 
@@ -39,12 +39,13 @@ struct Fixture {
       config.attitude.kind = AttitudeKind::kSim;  // the pipeline's gravity cap
     if (!pipeline.Init(config).ok())
       return;
-    StreetCameraOptions o;
+    sim::StreetOptions o;
     o.width = kWidth;
     o.height = kHeight;
     o.seed = 5;
     o.frames = kFrames;
-    StreetCamera camera(o);
+    sim::FilmedStreet filmed(o);
+    drivers::Camera& camera = filmed.camera;
     if (!camera.Open().ok() || !camera.Start().ok())
       return;
     RouteFrames route;

@@ -30,7 +30,7 @@
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/segmentation.h"
-#include "street_camera.h"
+#include "skyloc/sim/street_source.h"
 
 namespace {
 
@@ -55,12 +55,13 @@ std::string ImagePath(const std::string& dir, int i) {
 }
 
 bool RenderImages(std::vector<std::vector<std::uint8_t>>* images) {
-  StreetCameraOptions o;
+  sim::StreetOptions o;
   o.width = kWidth;
   o.height = kHeight;
   o.seed = 5;
   o.frames = kImages;
-  StreetCamera camera(o);
+  sim::FilmedStreet filmed(o);
+  drivers::Camera& camera = filmed.camera;
   if (!camera.Open().ok() || !camera.Start().ok())
     return false;
   for (int i = 0; i < kImages; ++i) {

@@ -1,9 +1,11 @@
 // One compliance suite for every Camera implementation, in the spirit of libcamera's
-// lc-compliance: the same cases run against the simulated camera and the V4L2 driver over
-// a scripted device (always), a V4L2 device (SKYLOC_TEST_V4L2_DEVICE) and a libcamera
-// camera (SKYLOC_TEST_LIBCAMERA_CAMERA). Real
-// instances are SKIPPED with the reason when no device is named or present; the HIL
-// harness runs them inside a VM against vivid and vimc.
+// lc-compliance: the same cases run against the simulated camera over each of its frame
+// sources (the synthetic sky, the street the firmware's tests drive, a rendered world of
+// the simulator), the dataset camera (replay, eval) over a small dataset written here, and
+// the V4L2 driver over a scripted device (always), a V4L2 device
+// (SKYLOC_TEST_V4L2_DEVICE) and a libcamera camera (SKYLOC_TEST_LIBCAMERA_CAMERA). Real instances
+// are SKIPPED with the reason when no device is named or present; the HIL harness runs them inside
+// a VM against vivid and vimc.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,13 +13,20 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "skyloc/drivers/camera.h"
+#include "skyloc/drivers/dataset.h"
 #include "skyloc/drivers/frame_source.h"
 #include "skyloc/drivers/simulated_camera.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/clock.h"
+#include "skyloc/sim/motion.h"
+#include "skyloc/sim/rendered_source.h"
+#include "skyloc/sim/street_source.h"
+#include "skyloc/sim/world.h"
 #include "support/emulator.h"
+#include "support/scratch_dir.h"
 #include "support/status_assertions.h"
 #include "test_env.h"
 #if SKYLOC_WITH_V4L2
@@ -70,6 +79,108 @@ class SimUnderTest final : public CameraUnderTest {
 
 std::unique_ptr<CameraUnderTest> MakeSim(std::string*) {
   return std::make_unique<SimUnderTest>();
+}
+
+// --- the simulated camera on the street (`camera.kind = "sim"`, sim_world = "street") ---
+std::unique_ptr<CameraUnderTest> MakeStreet(std::string*) {
+  class Under final : public CameraUnderTest {
+   public:
+    Under() : street_(Options()) {}
+    Camera& camera() override { return street_.camera; }
+
+   private:
+    static sim::StreetOptions Options() {
+      sim::StreetOptions o;
+      o.width = 64;
+      o.height = 48;
+      o.seed = 7;
+      o.speed_jitter = 0.2;
+      return o;
+    }
+    sim::FilmedStreet street_;
+  };
+  return std::make_unique<Under>();
+}
+
+// --- the simulated camera in a world of the simulator (simulate, the demo) ---
+std::unique_ptr<CameraUnderTest> MakeRendered(std::string* skip) {
+  class Under final : public CameraUnderTest {
+   public:
+    Under(std::unique_ptr<sim::World> world, std::vector<sim::TrajectoryPoint> trajectory)
+        : world_(std::move(world)),
+          trajectory_(std::move(trajectory)),
+          source_(world_.get(), trajectory_, Config()),
+          camera_(source_.camera_config(), &source_, &clock_) {}
+    Camera& camera() override { return camera_; }
+
+   private:
+    static sim::RenderedSourceConfig Config() {
+      sim::RenderedSourceConfig c;
+      c.lens = sim::DefaultSimLens(64, 48);
+      return c;
+    }
+    std::unique_ptr<sim::World> world_;
+    std::vector<sim::TrajectoryPoint> trajectory_;
+    sim::RenderedSource source_;
+    ManualClock clock_;
+    SimulatedCamera camera_;
+  };
+  auto world = std::make_unique<sim::World>();
+  std::vector<sim::TrajectoryPoint> trajectory;
+  sim::MotionConfig motion;
+  motion.max_frames = 40;
+  if (Status s = sim::MakeProceduralWorld(sim::WorldKind::kRepetitive, 1, world.get()); !s.ok()) {
+    ADD_FAILURE() << "cannot make the world: " << s.message();
+    *skip = "setup failed";
+    return nullptr;
+  }
+  if (Status s = sim::BuildTrajectory(world->route, world->route_closed, motion, &trajectory);
+      !s.ok()) {
+    ADD_FAILURE() << "cannot make the trajectory: " << s.message();
+    *skip = "setup failed";
+    return nullptr;
+  }
+  return std::make_unique<Under>(std::move(world), std::move(trajectory));
+}
+
+// --- the dataset camera (replay, eval) over a dataset written to its own scratch folder ---
+std::unique_ptr<CameraUnderTest> MakeDataset(std::string* skip) {
+  class Under final : public CameraUnderTest {
+   public:
+    explicit Under(std::unique_ptr<skyloc::testing::ScratchDir> scratch)
+        : scratch_(std::move(scratch)), camera_(scratch_->path() + "/run") {}
+    Camera& camera() override { return camera_; }
+
+   private:
+    std::unique_ptr<skyloc::testing::ScratchDir> scratch_;  // removed with the camera
+    DatasetCamera camera_;
+  };
+  auto scratch = std::make_unique<skyloc::testing::ScratchDir>("skyloc_compliance_");
+  // Frames of the synthetic sky, enough for the longest case (10 frames in one session).
+  SimulatedCameraConfig config;
+  config.width = 48;
+  config.height = 32;
+  SyntheticSkySource sky;
+  ManualClock clock;
+  SimulatedCamera source(config, &sky, &clock);
+  DatasetWriter writer;
+  Status s = writer.Open(scratch->path() + "/run", /*with_poses=*/true);
+  if (s.ok())
+    s = source.Open();
+  if (s.ok())
+    s = source.Start();
+  for (int i = 0; s.ok() && i < 16; ++i) {
+    Result<Frame> frame = source.Capture(Nanoseconds(0));
+    s = frame.ok() ? writer.Append(frame->image, 0.1 * i, frame->pose) : frame.status();
+  }
+  if (s.ok())
+    s = writer.Close();
+  if (!s.ok()) {
+    ADD_FAILURE() << "cannot write the dataset: " << s.message();
+    *skip = "setup failed";
+    return nullptr;
+  }
+  return std::make_unique<Under>(std::move(scratch));
 }
 
 // --- V4L2 ---
@@ -158,6 +269,9 @@ std::unique_ptr<CameraUnderTest> MakeLibcamera(std::string* skip) {
 
 const CameraCase kCases[] = {
     {"Simulated", MakeSim, false},
+    {"SimulatedStreet", MakeStreet, false},
+    {"SimulatedRendered", MakeRendered, false},
+    {"Dataset", MakeDataset, false},
     {"V4l2FakeDevice", MakeV4l2Fake, false},
     {"V4l2", MakeV4l2, true},
     {"Libcamera", MakeLibcamera, true},
@@ -167,8 +281,9 @@ const CameraCase kCases[] = {
 // allocation counter. Not libcamera: its own threads allocate for every request
 // (queued method calls, Signal::emit), which the counter cannot tell apart from ours;
 // LibcameraCamera's part (SPSC hand-over, eventfd, request reuse) allocates nothing by
-// construction.
-const CameraCase kAllocationFreeCases[] = {kCases[0], kCases[1], kCases[2]};
+// construction. Not the dataset camera: replay decodes a file in each Capture(), the one
+// exception camera.h makes on purpose (docs/DRIVERS.md, "The camera contract").
+const CameraCase kAllocationFreeCases[] = {kCases[0], kCases[1], kCases[2], kCases[4], kCases[5]};
 
 constexpr Nanoseconds kFrameTimeout = seconds(5);  // vimc under QEMU TCG: ~6 fps
 constexpr int kFrames = 8;

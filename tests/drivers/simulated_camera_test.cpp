@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include "skyloc/drivers/frame_source.h"
 #include "skyloc/platform/alloc_counter.h"
@@ -183,8 +185,8 @@ TEST(SyntheticSkySource, RendersEveryFormatWithTheSameLuminance) {
   constexpr int kW = 16, kH = 12;
   std::uint8_t yuyv[kW * 2 * kH];
   std::uint8_t rgb[kW * 3 * kH];
-  source.Render(7, {yuyv, kW, kH, kW * 2, dsp::PixelFormat::kYuyv}, nullptr);
-  source.Render(7, {rgb, kW, kH, kW * 3, dsp::PixelFormat::kRgb24}, nullptr);
+  ASSERT_TRUE(source.Render(7, {yuyv, kW, kH, kW * 2, dsp::PixelFormat::kYuyv}, nullptr).ok());
+  ASSERT_TRUE(source.Render(7, {rgb, kW, kH, kW * 3, dsp::PixelFormat::kRgb24}, nullptr).ok());
   for (int y = 0; y < kH; ++y) {
     for (int x = 0; x < kW; ++x) {
       const std::uint8_t g = source.GreyAt(7, x, y, kW, kH);
@@ -212,6 +214,66 @@ TEST(SyntheticSkySource, LooksLikeAnUpwardFisheye) {
   }
   EXPECT_GT(sky, 10);
   EXPECT_GT(obstacle, 10);
+}
+
+// A live simulated run (`paced`): frames are due one interval apart from Start(), on the
+// real clock, as a camera delivers them.
+TEST(SimulatedCameraPacing, APacedCameraDeliversFramesAtItsRate) {
+  SimulatedCameraConfig c;
+  c.width = 16;
+  c.height = 16;
+  c.frame_interval = milliseconds(20);
+  c.paced = true;
+  SyntheticSkySource sky;
+  MonotonicClock clock;
+  SimulatedCamera camera(c, &sky, &clock);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  const Nanoseconds start = clock.Now();
+  for (int i = 0; i < 4; ++i)
+    ASSERT_TRUE(camera.Capture(milliseconds(100)).ok());
+  // Frame 0 is due at Start(), frame 3 three intervals later.
+  EXPECT_GE(clock.Now() - start, milliseconds(60));
+}
+
+// A source that knows its frames' times and length (a trajectory) stamps and ends the run;
+// a frame it cannot render is the camera's error, naming the camera and the frame.
+TEST(SimulatedCameraSource, TheSourcesTimesLengthAndErrorsAreTheCameras) {
+  class Source final : public FrameSource {
+   public:
+    std::uint64_t frame_count() const override { return 3; }
+    std::optional<Nanoseconds> TimeOf(std::uint64_t index) const override {
+      return milliseconds(250) * static_cast<std::int64_t>(index + 1);
+    }
+    Status Render(std::uint64_t index, dsp::MutableImageView out, std::optional<Pose>*) override {
+      if (index == 1)
+        return Status::Error(StatusCode::kDataLoss, "no frame 1 here");
+      out.Row(0)[0] = 1;
+      return Status::Ok();
+    }
+  };
+  SimulatedCameraConfig c;
+  c.name = "sim:test";
+  c.width = 8;
+  c.height = 8;
+  Source source;
+  ManualClock clock{milliseconds(5000)};
+  SimulatedCamera camera(c, &source, &clock);
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  Result<Frame> first = camera.Capture(milliseconds(1));
+  ASSERT_TRUE(first.ok()) << first.status().message();
+  EXPECT_EQ(first->timestamp, milliseconds(250));
+  Result<Frame> broken = camera.Capture(milliseconds(1));
+  ASSERT_FALSE(broken.ok());
+  EXPECT_EQ(broken.status().code(), StatusCode::kDataLoss);
+  EXPECT_NE(std::string(broken.status().message()).find("sim:test: frame 1"), std::string::npos)
+      << broken.status().message();
+  Result<Frame> third = camera.Capture(milliseconds(1));
+  ASSERT_TRUE(third.ok()) << third.status().message();
+  EXPECT_EQ(third->sequence, 2u);
+  EXPECT_EQ(third->timestamp, milliseconds(750));
+  EXPECT_EQ(camera.Capture(milliseconds(1)).status().code(), StatusCode::kOutOfRange);
 }
 
 }  // namespace

@@ -10,7 +10,7 @@
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/process_memory.h"
 #include "skyloc/platform/signals.h"
-#include "street_camera.h"
+#include "skyloc/sim/street_source.h"
 
 namespace skyloc::app {
 namespace {
@@ -28,7 +28,7 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   Pipeline pipeline(clock);
   ASSERT_TRUE(pipeline.Init(config).ok());
 
-  StreetCameraOptions street;
+  sim::StreetOptions street;
   street.width = 64;
   street.height = 64;
   street.seed = 3;
@@ -36,7 +36,8 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   ASSERT_TRUE(route.Allocate(2000, static_cast<std::size_t>(pipeline.dim())).ok());
   {
     street.frames = 2000;
-    StreetCamera teach(street);
+    sim::FilmedStreet teach_filmed(street);
+    drivers::Camera& teach = teach_filmed.camera;
     ASSERT_TRUE(teach.Open().ok());
     ASSERT_TRUE(teach.Start().ok());
     for (Result<drivers::Frame> f = teach.Capture(std::chrono::seconds(1)); f.ok();
@@ -49,7 +50,8 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
 
   street.frames = 0;
-  StreetCamera camera(street);
+  sim::FilmedStreet filmed(street);
+  drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   RecordingStatusOutput status;

@@ -6,7 +6,9 @@
 //   Closed --Open()--> Open --Start()--> Streaming --Stop()--> Open --Close()--> Closed
 //
 // Buffers are allocated in Open() (sized from the configuration); Capture() hands out a
-// view of one of them that stays valid until the next Capture() or Stop().
+// view of one of them that stays valid until the next Capture() or Stop(). Capture()
+// allocates nothing, with one exception on purpose: dataset replay (DatasetCamera), a
+// laptop tool, decodes a file in each Capture() and so allocates.
 #pragma once
 
 #include <cstdint>

@@ -116,8 +116,12 @@ class DatasetWriter {
 // its pose when the dataset has poses, and kOutOfRange after the last one. Timestamps are
 // the dataset's timestamp_s (as nanoseconds since the start of the run). Frames come as
 // LoadImage gives them (kGrey8 or kRgb24); every frame must have the first one's size and
-// format (kDataLoss otherwise). Replay is a laptop tool: each Capture() decodes a file and
-// so allocates.
+// format (kDataLoss otherwise, for that frame). Sequence numbers are frame indices: they go
+// on across Stop()/Start() and start again at 0 after Open().
+//
+// Replay is a laptop tool, and the one camera camera.h lets allocate in Capture(): each
+// Capture() decodes the next file (a PNG decoder allocates). Why not a decoder thread (yet):
+// docs/DRIVERS.md, "The camera contract".
 class DatasetCamera final : public Camera {
  public:
   explicit DatasetCamera(std::string dir) : dir_(std::move(dir)) {}

@@ -1,12 +1,16 @@
-// What SimulatedCamera films. A FrameSource renders frame `index` into the camera's buffer
-// (any of the camera's pixel formats) and, if it knows it, the pose the frame was taken
-// from. SyntheticSkySource below is the one implementation; tests give it to the camera for
-// the compliance suite and fault injection. The simulator's worlds do not come through
-// here: sim::RenderedCamera (drivers/sim) is a Camera of its own, and the firmware's
-// `camera.kind = "sim"` uses it or app's StreetCamera.
+// What SimulatedCamera films: every simulated camera is a SimulatedCamera (one set of
+// state checks, counters, timestamps and injected faults) over a FrameSource. A source
+// renders frame `index` into the camera's buffer and, if it knows it, the pose the frame
+// was taken from. The sources:
 //
-// Render() runs on the frame path: it must not allocate (tests check it through the
-// simulated camera's compliance run).
+//   SyntheticSkySource (below)   a rotating sky disc: tests, the compliance suite
+//   sim::StreetSource            a street canyon from a seed: `camera.kind = "sim"` with
+//                                sim_world = "street", the firmware's own tests
+//   sim::RenderedSource          the simulator's worlds (city, forest, ...): `skyloc
+//                                simulate`, the demo, the other sim_world values
+//
+// Prepare() runs in the camera's Open() and may allocate; Render() runs on the frame path
+// and must not (the compliance suite checks it, for every source).
 #pragma once
 
 #include <cstdint>
@@ -14,16 +18,33 @@
 
 #include "skyloc/drivers/camera.h"
 #include "skyloc/dsp/image.h"
+#include "skyloc/platform/clock.h"
+#include "skyloc/platform/status.h"
 
 namespace skyloc::drivers {
 
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
+
+  // The camera name this source suggests ("sim:street(seed 7)"), used when the camera's
+  // configuration names none.
+  virtual const char* name() const { return "sim"; }
+  // Called by the camera's Open() with its frame size and format: allocate what Render()
+  // needs here. kInvalidArgument when the source cannot render that size or format.
+  virtual Status Prepare(int /*width*/, int /*height*/, dsp::PixelFormat /*format*/) {
+    return Status::Ok();
+  }
+  // How many frames the source has (the camera returns kOutOfRange after them); 0: endless.
+  virtual std::uint64_t frame_count() const { return 0; }
+  // When frame `index` was taken, counted from the start of the run, if the source
+  // defines it (a trajectory's time); nullopt: the camera stamps frames from its clock.
+  virtual std::optional<Nanoseconds> TimeOf(std::uint64_t /*index*/) const { return std::nullopt; }
   // `out` has the camera's width, height, stride and format. Set `*pose` when known
-  // (leave it empty otherwise).
-  virtual void Render(std::uint64_t index, dsp::MutableImageView out,
-                      std::optional<Pose>* pose) = 0;
+  // (leave it empty otherwise). Indices increase from one call to the next, with gaps
+  // where the camera dropped frames; they start again at 0 after the camera's Open().
+  virtual Status Render(std::uint64_t index, dsp::MutableImageView out,
+                        std::optional<Pose>* pose) = 0;
 
  protected:
   FrameSource() = default;
@@ -47,7 +68,8 @@ class SyntheticSkySource final : public FrameSource {
   SyntheticSkySource() = default;
   explicit SyntheticSkySource(const Config& config) : config_(config) {}
 
-  void Render(std::uint64_t index, dsp::MutableImageView out, std::optional<Pose>* pose) override;
+  const char* name() const override { return "sim:synthetic"; }
+  Status Render(std::uint64_t index, dsp::MutableImageView out, std::optional<Pose>* pose) override;
 
   // The grey level of pixel (x, y) in a `width` x `height` image of frame `index`:
   // the reference the tests compare rendered buffers with.

@@ -10,11 +10,15 @@
 //   kCorruptSize   one call returns kDataLoss (the frame's byte count     errors
 //                  does not match the format); the sequence advances
 //
-// Capture() never blocks: a stall is reported at once rather than after `timeout`, so
-// tests of the fault paths take no wall time. Timestamps are CLOCK-like: each frame is
-// stamped max(clock.Now(), previous + frame_interval), so under a ManualClock they are
-// spaced exactly one interval apart and under a real clock they never run ahead of it
-// by more than one interval.
+// Capture() never blocks (unless `paced`): a stall is reported at once rather than after
+// `timeout`, so tests of the fault paths take no wall time. Timestamps: a source that
+// defines its frames' times (a trajectory) stamps them; otherwise they are CLOCK-like:
+// each frame is stamped max(clock.Now(), previous + frame_interval), so under a
+// ManualClock they are spaced exactly one interval apart and under a real clock they
+// never run ahead of it by more than one interval.
+//
+// Frame sequence numbers are the source's frame indices: they keep increasing across
+// Stop()/Start(), and start again at 0 after Open().
 #pragma once
 
 #include <array>
@@ -38,12 +42,15 @@ struct CameraFault {
 };
 
 struct SimulatedCameraConfig {
-  const char* name = "sim:synthetic";
+  const char* name = nullptr;  // nullptr: the source's name()
   int width = 320;
   int height = 240;
   dsp::PixelFormat format = dsp::PixelFormat::kGrey8;
   Nanoseconds frame_interval{33'333'333};  // 30 fps
-  std::uint64_t frame_count = 0;           // 0: endless; else kOutOfRange after this many
+  std::uint64_t frame_count = 0;           // 0: the source's; else kOutOfRange after this many
+  // Deliver frames in real time, one frame_interval apart from Start(), as a camera does
+  // (Capture() sleeps until the frame is due). For a live run on a MonotonicClock.
+  bool paced = false;
 };
 
 class SimulatedCamera final : public Camera {
@@ -75,6 +82,7 @@ class SimulatedCamera final : public Camera {
 
   SimulatedCameraConfig config_;
   FrameSource* source_;
+  std::uint64_t frame_count_ = 0;  // config's or source's, 0 = endless
   const Clock* clock_;
   FixedArray<std::uint8_t> pixels_;
   std::size_t stride_ = 0;
@@ -86,6 +94,8 @@ class SimulatedCamera final : public Camera {
   std::uint32_t stalls_left_ = 0;     // of the stall currently in progress
   std::uint32_t unplugged_left_ = 0;  // of the disconnect currently in progress
   bool reconnect_pending_ = false;    // a disconnect ended: the next call "reopens"
+  std::uint64_t start_index_ = 0;     // paced: the frame and time of the last Start()
+  Nanoseconds start_time_{0};
   bool have_timestamp_ = false;
   Nanoseconds last_timestamp_{0};
 };

@@ -7,16 +7,29 @@
 
 namespace skyloc::sim {
 
+// One SplitMix64 step from state `x`: the output a generator seeded with `x` gives first.
+// Also a stateless hash of one integer (street heights, per-pixel noise).
+inline std::uint64_t SplitMix64(std::uint64_t x) {
+  std::uint64_t z = x + 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// SplitMix64 of `x` mapped to [0, 1).
+inline double SplitMix64Unit(std::uint64_t x) {
+  return static_cast<double>(SplitMix64(x) >> 11) * 0x1.0p-53;
+}
+
 // SplitMix64 (Steele, Lea, Flood 2014): tiny state, good enough for scenery and noise.
 class Rng {
  public:
   explicit Rng(std::uint64_t seed) : state_(seed) {}
 
   std::uint64_t Next() {
-    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
+    const std::uint64_t z = SplitMix64(state_);
+    state_ += 0x9E3779B97F4A7C15ull;
+    return z;
   }
   // Uniform in [0, 1).
   double Uniform() { return static_cast<double>(Next() >> 11) * 0x1.0p-53; }

@@ -1,15 +1,16 @@
-#include "skyloc/sim/rendered_camera.h"
+#include "skyloc/sim/rendered_source.h"
 
 #include <gtest/gtest.h>
 
 #include <vector>
 
+#include "skyloc/drivers/simulated_camera.h"
 #include "skyloc/platform/alloc_counter.h"
 
 namespace skyloc::sim {
 namespace {
 
-class RenderedCameraTest : public ::testing::Test {
+class RenderedSourceTest : public ::testing::Test {
  protected:
   void SetUp() override {
     ASSERT_TRUE(MakeProceduralWorld(WorldKind::kRepetitive, 1, &world_).ok());
@@ -21,11 +22,13 @@ class RenderedCameraTest : public ::testing::Test {
   }
   World world_;
   std::vector<TrajectoryPoint> trajectory_;
-  RenderedCameraConfig config_;
+  RenderedSourceConfig config_;
+  ManualClock clock_;
 };
 
-TEST_F(RenderedCameraTest, DeliversEveryPoseThenEndsWithOutOfRange) {
-  RenderedCamera camera(&world_, trajectory_, config_);
+TEST_F(RenderedSourceTest, DeliversEveryPoseThenEndsWithOutOfRange) {
+  RenderedSource source(&world_, trajectory_, config_);
+  drivers::SimulatedCamera camera(source.camera_config(), &source, &clock_);
   ASSERT_TRUE(camera.Open().ok());
   EXPECT_STREQ(camera.info().name, "sim:repetitive:uv");
   EXPECT_EQ(camera.info().format, dsp::PixelFormat::kGrey8);
@@ -41,7 +44,7 @@ TEST_F(RenderedCameraTest, DeliversEveryPoseThenEndsWithOutOfRange) {
     EXPECT_EQ(frame->image.width, 64);
     // The frame is the renderer's image of that pose.
     std::vector<std::uint8_t> expected(64 * 48);
-    ASSERT_TRUE(camera.renderer()
+    ASSERT_TRUE(source.renderer()
                     .Render(trajectory_[i].pose, config_.lighting, Spectrum::kUv, i,
                             {expected.data(), 64, 48, 64, dsp::PixelFormat::kGrey8})
                     .ok());
@@ -53,11 +56,12 @@ TEST_F(RenderedCameraTest, DeliversEveryPoseThenEndsWithOutOfRange) {
   camera.Close();
 }
 
-TEST_F(RenderedCameraTest, CaptureDoesNotAllocate) {
+TEST_F(RenderedSourceTest, CaptureDoesNotAllocate) {
   ASSERT_TRUE(AllocationCounterActive());
   for (Spectrum s : {Spectrum::kUv, Spectrum::kVisible}) {
     config_.spectrum = s;
-    RenderedCamera camera(&world_, trajectory_, config_);
+    RenderedSource source(&world_, trajectory_, config_);
+    drivers::SimulatedCamera camera(source.camera_config(), &source, &clock_);
     ASSERT_TRUE(camera.Open().ok());
     ASSERT_TRUE(camera.Start().ok());
     AllocationScope scope;
