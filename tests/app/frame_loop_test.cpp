@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "recording_status_output.h"
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
@@ -26,6 +25,15 @@ namespace skyloc::app {
 namespace {
 
 using testing::SmallConfig;
+
+// The state the simulated output's lines show (one line per state): the lit line.
+drivers::LocalisationState ShownState(const drivers::SimulatedStatusOutput& status) {
+  for (std::size_t i = 0; i < status.levels().count; ++i) {
+    if (status.Level(i))
+      return static_cast<drivers::LocalisationState>(i);
+  }
+  return drivers::LocalisationState::kLost;
+}
 
 // The clock of the tests that run in real time (the street camera stamps its frames with
 // CLOCK_MONOTONIC too).
@@ -108,7 +116,7 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
-  RecordingStatusOutput status;
+  drivers::SimulatedStatusOutput status({}, &kMonotonic);
   ASSERT_TRUE(status.Open().ok());
   TrackingSink sink;
   LoopOptions options;
@@ -121,10 +129,10 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   // no LOCALISED frame is wrong.
   EXPECT_GE(sink.localised, 220u);
   EXPECT_EQ(sink.localised_correct, sink.localised);
-  EXPECT_EQ(status.last_state(), drivers::LocalisationState::kLocalised);
-  EXPECT_FALSE(status.is_safe());
+  EXPECT_EQ(ShownState(status), drivers::LocalisationState::kLocalised);
+  EXPECT_TRUE(status.is_showing());
   status.Close();
-  EXPECT_TRUE(status.is_safe());
+  EXPECT_FALSE(status.is_showing());
 }
 
 TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
@@ -141,7 +149,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   drivers::Camera& camera = filmed.camera;  // endless: the street goes on past the route
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
-  RecordingStatusOutput status;
+  drivers::SimulatedStatusOutput status({}, &kMonotonic);
   ASSERT_TRUE(status.Open().ok());
   std::FILE* null = std::fopen("/dev/null", "w");
   ASSERT_NE(null, nullptr);
@@ -447,7 +455,7 @@ namespace {
 class FaultyStreet final : public drivers::Camera {
  public:
   FaultyStreet(drivers::CameraFault::Kind kind, std::uint64_t at_frame, std::uint32_t count,
-               const RecordingStatusOutput* lines = nullptr, ManualClock* clock = nullptr,
+               const drivers::StatusOutput* lines = nullptr, ManualClock* clock = nullptr,
                Nanoseconds failure_takes = Nanoseconds{0})
       : street_(Street(0)),
         fault_{kind, at_frame, count},
@@ -469,7 +477,7 @@ class FaultyStreet final : public drivers::Camera {
   Status DoStart() override { return street_.camera.Start(); }
   Result<drivers::Frame> DoCapture(Nanoseconds timeout) override {
     if (lines_ != nullptr)
-      safe_at_call_.push_back(lines_->is_safe());
+      safe_at_call_.push_back(!lines_->is_showing());
     Result<drivers::Frame> frame = street_.camera.Capture(timeout);
     if (!frame.ok() && clock_ != nullptr)
       clock_->Advance(failure_takes_);
@@ -480,7 +488,7 @@ class FaultyStreet final : public drivers::Camera {
 
   sim::FilmedStreet street_;
   drivers::CameraFault fault_;
-  const RecordingStatusOutput* lines_;
+  const drivers::StatusOutput* lines_;
   ManualClock* clock_;
   Nanoseconds failure_takes_;
   std::vector<bool> safe_at_call_;
@@ -501,7 +509,7 @@ class FrameLoopFaults : public ::testing::Test {
   // The loop's time (the pipeline's clock): it stands still unless a camera moves it.
   ManualClock clock_;
   Pipeline pipeline_{clock_};
-  RecordingStatusOutput status_;
+  drivers::SimulatedStatusOutput status_{{}, &clock_};
 };
 
 TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
@@ -523,10 +531,10 @@ TEST_F(FrameLoopFaults, TimeoutsAreSkippedWithTheLinesSafe) {
   // ...and the lines are safe from the first timeout until a frame is shown again.
   for (std::size_t call = 41; call <= 43; ++call)
     EXPECT_TRUE(safe[call]) << "call " << call << ": timeouts must leave the lines safe";
-  EXPECT_FALSE(status_.is_safe());
+  EXPECT_TRUE(status_.is_showing());
   // Tracking restarted after the gap: one frame of evidence cannot confirm a place
   // (confirm_frames = 5), whatever the matcher made of it.
-  EXPECT_NE(status_.last_state(), drivers::LocalisationState::kLocalised);
+  EXPECT_NE(ShownState(status_), drivers::LocalisationState::kLocalised);
 }
 
 // A recording's frame of another size or format (the dataset camera's kDataLoss) is a
@@ -543,7 +551,7 @@ TEST_F(FrameLoopFaults, ARecordedFrameThatIsWrongIsFatal) {
   EXPECT_EQ(s.code(), StatusCode::kDataLoss);
   EXPECT_NE(std::string(s.message()).find("frame 12 has"), std::string::npos) << s.message();
   EXPECT_EQ(summary.frames, 12u);
-  EXPECT_TRUE(status_.is_safe());
+  EXPECT_FALSE(status_.is_showing());
 }
 
 // The same fault from a live camera is skipped and counted: its next frame may be fine.
@@ -568,7 +576,7 @@ TEST_F(FrameLoopFaults, AStalledCameraIsFatalAndNamed) {
   EXPECT_EQ(s.code(), StatusCode::kDeadlineExceeded);
   EXPECT_NE(std::string(s.message()).find("sim:street"), std::string::npos) << s.message();
   EXPECT_EQ(summary.frames, 5u);
-  EXPECT_TRUE(status_.is_safe());
+  EXPECT_FALSE(status_.is_showing());
 }
 
 TEST_F(FrameLoopFaults, AVanishedCameraIsFatalWithoutReconnectTime) {
@@ -582,7 +590,7 @@ TEST_F(FrameLoopFaults, AVanishedCameraIsFatalWithoutReconnectTime) {
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
   EXPECT_EQ(summary.frames, 7u);
   EXPECT_EQ(summary.capture_errors, 0u);
-  EXPECT_TRUE(status_.is_safe());
+  EXPECT_FALSE(status_.is_showing());
 }
 
 TEST_F(FrameLoopFaults, AnUnpluggedCameraThatComesBackIsFollowed) {
@@ -594,7 +602,7 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraThatComesBackIsFollowed) {
   options.max_frames = 20;
   LoopSummary summary;
   ASSERT_TRUE(RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary).ok());
-  EXPECT_FALSE(status_.is_safe());
+  EXPECT_TRUE(status_.is_showing());
   options.max_frames = 5;
   const Status s = RunFrameLoop(camera, &status_, pipeline_, nullptr, nullptr, options, &summary);
   ASSERT_TRUE(s.ok()) << s.message();
@@ -607,7 +615,7 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
   // attempt would. The first failure ends at t, and the loop keeps trying while less than
   // 200 ms have passed since: at t, t+50, t+100, t+150 (4 errors); at t+200 it gives up.
   FaultyStreet camera(Fault::kDisconnect, 3, 1000000, &status_, &clock_,
-                     std::chrono::milliseconds(50));
+                      std::chrono::milliseconds(50));
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
   LoopOptions options;
@@ -619,7 +627,7 @@ TEST_F(FrameLoopFaults, AnUnpluggedCameraIsGivenUpAfterTheReconnectTime) {
   EXPECT_EQ(summary.frames, 3u);
   EXPECT_EQ(summary.capture_errors, 4u);
   EXPECT_EQ(camera.safe_at_call().size(), 3u + 5u);
-  EXPECT_TRUE(status_.is_safe());
+  EXPECT_FALSE(status_.is_showing());
 }
 
 }  // namespace

@@ -5,8 +5,8 @@
 
 #include <cstdio>
 
-#include "../app/recording_status_output.h"
 #include "frame_loop.h"
+#include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/process_memory.h"
 #include "skyloc/platform/signals.h"
@@ -54,7 +54,7 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
-  RecordingStatusOutput status;
+  drivers::SimulatedStatusOutput status({}, &clock);
   ASSERT_TRUE(status.Open().ok());
   std::FILE* null = std::fopen("/dev/null", "w");
   ASSERT_NE(null, nullptr);
