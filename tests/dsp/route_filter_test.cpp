@@ -458,20 +458,34 @@ TEST(RouteFilter, ThreeTimesFasterThanTaughtIsFollowed) {
   }
 }
 
-TEST(RouteFilter, RelocalisesAfterAKidnap) {
+// An 80 s route at 1 m/s, and a query that drives 10 s from `from_m`, is carried to
+// `to_m` (a kidnap) and drives on for 20 s: the carry is at query frame 100.
+struct Kidnap {
   Scenario sc;
-  sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, 31);
-  // 10 s from 5 m, then carried to 50 m (a kidnap) and on for 20 s.
-  std::vector<double> s = SampleInTime({{10, 1.0}}, 10, 5.0);
-  const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, 50.0);
+  std::vector<SeqSlamMatch> matches;
+};
+Kidnap RunKidnap(double from_m, double to_m, unsigned seed, const RouteFilterParams& p) {
+  Kidnap k;
+  Scenario& sc = k.sc;
+  sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, seed);
+  std::vector<double> s = SampleInTime({{10, 1.0}}, 10, from_m);
+  const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, to_m);
   s.insert(s.end(), after.begin(), after.end());
-  sc.query = MakeRun(sc.field, s, 0.02f, 32);
+  sc.query = MakeRun(sc.field, s, 0.02f, seed + 1);
+  RouteFilter filter;
+  EXPECT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
+  EXPECT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
+  k.matches = Repeat(filter, sc.query, sc.field.dim());
+  return k;
+}
+
+TEST(RouteFilter, RelocalisesAfterAKidnap) {
   RouteFilterParams p;
   p.sequence_length = 10;
-  RouteFilter filter;
-  ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
-  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
-  const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+  const Kidnap k = RunKidnap(5.0, 50.0, 31, p);
+  const std::vector<double>& s = k.sc.query.s_m;
+  const std::vector<SeqSlamMatch>& m = k.matches;
+  const Scenario& sc = k.sc;
   // Back on the truth within 2 ds frames of the kidnap (frame 100), and stays there.
   int back = -1;
   for (int t = 100; t < sc.query.frames() && back < 0; ++t) {
@@ -493,18 +507,9 @@ TEST(RouteFilter, RelocalisesAfterAKidnap) {
 // 30 m, the filter's best row must jump; the frames right after are trusted less than the
 // margin alone would say, and the track is fully trusted again 2 ds frames later.
 TEST(RouteFilter, ABestRowThatJumpsBackStartsATrackWhoseConfidenceGrows) {
-  Scenario sc;
-  sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, 33);
-  std::vector<double> s = SampleInTime({{10, 1.0}}, 10, 40.0);
-  const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, 10.0);
-  s.insert(s.end(), after.begin(), after.end());
-  sc.query = MakeRun(sc.field, s, 0.02f, 34);
   RouteFilterParams p;
   p.sequence_length = 10;
-  RouteFilter filter;
-  ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
-  ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
-  const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+  const std::vector<SeqSlamMatch> m = RunKidnap(40.0, 10.0, 33, p).matches;
   const int half = p.uniqueness_window / 2;
   int jumps = 0, last_jump = -1;
   for (std::size_t t = 1; t < m.size(); ++t) {
@@ -541,17 +546,11 @@ TEST(RouteFilter, ABestRowThatJumpsBackStartsATrackWhoseConfidenceGrows) {
 // to find the new place, the track's 2 ds of growing trust, and confirm_frames.
 TEST(RouteFilter, TheStateMachineRelocalisesAfterAKidnapAndNeverLocalisesWrong) {
   for (const double carried_to_m : {50.0, 10.0}) {
-    Scenario sc;
-    sc.reference = MakeRun(sc.field, SampleInTime({{80, 1.0}}, 10, 0.0), 0.02f, 35);
-    std::vector<double> s = SampleInTime({{10, 1.0}}, 10, 40.0 - (carried_to_m > 40 ? 35 : 0));
-    const std::vector<double> after = SampleInTime({{20, 1.0}}, 10, carried_to_m);
-    s.insert(s.end(), after.begin(), after.end());
-    sc.query = MakeRun(sc.field, s, 0.02f, 36);
     RouteFilterParams p;
-    RouteFilter filter;
-    ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames()), SeqSlamError::kOk);
-    ASSERT_TRUE(Teach(filter, sc.reference, sc.field.dim()));
-    const std::vector<SeqSlamMatch> m = Repeat(filter, sc.query, sc.field.dim());
+    const Kidnap k = RunKidnap(carried_to_m > 40 ? 5.0 : 40.0, carried_to_m, 35, p);
+    const Scenario& sc = k.sc;
+    const std::vector<double>& s = sc.query.s_m;
+    const std::vector<SeqSlamMatch>& m = k.matches;
     StateMachineParams sp;
     sp.vmin = 0;
     sp.vmax = p.max_advance;
