@@ -45,7 +45,8 @@ Status RenderedSource::Prepare(int width, int height, dsp::PixelFormat format) {
 std::optional<Nanoseconds> RenderedSource::TimeOf(std::uint64_t index) const {
   if (index >= trajectory_.size())
     return std::nullopt;
-  return Nanoseconds{static_cast<std::int64_t>(trajectory_[index].time_s * 1e9 + 0.5)};
+  return Nanoseconds{
+      static_cast<std::int64_t>(trajectory_[static_cast<std::size_t>(index)].time_s * 1e9 + 0.5)};
 }
 
 Status RenderedSource::Render(std::uint64_t index, dsp::MutableImageView out,
@@ -55,7 +56,7 @@ Status RenderedSource::Render(std::uint64_t index, dsp::MutableImageView out,
                          "simulated camera: end of the trajectory (%zu frames)",
                          trajectory_.size());
   }
-  const TrajectoryPoint& point = trajectory_[index];
+  const TrajectoryPoint& point = trajectory_[static_cast<std::size_t>(index)];
   SKYLOC_TRY(renderer_.Render(point.pose, config_.lighting, config_.spectrum, index, out));
   if (pose != nullptr)
     *pose = point.pose;
