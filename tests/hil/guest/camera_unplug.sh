@@ -20,16 +20,6 @@ if [ -z "$DEV" ]; then
 fi
 ok "vivid platform device $DEV"
 
-wait_gone() { # PID SECONDS: 0 when the process has exited within the time
-  i=0
-  while kill -0 "$1" 2>/dev/null; do
-    i=$((i + 1))
-    [ "$i" -gt $(($2 * 10)) ] && return 1
-    sleep 0.1
-  done
-  return 0
-}
-
 echo "baseline: v4l2-ctl streaming while vivid is unbound"
 v4l2-ctl -d "$HIL_VIVID_VIDEO" --set-fmt-video=width=320,height=240,pixelformat=YUYV \
   --stream-mmap=3 --stream-count=100000 --stream-to=/dev/null >/tmp/unplug-v4l2-ctl.log 2>&1 &

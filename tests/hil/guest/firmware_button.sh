@@ -41,10 +41,6 @@ button_active_low = false
 button_debounce_ms = 30
 EOF
 
-json_lines() {
-  n=$(grep -c '^{' /tmp/button.out 2>/dev/null)
-  echo "${n:-0}"
-}
 press() { # held for 0.3 s, then released and left released for 0.3 s (debounce: 30 ms)
   echo pull-up >"$BUTTON/pull"
   sleep 0.3
@@ -73,7 +69,7 @@ while [ "$(lines_held_by_skyloc "2,4p;9p")" -lt 4 ] && kill -0 "$skyloc" 2>/dev/
 done
 expect_eq "status lines and button held by consumer skyloc" "$(lines_held_by_skyloc "2,4p;9p")" 4
 sleep 1
-expect_eq "JSON lines while waiting for the button" "$(json_lines)" 0
+expect_eq "JSON lines while waiting for the button" "$(json_lines /tmp/button.out)" 0
 expect_eq "status lines while waiting (safe)" "$(status_levels)" 000
 if [ -e "$ROUTE" ]; then bad "a route file exists before any press"; else ok "no route file before the press"; fi
 
@@ -86,7 +82,7 @@ else
   sed 's/^/       | /' /tmp/button.err | tail -n 10
 fi
 sleep 3
-taught=$(json_lines)
+taught=$(json_lines /tmp/button.out)
 if [ "$taught" -ge 5 ]; then ok "teaching: $taught frames so far"; else bad "teaching printed $taught JSON lines in 3 s"; fi
 # A new route is written in place (it is not loadable until committed); a route that
 # exists is replaced only at the commit, from ROUTE.tmp.
@@ -101,14 +97,14 @@ else
   bad "no commit and repeat after press 2"
   sed 's/^/       | /' /tmp/button.err | tail -n 10
 fi
-at_commit=$(json_lines)
+at_commit=$(json_lines /tmp/button.out)
 i=0
-while [ "$(json_lines)" -lt "$((at_commit + 10))" ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 300 ]; do
+while [ "$(json_lines /tmp/button.out)" -lt "$((at_commit + 10))" ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 300 ]; do
   sleep 0.1
   i=$((i + 1))
 done
-if [ "$(json_lines)" -ge "$((at_commit + 10))" ]; then ok "repeat runs on the taught route"; else
-  bad "repeat printed $(($(json_lines) - at_commit)) frames in 30 s after the commit"
+if [ "$(json_lines /tmp/button.out)" -ge "$((at_commit + 10))" ]; then ok "repeat runs on the taught route"; else
+  bad "repeat printed $(($(json_lines /tmp/button.out) - at_commit)) frames in 30 s after the commit"
 fi
 grep -q '"best_index"' /tmp/button.out || bad "no repeat JSON line (best_index) after the commit"
 lit=$(status_levels)

@@ -46,10 +46,6 @@ holds_video() { # PID: 0 when the process has a /dev/video* node open
   done
   return 1
 }
-json_lines() {
-  n=$(grep -c '^{' /tmp/repeat.out 2>/dev/null)
-  echo "${n:-0}"
-}
 
 echo "teach 30 frames from vivid"
 "$SKYLOC" teach --route "$ROUTE" --config "$CONFIG" --frames 30 >/tmp/teach.out 2>/tmp/teach.err
@@ -70,12 +66,12 @@ echo "repeat with the status on gpio-sim"
 "$SKYLOC" repeat --route "$ROUTE" --config "$CONFIG" >/tmp/repeat.out 2>/tmp/repeat.err &
 skyloc=$!
 i=0
-while [ "$(json_lines)" -lt 10 ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 600 ]; do
+while [ "$(json_lines /tmp/repeat.out)" -lt 10 ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 600 ]; do
   sleep 0.1
   i=$((i + 1))
 done
-if [ "$(json_lines)" -ge 10 ]; then ok "repeat runs ($(json_lines) frames so far)"; else
-  bad "repeat printed $(json_lines) frames in 60 s"
+if [ "$(json_lines /tmp/repeat.out)" -ge 10 ]; then ok "repeat runs ($(json_lines /tmp/repeat.out) frames so far)"; else
+  bad "repeat printed $(json_lines /tmp/repeat.out) frames in 60 s"
   sed 's/^/       | /' /tmp/repeat.err | tail -n 10
 fi
 lit=$(status_levels)
@@ -106,18 +102,18 @@ fi
 if kill -0 "$skyloc" 2>/dev/null; then
   echo "plug it back ($DEV bound)"
   echo "$DEV" >"$DRV/bind"
-  frames_at_bind=$(json_lines)
+  frames_at_bind=$(json_lines /tmp/repeat.out)
   # Recovered: the camera node is open again and frames keep coming.
   i=0
   while [ "$i" -lt 300 ] && kill -0 "$skyloc" 2>/dev/null; do
-    if [ "$(json_lines)" -ge "$((frames_at_bind + 5))" ] && holds_video "$skyloc"; then
+    if [ "$(json_lines /tmp/repeat.out)" -ge "$((frames_at_bind + 5))" ] && holds_video "$skyloc"; then
       break
     fi
     sleep 0.1
     i=$((i + 1))
   done
   if [ "$i" -lt 300 ] && kill -0 "$skyloc" 2>/dev/null; then
-    ok "repeat recovered: camera reopened, $(($(json_lines) - frames_at_bind)) frames after the re-plug"
+    ok "repeat recovered: camera reopened, $(($(json_lines /tmp/repeat.out) - frames_at_bind)) frames after the re-plug"
   else
     bad "repeat did not reopen the camera and resume within 30 s of the re-plug"
   fi

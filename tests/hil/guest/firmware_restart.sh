@@ -39,10 +39,6 @@ route_frames = 200
 
 EOF
 status_gpio_config >>"$CONFIG"
-json_lines() {
-  n=$(grep -c '^{' "$1" 2>/dev/null)
-  echo "${n:-0}"
-}
 wait_json() { # FILE COUNT SECONDS: until FILE has COUNT JSON lines or skyloc exits
   i=0
   while [ "$(json_lines "$1")" -lt "$2" ] && kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt "$(($3 * 10))" ]; do
@@ -70,12 +66,7 @@ if wait_json /tmp/lc-repeat.out 5 60; then ok "repeat runs ($(json_lines /tmp/lc
   bad "repeat printed $(json_lines /tmp/lc-repeat.out) frames in 60 s"
 fi
 echo "$VDEV" >"$VDRV/unbind"
-i=0
-while kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 300 ]; do
-  sleep 0.1
-  i=$((i + 1))
-done
-if kill -0 "$skyloc" 2>/dev/null; then
+if ! wait_gone "$skyloc" 30; then
   bad "repeat still running 30 s after the unplug"
   kill -9 "$skyloc"
 fi

@@ -62,6 +62,19 @@ udev_stub_start() {
 }
 udev_stub_stop() { kill "$udev_stub" 2>/dev/null; }
 have() { command -v "$1" >/dev/null 2>&1; }
+json_lines() { # FILE: how many JSON lines (frames) skyloc has printed into FILE
+  n=$(grep -c '^{' "$1" 2>/dev/null)
+  echo "${n:-0}"
+}
+wait_gone() { # PID SECONDS: 0 when the process has exited within the time
+  i=0
+  while kill -0 "$1" 2>/dev/null; do
+    i=$((i + 1))
+    [ "$i" -gt $(($2 * 10)) ] && return 1
+    sleep 0.1
+  done
+  return 0
+}
 # Exit status of a scenario: 0 when every check passed.
 finish_scenario() {
   if [ "$failures" -eq 0 ]; then

@@ -85,12 +85,7 @@ switch_table() { # TABLE: swap the device's table, as a fault would (suspend, lo
   fi
 }
 switch_table "0 $SECTORS flakey $LOOP 0 0 1 1 error_writes"
-i=0
-while kill -0 "$skyloc" 2>/dev/null && [ "$i" -lt 300 ]; do
-  sleep 0.1
-  i=$((i + 1))
-done
-if kill -0 "$skyloc" 2>/dev/null; then
+if ! wait_gone "$skyloc" 30; then
   bad "teach still running 30 s after its writes started failing"
   kill -9 "$skyloc"
 fi
