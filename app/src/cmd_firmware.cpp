@@ -5,8 +5,8 @@
 #include <cstring>
 
 #include "commands.h"
-#include "session.h"
 #include "route_db.h"
+#include "session.h"
 
 namespace skyloc::app {
 namespace {

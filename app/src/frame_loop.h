@@ -10,10 +10,10 @@
 #include "button.h"
 #include "frame_recorder.h"
 #include "pipeline.h"
+#include "route_db.h"
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/status_output.h"
-#include "route_db.h"
 
 namespace skyloc::app {
 
