@@ -76,8 +76,9 @@ constexpr const char* kUsage =
     "  --max-advance K        filter: route rows per frame at most (default 8)\n"
     "  --keyframe-noise F     filter: keyframe merge threshold x noise floor (default 2)\n"
     "  --config FILE          the firmware configuration whose [state] settings (and\n"
-    "                         [seqslam] max_advance, keyframe_noise_factor) the runs use\n"
-    "                         (default: the built-in defaults)\n"
+    "                         [seqslam] max_advance, keyframe_noise_factor, [descriptor]\n"
+    "                         normalisation) the runs use (default: the built-in defaults;\n"
+    "                         normalisation unit_l2, \"none\" is the paper's eq. 3)\n"
     "  --gt FILE              ground truth CSV: query_index,reference_index (-1: off route)\n"
     "  --tolerance-m X        ground truth from the datasets' poses: a match is correct when\n"
     "                         the matched reference was recorded within X m of the query\n"
@@ -397,6 +398,7 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
       lp.fov_deg = *o.fov_deg;
     SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens_of_run));
     options_of_run.bands = o.bands;
+    options_of_run.normalisation = o.config.descriptor.normalisation;
     if (o.attitude_from_dataset) {
       // The firmware's rule (app/src/pipeline.cpp): the cap from the largest tilt and what
       // the lens sees.

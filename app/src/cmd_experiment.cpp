@@ -53,6 +53,9 @@ constexpr const char* kUsage =
     "options:\n"
     "  --width W --height H   image size (default 320x240)\n"
     "  --bands N              SH bands of the sky descriptor (default 120, as the paper)\n"
+    "  --normalisation N      of the sky descriptor's spectrum: unit_l2 (the firmware's\n"
+    "                         default), none (the paper's eq. 3; the tables measured before\n"
+    "                         2026-11-26) or divide_by_a0\n"
     "  --spacing M            frame spacing in metres (default 1; ants 0.05)\n"
     "  --frames N             at most N frames a run (default: whole routes)\n"
     "  --seed N               procedural world seed (default 1)\n"
@@ -162,6 +165,9 @@ int ParseArgs(std::span<char* const> args, Options* o) {
         e.zenith.method = dsp::ZenithMethod::kSkyCentroid;
       else
         return bad("skyline or centroid");
+    } else if (std::strcmp(flag, "--normalisation") == 0) {
+      if (!NormalisationFromName(v, &e.normalisation))
+        return bad("unit_l2, none or divide_by_a0");
     } else if (std::strcmp(flag, "--cap-elevation") == 0) {
       if (!ParseNumber(v, 0, 80, &d))
         return bad("degrees within 0..80");

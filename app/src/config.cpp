@@ -32,9 +32,12 @@ constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
 constexpr EnumName<GridPreset> kGridPresets[] = {
     {"auto", GridPreset::kAuto}, {"paper", GridPreset::kPaper}, {"custom", GridPreset::kCustom}};
 constexpr EnumName<dsp::AmplitudeNormalisation> kNormalisations[] = {
-    {"none", dsp::AmplitudeNormalisation::kNone},
-    {"divide_by_a0", dsp::AmplitudeNormalisation::kDivideByA0},
-    {"unit_l2", dsp::AmplitudeNormalisation::kUnitL2}};
+    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kNone),
+     dsp::AmplitudeNormalisation::kNone},
+    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kDivideByA0),
+     dsp::AmplitudeNormalisation::kDivideByA0},
+    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kUnitL2),
+     dsp::AmplitudeNormalisation::kUnitL2}};
 constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
                                                              {"sim", StatusOutputKind::kSim},
                                                              {"gpio", StatusOutputKind::kGpio}};
@@ -292,6 +295,16 @@ const char* GridPresetName(GridPreset preset) {
 }
 const char* NormalisationName(dsp::AmplitudeNormalisation normalisation) {
   return NameOf(kNormalisations, normalisation);
+}
+
+bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out) {
+  for (const auto& n : kNormalisations) {
+    if (name == n.name) {
+      *out = n.value;
+      return true;
+    }
+  }
+  return false;
 }
 const char* StatusOutputKindName(StatusOutputKind kind) {
   return NameOf(kStatusOutputKinds, kind);

@@ -14,6 +14,7 @@
 #include <iterator>
 #include <vector>
 
+#include "skyloc/dsp/spherical_harmonics.h"
 #include "skyloc/platform/bytes.h"
 #include "skyloc/platform/crc32.h"
 
@@ -180,6 +181,21 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
                          in_file, wanted, file.gravity_cap_taper_cdeg / 100.0,
                          want.gravity_cap_taper_cdeg / 100.0);
   }
+  if (file.normalisation != want.normalisation) {
+    // By name, with the setting to change: the default changed from "none" to "unit_l2" on
+    // 2026-11-26, so a route taught before meets a configuration that does not say which.
+    const auto name = [](std::uint32_t n) {
+      return n <= static_cast<std::uint32_t>(dsp::AmplitudeNormalisation::kUnitL2)
+                 ? dsp::AmplitudeNormalisationName(static_cast<dsp::AmplitudeNormalisation>(n))
+                 : "?";
+    };
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with [descriptor] normalisation = \"%s\" but this configuration "
+                         "has \"%s\": set normalisation = \"%s\" to repeat this route, or "
+                         "teach again",
+                         name(file.normalisation), name(want.normalisation),
+                         name(file.normalisation));
+  }
   struct Field {
     const char* name;
     std::uint64_t in_file, wanted;
@@ -188,8 +204,7 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
                           {"bands", file.bands, want.bands},
                           {"rings", file.rings, want.rings},
                           {"longitudes", file.longitudes, want.longitudes},
-                          {"descriptor size", file.dim, want.dim},
-                          {"normalisation", file.normalisation, want.normalisation}};
+                          {"descriptor size", file.dim, want.dim}};
   for (const Field& f : fields) {
     if (f.in_file != f.wanted) {
       return Status::Error(StatusCode::kFailedPrecondition,

@@ -11,6 +11,10 @@
 #include "skyloc/dsp/sh_grid.h"
 #include "support/scratch_dir.h"
 
+#if SKYLOC_WITH_HOST_EVAL
+#include "skyloc/host_eval/experiment.h"
+#endif
+
 namespace skyloc::app {
 namespace {
 
@@ -27,6 +31,13 @@ TEST(Config, ShippedFileStatesTheDefaults) {
   EXPECT_TRUE(*c == DefaultConfig()) << "config/skyloc.toml no longer matches the defaults "
                                         "in config.h";
 }
+
+#if SKYLOC_WITH_HOST_EVAL
+// The experiments measure the descriptor the firmware computes.
+TEST(Config, ExperimentsUseTheFirmwaresNormalisation) {
+  EXPECT_EQ(host_eval::ExperimentOptions{}.normalisation, DescriptorConfig{}.normalisation);
+}
+#endif
 
 TEST(Config, EmptyFileGivesDefaults) {
   Result<Config> c = ParseConfig("", "empty.toml");
@@ -65,7 +76,7 @@ threshold = 90
 grid = "custom"
 rings = 12
 longitudes = 64
-normalisation = "unit_l2"
+normalisation = "divide_by_a0"
 [seqslam]
 ds = 1
 [capacities]
@@ -97,7 +108,7 @@ stale_ms = 100
   EXPECT_EQ(c->segmentation.threshold, 90);
   EXPECT_EQ(c->descriptor.rings, 12);
   EXPECT_EQ(c->descriptor.longitudes, 64);
-  EXPECT_EQ(c->descriptor.normalisation, dsp::AmplitudeNormalisation::kUnitL2);
+  EXPECT_EQ(c->descriptor.normalisation, dsp::AmplitudeNormalisation::kDivideByA0);
   EXPECT_EQ(c->seqslam.ds(), 1);
   EXPECT_EQ(c->seqslam.openseqslam.sequence_length, 1);
   EXPECT_EQ(c->capacities.route_storage, dsp::ReferenceStorage::kBFloat16);

@@ -297,6 +297,19 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
   EXPECT_TRUE(s.ok()) << s.message();
 }
 
+TEST_F(RouteDbTest, NormalisationMismatchNamesBothAndTheSetting) {
+  Teach(5, 10, true);  // normalisation 0: "none", the default before unit_l2
+  RouteDbSettings unit_l2 = Settings();
+  unit_l2.normalisation = 2;
+  const Status s = ParseRouteDb(Bytes(), &unit_l2, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message())
+                .find("taught with [descriptor] normalisation = \"none\" but this configuration "
+                      "has \"unit_l2\": set normalisation = \"none\""),
+            std::string::npos)
+      << s.message();
+}
+
 TEST_F(RouteDbTest, GravityCapMismatchIsNamed) {
   Teach(5, 10, true);
   RouteDbSettings capped = Settings();

@@ -147,6 +147,47 @@ TEST(SkyDescriptor, UnknownTiltReportedAgainstADifferentPlace) {
   }
 }
 
+// Why the product divides the spectrum by its L2 norm ([descriptor] normalisation,
+// docs/SKY_DESCRIPTOR.md): a tilt the descriptor does not know moves sky out of the
+// hemisphere on one side and in on the other, and it changes how much sky is seen, which
+// scales every amplitude (for a binary mask sum a_l^2 is the sky's solid angle, Parseval).
+// Normalised, the change a tilt makes shrinks against the difference between two places,
+// as the matcher measures it (mean absolute difference).
+TEST(SkyDescriptor, UnitL2MakesAnUnknownTiltCloserThanAnotherPlace) {
+  LensParams drawn = TiltDrawingLens();
+  Lens upright;
+  ASSERT_EQ(upright.Init(drawn), LensError::kOk);
+  const std::vector<std::uint8_t> level_image = DrawCanyon(upright, 0.0);
+  const std::vector<std::uint8_t> place_image = DrawCanyon(upright, 0.0, 1.6);
+  for (double tilt : {10.0, 15.0, 20.0}) {
+    drawn.pitch_deg = tilt;
+    Lens tilted_lens;
+    ASSERT_EQ(tilted_lens.Init(drawn), LensError::kOk);
+    const std::vector<std::uint8_t> tilted_image = DrawCanyon(tilted_lens, 0.0);
+    double ratio[2] = {0, 0};
+    int i = 0;
+    for (const AmplitudeNormalisation n :
+         {AmplitudeNormalisation::kNone, AmplitudeNormalisation::kUnitL2}) {
+      SkyDescriptorOptions options = TiltTestOptions();
+      options.normalisation = n;
+      SkyDescriptor descriptor;
+      ASSERT_TRUE(descriptor.Init(upright, options).ok());
+      std::vector<float> level(32), tilted(32), place(32);
+      ASSERT_TRUE(
+          descriptor.Compute({level_image.data(), 480, 480, 480, PixelFormat::kGrey8}, level).ok());
+      ASSERT_TRUE(
+          descriptor.Compute({tilted_image.data(), 480, 480, 480, PixelFormat::kGrey8}, tilted)
+              .ok());
+      ASSERT_TRUE(
+          descriptor.Compute({place_image.data(), 480, 480, 480, PixelFormat::kGrey8}, place).ok());
+      ratio[i++] = DescriptorDistance(level, tilted) / DescriptorDistance(level, place);
+    }
+    std::printf("  tilt %2.0f deg: tilt / other place, none %.3f, unit_l2 %.3f\n", tilt, ratio[0],
+                ratio[1]);
+    EXPECT_LT(ratio[1], ratio[0]) << "tilt " << tilt;
+  }
+}
+
 // The gravity-aligned cap with the true zenith: the camera tilts (drawn through a lens whose
 // mount rotation is the tilt, so the pixels see a tilted sky) and the descriptor is told the
 // zenith. The cap above 60 degrees is in view at every tilt up to 60 (185 degree lens), so

@@ -113,6 +113,19 @@ enum class AmplitudeNormalisation : std::uint8_t {
   kUnitL2,      // a / ||a||_2: scale-free, for cosine-like comparisons with L1/L2
 };
 
+// The name the configuration file and the route database's messages use.
+constexpr const char* AmplitudeNormalisationName(AmplitudeNormalisation normalisation) {
+  switch (normalisation) {
+    case AmplitudeNormalisation::kNone:
+      return "none";
+    case AmplitudeNormalisation::kDivideByA0:
+      return "divide_by_a0";
+    case AmplitudeNormalisation::kUnitL2:
+      return "unit_l2";
+  }
+  return "?";
+}
+
 // a_l = sqrt(Σ_m c_lm²) for l = 0..bands-1 (eq. 3), then the normalisation. A zero spectrum
 // (no sky) stays zero under either normalisation. coeffs: ShCoefficientCount(bands) values,
 // amplitudes: bands values. Allocates nothing.

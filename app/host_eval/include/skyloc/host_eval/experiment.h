@@ -47,6 +47,9 @@ struct ExperimentOptions {
   int width = 320;
   int height = 240;
   int bands = 120;  // SH bands of the sky descriptor (the paper: 120)
+  // The firmware's default ([descriptor] normalisation, app/src/config.h; a test keeps the
+  // two equal). kNone is the paper's eq. 3, what the tables before 2026-11-26 used.
+  dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kUnitL2;
   // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
   // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its
   // RunSpec::motion.speed_ratio scales its cruise speed).
