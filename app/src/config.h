@@ -83,7 +83,7 @@ struct DescriptorConfig {
   // unit_l2 (a / |a|): a tilt the descriptor does not know changes how much sky the lens
   // sees, which scales every amplitude; dividing by the norm keeps the shape. Measured on
   // the speed experiment (docs/SKY_DESCRIPTOR.md, "Normalisation"): bumpy forest runs
-  // without attitude P@R100 70-82 % -> 85-92 % at ds 10, level runs unchanged.
+  // without attitude P@R100 70-82 % -> 81-92 % at ds 10, level runs unchanged.
   dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kUnitL2;
 
   bool operator==(const DescriptorConfig&) const = default;
