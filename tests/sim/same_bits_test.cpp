@@ -4,10 +4,11 @@
 // qemu-user, so a target that builds another world, renders another pixel or rounds
 // another amplitude fails it.
 //
-// It caught two causes: rng draws passed as the arguments of one call (evaluated right to
-// left on x86-64, left to right on ARM: other worlds from one seed, a third of a frame's
-// pixels different) and Eigen's vectorised float sum in the amplitude spectrum (SSE on
-// x86-64, scalar on armhf: amplitudes a bit apart).
+// It caught three causes: rng draws passed as the arguments of one call (evaluated right
+// to left on x86-64, left to right on ARM: other worlds from one seed, a third of a frame's
+// pixels different), Eigen's vectorised float sum in the amplitude spectrum (SSE on x86-64,
+// scalar on armhf: amplitudes a bit apart) and the street's noise hash multiplying in
+// armhf's 32-bit size_t.
 //
 // A deliberate change to the worlds, the renderer or the descriptor changes these values:
 // print them on x86-64 (the failure message has them), paste them here, and see that the
