@@ -5,7 +5,7 @@
 // another amplitude fails it.
 //
 // It caught three causes: rng draws passed as the arguments of one call (evaluated right
-// to left on x86-64, left to right on ARM: other worlds from one seed, a third of a frame's
+// to left on x86-64, left to right on ARM: other worlds from one seed, an eighth of a frame's
 // pixels different), Eigen's vectorised float sum in the amplitude spectrum (SSE on x86-64,
 // scalar on armhf: amplitudes a bit apart) and the street's noise hash multiplying in
 // armhf's 32-bit size_t.
