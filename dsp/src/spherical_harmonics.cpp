@@ -264,13 +264,19 @@ ShError AmplitudeSpectrum(std::span<const float> coeffs, int bands, std::span<fl
   if (coeffs.size() != ShCoefficientCount(bands) ||
       amplitudes.size() != static_cast<std::size_t>(bands))
     return ShError::kSizeMismatch;
-  // Band l is the contiguous run k = l²..l²+2l; float sums of ≤ 2L-1 squares lose < 1e-6.
+  // Band l is the contiguous run k = l²..l²+2l. A plain loop in double, in index order: a
+  // vectorised float reduction (Eigen's sum()) adds in an order that depends on the SIMD
+  // width and the buffer's alignment, so x86-64 (SSE) and armhf (no NEON) rounded the same
+  // coefficients to amplitudes a bit apart. Squares of floats are exact in double, and
+  // without fast-math the compiler keeps this order on every target.
   double total = 0.0;
   for (int l = 0; l < bands; ++l) {
-    const Eigen::Map<const Eigen::ArrayXf> band(&coeffs[ShIndex(l, -l)], 2 * l + 1);
-    const float sum = band.square().sum();
-    total += static_cast<double>(sum);
-    amplitudes[static_cast<std::size_t>(l)] = std::sqrt(sum);
+    const std::size_t first = ShIndex(l, -l);
+    double sum = 0.0;
+    for (std::size_t k = first; k < first + static_cast<std::size_t>(2 * l + 1); ++k)
+      sum += static_cast<double>(coeffs[k]) * static_cast<double>(coeffs[k]);
+    total += sum;
+    amplitudes[static_cast<std::size_t>(l)] = static_cast<float>(std::sqrt(sum));
   }
   double divisor = 1.0;
   if (normalisation == AmplitudeNormalisation::kDivideByA0)

@@ -87,7 +87,12 @@ void ExpectRoundTrips(const LensParams& params, double pixel_tolerance) {
   std::normal_distribution<double> g;
   int projected = 0;
   for (int i = 0; i < 4000; ++i) {
-    const Eigen::Vector3d ray = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    // One draw per statement: a call's arguments are evaluated in an unspecified order
+    // (right to left by GCC on x86-64, left to right on ARM).
+    const double gz = g(rng);
+    const double gy = g(rng);
+    const double gx = g(rng);
+    const Eigen::Vector3d ray = Eigen::Vector3d(gx, gy, gz).normalized();
     double x = 0, y = 0;
     if (!lens.RayToPixel(ray, &x, &y))
       continue;

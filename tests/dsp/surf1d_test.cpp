@@ -367,9 +367,13 @@ TEST(Surf1dTest, MatchedPlacesOutscoreUnrelatedOnes) {
     stored.push_back(DetectAll(surf, PlaceStrip(place, n, 0.0, 1.0, 0.0, 0.0, &rng)));
     const double yaw = (uniform(rng) * 2.0 - 1.0) * kPi;
     yaws.push_back(yaw);
-    test.push_back(
-        DetectAll(surf, PlaceStrip(place, n, yaw, 0.8 + 0.4 * uniform(rng),
-                                   20.0 * uniform(rng) - 10.0, 1.5 * uniform(rng), &rng)));
+    // One draw per statement: a call's arguments are evaluated in an unspecified order
+    // (right to left by GCC on x86-64, left to right on ARM).
+    const double tilt_u = uniform(rng);
+    const double offset_u = uniform(rng);
+    const double gain_u = uniform(rng);
+    test.push_back(DetectAll(surf, PlaceStrip(place, n, yaw, 0.8 + 0.4 * gain_u,
+                                              20.0 * offset_u - 10.0, 1.5 * tilt_u, &rng)));
   }
   std::vector<double> nn_pos, nn_neg, ransac_pos, ransac_neg;
   int heading_ok = 0;

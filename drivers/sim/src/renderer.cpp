@@ -31,10 +31,23 @@ float Smoothstep(float e0, float e1, float x) {
   return t * t * (3 - 2 * t);
 }
 
+// The lattice index of a floored coordinate, defined for every float: converting one
+// outside int32's range is undefined (x86-64 gives INT32_MIN, ARM saturates), and a ray
+// grazing the ground plane hits it arbitrarily far away. Beyond +-2^30 (where the haze has
+// long replaced the texture) every coordinate shares one lattice cell; NaN takes the lower.
+std::int32_t LatticeIndex(float floored) {
+  constexpr float kLimit = 1073741824.0f;  // 2^30: index + 1 cannot overflow
+  if (!(floored > -kLimit))
+    return -(1 << 30);
+  if (!(floored < kLimit))
+    return 1 << 30;
+  return static_cast<std::int32_t>(floored);
+}
+
 // Value noise on an integer lattice, smoothly interpolated: clouds and surface textures.
 float ValueNoise2(float x, float y, std::uint32_t seed) {
   const float fx = std::floor(x), fy = std::floor(y);
-  const auto ix = static_cast<std::int32_t>(fx), iy = static_cast<std::int32_t>(fy);
+  const std::int32_t ix = LatticeIndex(fx), iy = LatticeIndex(fy);
   float tx = x - fx, ty = y - fy;
   tx = tx * tx * (3 - 2 * tx);
   ty = ty * ty * (3 - 2 * ty);
@@ -45,7 +58,7 @@ float ValueNoise2(float x, float y, std::uint32_t seed) {
 
 float ValueNoise3(Vec3 p, std::uint32_t seed) {
   const float fz = std::floor(p.z);
-  const auto iz = static_cast<std::int32_t>(fz);
+  const std::int32_t iz = LatticeIndex(fz);
   const float tz = p.z - fz;
   const float lo = ValueNoise2(p.x, p.y, seed + static_cast<std::uint32_t>(iz) * 7919u);
   const float hi = ValueNoise2(p.x, p.y, seed + static_cast<std::uint32_t>(iz + 1) * 7919u);

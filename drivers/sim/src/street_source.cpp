@@ -141,9 +141,12 @@ Status StreetSource::Render(std::uint64_t index, dsp::MutableImageView out,
             v = wall;
         }
       }
-      // Deterministic sensor noise, +-6 grey levels, different on every run.
-      v += 12.0 *
-           (SplitMix64Unit(p * 0x9e37u + index + options_.run_seed * 0xd1b54a32d192ed03ull) - 0.5);
+      // Deterministic sensor noise, +-6 grey levels, different on every run. The pixel
+      // index is widened first: size_t is 32 bits on armhf, where p * 0x9e37 wrapped past
+      // pixel 106,039 (a 640x480 frame's lower two thirds had other noise than x86-64's).
+      v += 12.0 * (SplitMix64Unit(static_cast<std::uint64_t>(p) * 0x9e37u + index +
+                                  options_.run_seed * 0xd1b54a32d192ed03ull) -
+                   0.5);
       row[x] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
     }
   }

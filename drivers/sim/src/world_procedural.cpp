@@ -1,6 +1,12 @@
 // Procedural worlds modelled on the three sites of Stone et al. 2016 (section IV-B), built
 // from a seed so the demo and tests run without the shared data folder. Objects are placed
 // relative to the route: at arc length s along it, offset sideways (left positive).
+//
+// Every random draw is a statement of its own, in a fixed order: the arguments of one call
+// are evaluated in an unspecified order, and GCC draws them right to left on x86-64 and
+// left to right on ARM, which built different worlds from one seed (heights, sizes and
+// materials swapped). The order written here is the one x86-64 drew, so its worlds (and
+// every result measured on them) stay as they were.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -152,7 +158,9 @@ void MakeCity(World& w, Rng& rng) {
       // Keep street crossings clear: no building whose footprint reaches the street.
       const double clearance = route.DistanceTo(c);
       if (clearance > setback + depth / 2 - 0.5 && rng.Uniform() > 0.12) {
-        w.AddBox(c.x, c.y, 0, width - 0.4, depth, rng.Uniform(6, 28), heading, Facade(rng));
+        const Material facade = Facade(rng);
+        const double height = rng.Uniform(6, 28);
+        w.AddBox(c.x, c.y, 0, width - 0.4, depth, height, heading, facade);
       }
       s += width + (rng.Uniform() < 0.15 ? rng.Uniform(3, 8) : 0);
     }
@@ -222,18 +230,29 @@ void MakeForest(World& w, Rng& rng) {
       if (route.DistanceTo(c) < 2.5)
         continue;
       const double r = rng.Uniform(2.5, 4.5);
-      AddTree(w, c.x, c.y, rng.Uniform(0.15, 0.35), rng.Uniform(3, 7),
-              V(r, r * rng.Uniform(0.8, 1.2), rng.Uniform(3, 5.5)), Foliage(rng));
+      const Material foliage = Foliage(rng);
+      const double crown_half_height = rng.Uniform(3, 5.5);
+      const double crown_aspect = rng.Uniform(0.8, 1.2);
+      const double crown_base = rng.Uniform(3, 7);
+      const double trunk_radius = rng.Uniform(0.15, 0.35);
+      AddTree(w, c.x, c.y, trunk_radius, crown_base, V(r, r * crown_aspect, crown_half_height),
+              foliage);
     }
   }
   // Gardens on the left of the forest edge: hedges, houses, small trees.
   for (double s = 255; s < 450; s += rng.Uniform(18, 26)) {
     double heading;
     const Point2 hedge = route.Side(s, 4.5, &heading);
-    w.AddBox(hedge.x, hedge.y, 0, 16, 0.8, rng.Uniform(1.2, 2.0), heading, Foliage(rng));
+    const Material hedge_foliage = Foliage(rng);
+    const double hedge_height = rng.Uniform(1.2, 2.0);
+    w.AddBox(hedge.x, hedge.y, 0, 16, 0.8, hedge_height, heading, hedge_foliage);
     const Point2 house = route.Side(s, rng.Uniform(15, 19), nullptr);
-    AddHouse(w, house.x, house.y, rng.Uniform(8, 11), rng.Uniform(7, 9), rng.Uniform(5, 6.5),
-             rng.Uniform(2.5, 4), heading, Facade(rng));
+    const Material facade = Facade(rng);
+    const double roof_h = rng.Uniform(2.5, 4);
+    const double wall_h = rng.Uniform(5, 6.5);
+    const double size_y = rng.Uniform(7, 9);
+    const double size_x = rng.Uniform(8, 11);
+    AddHouse(w, house.x, house.y, size_x, size_y, wall_h, roof_h, heading, facade);
     if (rng.Uniform() < 0.6) {
       const Point2 t = route.Side(s + 9, rng.Uniform(7, 10), nullptr);
       const double r = rng.Uniform(1.5, 2.5);
@@ -245,8 +264,12 @@ void MakeForest(World& w, Rng& rng) {
     for (double s = 450; s < route.length() + 20; s += rng.Uniform(16, 24)) {
       double heading;
       const Point2 house = route.Side(s, side * rng.Uniform(11, 14), &heading);
-      AddHouse(w, house.x, house.y, rng.Uniform(9, 12), rng.Uniform(7, 9), rng.Uniform(5, 7),
-               rng.Uniform(2.5, 4), heading, Facade(rng));
+      const Material facade = Facade(rng);
+      const double roof_h = rng.Uniform(2.5, 4);
+      const double wall_h = rng.Uniform(5, 7);
+      const double size_y = rng.Uniform(7, 9);
+      const double size_x = rng.Uniform(9, 12);
+      AddHouse(w, house.x, house.y, size_x, size_y, wall_h, roof_h, heading, facade);
       if (rng.Uniform() < 0.5) {
         const Point2 t = route.Side(s + 8, side * 5.0, nullptr);
         const double r = rng.Uniform(1.8, 3);
@@ -270,8 +293,9 @@ void MakeRepetitive(World& w, Rng& rng) {
   const Material foliage = Mat(0.12, 0.3, 0.09, 0.025, Texture::kFoliage);
   auto tree = [&](Point2 p) {
     const double j = rng.Uniform(0.97, 1.03);  // near-identical on purpose
-    AddTree(w, p.x + rng.Uniform(-0.3, 0.3), p.y + rng.Uniform(-0.3, 0.3), 0.25, 4.5 * j,
-            V(3.0 * j, 3.0 * j, 4.0 * j), foliage);
+    const double dy = rng.Uniform(-0.3, 0.3);
+    const double dx = rng.Uniform(-0.3, 0.3);
+    AddTree(w, p.x + dx, p.y + dy, 0.25, 4.5 * j, V(3.0 * j, 3.0 * j, 4.0 * j), foliage);
   };
   for (double s = -20; s < route.length() + 20; s += 7) {
     for (double offset : {5.5, 12.5, 19.5, -5.5, -12.5, -19.5}) {
@@ -298,9 +322,14 @@ void MakeRepetitive(World& w, Rng& rng) {
   }
   // The disposal site: low piles and one small building.
   for (int i = 0; i < 6; ++i) {
-    const Point2 p = route.Side(disposal_s + rng.Uniform(-10, 35), -rng.Uniform(9, 25), nullptr);
-    w.AddBox(p.x, p.y, 0, rng.Uniform(3, 6), rng.Uniform(3, 6), rng.Uniform(1.5, 3),
-             rng.Uniform(0, kPi), Mat(0.4, 0.36, 0.3, 0.04, Texture::kConcrete));
+    const double offset = -rng.Uniform(9, 25);
+    const Point2 p = route.Side(disposal_s + rng.Uniform(-10, 35), offset, nullptr);
+    const double yaw = rng.Uniform(0, kPi);
+    const double height = rng.Uniform(1.5, 3);
+    const double size_y = rng.Uniform(3, 6);
+    const double size_x = rng.Uniform(3, 6);
+    w.AddBox(p.x, p.y, 0, size_x, size_y, height, yaw,
+             Mat(0.4, 0.36, 0.3, 0.04, Texture::kConcrete));
   }
   const Point2 b = route.Side(disposal_s + 20, -12, &heading);
   AddHouse(w, b.x, b.y, 10, 7, 4, 1.5, heading, Mat(0.7, 0.68, 0.62, 0.06, Texture::kFacade));

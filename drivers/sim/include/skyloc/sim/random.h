@@ -36,8 +36,14 @@ class Rng {
   double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
   // Approximately standard normal (sum of four uniforms, variance scaled to 1): cheap and
   // bounded, which is what sensor noise wants.
+  // The draws are separate statements: the operands of one + are evaluated in an
+  // unspecified order, and the sum's rounding depends on which draw comes first.
   double Normal() {
-    const double s = Uniform() + Uniform() + Uniform() + Uniform() - 2.0;
+    const double u0 = Uniform();
+    const double u1 = Uniform();
+    const double u2 = Uniform();
+    const double u3 = Uniform();
+    const double s = u0 + u1 + u2 + u3 - 2.0;
     return s * 1.7320508075688772;  // sqrt(12 / 4)
   }
 
