@@ -125,6 +125,19 @@ void AddHouse(World& w, double cx, double cy, double size_x, double size_y, doub
   w.AddTriangle(at(hx, -hy, wall_h), at(hx, hy, wall_h), r1, facade);
 }
 
+// A house of random facade and size at (x, y), ridge along yaw. The draws are separate
+// statements in one fixed order (facade, roof, wall, depth, width): the order of a call's
+// arguments is unspecified, and GCC evaluates them in opposite orders on x86-64 and ARM.
+void AddRandomHouse(World& w, Rng& rng, Point2 at, double yaw, double wall_lo, double wall_hi,
+                    double width_lo, double width_hi) {
+  const Material facade = Facade(rng);
+  const double roof_h = rng.Uniform(2.5, 4);
+  const double wall_h = rng.Uniform(wall_lo, wall_hi);
+  const double size_y = rng.Uniform(7, 9);
+  const double size_x = rng.Uniform(width_lo, width_hi);
+  AddHouse(w, at.x, at.y, size_x, size_y, wall_h, roof_h, yaw, facade);
+}
+
 void AddLampPost(World& w, const Polyline& route, double s, double offset) {
   double heading;
   const Point2 base = route.Side(s, offset, &heading);
@@ -247,12 +260,7 @@ void MakeForest(World& w, Rng& rng) {
     const double hedge_height = rng.Uniform(1.2, 2.0);
     w.AddBox(hedge.x, hedge.y, 0, 16, 0.8, hedge_height, heading, hedge_foliage);
     const Point2 house = route.Side(s, rng.Uniform(15, 19), nullptr);
-    const Material facade = Facade(rng);
-    const double roof_h = rng.Uniform(2.5, 4);
-    const double wall_h = rng.Uniform(5, 6.5);
-    const double size_y = rng.Uniform(7, 9);
-    const double size_x = rng.Uniform(8, 11);
-    AddHouse(w, house.x, house.y, size_x, size_y, wall_h, roof_h, heading, facade);
+    AddRandomHouse(w, rng, house, heading, 5, 6.5, 8, 11);
     if (rng.Uniform() < 0.6) {
       const Point2 t = route.Side(s + 9, rng.Uniform(7, 10), nullptr);
       const double r = rng.Uniform(1.5, 2.5);
@@ -264,12 +272,7 @@ void MakeForest(World& w, Rng& rng) {
     for (double s = 450; s < route.length() + 20; s += rng.Uniform(16, 24)) {
       double heading;
       const Point2 house = route.Side(s, side * rng.Uniform(11, 14), &heading);
-      const Material facade = Facade(rng);
-      const double roof_h = rng.Uniform(2.5, 4);
-      const double wall_h = rng.Uniform(5, 7);
-      const double size_y = rng.Uniform(7, 9);
-      const double size_x = rng.Uniform(9, 12);
-      AddHouse(w, house.x, house.y, size_x, size_y, wall_h, roof_h, heading, facade);
+      AddRandomHouse(w, rng, house, heading, 5, 7, 9, 12);
       if (rng.Uniform() < 0.5) {
         const Point2 t = route.Side(s + 8, side * 5.0, nullptr);
         const double r = rng.Uniform(1.8, 3);
