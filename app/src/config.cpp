@@ -61,6 +61,17 @@ const char* NameOf(const EnumName<E> (&names)[N], E value) {
 }
 
 template <typename E, std::size_t N>
+bool ValueOf(const EnumName<E> (&names)[N], std::string_view name, E* out) {
+  for (const auto& n : names) {
+    if (name == n.name) {
+      *out = n.value;
+      return true;
+    }
+  }
+  return false;
+}
+
+template <typename E, std::size_t N>
 std::string Choices(const EnumName<E> (&names)[N]) {
   std::string s;
   for (std::size_t i = 0; i < N; ++i) {
@@ -161,14 +172,8 @@ class SectionReader {
     if (node == nullptr)
       return;
     const auto* value = node->as_string();
-    if (value != nullptr) {
-      for (const auto& n : names) {
-        if (value->get() == n.name) {
-          *out = n.value;
-          return;
-        }
-      }
-    }
+    if (value != nullptr && ValueOf(names, value->get(), out))
+      return;
     Fail(node, key, "must be one of %s (default \"%s\")", Choices(names).c_str(),
          NameOf(names, *out));
   }
@@ -293,18 +298,8 @@ const char* SegmentationMethodName(SegmentationMethod method) {
 const char* GridPresetName(GridPreset preset) {
   return NameOf(kGridPresets, preset);
 }
-const char* NormalisationName(dsp::AmplitudeNormalisation normalisation) {
-  return NameOf(kNormalisations, normalisation);
-}
-
 bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out) {
-  for (const auto& n : kNormalisations) {
-    if (name == n.name) {
-      *out = n.value;
-      return true;
-    }
-  }
-  return false;
+  return ValueOf(kNormalisations, name, out);
 }
 const char* StatusOutputKindName(StatusOutputKind kind) {
   return NameOf(kStatusOutputKinds, kind);

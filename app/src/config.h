@@ -28,7 +28,7 @@ enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 const char* CameraKindName(CameraKind kind);
 const char* SegmentationMethodName(SegmentationMethod method);
 const char* GridPresetName(GridPreset preset);
-const char* NormalisationName(dsp::AmplitudeNormalisation normalisation);
+// dsp::AmplitudeNormalisationName gives the name of a normalisation.
 // "none", "divide_by_a0" or "unit_l2" (the config's names); false for anything else.
 bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out);
 const char* StatusOutputKindName(StatusOutputKind kind);
