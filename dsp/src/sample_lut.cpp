@@ -1,5 +1,6 @@
 #include "skyloc/dsp/sample_lut.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -89,10 +90,161 @@ SampleLutError SampleLut::Init(const Lens& lens, const ShGrid& grid,
   return Init(lens, theta, grid.longitudes(), options);
 }
 
+namespace {
+// The oriented table's size: 512 x 512 cells of 4 bytes (1 MiB). Over a 185 degree lens a
+// cell spans 0.47 degrees at the zenith and 0.23 at the horizon, under a pixel of a
+// 640 x 480 frame's image circle (0.39 degrees) near the zenith's order.
+constexpr int kOrientedTableCells = 512;
+// Directions farther than this from the body zenith are not tabulated (the stereographic
+// scale grows as tan(theta / 2)); a tilt leaves the world hemisphere within 90 + tilt.
+constexpr double kOrientedMaxTheta = 120.0 * std::numbers::pi / 180.0;
+}  // namespace
+
+SampleLutError SampleLut::InitOriented(const Lens& lens, const ShGrid& grid,
+                                       const SampleLutOptions& options) {
+  if (options.footprint != 1)
+    return SampleLutError::kBadFootprint;
+  if (const SampleLutError e = Init(lens, grid, options); e != SampleLutError::kOk)
+    return e;
+  if (width_ * kSubPixel >= kInvisible || height_ * kSubPixel >= kInvisible)
+    return SampleLutError::kSizeMismatch;
+  const double theta_max = std::min(lens.max_theta(), kOrientedMaxTheta);
+  table_cells_ = kOrientedTableCells;
+  const double rho = std::tan(theta_max / 2.0);
+  const double scale = table_cells_ / (2.0 * rho);
+  table_rho_ = static_cast<float>(rho);
+  table_scale_ = static_cast<float>(scale);
+  table_.assign(static_cast<std::size_t>(table_cells_) * static_cast<std::size_t>(table_cells_),
+                Tap{0, kInvisible});
+  const bool wraps = lens.params().model == LensModel::kEquirectangular;
+  Eigen::Vector3d ray;
+  for (int b = 0; b < table_cells_; ++b) {
+    const double v = (b + 0.5) / scale - rho;
+    for (int a = 0; a < table_cells_; ++a) {
+      const double u = (a + 0.5) / scale - rho;
+      // The inverse stereographic projection of the cell's centre.
+      const double r2 = u * u + v * v;
+      const Eigen::Vector3d d(2.0 * u, 2.0 * v, 1.0 - r2);
+      if (r2 > rho * rho)
+        continue;
+      double px = 0.0, py = 0.0;
+      if (!lens.RayToPixel(d / (1.0 + r2), &px, &py))
+        continue;
+      if (wraps)
+        px = std::fmod(std::fmod(px, width_) + width_, width_);
+      const auto x = static_cast<int>(std::lround(px));
+      const auto y = static_cast<int>(std::lround(py));
+      if (x < 0 || y < 0 || x >= width_ || y >= height_ || !lens.PixelToCameraRay(x, y, &ray))
+        continue;
+      // Sub-pixel position for the bilinear read, its 2 x 2 block inside the image.
+      const double fx = std::clamp(px, 0.0, width_ - 1.0 - 1.0 / kSubPixel);
+      const double fy = std::clamp(py, 0.0, height_ - 1.0 - 1.0 / kSubPixel);
+      table_[static_cast<std::size_t>(b) * static_cast<std::size_t>(table_cells_) +
+             static_cast<std::size_t>(a)] =
+          Tap{static_cast<std::uint16_t>(std::lround(fx * kSubPixel)),
+              static_cast<std::uint16_t>(std::lround(fy * kSubPixel))};
+    }
+  }
+  ring_sin_.resize(static_cast<std::size_t>(grid.ring_count()));
+  ring_cos_.resize(static_cast<std::size_t>(grid.ring_count()));
+  for (int i = 0; i < grid.ring_count(); ++i) {
+    ring_sin_[static_cast<std::size_t>(i)] = static_cast<float>(grid.ring(i).sin_theta);
+    ring_cos_[static_cast<std::size_t>(i)] = static_cast<float>(grid.ring(i).cos_theta);
+  }
+  cos_phi_.resize(static_cast<std::size_t>(n_phi_));
+  sin_phi_.resize(static_cast<std::size_t>(n_phi_));
+  for (int j = 0; j < n_phi_; ++j) {
+    cos_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::cos(grid.phi(j)));
+    sin_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::sin(grid.phi(j)));
+  }
+  meridian_.assign(3 * static_cast<std::size_t>(n_phi_), 0.0f);
+  Orient({0.0, 0.0, 1.0});
+  return SampleLutError::kOk;
+}
+
+void SampleLut::Orient(const std::array<double, 3>& up) {
+  // Q = c I + [k]x + k k^T / (1 + c), k = z x up = (-uy, ux, 0), c = uz (Rodrigues); its
+  // columns are the world x, y and z axes in the body frame. Upside down (c = -1) it is not
+  // defined and nothing of the world's upper hemisphere is in view: every tap unseen.
+  const double ux = up[0], uy = up[1], uz = up[2];
+  if (!(uz > -1.0 + 1e-6)) {
+    for (Tap& t : taps_)
+      t = Tap{0, kInvisible};
+    return;
+  }
+  const double h = 1.0 / (1.0 + uz);
+  const float qx[3] = {static_cast<float>(uz + uy * uy * h), static_cast<float>(-ux * uy * h),
+                       static_cast<float>(-ux)};
+  const float qy[3] = {static_cast<float>(-ux * uy * h), static_cast<float>(uz + ux * ux * h),
+                       static_cast<float>(-uy)};
+  const float qz[3] = {static_cast<float>(ux), static_cast<float>(uy), static_cast<float>(uz)};
+  const auto n_phi = static_cast<std::size_t>(n_phi_);
+  for (std::size_t j = 0; j < n_phi; ++j)
+    for (std::size_t k = 0; k < 3; ++k)
+      meridian_[3 * j + k] = cos_phi_[j] * qx[k] + sin_phi_[j] * qy[k];
+  const auto cells = static_cast<std::size_t>(table_cells_);
+  Tap* tap = taps_.data();
+  for (std::size_t i = 0; i < ring_sin_.size(); ++i) {
+    const float st = ring_sin_[i];
+    const float zx = ring_cos_[i] * qz[0];
+    const float zy = ring_cos_[i] * qz[1];
+    const float zz = ring_cos_[i] * qz[2];
+    for (std::size_t j = 0; j < n_phi; ++j, ++tap) {
+      const float bx = st * meridian_[3 * j] + zx;
+      const float by = st * meridian_[3 * j + 1] + zy;
+      const float bz = st * meridian_[3 * j + 2] + zz;
+      *tap = Tap{0, kInvisible};
+      if (!(bz > -0.99f))
+        continue;
+      const float s = table_scale_ / (1.0f + bz);
+      // Cell index: (stereographic coordinate + rho) * scale, floored.
+      const float a = bx * s + table_rho_ * table_scale_;
+      const float b = by * s + table_rho_ * table_scale_;
+      if (!(a >= 0.0f && b >= 0.0f && a < static_cast<float>(table_cells_) &&
+            b < static_cast<float>(table_cells_)))
+        continue;
+      *tap = table_[static_cast<std::size_t>(b) * cells + static_cast<std::size_t>(a)];
+    }
+  }
+}
+
+void SampleLut::FillUnseenFromAbove(std::span<float> samples) const {
+  const auto n_phi = static_cast<std::size_t>(n_phi_);
+  for (std::size_t s = 0; s < samples.size() && s < taps_.size(); ++s)
+    if (taps_[s].y == kInvisible)
+      samples[s] = s < n_phi ? 0.0f : samples[s - n_phi];
+}
+
 template <typename Predicate>
 void SampleLut::Gather(const ImageView& image, const Predicate& is_sky,
                        std::span<float> samples) const {
   const Tap* tap = taps_.data();
+  if (!table_.empty()) {
+    // Oriented: bilinear between the 2 x 2 pixels around the sub-pixel position. The grid
+    // turns with every small change of attitude; read at the nearest pixel its samples
+    // would jump a pixel at a time (1.5 degrees on a 160 x 120 frame) as the attitude
+    // wobbles, and the spectrum with them.
+    constexpr float kInv = 1.0f / kSubPixel;
+    for (float& s : samples) {
+      if (tap->y == kInvisible) {
+        s = 0.0f;
+        ++tap;
+        continue;
+      }
+      const int x0 = tap->x / kSubPixel, y0 = tap->y / kSubPixel;
+      const float fx = static_cast<float>(tap->x % kSubPixel) * kInv;
+      const float fy = static_cast<float>(tap->y % kSubPixel) * kInv;
+      const std::uint8_t* r0 = image.Row(y0);
+      const std::uint8_t* r1 = image.Row(y0 + 1);
+      const auto x = static_cast<std::uint16_t>(x0);
+      const auto x1 = static_cast<std::uint16_t>(x0 + 1);
+      const float top = (is_sky(r0, x) ? 1.0f - fx : 0.0f) + (is_sky(r0, x1) ? fx : 0.0f);
+      const float bottom = (is_sky(r1, x) ? 1.0f - fx : 0.0f) + (is_sky(r1, x1) ? fx : 0.0f);
+      s = top + fy * (bottom - top);
+      ++tap;
+    }
+    return;
+  }
   if (taps_per_sample_ == 1) {
     for (float& s : samples) {
       s = (tap->y != kInvisible && is_sky(image.Row(tap->y), tap->x)) ? 1.0f : 0.0f;

@@ -31,10 +31,6 @@ DescriptorError SkyDescriptor::Init(const Lens& lens, const SkyDescriptorOptions
   if (const SegmentationError e = segmenter_.Init(lens, options_.segmentation);
       e != SegmentationError::kOk)
     return Fail(Stage::kSegmentation, SegmentationErrorMessage(e));
-  if (const SampleLutError e = lut_.Init(lens, grid_, options_.sampling); e != SampleLutError::kOk)
-    return Fail(Stage::kSampling, SampleLutErrorMessage(e));
-  if (const ShError e = projector_.Init(grid_, options_.bands); e != ShError::kOk)
-    return Fail(Stage::kProjection, ShErrorMessage(e));
   if (options_.cap.enabled) {
     const GravityCapOptions& cap = options_.cap;
     if (!(cap.elevation_deg >= 0 && cap.elevation_deg <= 85 && cap.taper_deg >= 0 &&
@@ -42,21 +38,33 @@ DescriptorError SkyDescriptor::Init(const Lens& lens, const SkyDescriptorOptions
       return Fail(Stage::kSampling,
                   "gravity cap: elevation must be within 0..85 degrees, the taper within 0..30, "
                   "and their sum below 90");
-    const int n_phi = grid_.longitudes();
-    cos_phi_.resize(static_cast<std::size_t>(n_phi));
-    sin_phi_.resize(static_cast<std::size_t>(n_phi));
-    along_phi_.resize(static_cast<std::size_t>(n_phi));
-    for (int j = 0; j < n_phi; ++j) {
-      cos_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::cos(grid_.phi(j)));
-      sin_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::sin(grid_.phi(j)));
-    }
-    ring_sin_.resize(static_cast<std::size_t>(grid_.ring_count()));
-    ring_cos_.resize(static_cast<std::size_t>(grid_.ring_count()));
+    if (options_.sampling.footprint != 1)
+      return Fail(Stage::kSampling,
+                  "gravity cap: the world-aligned grid samples one pixel per direction; set the "
+                  "sample footprint to 1");
+    if (const SampleLutError e = lut_.InitOriented(lens, grid_, options_.sampling);
+        e != SampleLutError::kOk)
+      return Fail(Stage::kSampling, SampleLutErrorMessage(e));
+    // Weight w(s) of a ring whose world elevation has sine s = cos(theta): 0 below the cap,
+    // a raised cosine across the taper (in sin-elevation), 1 above.
+    const double s0 = std::sin(cap.elevation_deg * kDegToRad);
+    const double s1 = std::sin((cap.elevation_deg + cap.taper_deg) * kDegToRad);
+    cap_weight_.resize(static_cast<std::size_t>(grid_.ring_count()));
     for (int i = 0; i < grid_.ring_count(); ++i) {
-      ring_sin_[static_cast<std::size_t>(i)] = static_cast<float>(grid_.ring(i).sin_theta);
-      ring_cos_[static_cast<std::size_t>(i)] = static_cast<float>(grid_.ring(i).cos_theta);
+      const double e = grid_.ring(i).cos_theta;
+      double w = 1.0;
+      if (e <= s0)
+        w = 0.0;
+      else if (e < s1)
+        w = 0.5 - 0.5 * std::cos((e - s0) * kPi / (s1 - s0));
+      cap_weight_[static_cast<std::size_t>(i)] = static_cast<float>(w);
     }
+  } else if (const SampleLutError e = lut_.Init(lens, grid_, options_.sampling);
+             e != SampleLutError::kOk) {
+    return Fail(Stage::kSampling, SampleLutErrorMessage(e));
   }
+  if (const ShError e = projector_.Init(grid_, options_.bands); e != ShError::kOk)
+    return Fail(Stage::kProjection, ShErrorMessage(e));
   width_ = lens.params().width;
   height_ = lens.params().height;
   samples_.assign(grid_.sample_count(), 0.0f);
@@ -79,6 +87,14 @@ DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> 
   using Stage = DescriptorError::Stage;
   if (amplitudes.size() != static_cast<std::size_t>(options_.bands))
     return Fail(Stage::kProjection, ShErrorMessage(ShError::kSizeMismatch));
+  if (options_.cap.enabled) {
+    const std::array<double, 3> level{0, 0, 1};
+    const std::array<double, 3>& up = attitude != nullptr ? attitude->up : level;
+    if (!(std::isfinite(up[0]) && std::isfinite(up[1]) && std::isfinite(up[2])) ||
+        std::fabs(up[0] * up[0] + up[1] * up[1] + up[2] * up[2] - 1.0) > 1e-3)
+      return Fail(Stage::kSampling, "gravity cap: the attitude's zenith is not a unit vector");
+    lut_.Orient(up);
+  }
   SegmentationResult result;
   if (options_.path == SamplingPath::kViaMask) {
     const MutableImageView mask{mask_.data(), width_, height_, static_cast<std::size_t>(width_),
@@ -97,12 +113,18 @@ DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> 
       return Fail(Stage::kSampling, SampleLutErrorMessage(e));
   }
   if (options_.cap.enabled) {
-    const std::array<double, 3> level{0, 0, 1};
-    const std::array<double, 3>& up = attitude != nullptr ? attitude->up : level;
-    if (!(std::isfinite(up[0]) && std::isfinite(up[1]) && std::isfinite(up[2])) ||
-        std::fabs(up[0] * up[0] + up[1] * up[1] + up[2] * up[2] - 1.0) > 1e-3)
-      return Fail(Stage::kSampling, "gravity cap: the attitude's zenith is not a unit vector");
-    ApplyCap(up);
+    // The world-aligned grid: what the camera cannot see continues the skyline above it,
+    // then only the cap is kept.
+    lut_.FillUnseenFromAbove(samples_);
+    const std::size_t n_phi = static_cast<std::size_t>(grid_.longitudes());
+    for (std::size_t i = 0; i < cap_weight_.size(); ++i) {
+      const float w = cap_weight_[i];
+      if (w == 1.0f)
+        continue;
+      float* ring = samples_.data() + i * n_phi;
+      for (std::size_t j = 0; j < n_phi; ++j)
+        ring[j] *= w;
+    }
   }
   if (const ShError e = projector_.Project(samples_, coefficients_); e != ShError::kOk)
     return Fail(Stage::kProjection, ShErrorMessage(e));
@@ -113,35 +135,6 @@ DescriptorError SkyDescriptor::Compute(const ImageView& image, std::span<float> 
   if (segmentation != nullptr)
     *segmentation = result;
   return {};
-}
-
-void SkyDescriptor::ApplyCap(const std::array<double, 3>& up) {
-  // Weight w(s) of a sample whose world elevation has sine s: 0 below the cap, a raised
-  // cosine across the taper (in sin-elevation, which keeps it a function of the world
-  // elevation alone and costs no asin per sample), 1 above.
-  const GravityCapOptions& cap = options_.cap;
-  const double s0 = std::sin(cap.elevation_deg * kDegToRad);
-  const double s1 = std::sin((cap.elevation_deg + cap.taper_deg) * kDegToRad);
-  const auto lo = static_cast<float>(s0);
-  const auto hi = static_cast<float>(s1);
-  const float inv_width = hi > lo ? static_cast<float>(kPi / (s1 - s0)) : 0.0f;
-  const auto ux = static_cast<float>(up[0]);
-  const auto uy = static_cast<float>(up[1]);
-  const auto uz = static_cast<float>(up[2]);
-  const std::size_t n_phi = cos_phi_.size();
-  for (std::size_t j = 0; j < n_phi; ++j)
-    along_phi_[j] = ux * cos_phi_[j] + uy * sin_phi_[j];
-  for (std::size_t i = 0; i < ring_sin_.size(); ++i) {
-    float* ring = samples_.data() + i * n_phi;
-    const float st = ring_sin_[i];
-    const float zt = uz * ring_cos_[i];
-    for (std::size_t j = 0; j < n_phi; ++j) {
-      const float s = st * along_phi_[j] + zt;
-      if (s >= hi)
-        continue;
-      ring[j] = s <= lo ? 0.0f : ring[j] * (0.5f - 0.5f * std::cos((s - lo) * inv_width));
-    }
-  }
 }
 
 }  // namespace skyloc::dsp

@@ -7,6 +7,7 @@
 // ring-major: index i * n_phi + j, the order the SH projector takes.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -41,6 +42,29 @@ class SampleLut {
   // The same for the rings and longitudes of an SH grid.
   SampleLutError Init(const Lens& lens, const ShGrid& grid, const SampleLutOptions& options);
 
+  // Oriented sampling (the gravity-aligned cap, docs/SKY_DESCRIPTOR.md "Tilt"): the grid's
+  // directions are in the *world* frame and Orient() points them through the body's
+  // attitude every frame. A level table would need one entry per attitude, so Init builds
+  // instead a table over the lens's whole field: body direction -> pixel, indexed by the
+  // stereographic projection (x, y) / (1 + z), which needs no trigonometry per sample and
+  // stays regular past 90 degrees from the zenith. Each direction is read bilinearly from
+  // the 2 x 2 pixels around its sub-pixel position (footprint must be 1).
+  // Until the first Orient() the grid points along the body's axes (level).
+  SampleLutError InitOriented(const Lens& lens, const ShGrid& grid,
+                              const SampleLutOptions& options);
+  // up: the world zenith in the body frame (unit). World direction w is looked up at body
+  // direction Q w, Q the smallest rotation taking (0, 0, 1) to up (the yaw it leaves out does
+  // not change an amplitude spectrum). No allocation. Only after InitOriented.
+  void Orient(const std::array<double, 3>& up);
+  // The skyline model of an upward view: along a world meridian the sky lies above the
+  // skyline and the ground below it (no overhangs), so a direction the camera cannot see
+  // (tilted away below its field of view) most likely has the value of the nearest seen
+  // direction above it. Sets every unseen sample to the sample one ring up on its
+  // longitude (0 on ring 0). Exact when the skyline is at or above the edge of the view.
+  // Only after InitOriented and Orient: unseen directions leave the view going down a
+  // meridian and never come back (the field of view is a cap about the body zenith).
+  void FillUnseenFromAbove(std::span<float> samples) const;
+
   // From a binary mask (kGrey8; any non-zero byte is sky).
   SampleLutError SampleMask(const ImageView& mask, std::span<float> samples) const;
   // Straight from the frame: a pixel is sky when its channel mean is > threshold. Same
@@ -61,6 +85,8 @@ class SampleLut {
     std::uint16_t y;  // kInvisible: the tap is ground
   };
   static constexpr std::uint16_t kInvisible = 0xffff;
+  // Oriented taps hold the pixel position in 1/16 pixels (bilinear reads).
+  static constexpr int kSubPixel = 16;
 
   template <typename Predicate>
   void Gather(const ImageView& image, const Predicate& is_sky, std::span<float> samples) const;
@@ -73,6 +99,14 @@ class SampleLut {
   float tap_weight_ = 1.0f;
   double visible_fraction_ = 0.0;
   std::vector<Tap> taps_;  // size() * taps_per_sample_
+
+  // Oriented sampling only.
+  int table_cells_ = 0;    // the stereographic table is table_cells_ x table_cells_
+  float table_rho_ = 0;    // its half-width: tan(theta_max / 2)
+  float table_scale_ = 0;  // cells per unit of stereographic coordinate
+  std::vector<Tap> table_;
+  std::vector<float> ring_sin_, ring_cos_, cos_phi_, sin_phi_;
+  std::vector<float> meridian_;  // per frame: 3 floats per longitude
 };
 
 }  // namespace skyloc::dsp

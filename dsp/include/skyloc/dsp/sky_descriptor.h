@@ -33,12 +33,16 @@ enum class SamplingPath : std::uint8_t {
 // The gravity-aligned cap (docs/SKY_DESCRIPTOR.md, "Tilt"). The amplitude spectrum is
 // rotation-invariant only for the whole sphere; a tilted lens crops a different part of the
 // sky, so the hemisphere's spectrum changes with the tilt. With the zenith known (from the
-// attitude), the descriptor keeps only the sky above `elevation_deg` in the *world* frame,
-// weighted by a raised-cosine taper over `taper_deg` (a hard edge on the camera's grid would
-// alias differently at each tilt). That cap is a function of world elevation only, so its
-// spectrum is the same at any tilt as long as the whole cap is in view:
+// attitude), the descriptor samples its grid in the *world* frame (SampleLut::Orient: each
+// world direction read bilinearly where the tilted lens sees it) and keeps only the sky
+// above `elevation_deg`, weighted by a raised-cosine taper over `taper_deg` (a hard edge
+// would alias). That cap is a function of world direction only, so its spectrum is the
+// same at any tilt as long as the whole cap is in view:
 //   elevation_deg >= max_tilt_deg + 90 - min(90, fov_deg / 2)       (CapElevationForTilt)
-// Cost per frame: one dot product and a compare per sample.
+// Tilted further, the part of the cap below the lens's view takes the value of the nearest
+// seen direction above it (SampleLut::FillUnseenFromAbove, the skyline model): exact where
+// the skyline is above the view's edge, a guess where it falls through the unseen band.
+// Cost per frame: a rotation, a table read and a 2 x 2 pixel read per sample.
 struct GravityCapOptions {
   bool enabled = false;
   double elevation_deg = 60;  // world elevation of the cap's lower edge, 0..85
@@ -46,8 +50,10 @@ struct GravityCapOptions {
 };
 
 // The lowest cap elevation that stays in view at tilts up to max_tilt_deg for a lens whose
-// full field of view is fov_deg (the upper hemisphere grid also limits it to 90 degrees
-// from the body zenith). Clamped to 0.
+// full field of view is fov_deg, counting the view to at most 90 degrees from the body
+// zenith (the rule of the body-frame grid before the world-aligned one; kept so that the
+// configured caps and the routes taught with them stay what they were; a wider lens's
+// extra degrees are still read, not filled). Clamped to 0.
 double CapElevationForTilt(double max_tilt_deg, double fov_deg);
 
 struct SkyDescriptorOptions {
@@ -98,12 +104,11 @@ class SkyDescriptor {
   SkySegmenter segmenter_;
   SampleLut lut_;
   ShProjector projector_;
-  void ApplyCap(const std::array<double, 3>& up);
 
   std::vector<float> samples_;
   std::vector<float> coefficients_;
-  // The cap: per longitude (cos phi, sin phi) and per ring (sin theta, cos theta).
-  std::vector<float> cos_phi_, sin_phi_, ring_sin_, ring_cos_, along_phi_;
+  // The cap: the weight of each ring of the world-aligned grid.
+  std::vector<float> cap_weight_;
   std::vector<std::uint8_t> mask_;
   int width_ = 0;
   int height_ = 0;
