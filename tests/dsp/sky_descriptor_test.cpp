@@ -311,7 +311,9 @@ TEST(SkyDescriptor, SkylineFillRecoversTheCapBeyondTheTiltLimit) {
     }
     ASSERT_GT(unseen_sky, 20);  // a gap is hidden, or the test shows nothing
     EXPECT_GE(filled_right, unseen - 2);
-    EXPECT_EQ(raw_right, unseen - unseen_sky);
+    // Unfilled, the hidden gaps read as ground (2 to spare for a table cell at the rim that
+    // the lens itself counts as unseen).
+    EXPECT_LE(raw_right, unseen - unseen_sky + 2);
   }
 }
 
