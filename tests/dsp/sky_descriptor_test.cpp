@@ -32,15 +32,21 @@ bool CanyonSky(const Eigen::Vector3d& d, double heading, double wall_scale) {
   return d.dot(tree) < std::cos(15 * kDeg);
 }
 
-std::vector<std::uint8_t> DrawCanyon(const Lens& lens, double heading, double wall_scale = 1.0) {
+// Draws a sky (210) over ground (40) through the lens, 5 outside its view.
+template <typename Sky>
+std::vector<std::uint8_t> DrawSky(const Lens& lens, const Sky& is_sky) {
   const int w = lens.params().width, h = lens.params().height;
   std::vector<std::uint8_t> grey(static_cast<std::size_t>(w * h));
   Eigen::Vector3d ray;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       grey[static_cast<std::size_t>(y * w + x)] =
-          lens.PixelToRay(x, y, &ray) ? (CanyonSky(ray, heading, wall_scale) ? 210 : 40) : 5;
+          lens.PixelToRay(x, y, &ray) ? (is_sky(ray) ? 210 : 40) : 5;
   return grey;
+}
+
+std::vector<std::uint8_t> DrawCanyon(const Lens& lens, double heading, double wall_scale = 1.0) {
+  return DrawSky(lens, [&](const Eigen::Vector3d& d) { return CanyonSky(d, heading, wall_scale); });
 }
 
 Lens FisheyeLens(int w, int h) {
@@ -188,47 +194,74 @@ TEST(SkyDescriptor, UnitL2MakesAnUnknownTiltCloserThanAnotherPlace) {
   }
 }
 
+// The cap tests' measure: the canyon (walls `walls` times the test's) described level, at
+// another place (walls `other_walls`), and tilted by (roll, pitch) with the true zenith;
+// the tilt's change and the other place's distance as relative L2.
+class CapAgainstAnotherPlace {
+ public:
+  void Init(double cap_elevation_deg, double walls, double other_walls) {
+    drawn_ = TiltDrawingLens();
+    ASSERT_EQ(upright_.Init(drawn_), LensError::kOk);
+    SkyDescriptorOptions options = TiltTestOptions();
+    options.cap = {true, cap_elevation_deg, 10};
+    ASSERT_TRUE(descriptor_.Init(upright_, options).ok());
+    walls_ = walls;
+    const std::vector<std::uint8_t> f0 = DrawCanyon(upright_, 0.0, walls);
+    ASSERT_TRUE(descriptor_.Compute(View(f0), level_).ok());
+    const std::vector<std::uint8_t> place = DrawCanyon(upright_, 0.0, other_walls);
+    std::vector<float> other(32);
+    ASSERT_TRUE(descriptor_.Compute(View(place), other).ok());
+    other_place_ = RelativeL2(level_, other);
+  }
+  double other_place() const { return other_place_; }
+  // The change at a tilt; *unaware: the same frame described as if level.
+  void Tilted(double roll, double pitch, double* change, double* unaware) {
+    // Drawn with mount body = Ry(pitch) Rx(roll) * camera (dsp::Lens): in imu.h's convention
+    // (body-to-world Ry(-pitch) Rx(roll)) that is a pitch of -pitch.
+    drawn_.roll_deg = roll;
+    drawn_.pitch_deg = pitch;
+    Lens tilted_lens;
+    ASSERT_EQ(tilted_lens.Init(drawn_), LensError::kOk);
+    const std::vector<std::uint8_t> f = DrawCanyon(tilted_lens, 0.0, walls_);
+    const Attitude attitude = AttitudeFromRollPitch(0, roll, -pitch);
+    std::vector<float> tilted(32), level_assumed(32);
+    ASSERT_TRUE(descriptor_.Compute(View(f), tilted, nullptr, &attitude).ok());
+    ASSERT_TRUE(descriptor_.Compute(View(f), level_assumed).ok());
+    *change = RelativeL2(level_, tilted);
+    *unaware = RelativeL2(level_, level_assumed);
+  }
+
+ private:
+  static ImageView View(const std::vector<std::uint8_t>& f) {
+    return {f.data(), 480, 480, 480, PixelFormat::kGrey8};
+  }
+  LensParams drawn_;
+  Lens upright_;
+  SkyDescriptor descriptor_;
+  std::vector<float> level_ = std::vector<float>(32);
+  double walls_ = 1.0;
+  double other_place_ = 0.0;
+};
+
 // The gravity-aligned cap with the true zenith: the camera tilts (drawn through a lens whose
 // mount rotation is the tilt, so the pixels see a tilted sky) and the descriptor is told the
 // zenith. The cap above 60 degrees is in view at every tilt up to 60 (185 degree lens), so
 // its spectrum stays what it is level, to within the grid's aliasing of the mask edge.
 TEST(SkyDescriptor, GravityCapIsTheSameAtAnyTiltUpToItsLimit) {
-  LensParams drawn = TiltDrawingLens();
-  Lens upright;
-  ASSERT_EQ(upright.Init(drawn), LensError::kOk);
-  SkyDescriptorOptions options = TiltTestOptions();
-  options.cap = {true, CapElevationForTilt(60, 185), 10};
-  SkyDescriptor descriptor;
-  ASSERT_TRUE(descriptor.Init(upright, options).ok());
-  std::vector<float> level(32), tilted(32), other(32);
-  const std::vector<std::uint8_t> f0 = DrawCanyon(upright, 0.0, 4.0);
-  ASSERT_TRUE(descriptor.Compute({f0.data(), 480, 480, 480, PixelFormat::kGrey8}, level).ok());
-  const std::vector<std::uint8_t> place = DrawCanyon(upright, 0.0, 8.0);
-  ASSERT_TRUE(descriptor.Compute({place.data(), 480, 480, 480, PixelFormat::kGrey8}, other).ok());
-  const double other_place = RelativeL2(level, other);
-  std::printf("  cap: different place: relative L2 %.4f\n", other_place);
+  CapAgainstAnotherPlace measure;
+  ASSERT_NO_FATAL_FAILURE(measure.Init(CapElevationForTilt(60, 185), 4.0, 8.0));
+  std::printf("  cap: different place: relative L2 %.4f\n", measure.other_place());
   for (const auto& [roll, pitch] : {std::pair{0.0, 10.0},
                                     {0.0, 30.0},
                                     {0.0, 60.0},
                                     {-25.0, 0.0},
                                     {40.0, -35.0},
                                     {-42.0, 42.0}}) {
-    // Drawn with mount body = Ry(pitch) Rx(roll) * camera (dsp::Lens): in imu.h's convention
-    // (body-to-world Ry(-pitch) Rx(roll)) that is a pitch of -pitch.
-    drawn.roll_deg = roll;
-    drawn.pitch_deg = pitch;
-    Lens tilted_lens;
-    ASSERT_EQ(tilted_lens.Init(drawn), LensError::kOk);
-    const std::vector<std::uint8_t> f = DrawCanyon(tilted_lens, 0.0, 4.0);
-    const Attitude attitude = AttitudeFromRollPitch(0, roll, -pitch);
-    const ImageView view{f.data(), 480, 480, 480, PixelFormat::kGrey8};
-    ASSERT_TRUE(descriptor.Compute(view, tilted, nullptr, &attitude).ok());
-    const double change = RelativeL2(level, tilted);
-    std::vector<float> unaware(32);
-    ASSERT_TRUE(descriptor.Compute(view, unaware).ok());
+    double change = 0, unaware = 0;
+    ASSERT_NO_FATAL_FAILURE(measure.Tilted(roll, pitch, &change, &unaware));
     std::printf("  cap: roll %+3.0f pitch %+3.0f: relative L2 %.4f (assumed level: %.4f)\n", roll,
-                pitch, change, RelativeL2(level, unaware));
-    EXPECT_LT(change, other_place / 5);
+                pitch, change, unaware);
+    EXPECT_LT(change, measure.other_place() / 5);
   }
 }
 
@@ -239,17 +272,6 @@ bool GapsSky(const Eigen::Vector3d& d) {
   const double to_axis = std::fabs(std::remainder(azimuth, std::numbers::pi / 2));
   const double skyline = to_axis < 25 * kDeg ? 3 * kDeg : 40 * kDeg;
   return d(2) > std::sin(skyline);
-}
-
-std::vector<std::uint8_t> DrawGaps(const Lens& lens) {
-  const int w = lens.params().width, h = lens.params().height;
-  std::vector<std::uint8_t> grey(static_cast<std::size_t>(w * h));
-  Eigen::Vector3d ray;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      grey[static_cast<std::size_t>(y * w + x)] =
-          lens.PixelToRay(x, y, &ray) ? (GapsSky(ray) ? 210 : 40) : 5;
-  return grey;
 }
 
 // Beyond its tilt limit the cap reaches below the field of view on the side the camera
@@ -275,7 +297,7 @@ TEST(SkyDescriptor, SkylineFillRecoversTheCapBeyondTheTiltLimit) {
     drawn.pitch_deg = pitch;
     Lens tilted_lens;
     ASSERT_EQ(tilted_lens.Init(drawn), LensError::kOk);
-    const std::vector<std::uint8_t> f = DrawGaps(tilted_lens);
+    const std::vector<std::uint8_t> f = DrawSky(tilted_lens, GapsSky);
     lut.Orient(AttitudeFromRollPitch(0, roll, -pitch).up);
     std::vector<float> raw(grid.sample_count());
     ASSERT_EQ(lut.SampleImage({f.data(), 480, 480, 480, PixelFormat::kGrey8}, 125, raw),
@@ -323,33 +345,14 @@ TEST(SkyDescriptor, SkylineFillRecoversTheCapBeyondTheTiltLimit) {
 // one than another place (without the fill: 0.034 at 25 degrees and 0.071 at 35, against
 // another place's 0.25).
 TEST(SkyDescriptor, GravityCapBeyondItsLimitStaysCloserThanAnotherPlace) {
-  LensParams drawn = TiltDrawingLens();
-  Lens upright;
-  ASSERT_EQ(upright.Init(drawn), LensError::kOk);
-  SkyDescriptorOptions options = TiltTestOptions();
-  options.cap = {true, 10.0, 10.0};
-  SkyDescriptor descriptor;
-  ASSERT_TRUE(descriptor.Init(upright, options).ok());
-  std::vector<float> level(32), tilted(32), other(32);
-  const std::vector<std::uint8_t> f0 = DrawCanyon(upright, 0.0, 1.0);
-  ASSERT_TRUE(descriptor.Compute({f0.data(), 480, 480, 480, PixelFormat::kGrey8}, level).ok());
-  const std::vector<std::uint8_t> place = DrawCanyon(upright, 0.0, 1.6);
-  ASSERT_TRUE(descriptor.Compute({place.data(), 480, 480, 480, PixelFormat::kGrey8}, other).ok());
-  const double other_place = RelativeL2(level, other);
-  std::printf("  cap 10: different place: relative L2 %.4f\n", other_place);
+  CapAgainstAnotherPlace measure;
+  ASSERT_NO_FATAL_FAILURE(measure.Init(10.0, 1.0, 1.6));
+  std::printf("  cap 10: different place: relative L2 %.4f\n", measure.other_place());
   for (const double pitch : {15.0, 25.0, 35.0}) {
-    drawn.pitch_deg = pitch;
-    Lens tilted_lens;
-    ASSERT_EQ(tilted_lens.Init(drawn), LensError::kOk);
-    const std::vector<std::uint8_t> f = DrawCanyon(tilted_lens, 0.0, 1.0);
-    const Attitude attitude = AttitudeFromRollPitch(0, 0.0, -pitch);
-    ASSERT_TRUE(
-        descriptor
-            .Compute({f.data(), 480, 480, 480, PixelFormat::kGrey8}, tilted, nullptr, &attitude)
-            .ok());
-    const double change = RelativeL2(level, tilted);
+    double change = 0, unaware = 0;
+    ASSERT_NO_FATAL_FAILURE(measure.Tilted(0.0, pitch, &change, &unaware));
     std::printf("  cap 10: pitch %+3.0f: relative L2 %.4f\n", pitch, change);
-    EXPECT_LT(change, other_place / 5);
+    EXPECT_LT(change, measure.other_place() / 5);
   }
 }
 
