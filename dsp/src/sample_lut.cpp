@@ -92,8 +92,9 @@ SampleLutError SampleLut::Init(const Lens& lens, const ShGrid& grid,
 
 namespace {
 // The oriented table's size: 512 x 512 cells of 4 bytes (1 MiB). Over a 185 degree lens a
-// cell spans 0.47 degrees at the zenith and 0.23 at the horizon, under a pixel of a
-// 640 x 480 frame's image circle (0.39 degrees) near the zenith's order.
+// cell spans 0.47 degrees at the zenith and 0.23 at the horizon; a direction takes its
+// cell centre's sub-pixel position, so it is placed to within half that (0.12-0.24
+// degrees): a third of a pixel of a 640 x 480 frame (0.39 degrees), a sixth at 160 x 120.
 constexpr int kOrientedTableCells = 512;
 // Directions farther than this from the body zenith are not tabulated (the stereographic
 // scale grows as tan(theta / 2)); a tilt leaves the world hemisphere within 90 + tilt.
