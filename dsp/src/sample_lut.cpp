@@ -34,13 +34,13 @@ SampleLutError SampleLut::Init(const Lens& lens, std::span<const double> ring_th
       return SampleLutError::kBadGrid;
   width_ = lens.params().width;
   height_ = lens.params().height;
-  if (width_ >= kInvisible || height_ >= kInvisible)
+  if (width_ > 0xffff || height_ > 0xffff)
     return SampleLutError::kSizeMismatch;
   rings_ = static_cast<int>(ring_theta.size());
   n_phi_ = n_phi;
   taps_per_sample_ = k * k;
   tap_weight_ = 1.0f / static_cast<float>(taps_per_sample_);
-  taps_.assign(size() * static_cast<std::size_t>(taps_per_sample_), Tap{0, kInvisible});
+  taps_.assign(size() * static_cast<std::size_t>(taps_per_sample_), Tap{});
 
   const bool wraps = lens.params().model == LensModel::kEquirectangular;
   const int half = k / 2;
@@ -55,12 +55,17 @@ SampleLutError SampleLut::Init(const Lens& lens, std::span<const double> ring_th
       double px = 0.0, py = 0.0;
       if (!lens.RayToPixel(d, &px, &py))
         continue;
-      ++visible;
-      const auto cx = static_cast<int>(std::lround(px));
-      const auto cy = static_cast<int>(std::lround(py));
       Tap* out = &taps_[(static_cast<std::size_t>(i) * static_cast<std::size_t>(n_phi_) +
                          static_cast<std::size_t>(j)) *
                         static_cast<std::size_t>(taps_per_sample_)];
+      if (k == 1) {
+        *out = BilinearTap(lens, px, py);
+        visible += out->seen != 0 ? 1 : 0;
+        continue;
+      }
+      ++visible;
+      const auto cx = static_cast<int>(std::lround(px));
+      const auto cy = static_cast<int>(std::lround(py));
       for (int dy = -half; dy <= half; ++dy) {
         for (int dx = -half; dx <= half; ++dx, ++out) {
           int x = cx + dx;
@@ -72,13 +77,47 @@ SampleLutError SampleLut::Init(const Lens& lens, std::span<const double> ring_th
           // A tap is sky-capable only if the camera sees its pixel centre.
           if (!lens.PixelToCameraRay(x, y, &ray))
             continue;
-          *out = Tap{static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y)};
+          *out = Tap{static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), 0, 0, 1, 0};
         }
       }
     }
   }
   visible_fraction_ = static_cast<double>(visible) / static_cast<double>(size());
   return SampleLutError::kOk;
+}
+
+SampleLut::Tap SampleLut::BilinearTap(const Lens& lens, double px, double py) {
+  const int width = lens.params().width;
+  const int height = lens.params().height;
+  if (width < 2 || height < 2)
+    return Tap{};
+  const bool wraps = lens.params().model == LensModel::kEquirectangular;
+  if (wraps)
+    px = std::fmod(std::fmod(px, width) + width, width);
+  Eigen::Vector3d ray;
+  auto nx = static_cast<int>(std::lround(px));
+  if (wraps)
+    nx %= width;
+  const auto ny = static_cast<int>(std::lround(py));
+  if (nx < 0 || ny < 0 || nx >= width || ny >= height || !lens.PixelToCameraRay(nx, ny, &ray))
+    return Tap{};
+  // The block stays inside the image: a position within half a pixel of the border reads
+  // the border pixels (on an equirectangular image's seam, the last column's value
+  // continues to its edge instead of wrapping: half a pixel of one column).
+  const double fx = std::clamp(px, 0.0, width - 1.0);
+  const double fy = std::clamp(py, 0.0, height - 1.0);
+  const int x0 = std::min(static_cast<int>(fx), width - 2);
+  const int y0 = std::min(static_cast<int>(fy), height - 2);
+  Tap tap{static_cast<std::uint16_t>(x0),
+          static_cast<std::uint16_t>(y0),
+          static_cast<std::uint8_t>(std::min(255.0, std::floor((fx - x0) * 256.0))),
+          static_cast<std::uint8_t>(std::min(255.0, std::floor((fy - y0) * 256.0))),
+          0,
+          0};
+  for (int b = 0; b < 4; ++b)
+    if (lens.PixelToCameraRay(x0 + (b & 1), y0 + (b >> 1), &ray))
+      tap.seen = static_cast<std::uint8_t>(tap.seen | (1 << b));
+  return tap;
 }
 
 SampleLutError SampleLut::Init(const Lens& lens, const ShGrid& grid,
@@ -91,7 +130,7 @@ SampleLutError SampleLut::Init(const Lens& lens, const ShGrid& grid,
 }
 
 namespace {
-// The oriented table's size: 512 x 512 cells of 4 bytes (1 MiB). Over a 185 degree lens a
+// The oriented table's size: 512 x 512 cells of 8 bytes (2 MiB). Over a 185 degree lens a
 // cell spans 0.47 degrees at the zenith and 0.23 at the horizon; a direction takes its
 // cell centre's sub-pixel position, so it is placed to within half that (0.12-0.24
 // degrees): a third of a pixel of a 640 x 480 frame (0.39 degrees), a sixth at 160 x 120.
@@ -107,8 +146,6 @@ SampleLutError SampleLut::InitOriented(const Lens& lens, const ShGrid& grid,
     return SampleLutError::kBadFootprint;
   if (const SampleLutError e = Init(lens, grid, options); e != SampleLutError::kOk)
     return e;
-  if (width_ * kSubPixel >= kInvisible || height_ * kSubPixel >= kInvisible)
-    return SampleLutError::kSizeMismatch;
   const double theta_max = std::min(lens.max_theta(), kOrientedMaxTheta);
   table_cells_ = kOrientedTableCells;
   const double rho = std::tan(theta_max / 2.0);
@@ -116,9 +153,7 @@ SampleLutError SampleLut::InitOriented(const Lens& lens, const ShGrid& grid,
   table_rho_ = static_cast<float>(rho);
   table_scale_ = static_cast<float>(scale);
   table_.assign(static_cast<std::size_t>(table_cells_) * static_cast<std::size_t>(table_cells_),
-                Tap{0, kInvisible});
-  const bool wraps = lens.params().model == LensModel::kEquirectangular;
-  Eigen::Vector3d ray;
+                Tap{});
   for (int b = 0; b < table_cells_; ++b) {
     const double v = (b + 0.5) / scale - rho;
     for (int a = 0; a < table_cells_; ++a) {
@@ -131,19 +166,8 @@ SampleLutError SampleLut::InitOriented(const Lens& lens, const ShGrid& grid,
       double px = 0.0, py = 0.0;
       if (!lens.RayToPixel(d / (1.0 + r2), &px, &py))
         continue;
-      if (wraps)
-        px = std::fmod(std::fmod(px, width_) + width_, width_);
-      const auto x = static_cast<int>(std::lround(px));
-      const auto y = static_cast<int>(std::lround(py));
-      if (x < 0 || y < 0 || x >= width_ || y >= height_ || !lens.PixelToCameraRay(x, y, &ray))
-        continue;
-      // Sub-pixel position for the bilinear read, its 2 x 2 block inside the image.
-      const double fx = std::clamp(px, 0.0, width_ - 1.0 - 1.0 / kSubPixel);
-      const double fy = std::clamp(py, 0.0, height_ - 1.0 - 1.0 / kSubPixel);
       table_[static_cast<std::size_t>(b) * static_cast<std::size_t>(table_cells_) +
-             static_cast<std::size_t>(a)] =
-          Tap{static_cast<std::uint16_t>(std::lround(fx * kSubPixel)),
-              static_cast<std::uint16_t>(std::lround(fy * kSubPixel))};
+             static_cast<std::size_t>(a)] = BilinearTap(lens, px, py);
     }
   }
   ring_sin_.resize(static_cast<std::size_t>(grid.ring_count()));
@@ -170,7 +194,7 @@ void SampleLut::Orient(const std::array<double, 3>& up) {
   const double ux = up[0], uy = up[1], uz = up[2];
   if (!(uz > -1.0 + 1e-6)) {
     for (Tap& t : taps_)
-      t = Tap{0, kInvisible};
+      t = Tap{};
     return;
   }
   const double h = 1.0 / (1.0 + uz);
@@ -194,7 +218,7 @@ void SampleLut::Orient(const std::array<double, 3>& up) {
       const float bx = st * meridian_[3 * j] + zx;
       const float by = st * meridian_[3 * j + 1] + zy;
       const float bz = st * meridian_[3 * j + 2] + zz;
-      *tap = Tap{0, kInvisible};
+      *tap = Tap{};
       if (!(bz > -0.99f))
         continue;
       const float s = table_scale_ / (1.0f + bz);
@@ -212,7 +236,7 @@ void SampleLut::Orient(const std::array<double, 3>& up) {
 void SampleLut::FillUnseenFromAbove(std::span<float> samples) const {
   const auto n_phi = static_cast<std::size_t>(n_phi_);
   for (std::size_t s = 0; s < samples.size() && s < taps_.size(); ++s)
-    if (taps_[s].y == kInvisible)
+    if (taps_[s].seen == 0)
       samples[s] = s < n_phi ? 0.0f : samples[s - n_phi];
 }
 
@@ -220,35 +244,28 @@ template <typename Predicate>
 void SampleLut::Gather(const ImageView& image, const Predicate& is_sky,
                        std::span<float> samples) const {
   const Tap* tap = taps_.data();
-  if (!table_.empty()) {
-    // Oriented: bilinear between the 2 x 2 pixels around the sub-pixel position. The grid
-    // turns with every small change of attitude; read at the nearest pixel its samples
-    // would jump a pixel at a time (1.5 degrees on a 160 x 120 frame) as the attitude
-    // wobbles, and the spectrum with them.
-    constexpr float kInv = 1.0f / kSubPixel;
+  if (taps_per_sample_ == 1) {
+    // Bilinear between the 2 x 2 pixels around the sub-pixel position; unseen pixels are
+    // ground. fx, fy are multiples of 1/256, so an all-sky block reads exactly 1.
+    constexpr float kInv = 1.0f / 256.0f;
     for (float& s : samples) {
-      if (tap->y == kInvisible) {
+      if (tap->seen == 0) {
         s = 0.0f;
         ++tap;
         continue;
       }
-      const int x0 = tap->x / kSubPixel, y0 = tap->y / kSubPixel;
-      const float fx = static_cast<float>(tap->x % kSubPixel) * kInv;
-      const float fy = static_cast<float>(tap->y % kSubPixel) * kInv;
-      const std::uint8_t* r0 = image.Row(y0);
-      const std::uint8_t* r1 = image.Row(y0 + 1);
-      const auto x = static_cast<std::uint16_t>(x0);
+      const float fx = static_cast<float>(tap->fx) * kInv;
+      const float fy = static_cast<float>(tap->fy) * kInv;
+      const std::uint8_t* r0 = image.Row(tap->y);
+      const std::uint8_t* r1 = image.Row(tap->y + 1);
+      const std::uint16_t x0 = tap->x;
       const auto x1 = static_cast<std::uint16_t>(x0 + 1);
-      const float top = (is_sky(r0, x) ? 1.0f - fx : 0.0f) + (is_sky(r0, x1) ? fx : 0.0f);
-      const float bottom = (is_sky(r1, x) ? 1.0f - fx : 0.0f) + (is_sky(r1, x1) ? fx : 0.0f);
+      const unsigned seen = tap->seen;
+      const float top = ((seen & 1u) != 0 && is_sky(r0, x0) ? 1.0f - fx : 0.0f) +
+                        ((seen & 2u) != 0 && is_sky(r0, x1) ? fx : 0.0f);
+      const float bottom = ((seen & 4u) != 0 && is_sky(r1, x0) ? 1.0f - fx : 0.0f) +
+                           ((seen & 8u) != 0 && is_sky(r1, x1) ? fx : 0.0f);
       s = top + fy * (bottom - top);
-      ++tap;
-    }
-    return;
-  }
-  if (taps_per_sample_ == 1) {
-    for (float& s : samples) {
-      s = (tap->y != kInvisible && is_sky(image.Row(tap->y), tap->x)) ? 1.0f : 0.0f;
       ++tap;
     }
     return;
@@ -256,7 +273,7 @@ void SampleLut::Gather(const ImageView& image, const Predicate& is_sky,
   for (float& s : samples) {
     int sky = 0;
     for (int t = 0; t < taps_per_sample_; ++t, ++tap)
-      sky += (tap->y != kInvisible && is_sky(image.Row(tap->y), tap->x)) ? 1 : 0;
+      sky += (tap->seen != 0 && is_sky(image.Row(tap->y), tap->x)) ? 1 : 0;
     s = static_cast<float>(sky) * tap_weight_;
   }
 }

@@ -106,6 +106,66 @@ TEST(SampleLut, EquirectangularSamplesAgreeIncludingTheWrapColumn) {
   ExpectSamplesMatchCap(MakeLens(LensModel::kEquirectangular, 720, 360, 0.0), 3, 1.5);
 }
 
+// Footprint 1 reads bilinearly: a sky of the columns left of x = 96.5 (pixel centres 0..96
+// sky) is, at a sub-pixel position px with x0 = floor(px) and f = px - x0, 1 for x0 <= 95,
+// 1 - f for x0 = 96 and 0 beyond, whatever the row: the value the docs' formula gives,
+// computed here from the lens alone. Outside the image circle the frame is bright too, and
+// must still read as ground.
+TEST(SampleLut, FootprintOneReadsTheSubPixelPositionBilinearly) {
+  ShGrid grid;
+  ASSERT_EQ(grid.Init(DefaultShGridConfig(64)), ShError::kOk);
+  // The view ends half a degree (0.6 px) past the second-lowest ring: the lowest ring is
+  // unseen, the one above it at the image circle's rim.
+  LensParams params = MakeLens(LensModel::kEquidistant, 200, 200, 0.0).params();
+  params.fov_deg = 2.0 * (grid.ring(grid.ring_count() - 2).theta / kDeg + 0.5);
+  Lens lens;
+  ASSERT_EQ(lens.Init(params), LensError::kOk);
+  SampleLut lut;
+  ASSERT_EQ(lut.Init(lens, grid, SampleLutOptions{1}), SampleLutError::kOk);
+  std::vector<std::uint8_t> grey(200 * 200, 30);
+  Eigen::Vector3d ray;
+  for (int y = 0; y < 200; ++y)
+    for (int x = 0; x < 200; ++x)
+      if (x <= 96 || !lens.PixelToCameraRay(x, y, &ray))
+        grey[static_cast<std::size_t>(y * 200 + x)] = 220;
+  std::vector<float> samples(lut.size());
+  ASSERT_EQ(lut.SampleImage({grey.data(), 200, 200, 200, PixelFormat::kGrey8}, 128, samples),
+            SampleLutError::kOk);
+  int on_edge = 0, checked = 0, rim = 0, unseen = 0;
+  for (std::size_t s = 0; s < samples.size(); ++s) {
+    const ShDirection dir = grid.direction(s);
+    double px = 0, py = 0;
+    if (!lens.RayToPixel(Eigen::Vector3d(dir.x, dir.y, dir.z), &px, &py) ||
+        !lens.PixelToCameraRay(std::round(px), std::round(py), &ray)) {
+      ASSERT_EQ(samples[s], 0.0f) << "unseen sample " << s;
+      ++unseen;
+      continue;
+    }
+    const int x0 = static_cast<int>(std::floor(px)), y0 = static_cast<int>(std::floor(py));
+    bool block_seen = true;
+    for (int b = 0; b < 4; ++b)
+      block_seen = block_seen && lens.PixelToCameraRay(x0 + (b & 1), y0 + (b >> 1), &ray);
+    if (!block_seen) {
+      // The rim: the pixels outside the circle are bright but ground, so a sky sample
+      // reads less than 1.
+      if (x0 + 1 <= 96) {
+        ASSERT_LT(samples[s], 1.0f) << "rim sample " << s;
+        ++rim;
+      }
+      continue;
+    }
+    const double f = px - x0;
+    const double expected = x0 <= 95 ? 1.0 : (x0 == 96 ? 1.0 - f : 0.0);
+    ASSERT_NEAR(samples[s], expected, 1.0 / 128) << "sample " << s << " at " << px << ", " << py;
+    on_edge += x0 == 96 ? 1 : 0;
+    ++checked;
+  }
+  EXPECT_GT(on_edge, 20);  // the edge column is crossed by many samples (40 here)
+  EXPECT_GT(checked, static_cast<int>(samples.size()) * 8 / 10);
+  EXPECT_GT(rim, 10);
+  EXPECT_GE(unseen, grid.longitudes());
+}
+
 TEST(SampleLut, FootprintAveragesAndOutsideTheViewIsGround) {
   const Lens lens = MakeLens(LensModel::kEquidistant, 300, 300, 0.0);
   ShGrid grid;

@@ -1,10 +1,13 @@
 // The per-sample pixel lookup table: for every sampling-grid direction (ring theta_i,
-// longitude phi_j = 2 pi j / n_phi, in the body frame) the pixel(s) the lens maps it to,
-// built once at start-up. Sampling a frame is then a gather: the value of sample
-// (i, j) is the mean sky indicator (0 ground, 1 sky) over its footprint of k x k pixels
-// around the projected pixel, equally weighted; pixels that are not visible (outside the
-// image circle, beyond the field of view) count as ground. Samples are written
-// ring-major: index i * n_phi + j, the order the SH projector takes.
+// longitude phi_j = 2 pi j / n_phi, in the body frame) where the lens maps it, built once
+// at start-up. Sampling a frame is then a gather. With footprint 1 (the default) the value
+// of sample (i, j) is the sky indicator (0 ground, 1 sky) read bilinearly at the direction's
+// sub-pixel position: the 2 x 2 pixels around it, weighted by how close each is. With
+// footprint k > 1 it is the mean indicator over the k x k pixels around the nearest pixel,
+// equally weighted. Pixels the camera does not see (outside the image circle, beyond the
+// field of view) count as ground, and so does a direction whose nearest pixel it does not
+// see. Samples are written ring-major: index i * n_phi + j, the order the SH projector
+// takes.
 #pragma once
 
 #include <array>
@@ -19,8 +22,11 @@
 namespace skyloc::dsp {
 
 struct SampleLutOptions {
-  // Footprint edge k (odd, 1..7): 1 samples the nearest pixel; 3 averages 3 x 3 pixels,
-  // which smooths the staircase of the mask edge at the cost of 9 reads per sample.
+  // Footprint edge k (odd, 1..7): 1 reads the direction's sub-pixel position bilinearly
+  // (4 reads); k > 1 averages the k x k pixels around the nearest pixel (k * k reads).
+  // Bilinear, not the nearest pixel: a sample then changes smoothly as the sky's edge moves
+  // across the pixels, where at the nearest pixel it flips whole (docs/SKY_DESCRIPTOR.md,
+  // "Sampling").
   int footprint = 1;
 };
 
@@ -48,7 +54,8 @@ class SampleLut {
   // instead a table over the lens's whole field: body direction -> pixel, indexed by the
   // stereographic projection (x, y) / (1 + z), which needs no trigonometry per sample and
   // stays regular past 90 degrees from the zenith. Each direction is read bilinearly from
-  // the 2 x 2 pixels around its sub-pixel position (footprint must be 1).
+  // the 2 x 2 pixels around its sub-pixel position (footprint must be 1). The table takes
+  // 8 bytes a cell (2 MiB).
   // Until the first Orient() the grid points along the body's axes (level).
   SampleLutError InitOriented(const Lens& lens, const ShGrid& grid,
                               const SampleLutOptions& options);
@@ -80,13 +87,21 @@ class SampleLut {
   double visible_fraction() const { return visible_fraction_; }
 
  private:
+  // Footprint 1: the 2 x 2 block whose top-left pixel is (x, y), mixed by fx, fy (1/256
+  // pixel); bit k of `seen` says the camera sees pixel k of the block (0 top-left, 1
+  // top-right, 2 bottom-left, 3 bottom-right). Footprint k > 1: one pixel (x, y), seen 1
+  // or 0. seen == 0 everywhere: the direction is unseen and reads as ground.
   struct Tap {
-    std::uint16_t x;
-    std::uint16_t y;  // kInvisible: the tap is ground
+    std::uint16_t x = 0;
+    std::uint16_t y = 0;
+    std::uint8_t fx = 0;
+    std::uint8_t fy = 0;
+    std::uint8_t seen = 0;
+    std::uint8_t unused = 0;
   };
-  static constexpr std::uint16_t kInvisible = 0xffff;
-  // Oriented taps hold the pixel position in 1/16 pixels (bilinear reads).
-  static constexpr int kSubPixel = 16;
+  // The bilinear tap of a sub-pixel position (unseen if the camera does not see its nearest
+  // pixel).
+  static Tap BilinearTap(const Lens& lens, double px, double py);
 
   template <typename Predicate>
   void Gather(const ImageView& image, const Predicate& is_sky, std::span<float> samples) const;
@@ -95,7 +110,7 @@ class SampleLut {
   int height_ = 0;
   int rings_ = 0;
   int n_phi_ = 0;
-  int taps_per_sample_ = 1;
+  int taps_per_sample_ = 1;  // 1: bilinear taps; k * k: box taps
   float tap_weight_ = 1.0f;
   double visible_fraction_ = 0.0;
   std::vector<Tap> taps_;  // size() * taps_per_sample_
