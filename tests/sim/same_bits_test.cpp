@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "skyloc/dsp/imu.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/bytes.h"
@@ -95,7 +96,8 @@ TEST(SameBits, ProceduralWorlds) {
 }
 
 // A 64x64 frame of the city at dawn (low sun in view: flare, clouds, sensor noise), tilted,
-// in both spectra, and the 24- and 120-band descriptors of the UV frame.
+// in both spectra, and the 24- and 120-band descriptors of the UV frame, the last also with
+// the gravity-aligned cap.
 TEST(SameBits, RenderedFrameAndDescriptor) {
   World world;
   ASSERT_TRUE(MakeProceduralWorld(WorldKind::kCity, 1, &world).ok());
@@ -129,26 +131,39 @@ TEST(SameBits, RenderedFrameAndDescriptor) {
   ASSERT_EQ(lens.Init(lens_params), dsp::LensError::kOk);
   struct Case {
     int bands;
+    bool cap;
     std::uint32_t coefficients_crc, amplitudes_crc;
   };
-  const Case cases[] = {{24, 0x45408548u, 0x4f39b86du}, {120, 0xb58718f5u, 0x7ee1a8b9u}};
+  // The gravity-aligned cap (10 degrees) at a 20-degree tilt, past its 12.5-degree limit:
+  // the world-aligned table, its rotation, the bilinear read and the skyline fill.
+  dsp::Attitude tilted;
+  tilted.up = dsp::UpFromRollPitch(12.0, -16.0);
+  const Case cases[] = {{24, false, 0x45408548u, 0x4f39b86du},
+                        {120, false, 0xb58718f5u, 0x7ee1a8b9u},
+                        {120, true, 0x492507d9u, 0x165cad19u}};
   for (const Case& c : cases) {
     dsp::SkyDescriptor descriptor;
     dsp::SkyDescriptorOptions options;
     options.bands = c.bands;
+    options.cap.enabled = c.cap;
+    options.cap.elevation_deg = 10;
     ASSERT_TRUE(descriptor.Init(lens, options).ok());
     std::vector<float> amplitudes(static_cast<std::size_t>(c.bands));
-    ASSERT_TRUE(
-        descriptor.Compute({uv.data(), 64, 64, 64, dsp::PixelFormat::kGrey8}, amplitudes).ok());
+    ASSERT_TRUE(descriptor
+                    .Compute({uv.data(), 64, 64, 64, dsp::PixelFormat::kGrey8}, amplitudes, nullptr,
+                             c.cap ? &tilted : nullptr)
+                    .ok());
     BitsCrc coefficients, spectrum;
     for (float v : descriptor.coefficients())
       coefficients.Add(v);
     for (float a : amplitudes)
       spectrum.Add(a);
     EXPECT_EQ(Hex(coefficients.value()), Hex(c.coefficients_crc))
-        << c.bands << " bands: SH coefficients; the value is x86-64's";
+        << c.bands << " bands" << (c.cap ? " with the cap" : "")
+        << ": SH coefficients; the value is x86-64's";
     EXPECT_EQ(Hex(spectrum.value()), Hex(c.amplitudes_crc))
-        << c.bands << " bands: amplitudes; the value is x86-64's";
+        << c.bands << " bands" << (c.cap ? " with the cap" : "")
+        << ": amplitudes; the value is x86-64's";
   }
 }
 
