@@ -90,7 +90,8 @@ class SampleLut {
   // Footprint 1: the 2 x 2 block whose top-left pixel is (x, y), mixed by fx, fy (1/256
   // pixel); bit k of `seen` says the camera sees pixel k of the block (0 top-left, 1
   // top-right, 2 bottom-left, 3 bottom-right). Footprint k > 1: one pixel (x, y), seen 1
-  // or 0. seen == 0 everywhere: the direction is unseen and reads as ground.
+  // or 0. A tap with seen == 0 reads as ground (for footprint 1: the direction is unseen,
+  // which FillUnseenFromAbove tests).
   struct Tap {
     std::uint16_t x = 0;
     std::uint16_t y = 0;
