@@ -61,6 +61,9 @@ constexpr const char* kUsage =
     "  --zigzag DEG         yaw weave amplitude (period --zigzag-period M, default 20)\n"
     "  --bumps DEG          bounded random walk of roll and pitch, up to +-DEG (<= 45)\n"
     "  --yaw DEG            constant heading offset of the camera\n"
+    "  --lateral M          wander sideways off the route's line within +-M metres (a drift\n"
+    "                       over 40-80 m and a weave over 12-25 m), as a second drive of the\n"
+    "                       same track never retraces the first (default 0, at most 5)\n"
     "appearance and camera:\n"
     "  --lighting NAME      dawn, noon (default) or overcast\n"
     "  --sun AZ,EL          sun azimuth (counter-clockwise from east) and elevation, degrees\n"
@@ -84,7 +87,7 @@ struct Options {
   std::optional<double> fps, speed, speed_band, accel, start_stop, stop_min, stop_max;
   std::optional<int> stops;
   const char* time_flag = nullptr;  // the first time-sampling flag given (for errors)
-  double start = 0, tilt = 0, zigzag = 0, zigzag_period = 20, bumps = 0, yaw = 0;
+  double start = 0, tilt = 0, zigzag = 0, zigzag_period = 20, bumps = 0, yaw = 0, lateral = 0;
   double exposure = 0;
   std::optional<double> sun_azimuth, sun_elevation, clouds;
   int frames = 0;
@@ -226,6 +229,10 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!ParseDouble(v, &d))
         return fail(flag, v, "degrees");
       o->yaw = d;
+    } else if (std::strcmp(flag, "--lateral") == 0) {
+      if (!ParseDouble(v, &d) || d < 0 || d > 5)
+        return fail(flag, v, "metres within 0..5");
+      o->lateral = d;
     } else if (std::strcmp(flag, "--lighting") == 0) {
       sim::Lighting probe;
       if (!sim::LightingPreset(v, 0, &probe))
@@ -360,6 +367,7 @@ Status WriteSimulationToml(const std::string& dir, const Options& o, sim::Spectr
       "%llu\nroute = \"%s\"\n\n[run]\nseed = %llu\nspectrum = \"%s\"\n%scamera_height_m = "
       "%.6f\nstart_m = %.6f\ntilt_deg = %.6f\n"
       "zigzag_deg = %.6f\nzigzag_period_m = %.6f\nbumps_deg = %.6f\nyaw_offset_deg = %.6f\n"
+      "lateral_m = %.6f\n"
       "\n[lighting]\npreset = \"%s\"\nsun_azimuth_deg = %.6f\nsun_elevation_deg = %.6f\n"
       "cloud_cover = %.6f\nsky_brightness = %.6f\nexposure_ev = %.6f\nnoise_sigma = %.6f\n"
       "flare = %.6f\n",
@@ -367,9 +375,9 @@ Status WriteSimulationToml(const std::string& dir, const Options& o, sim::Spectr
       o.route_file.empty() ? "(the world's own)" : o.route_file.c_str(),
       static_cast<unsigned long long>(o.run), sim::SpectrumName(spectrum), sampling,
       motion.height_m, motion.start_m, motion.tilt_deg, motion.zigzag_deg, motion.zigzag_period_m,
-      motion.bumps_deg, motion.yaw_offset_deg, o.lighting.c_str(), lighting.sun_azimuth_deg,
-      lighting.sun_elevation_deg, lighting.cloud_cover, lighting.sky_brightness,
-      lighting.exposure_ev, lighting.noise_sigma, lighting.flare);
+      motion.bumps_deg, motion.yaw_offset_deg, motion.lateral_m, o.lighting.c_str(),
+      lighting.sun_azimuth_deg, lighting.sun_elevation_deg, lighting.cloud_cover,
+      lighting.sky_brightness, lighting.exposure_ev, lighting.noise_sigma, lighting.flare);
   return WriteText(dir + "/simulation.toml", text);
 }
 
@@ -477,6 +485,7 @@ int RunSimulate(std::span<char* const> args) {
   motion.zigzag_period_m = o.zigzag_period;
   motion.bumps_deg = o.bumps;
   motion.yaw_offset_deg = o.yaw;
+  motion.lateral_m = o.lateral;
   motion.start_m = o.start;
   motion.max_frames = o.frames;
   motion.seed = o.run;

@@ -309,6 +309,55 @@ std::string WriteTemp(const char* name, const char* contents) {
   return path;
 }
 
+// The sideways wander, on a straight route along x, where the offset is y itself: bounded
+// by A, used (a 200 m route covers at least 2.5 periods of its slower sine), smooth (the
+// bound of its slope: A 2 pi (0.6 / 40 + 0.4 / 12) per metre), and nothing else moves:
+// time, route distance, speed and attitude are those of the run on the line, with both
+// samplings and stops (a standing robot stands at its offset).
+TEST(Motion, LateralWanderMovesOnlyThePositionSidewaysWithinItsBound) {
+  const std::vector<Point2> straight = {{0, 0}, {200, 0}};
+  for (const Sampling sampling : {Sampling::kDistance, Sampling::kTime}) {
+    MotionConfig config = sampling == Sampling::kTime ? TimeSampled() : MotionConfig{};
+    config.bumps_deg = 10;
+    config.zigzag_deg = 15;
+    config.seed = 7;
+    std::vector<TrajectoryPoint> on_line, wandering;
+    ASSERT_TRUE(BuildTrajectory(straight, false, config, &on_line).ok());
+    config.lateral_m = 1.5;
+    ASSERT_TRUE(BuildTrajectory(straight, false, config, &wandering).ok());
+    ASSERT_EQ(wandering.size(), on_line.size());
+    const double slope_bound = 1.5 * 2 * M_PI * (0.6 / 40 + 0.4 / 12);
+    double largest = 0;
+    for (std::size_t i = 0; i < wandering.size(); ++i) {
+      const TrajectoryPoint& a = wandering[i];
+      const TrajectoryPoint& b = on_line[i];
+      EXPECT_EQ(a.time_s, b.time_s);
+      EXPECT_EQ(a.route_m, b.route_m);
+      EXPECT_EQ(a.speed_mps, b.speed_mps);
+      EXPECT_EQ(a.pose.x_m, b.pose.x_m);
+      EXPECT_EQ(a.pose.z_m, b.pose.z_m);
+      EXPECT_EQ(a.pose.roll_deg, b.pose.roll_deg);
+      EXPECT_EQ(a.pose.pitch_deg, b.pose.pitch_deg);
+      EXPECT_EQ(a.pose.yaw_deg, b.pose.yaw_deg);
+      EXPECT_EQ(b.pose.y_m, 0);
+      EXPECT_LE(std::fabs(a.pose.y_m), 1.5 + 1e-12);
+      largest = std::max(largest, std::fabs(a.pose.y_m));
+      if (i > 0) {
+        const double ds = a.route_m - wandering[i - 1].route_m;
+        EXPECT_LE(std::fabs(a.pose.y_m - wandering[i - 1].pose.y_m), slope_bound * ds + 1e-12)
+            << "frame " << i;
+      }
+    }
+    EXPECT_GT(largest, 0.75) << "the wander should use a good part of its range";
+  }
+  std::vector<TrajectoryPoint> t;
+  MotionConfig config;
+  config.lateral_m = 5.5;
+  EXPECT_EQ(BuildTrajectory(straight, false, config, &t).code(), StatusCode::kInvalidArgument);
+  config.lateral_m = -1;
+  EXPECT_EQ(BuildTrajectory(straight, false, config, &t).code(), StatusCode::kInvalidArgument);
+}
+
 TEST(Motion, RouteCsvInCentimetresAndMetres) {
   const std::string cm =
       WriteTemp("skyloc_sim_route_cm.csv", "x_cm,y_cm,heading_deg\n630,845,-124\n629.5,844,-124\n");

@@ -84,6 +84,11 @@ Status CheckCommon(std::span<const Point2> route, const MotionConfig& config) {
     return Status::Error(StatusCode::kInvalidArgument, "bumps must be within 0..45 degrees");
   if (!(config.fps > 0 && config.fps <= 1000))
     return Status::Error(StatusCode::kInvalidArgument, "fps must be within (0, 1000]");
+  if (!(config.lateral_m >= 0 && config.lateral_m <= 5))
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "lateral wander %g m: expected within 0..5 m (the worlds keep trees and "
+                         "walls 2.5 m or more from the route)",
+                         config.lateral_m);
   return Status::Ok();
 }
 
@@ -305,13 +310,47 @@ Status BuildTimeSampled(std::span<const Point2> route, bool closed, const Motion
   return Status::Ok();
 }
 
+// Moves every pose sideways off the route by w(s) = A (0.6 sin(2 pi s / P1 + p1) + 0.4 sin(2 pi s /
+// P2 + p2)), |w| <= A: a drift over tens of metres (P1 in 40..80 m) and a weave over a dozen
+// (P2 in 12..25 m), as a driver holds a track only to a lane's width. `route_m` stays the
+// distance along the route; eval's truth (the taught frames nearest by position) is the same
+// stretch of route for an A of a metre or two. A stream of its own: the speed profile, stops
+// and bumps do not move when A changes.
+void WanderSideways(std::span<const Point2> route, bool closed, const MotionConfig& config,
+                    std::vector<TrajectoryPoint>* out) {
+  const ArcLength path(route, closed);
+  Rng rng(config.seed * 0xD1B54A32D192ED03ull + 13);
+  const double p1 = rng.Uniform(40, 80), p2 = rng.Uniform(12, 25);
+  const double phase1 = rng.Uniform(0, 2 * std::numbers::pi);
+  const double phase2 = rng.Uniform(0, 2 * std::numbers::pi);
+  const double end = path.length();
+  for (TrajectoryPoint& t : *out) {
+    const double s = t.route_m;
+    const double w = config.lateral_m * (0.6 * std::sin(2 * std::numbers::pi * s / p1 + phase1) +
+                                         0.4 * std::sin(2 * std::numbers::pi * s / p2 + phase2));
+    // The route's own direction over 1 m (no manoeuvre yaw): left of it is +w.
+    const Point2 behind = path.At(closed ? s - 0.5 : std::max(s - 0.5, 0.0));
+    const Point2 ahead = path.At(closed ? s + 0.5 : std::min(s + 0.5, end));
+    const double dx = ahead.x - behind.x, dy = ahead.y - behind.y;
+    const double norm = std::hypot(dx, dy);
+    if (!(norm > 0))
+      continue;
+    t.pose.x_m += -dy / norm * w;
+    t.pose.y_m += dx / norm * w;
+  }
+}
+
 }  // namespace
 
 Status BuildTrajectory(std::span<const Point2> route, bool closed, const MotionConfig& config,
                        std::vector<TrajectoryPoint>* out) {
   SKYLOC_TRY(CheckCommon(route, config));
-  return config.sampling == Sampling::kDistance ? BuildDistanceSampled(route, closed, config, out)
-                                                : BuildTimeSampled(route, closed, config, out);
+  SKYLOC_TRY(config.sampling == Sampling::kDistance
+                 ? BuildDistanceSampled(route, closed, config, out)
+                 : BuildTimeSampled(route, closed, config, out));
+  if (config.lateral_m > 0)
+    WanderSideways(route, closed, config, out);
+  return Status::Ok();
 }
 
 Status LoadRouteCsv(const char* path, std::vector<Point2>* route) {

@@ -1,7 +1,8 @@
 // Trajectories: a route (polyline on the ground) sampled into camera poses, with the
 // manoeuvres of Stone et al. 2016: camera height, constant tilt about the pitch axis,
-// zig-zag yaw, bumpy roll/pitch (a bounded random walk), and a constant yaw offset between
-// runs. Two samplings:
+// zig-zag yaw, bumpy roll/pitch (a bounded random walk), a constant yaw offset between
+// runs, and a sideways wander off the route's line (a repeat drive never retraces the taught
+// line exactly). Two samplings:
 //  - distance: a frame every `frame_spacing_m` with speed jitter (so SeqSLAM's velocity
 //    search matters); the original behaviour, kept bit for bit;
 //  - time: a frame every 1/fps seconds while the robot follows a speed profile (starts
@@ -49,6 +50,7 @@ struct MotionConfig {
   double zigzag_period_m = 20;   // route distance of one full weave
   double bumps_deg = 0;          // roll/pitch random walk bound (0: smooth ride)
   double yaw_offset_deg = 0;     // constant heading offset (full yaw change between runs)
+  double lateral_m = 0;          // sideways wander off the route within +-lateral_m (0: on it)
   double fps = 10;               // frames per second: kTime samples at it; timestamps i / fps
   double start_m = 0;            // where along the route the run starts
   int max_frames = 0;            // 0: until the end of the route (one lap of a loop)
