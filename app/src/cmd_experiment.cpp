@@ -59,6 +59,8 @@ constexpr const char* kUsage =
     "  --spacing M            frame spacing in metres (default 1; ants 0.05)\n"
     "  --frames N             at most N frames a run (default: whole routes)\n"
     "  --seed N               procedural world seed (default 1)\n"
+    "  --lateral M            speed: every repeat wanders sideways off the taught line within\n"
+    "                         +-M metres, 0..5 (default 0: on it; skyloc simulate --lateral)\n"
     "  --data DIR             Seville data folder (default ../shared/data/seville2009)\n"
     "  --attitude A           the gravity-aligned descriptor's zenith (tilt, manoeuvre,\n"
     "                         speed): imu (the simulated IMU with noise and bias through\n"
@@ -172,6 +174,10 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!ParseNumber(v, 0, 80, &d))
         return bad("degrees within 0..80");
       e.cap.elevation_deg = d;
+    } else if (std::strcmp(flag, "--lateral") == 0) {
+      if (!ParseNumber(v, 0, 5, &d))
+        return bad("metres within 0..5");
+      e.lateral_m = d;
     } else if (std::strcmp(flag, "--seed") == 0) {
       if (!ParseNumber(v, 0, 1e15, &d) || d != std::floor(d))
         return bad("a non-negative integer");
@@ -337,7 +343,11 @@ std::string CommonNotes(const host_eval::ExperimentOptions& e) {
                 "frames at %.3g fps along a speed profile (cruise %.3g m/s x the run's speed "
                 "ratio, a %.3g s stop at the start and %d more of %.3g-%.3g s unless stated)",
                 e.fps, e.speed.cruise_mps, e.speed.start_stop_s, e.speed.stops, e.speed.stop_min_s,
-                e.speed.stop_max_s)
+                e.speed.stop_max_s) +
+                (e.lateral_m > 0
+                     ? Format("; every repeat wanders sideways off the taught line within +-%.3g m",
+                              e.lateral_m)
+                     : std::string())
           : Format("frames every %.3g m with +-20 %% speed jitter", e.spacing_m);
   return Format("Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands, ", e.width,
                 e.height, e.bands) +

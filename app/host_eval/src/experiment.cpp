@@ -704,6 +704,7 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
           query_spec.motion.seed = seed;  // its stops, speed targets and bumps are its own
           query_spec.motion.speed_ratio = ratio;
           query_spec.motion.bumps_deg = bumps;
+          query_spec.motion.lateral_m = options.lateral_m;
           LightingPreset("noon", 600 + seed, &query_spec.lighting);  // other clouds and noise
           RunDescriptors query;
           Report(progress, context, label);

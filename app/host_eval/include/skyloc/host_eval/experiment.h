@@ -59,6 +59,9 @@ struct ExperimentOptions {
   sim::SpeedProfile speed;
   double camera_height_m = 1.0;
   int max_frames = 0;  // 0: the whole route
+  // Speed: every repeat wanders sideways off the taught line within +-lateral_m
+  // (sim::MotionConfig::lateral_m; the taught run keeps to the route). 0: on the line.
+  double lateral_m = 0;
   std::uint64_t world_seed = 1;
   dsp::SeqSlamParams seqslam;     // OpenSeqSLAM defaults: ds 10, v 0.8..1.2, R 10
   dsp::RouteFilterParams filter;  // the route filter (ds taken from seqslam.sequence_length)
