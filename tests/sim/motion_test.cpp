@@ -358,6 +358,33 @@ TEST(Motion, LateralWanderMovesOnlyThePositionSidewaysWithinItsBound) {
   EXPECT_EQ(BuildTrajectory(straight, false, config, &t).code(), StatusCode::kInvalidArgument);
 }
 
+// On a closed loop the route distance wraps to 0 at the seam; the wander must not jump
+// there. A 200-gon of radius 50 m (a circle to 6 mm), one lap from 200 m, so the seam
+// (314 m) falls mid-run: the offset (distance from the centre - 50) changes between frames
+// by at most the wander's slope bound times the step, everywhere.
+TEST(Motion, LateralWanderIsContinuousAcrossAClosedLoopsSeam) {
+  std::vector<Point2> circle;
+  for (int i = 0; i < 200; ++i) {
+    const double a = 2 * M_PI * i / 200;
+    circle.push_back({50 * std::cos(a), 50 * std::sin(a)});
+  }
+  MotionConfig config;
+  config.speed_jitter = 0;
+  config.start_m = 200;
+  config.lateral_m = 2;
+  std::vector<TrajectoryPoint> t;
+  ASSERT_TRUE(BuildTrajectory(circle, true, config, &t).ok());
+  const double slope_bound = 2 * 2 * M_PI * (0.6 / 40 + 0.4 / 12);
+  bool crossed_seam = false;
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    crossed_seam |= t[i].route_m < t[i - 1].route_m;
+    const double offset = std::hypot(t[i].pose.x_m, t[i].pose.y_m) - 50;
+    const double previous = std::hypot(t[i - 1].pose.x_m, t[i - 1].pose.y_m) - 50;
+    EXPECT_LE(std::fabs(offset - previous), slope_bound * 1.0 + 0.02) << "frame " << i;
+  }
+  EXPECT_TRUE(crossed_seam);
+}
+
 TEST(Motion, RouteCsvInCentimetresAndMetres) {
   const std::string cm =
       WriteTemp("skyloc_sim_route_cm.csv", "x_cm,y_cm,heading_deg\n630,845,-124\n629.5,844,-124\n");

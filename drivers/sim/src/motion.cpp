@@ -324,10 +324,18 @@ void WanderSideways(std::span<const Point2> route, bool closed, const MotionConf
   const double phase1 = rng.Uniform(0, 2 * std::numbers::pi);
   const double phase2 = rng.Uniform(0, 2 * std::numbers::pi);
   const double end = path.length();
+  // The wander follows the distance driven, not `route_m`: on a closed loop route_m wraps to
+  // 0 at the seam, where w(route_m) would jump sideways by up to 2 A in one frame.
+  double laps = 0, previous_route_m = out->empty() ? 0 : out->front().route_m;
   for (TrajectoryPoint& t : *out) {
+    if (closed && t.route_m < previous_route_m - end / 2)
+      laps += end;
+    previous_route_m = t.route_m;
+    const double driven = t.route_m + laps;
+    const double w =
+        config.lateral_m * (0.6 * std::sin(2 * std::numbers::pi * driven / p1 + phase1) +
+                            0.4 * std::sin(2 * std::numbers::pi * driven / p2 + phase2));
     const double s = t.route_m;
-    const double w = config.lateral_m * (0.6 * std::sin(2 * std::numbers::pi * s / p1 + phase1) +
-                                         0.4 * std::sin(2 * std::numbers::pi * s / p2 + phase2));
     // The route's own direction over 1 m (no manoeuvre yaw): left of it is +w.
     const Point2 behind = path.At(closed ? s - 0.5 : std::max(s - 0.5, 0.0));
     const Point2 ahead = path.At(closed ? s + 0.5 : std::min(s + 0.5, end));
