@@ -52,6 +52,11 @@ ShGridConfig DefaultShGridConfig(int bands) {
   return config;
 }
 
+ShGridConfig OversampledShGridConfig(int bands) {
+  bands = std::clamp(bands, 1, kMaxShBands);
+  return DefaultShGridConfig((3 * bands + 1) / 2);
+}
+
 ShGridConfig PaperShGridConfig() {
   return ShGridConfig{.rings = 16, .longitudes = 128, .coverage = ShCoverage::kUpperHemisphere};
 }

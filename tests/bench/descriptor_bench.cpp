@@ -83,6 +83,32 @@ BENCHMARK_CAPTURE(BM_Descriptor, via_mask, SamplingPath::kViaMask, Cap::kOff)
 BENCHMARK_CAPTURE(BM_Descriptor, direct_gravity_cap, SamplingPath::kDirect, Cap::kGravity)
     ->Unit(benchmark::kMicrosecond);
 
+// The descriptor on the grids of docs/SKY_DESCRIPTOR.md, "Grid": bands, rings on the upper
+// hemisphere, longitudes; `direct` above (120 bands, 60 x 256) is the reference.
+void BM_DescriptorGrid(benchmark::State& state) {
+  const Lens lens = MakeLens();
+  const std::vector<std::uint8_t> frame = Frame(lens);
+  SkyDescriptorOptions options;
+  options.bands = static_cast<int>(state.range(0));
+  options.grid.rings = static_cast<int>(state.range(1));
+  options.grid.longitudes = static_cast<int>(state.range(2));
+  SkyDescriptor descriptor;
+  if (!descriptor.Init(lens, options).ok())
+    std::abort();
+  std::vector<float> amplitudes(static_cast<std::size_t>(options.bands));
+  for (auto _ : state) {
+    descriptor.Compute(View(frame), amplitudes, nullptr, nullptr);
+    benchmark::DoNotOptimize(amplitudes.data());
+  }
+}
+BENCHMARK(BM_DescriptorGrid)
+    ->ArgNames({"bands", "rings", "longitudes"})
+    ->Args({64, 32, 128})   // the minimal grid for 64 bands (the default before 2026-11-26)
+    ->Args({64, 48, 256})   // oversampled: the firmware's default
+    ->Args({120, 60, 256})  // the minimal grid for 120 bands
+    ->Args({120, 90, 512})  // oversampled
+    ->Unit(benchmark::kMicrosecond);
+
 // Stages: histogram + Otsu over the image circle.
 void BM_Threshold(benchmark::State& state) {
   const Lens lens = MakeLens();

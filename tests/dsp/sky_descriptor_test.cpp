@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -129,6 +131,83 @@ TEST(SkyDescriptor, SubPixelYawsBarelyMoveTheSpectrumAtLowResolution) {
   EXPECT_LT(sum / steps, 0.006);
   EXPECT_LT(worst, 0.0075);
   EXPECT_GT(RelativeL2(a0, other), 0.15);
+}
+
+// A canopy: the sky seen through leaves, fixed in the world and yawed by `heading` about
+// the zenith. 400 round leaves of 1.5-5 degrees radius at elevations 15-85 degrees, from a
+// fixed linear congruential sequence (the same canopy in every run and on every machine).
+std::vector<std::uint8_t> DrawCanopy(const Lens& lens, double heading) {
+  std::vector<Eigen::Vector3d> centres;
+  std::vector<double> cos_radius;
+  std::uint32_t state = 12345;
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<double>(state >> 8) / 16777216.0;
+  };
+  for (int k = 0; k < 400; ++k) {
+    const double azimuth = 2 * std::numbers::pi * next() + heading;
+    const double elevation = (15 + 70 * next()) * kDeg;
+    centres.emplace_back(std::cos(elevation) * std::cos(azimuth),
+                         std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+    cos_radius.push_back(std::cos((1.5 + 3.5 * next()) * kDeg));
+  }
+  return DrawSky(lens, [&](const Eigen::Vector3d& d) {
+    if (d(2) <= 0.0)
+      return false;
+    for (std::size_t k = 0; k < centres.size(); ++k)
+      if (d.dot(centres[k]) > cos_radius[k])
+        return false;
+    return true;
+  });
+}
+
+// Why the firmware samples L bands on the grid for 1.5 L (OversampledShGridConfig) rather
+// than the minimal grid for L: a canopy's leaf edges are not band-limited, and on the
+// minimal grid what lies above the grid's limit folds into the kept bands by an amount that
+// depends on where the edges fall between samples, so a yaw (to which the spectrum of the
+// sky is invariant: the reference) moves it. The firmware's 640x480 camera and bands (64),
+// and the paper's 120, yawed by angles that are not multiples of either grid's longitude
+// step.
+TEST(SkyDescriptor, OversampledGridMovesLessWithAYawThanTheMinimalGrid) {
+  const Lens lens = FisheyeLens(640, 480);
+  const std::vector<std::uint8_t> f0 = DrawCanopy(lens, 0.0);
+  constexpr double kYawsDeg[] = {7.3, 19.1, 37.7, 53.9, 71.3};
+  std::vector<std::vector<std::uint8_t>> yawed;
+  for (double yaw : kYawsDeg)
+    yawed.push_back(DrawCanopy(lens, yaw * kDeg));
+  const std::vector<std::uint8_t> street = DrawCanyon(lens, 0.0, 0.3);
+  EXPECT_EQ(OversampledShGridConfig(64).rings, 48);
+  EXPECT_EQ(OversampledShGridConfig(64).longitudes, 256);
+  EXPECT_EQ(OversampledShGridConfig(120).rings, 90);
+  EXPECT_EQ(OversampledShGridConfig(120).longitudes, 512);
+  for (const int bands : {64, 120}) {
+    const ShGridConfig grids[2] = {DefaultShGridConfig(bands), OversampledShGridConfig(bands)};
+    double change[2] = {0, 0}, other_place[2] = {0, 0};
+    for (int g = 0; g < 2; ++g) {
+      SkyDescriptorOptions options;
+      options.bands = bands;
+      options.grid = grids[g];
+      options.normalisation = AmplitudeNormalisation::kUnitL2;
+      SkyDescriptor descriptor;
+      ASSERT_TRUE(descriptor.Init(lens, options).ok());
+      const std::size_t n = static_cast<std::size_t>(bands);
+      std::vector<float> a0(n), a(n);
+      ASSERT_TRUE(descriptor.Compute({f0.data(), 640, 480, 640, PixelFormat::kGrey8}, a0).ok());
+      for (const std::vector<std::uint8_t>& f : yawed) {
+        ASSERT_TRUE(descriptor.Compute({f.data(), 640, 480, 640, PixelFormat::kGrey8}, a).ok());
+        change[g] += RelativeL2(a0, a) / std::size(kYawsDeg);
+      }
+      ASSERT_TRUE(descriptor.Compute({street.data(), 640, 480, 640, PixelFormat::kGrey8}, a).ok());
+      other_place[g] = RelativeL2(a0, a);
+      std::printf(
+          "  %3d bands on %d x %d: yaw moves the spectrum by %.4f (relative L2, mean "
+          "of %zu), an open street is %.4f away\n",
+          bands, grids[g].rings, grids[g].longitudes, change[g], std::size(kYawsDeg),
+          other_place[g]);
+    }
+    EXPECT_LT(change[1], 0.5 * change[0]) << bands << " bands";
+    EXPECT_GT(other_place[1], 10 * change[1]) << bands << " bands";
+  }
 }
 
 // The tilt tests: a 480x480 185-degree fisheye whose mount angles draw a tilted camera,
