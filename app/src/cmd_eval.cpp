@@ -77,8 +77,9 @@ constexpr const char* kUsage =
     "  --keyframe-noise F     filter: keyframe merge threshold x noise floor (default 2)\n"
     "  --config FILE          the firmware configuration whose [state] settings (and\n"
     "                         [seqslam] max_advance, keyframe_noise_factor, [descriptor]\n"
-    "                         normalisation) the runs use (default: the built-in defaults;\n"
-    "                         normalisation unit_l2, \"none\" is the paper's eq. 3)\n"
+    "                         bands, grid, normalisation) the runs use (default: the\n"
+    "                         built-in defaults; normalisation unit_l2, \"none\" is the\n"
+    "                         paper's eq. 3)\n"
     "  --gt FILE              ground truth CSV: query_index,reference_index (-1: off route)\n"
     "  --tolerance-m X        ground truth from the datasets' poses: a match is correct when\n"
     "                         the matched reference was recorded within X m of the query\n"
@@ -89,7 +90,9 @@ constexpr const char* kUsage =
     "                         equidistant 185-degree lens filling the short image side\n"
     "                         (equirectangular for 2:1 images), as skyloc describe\n"
     "  --lens MODEL, --fov DEG  sky: override the lens model / field of view\n"
-    "  --bands N              sky: spherical-harmonic bands (default 120)\n"
+    "  --bands N              sky: spherical-harmonic bands, on the configuration's grid\n"
+    "                         (default: [descriptor] of --config, as the firmware: 64\n"
+    "                         bands on the oversampled 48 x 256 grid)\n"
     "  --jobs N               threads for the descriptors and the batch matcher (default:\n"
     "                         all cores); the results do not depend on it\n"
     "  --vanilla-precision byte|float  vanilla with the batch matcher: the descriptor in\n"
@@ -157,7 +160,7 @@ struct EvalOptions {
   std::string camera;  // --camera FILE
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
-  int bands = 120;
+  std::optional<int> bands;  // --bands: replaces [descriptor] bands of the configuration
   int jobs = DefaultJobs();
   bool vanilla_bytes = true;           // --vanilla-precision byte (the default) or float
   bool attitude_from_dataset = false;  // --attitude dataset
@@ -295,8 +298,10 @@ int ParseArgs(std::span<char* const> args, EvalOptions* o, bool* help) {
         return fail("--vanilla-precision '%s': use float or byte", v);
       }
     } else if (a == "--bands") {
-      if (!ParseIntArg(v, &o->bands) || o->bands < 1 || o->bands > 512)
+      int bands = 0;
+      if (!ParseIntArg(v, &bands) || bands < 1 || bands > 512)
         return fail("--bands '%s': give 1..512", v);
+      o->bands = bands;
     } else {
       return fail("unknown option '%s'", args[i]);
     }
@@ -397,7 +402,11 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
     if (o.fov_deg)
       lp.fov_deg = *o.fov_deg;
     SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens_of_run));
-    options_of_run.bands = o.bands;
+    // The firmware's descriptor ([descriptor] of --config, else the built-in defaults), as
+    // the robot computes it; --bands has already replaced the bands (Evaluate).
+    options_of_run.bands = o.config.descriptor.bands;
+    options_of_run.grid.rings = o.config.descriptor.rings;
+    options_of_run.grid.longitudes = o.config.descriptor.longitudes;
     options_of_run.normalisation = o.config.descriptor.normalisation;
     if (o.attitude_from_dataset) {
       // The firmware's rule (app/src/pipeline.cpp): the cap from the largest tilt and what
@@ -409,7 +418,7 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
                                    2 * lens_of_run.max_theta() * kRadToDeg);
       options_of_run.cap.taper_deg = o.config.attitude.cap_taper_deg;
     }
-    d.dim = o.bands;
+    d.dim = options_of_run.bands;
   } else {
     d.dim = dsp::kVanillaDescriptorSize;
   }
@@ -1200,6 +1209,15 @@ Status Evaluate(EvalOptions o) {
     o.config.seqslam.filter.max_advance = *o.max_advance;
   if (o.keyframe_noise_factor)
     o.config.seqslam.filter.keyframe_noise_factor = static_cast<float>(*o.keyframe_noise_factor);
+  if (o.bands) {
+    if (o.config.descriptor.grid == GridPreset::kPaper)
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "--bands %d: the configuration's [descriptor] grid = \"paper\" has 120 "
+                           "bands; leave --bands out or choose another grid",
+                           *o.bands);
+    o.config.descriptor.bands = *o.bands;
+    ResolveDescriptorGrid(&o.config.descriptor);  // a custom grid stays as it was
+  }
   SKYLOC_TRY_ASSIGN(const drivers::Dataset ref, drivers::ReadDataset(o.reference));
   SKYLOC_TRY_ASSIGN(const drivers::Dataset query, drivers::ReadDataset(o.query));
   SKYLOC_TRY_ASSIGN(const GroundTruth gt, MakeGroundTruth(o, ref, query));

@@ -29,8 +29,10 @@ constexpr EnumName<CameraKind> kCameraKinds[] = {{"sim", CameraKind::kSim},
                                                  {"dataset", CameraKind::kDataset}};
 constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
     {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
-constexpr EnumName<GridPreset> kGridPresets[] = {
-    {"auto", GridPreset::kAuto}, {"paper", GridPreset::kPaper}, {"custom", GridPreset::kCustom}};
+constexpr EnumName<GridPreset> kGridPresets[] = {{"oversampled", GridPreset::kOversampled},
+                                                 {"auto", GridPreset::kAuto},
+                                                 {"paper", GridPreset::kPaper},
+                                                 {"custom", GridPreset::kCustom}};
 constexpr EnumName<dsp::AmplitudeNormalisation> kNormalisations[] = {
     {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kNone),
      dsp::AmplitudeNormalisation::kNone},
@@ -267,8 +269,16 @@ class SectionReader {
   std::size_t known_count_ = 0;
 };
 
-void ResolveGrid(DescriptorConfig* d) {
+}  // namespace
+
+void ResolveDescriptorGrid(DescriptorConfig* d) {
   switch (d->grid) {
+    case GridPreset::kOversampled: {
+      const dsp::ShGridConfig g = dsp::OversampledShGridConfig(d->bands);
+      d->rings = g.rings;
+      d->longitudes = g.longitudes;
+      break;
+    }
     case GridPreset::kAuto: {
       const dsp::ShGridConfig g = dsp::DefaultShGridConfig(d->bands);
       d->rings = g.rings;
@@ -286,8 +296,6 @@ void ResolveGrid(DescriptorConfig* d) {
       break;
   }
 }
-
-}  // namespace
 
 const char* CameraKindName(CameraKind kind) {
   return NameOf(kCameraKinds, kind);
@@ -313,7 +321,7 @@ const char* AttitudeKindName(AttitudeKind kind) {
 
 Config DefaultConfig() {
   Config c;
-  ResolveGrid(&c.descriptor);
+  ResolveDescriptorGrid(&c.descriptor);
   return c;
 }
 
@@ -406,7 +414,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     if (error.ok() && c.descriptor.grid == GridPreset::kPaper && t != nullptr &&
         t->contains("bands") && c.descriptor.bands != 120)
       r.Invalid("bands", "must be 120 (or left out) with grid = \"paper\"");
-    ResolveGrid(&c.descriptor);
+    ResolveDescriptorGrid(&c.descriptor);
     r.Finish();
   }
   {

@@ -20,7 +20,7 @@ namespace skyloc::app {
 
 enum class CameraKind : std::uint8_t { kSim, kV4l2, kLibcamera, kDataset };
 enum class SegmentationMethod : std::uint8_t { kOtsu, kFixed };
-enum class GridPreset : std::uint8_t { kAuto, kPaper, kCustom };
+enum class GridPreset : std::uint8_t { kOversampled, kAuto, kPaper, kCustom };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
 enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
@@ -73,8 +73,9 @@ struct SegmentationConfig {
 
 struct DescriptorConfig {
   int bands = 64;  // L: amplitudes a_0..a_{L-1}
-  GridPreset grid = GridPreset::kAuto;
-  // Resolved by the parser from dsp/sh_grid.h: auto = DefaultShGridConfig(bands), the
+  GridPreset grid = GridPreset::kOversampled;
+  // Resolved by ResolveDescriptorGrid from dsp/sh_grid.h: oversampled =
+  // OversampledShGridConfig(bands); auto = DefaultShGridConfig(bands), the minimal
   // unaliased grid; paper = PaperShGridConfig() (2000 points, 120 bands).
   int rings = 0;
   int longitudes = 0;
@@ -224,6 +225,10 @@ struct Config {
 
 // The defaults, with the derived fields (descriptor grid) resolved.
 Config DefaultConfig();
+
+// Sets rings and longitudes from the grid preset and the bands (custom: left as they are).
+// For a tool that changes the bands of a parsed configuration (skyloc eval --bands).
+void ResolveDescriptorGrid(DescriptorConfig* descriptor);
 
 // Parses TOML text; `source_name` names it in messages (usually the path).
 Result<Config> ParseConfig(std::string_view text, std::string_view source_name);

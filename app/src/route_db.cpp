@@ -199,19 +199,25 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
   struct Field {
     const char* name;
     std::uint64_t in_file, wanted;
+    const char* hint;
   };
-  const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind},
-                          {"bands", file.bands, want.bands},
-                          {"rings", file.rings, want.rings},
-                          {"longitudes", file.longitudes, want.longitudes},
-                          {"descriptor size", file.dim, want.dim}};
+  // The grid's rings and longitudes come from [descriptor] grid; a route taught with the
+  // defaults before 2026-11-26 was sampled on grid = "auto".
+  constexpr const char* kGridHint =
+      " (set by [descriptor] grid; routes taught with the defaults before 2026-11-26 used "
+      "grid = \"auto\")";
+  const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind, ""},
+                          {"[descriptor] bands", file.bands, want.bands, ""},
+                          {"[descriptor] rings", file.rings, want.rings, kGridHint},
+                          {"[descriptor] longitudes", file.longitudes, want.longitudes, kGridHint},
+                          {"descriptor size", file.dim, want.dim, ""}};
   for (const Field& f : fields) {
     if (f.in_file != f.wanted) {
       return Status::Error(StatusCode::kFailedPrecondition,
-                           "taught with %s = %llu but this configuration has %llu: run with "
+                           "taught with %s = %llu but this configuration has %llu%s: run with "
                            "the configuration it was taught with, or teach again",
                            f.name, static_cast<unsigned long long>(f.in_file),
-                           static_cast<unsigned long long>(f.wanted));
+                           static_cast<unsigned long long>(f.wanted), f.hint);
     }
   }
   // A route without strips, or a configuration without heading, loads: heading is then

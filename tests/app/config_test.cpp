@@ -45,12 +45,26 @@ TEST(Config, EmptyFileGivesDefaults) {
   EXPECT_TRUE(*c == DefaultConfig());
 }
 
-TEST(Config, AutoGridIsUnaliased) {
-  Result<Config> c = ParseConfig("[descriptor]\nbands = 120\n", "t.toml");
+// The default grid is oversampled (the unaliased grid for 1.5 x the bands, dsp/sh_grid.h:
+// why, tests/dsp/sky_descriptor_test.cpp); "auto" is the minimal unaliased one.
+TEST(Config, GridPresetsResolveToTheirRingsAndLongitudes) {
+  const Config defaults = DefaultConfig();
+  EXPECT_EQ(defaults.descriptor.bands, 64);
+  EXPECT_EQ(defaults.descriptor.grid, GridPreset::kOversampled);
+  EXPECT_EQ(defaults.descriptor.rings, 48);  // ceil(96 / 2): the minimal grid for 96 bands
+  EXPECT_EQ(defaults.descriptor.longitudes, 256);
+  EXPECT_TRUE(dsp::ShGridResolvesBands({defaults.descriptor.rings, defaults.descriptor.longitudes,
+                                        dsp::ShCoverage::kUpperHemisphere},
+                                       96));
+  Result<Config> paper_bands = ParseConfig("[descriptor]\nbands = 120\n", "t.toml");
+  ASSERT_TRUE(paper_bands.ok()) << paper_bands.status().message();
+  EXPECT_EQ(paper_bands->descriptor.rings, 90);
+  EXPECT_EQ(paper_bands->descriptor.longitudes, 512);
+  Result<Config> c = ParseConfig("[descriptor]\nbands = 120\ngrid = \"auto\"\n", "t.toml");
   ASSERT_TRUE(c.ok()) << c.status().message();
   EXPECT_EQ(c->descriptor.rings, 60);
   EXPECT_EQ(c->descriptor.longitudes, 256);
-  Result<Config> odd = ParseConfig("[descriptor]\nbands = 7\n", "t.toml");
+  Result<Config> odd = ParseConfig("[descriptor]\nbands = 7\ngrid = \"auto\"\n", "t.toml");
   ASSERT_TRUE(odd.ok());
   EXPECT_EQ(odd->descriptor.rings, 4);
   EXPECT_EQ(odd->descriptor.longitudes, 16);

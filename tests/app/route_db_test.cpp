@@ -289,7 +289,23 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
   other.bands = 7;
   Status s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(std::string(s.message()).find("bands = 5"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message())
+                .find("taught with [descriptor] bands = 5 but this "
+                      "configuration has 7: run with the configuration"),
+            std::string::npos)
+      << s.message();
+  // Another grid: says which key sets it, and what the defaults were before it changed.
+  other = Settings();
+  other.rings += 1;
+  s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(std::string(s.message()).find("[descriptor] rings = "), std::string::npos)
+      << s.message();
+  EXPECT_NE(std::string(s.message())
+                .find("(set by [descriptor] grid; routes taught with the "
+                      "defaults before 2026-11-26 used grid = \"auto\")"),
+            std::string::npos)
+      << s.message();
   // A version-3 file compares the lens parameters, not the hash.
   other = Settings();
   other.lens_hash = 1;

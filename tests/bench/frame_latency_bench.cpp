@@ -32,9 +32,14 @@ struct Fixture {
   std::vector<std::vector<std::uint8_t>> images;
   bool ok = false;
 
-  explicit Fixture(bool attitude) {
+  Fixture(bool attitude, bool minimal_grid_64) {
     Config config = DefaultConfig();
     config.capacities.route_frames = kRouteFrames;
+    if (minimal_grid_64) {  // the default before 2026-11-26 (docs/SKY_DESCRIPTOR.md, "Grid")
+      config.descriptor.bands = 64;
+      config.descriptor.grid = GridPreset::kAuto;
+      ResolveDescriptorGrid(&config.descriptor);
+    }
     if (attitude)
       config.attitude.kind = AttitudeKind::kSim;  // the pipeline's gravity cap
     if (!pipeline.Init(config).ok())
@@ -83,10 +88,11 @@ struct Fixture {
 // attitude: [attitude] on, each frame's attitude from a 200 Hz IMU (the simulated twin of
 // the IIO driver) through the attitude filter, 7 samples a frame at 30 fps, then the
 // descriptor with the gravity cap.
-void FrameToState(benchmark::State& state, bool attitude) {
-  static Fixture plain(false);
-  static Fixture capped(true);
-  Fixture& fixture = attitude ? capped : plain;
+void FrameToState(benchmark::State& state, bool attitude, bool minimal_grid_64 = false) {
+  static Fixture plain(false, false);
+  static Fixture capped(true, false);
+  static Fixture plain_64(false, true);
+  Fixture& fixture = minimal_grid_64 ? plain_64 : attitude ? capped : plain;
   if (!fixture.ok) {
     state.SkipWithError("fixture failed");
     return;
@@ -150,6 +156,12 @@ void BM_FrameToStateWithAttitude(benchmark::State& state) {
   FrameToState(state, true);
 }
 BENCHMARK(BM_FrameToStateWithAttitude)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+// The default descriptor before 2026-11-26: 64 bands on the minimal 32 x 128 grid.
+void BM_FrameToStateMinimalGrid64(benchmark::State& state) {
+  FrameToState(state, false, true);
+}
+BENCHMARK(BM_FrameToStateMinimalGrid64)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 // Reference: reading every byte of one frame.
 void BM_ReadFrame(benchmark::State& state) {
