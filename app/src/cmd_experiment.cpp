@@ -53,6 +53,10 @@ constexpr const char* kUsage =
     "options:\n"
     "  --width W --height H   image size (default 320x240)\n"
     "  --bands N              SH bands of the sky descriptor (default 120, as the paper)\n"
+    "  --grid G               its sampling grid: auto (the minimal unaliased grid for the\n"
+    "                         bands; default, every published table) or oversampled (the\n"
+    "                         firmware's; --bands 64 --grid oversampled is the firmware's\n"
+    "                         descriptor; docs/SKY_DESCRIPTOR.md, \"Grid\")\n"
     "  --normalisation N      of the sky descriptor's spectrum: unit_l2 (the firmware's\n"
     "                         default), none (the paper's eq. 3; the tables measured before\n"
     "                         2026-11-26) or divide_by_a0\n"
@@ -140,6 +144,14 @@ int ParseArgs(std::span<char* const> args, Options* o) {
       if (!ParseNumber(v, 2, 200, &d) || d != std::floor(d))
         return bad("an integer within 2..200");
       e.bands = static_cast<int>(d);
+    } else if (std::strcmp(flag, "--grid") == 0) {
+      if (std::strcmp(v, "auto") == 0) {
+        e.oversampled_grid = false;
+      } else if (std::strcmp(v, "oversampled") == 0) {
+        e.oversampled_grid = true;
+      } else {
+        return bad("auto or oversampled");
+      }
     } else if (std::strcmp(flag, "--spacing") == 0) {
       if (!ParseNumber(v, 0.001, 100, &d))
         return bad("metres within 0.001..100");
@@ -349,8 +361,11 @@ std::string CommonNotes(const host_eval::ExperimentOptions& e) {
                               e.lateral_m)
                      : std::string())
           : Format("frames every %.3g m with +-20 %% speed jitter", e.spacing_m);
-  return Format("Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands, ", e.width,
-                e.height, e.bands) +
+  return Format(
+             "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands on the %s "
+             "grid, ",
+             e.width, e.height, e.bands,
+             e.oversampled_grid ? "oversampled (the firmware's)" : "minimal unaliased") +
          sampling +
          Format(
              ". OpenSeqSLAM: ds %d (unless stated), v %.1f..%.1f, R %d, Rwindow %d, centred "

@@ -141,7 +141,8 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   dsp::SkyDescriptor sky;
   dsp::SkyDescriptorOptions sky_options;
   sky_options.bands = options.bands;
-  sky_options.grid = dsp::DefaultShGridConfig(options.bands);
+  sky_options.grid = options.oversampled_grid ? dsp::OversampledShGridConfig(options.bands)
+                                              : dsp::DefaultShGridConfig(options.bands);
   sky_options.normalisation = options.normalisation;
   if (const dsp::DescriptorError e = sky.Init(renderer.lens(), sky_options); !e.ok())
     return Status::Error(StatusCode::kInvalidArgument, "sky descriptor: %s", e.message);

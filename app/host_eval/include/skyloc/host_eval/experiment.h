@@ -47,6 +47,10 @@ struct ExperimentOptions {
   int width = 320;
   int height = 240;
   int bands = 120;  // SH bands of the sky descriptor (the paper: 120)
+  // The sampling grid: false, the minimal unaliased grid for `bands` (DefaultShGridConfig,
+  // what every table in docs/RESULTS.md used); true, OversampledShGridConfig, the firmware's
+  // [descriptor] grid = "oversampled" (with bands = 64: the firmware's descriptor).
+  bool oversampled_grid = false;
   // The firmware's default ([descriptor] normalisation, app/src/config.h; a test keeps the
   // two equal). kNone is the paper's eq. 3, what the tables before 2026-11-26 used.
   dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kUnitL2;
