@@ -3,6 +3,7 @@
 // any image failed, so scripts notice, and 2 for a bad command line (nothing processed).
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,7 +20,8 @@ namespace skyloc::app {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: skyloc describe [--camera FILE.toml] [--bands L] [--grid default|paper] [--json]\n"
+    "usage: skyloc describe [--camera FILE.toml] [--bands L] [--grid default|oversampled|paper]\n"
+    "                       [--json]\n"
     "                       [--lens equidistant|equisolid|equirectangular] [--fov DEG]\n"
     "                       [--centre X,Y] [--radius PX] IMAGE...\n"
     "\n"
@@ -30,7 +32,10 @@ constexpr char kUsage[] =
     "                 an equidistant 185-degree fisheye filling the image circle and a 2:1\n"
     "                 image an equirectangular panorama\n"
     "  --bands L      number of bands, 1..512 (default 120)\n"
-    "  --grid G       'default' (unaliased for L bands) or 'paper' (2000 points)\n"
+    "  --grid G       'default' (the minimal unaliased grid for L bands), 'oversampled' (the\n"
+    "                 firmware's: the unaliased grid for 1.5 L; with --bands 64 the\n"
+    "                 firmware's default descriptor before its normalisation) or 'paper'\n"
+    "                 (2000 points)\n"
     "  --json         one JSON object per line: file, threshold, sky_fraction, amplitudes\n"
     "  --lens, --fov, --centre, --radius  override the camera file or the guess\n"
     "\n"
@@ -40,7 +45,7 @@ constexpr char kUsage[] =
 struct Options {
   const char* camera = nullptr;
   int bands = 120;
-  bool paper_grid = false;
+  enum class Grid : std::uint8_t { kDefault, kOversampled, kPaper } grid = Grid::kDefault;
   bool json = false;
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
@@ -79,11 +84,13 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     } else if (std::strcmp(a, "--grid") == 0) {
       const char* v = value();
       if (v != nullptr && std::strcmp(v, "paper") == 0)
-        o->paper_grid = true;
+        o->grid = Options::Grid::kPaper;
+      else if (v != nullptr && std::strcmp(v, "oversampled") == 0)
+        o->grid = Options::Grid::kOversampled;
       else if (v != nullptr && std::strcmp(v, "default") == 0)
-        o->paper_grid = false;
+        o->grid = Options::Grid::kDefault;
       else
-        return Usage("--grid must be 'default' or 'paper', not '%s'", v ? v : "");
+        return Usage("--grid must be 'default', 'oversampled' or 'paper', not '%s'", v ? v : "");
     } else if (std::strcmp(a, "--lens") == 0) {
       const char* v = value();
       dsp::LensModel model;
@@ -229,8 +236,10 @@ int RunDescribe(std::span<char* const> args) {
 
   dsp::SkyDescriptorOptions descriptor_options;
   descriptor_options.bands = o.bands;
-  if (o.paper_grid)
+  if (o.grid == Options::Grid::kPaper)
     descriptor_options.grid = dsp::PaperShGridConfig();
+  else if (o.grid == Options::Grid::kOversampled)
+    descriptor_options.grid = dsp::OversampledShGridConfig(o.bands);
   std::vector<float> amplitudes(static_cast<std::size_t>(o.bands));
   dsp::SkyDescriptor descriptor;
   std::optional<dsp::LensParams> descriptor_lens;  // what `descriptor` was built for
