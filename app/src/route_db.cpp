@@ -199,25 +199,26 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
   struct Field {
     const char* name;
     std::uint64_t in_file, wanted;
-    const char* hint;
+    const char* fix;
   };
+  // Short enough to survive a long route path in a Status (240 characters): the fix first.
+  constexpr const char* kRerun = "run with the configuration it was taught with, or teach again";
   // The grid's rings and longitudes come from [descriptor] grid; a route taught with the
   // defaults before 2026-11-26 was sampled on grid = "auto".
-  constexpr const char* kGridHint =
-      " (set by [descriptor] grid; routes taught with the defaults before 2026-11-26 used "
-      "grid = \"auto\")";
-  const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind, ""},
-                          {"[descriptor] bands", file.bands, want.bands, ""},
-                          {"[descriptor] rings", file.rings, want.rings, kGridHint},
-                          {"[descriptor] longitudes", file.longitudes, want.longitudes, kGridHint},
-                          {"descriptor size", file.dim, want.dim, ""}};
+  constexpr const char* kGridFix =
+      "set [descriptor] grid as taught (\"auto\" was the default before 2026-11-26), or teach "
+      "again";
+  const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind, kRerun},
+                          {"[descriptor] bands", file.bands, want.bands, kRerun},
+                          {"[descriptor] rings", file.rings, want.rings, kGridFix},
+                          {"[descriptor] longitudes", file.longitudes, want.longitudes, kGridFix},
+                          {"descriptor size", file.dim, want.dim, kRerun}};
   for (const Field& f : fields) {
     if (f.in_file != f.wanted) {
       return Status::Error(StatusCode::kFailedPrecondition,
-                           "taught with %s = %llu but this configuration has %llu%s: run with "
-                           "the configuration it was taught with, or teach again",
-                           f.name, static_cast<unsigned long long>(f.in_file),
-                           static_cast<unsigned long long>(f.wanted), f.hint);
+                           "taught with %s = %llu but this configuration has %llu: %s", f.name,
+                           static_cast<unsigned long long>(f.in_file),
+                           static_cast<unsigned long long>(f.wanted), f.fix);
     }
   }
   // A route without strips, or a configuration without heading, loads: heading is then

@@ -294,7 +294,7 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
                       "configuration has 7: run with the configuration"),
             std::string::npos)
       << s.message();
-  // Another grid: says which key sets it, and what the defaults were before it changed.
+  // Another grid: says which key sets it, and what the default was before it changed.
   other = Settings();
   other.rings += 1;
   s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
@@ -302,8 +302,8 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
   EXPECT_NE(std::string(s.message()).find("[descriptor] rings = "), std::string::npos)
       << s.message();
   EXPECT_NE(std::string(s.message())
-                .find("(set by [descriptor] grid; routes taught with the "
-                      "defaults before 2026-11-26 used grid = \"auto\")"),
+                .find(": set [descriptor] grid as taught (\"auto\" was the default before "
+                      "2026-11-26), or teach again"),
             std::string::npos)
       << s.message();
   // A version-3 file compares the lens parameters, not the hash.
