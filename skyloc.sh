@@ -197,7 +197,7 @@ configure_and_build() {
     # What goes into the .deb: Release, the firmware only, every driver required.
     package-*)
       args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF -DSKYLOC_BUILD_BENCHMARKS=OFF
-        -DSKYLOC_HOST_EVAL=OFF -DSKYLOC_WITH_V4L2=ON -DSKYLOC_WITH_GPIOD=ON -DSKYLOC_WITH_LIBCAMERA=ON)
+        -DSKYLOC_TOOLS=OFF -DSKYLOC_WITH_V4L2=ON -DSKYLOC_WITH_GPIOD=ON -DSKYLOC_WITH_LIBCAMERA=ON)
       case "$kind" in
         package-host) ;;
         package-aarch64) args+=(-DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"

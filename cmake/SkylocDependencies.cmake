@@ -22,19 +22,19 @@ target_include_directories(skyloc_tomlpp SYSTEM INTERFACE ${SKYLOC_TOMLPP_INCLUD
 target_compile_definitions(skyloc_tomlpp INTERFACE TOML_HEADER_ONLY=1 TOML_EXCEPTIONS=0)
 add_library(skyloc::tomlpp ALIAS skyloc_tomlpp)
 
-# OpenCV (Debian's libopencv-dev) for the host-only evaluation tools only: SIFT features and
+# OpenCV (Debian's libopencv-dev) for the lab's tools only: SIFT features and
 # k-means for the FAB-MAP baseline. Never linked into dsp/, drivers/ or the ARM firmware.
-if(SKYLOC_HOST_EVAL)
+if(SKYLOC_TOOLS)
   find_package(OpenCV 4 QUIET COMPONENTS core imgproc features2d)
   if(NOT OpenCV_FOUND)
-    message(FATAL_ERROR "skyloc: SKYLOC_HOST_EVAL is ON but OpenCV 4 (core, imgproc, "
+    message(FATAL_ERROR "skyloc: SKYLOC_TOOLS is ON but OpenCV 4 (core, imgproc, "
                         "features2d) was not found. Install it with 'apt-get install "
                         "libopencv-dev' (./skyloc.sh deps does), or configure with "
-                        "-DSKYLOC_HOST_EVAL=OFF to leave the evaluation tools out.")
+                        "-DSKYLOC_TOOLS=OFF to leave the lab's tools out.")
   endif()
-  message(STATUS "skyloc: host evaluation tools (FAB-MAP): built, OpenCV ${OpenCV_VERSION}")
+  message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): built, OpenCV ${OpenCV_VERSION}")
 else()
-  message(STATUS "skyloc: host evaluation tools (FAB-MAP): LEFT OUT (SKYLOC_HOST_EVAL=OFF, "
+  message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): LEFT OUT (SKYLOC_TOOLS=OFF, "
                  "the default when cross-compiling)")
 endif()
 

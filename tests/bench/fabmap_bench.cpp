@@ -1,4 +1,4 @@
-// FAB-MAP 2.0 query cost (inverted index, host_eval/fabmap.h) against the route length:
+// FAB-MAP 2.0 query cost (inverted index, app/tools/fabmap.h) against the route length:
 // 1k, 10k and 100k reference places, with a 500-word vocabulary (200 distinct words per
 // image: 40 % occupancy, what SIFT's 500 keypoints give on the simulated sky images) and a
 // 5000-word one (4 %). Inference only: SIFT and quantisation are per image, not per place
@@ -6,19 +6,18 @@
 // i.e. well under the ~30 ms SIFT costs per frame.
 #include <benchmark/benchmark.h>
 
-#if SKYLOC_WITH_HOST_EVAL
 #include <algorithm>
 #include <cstdint>
 #include <random>
 #include <vector>
 
-#include "skyloc/host_eval/chow_liu.h"
-#include "skyloc/host_eval/fabmap.h"
+#include "tools/chow_liu.h"
+#include "tools/fabmap.h"
 
 namespace {
 
-using skyloc::host_eval::FabMap2;
-using skyloc::host_eval::WordList;
+using skyloc::tools::FabMap2;
+using skyloc::tools::WordList;
 
 WordList RandomImage(std::mt19937& rng, int words, int per_image) {
   std::vector<std::uint32_t> all(static_cast<std::size_t>(words));
@@ -42,7 +41,7 @@ void BM_FabMapQuery(benchmark::State& state) {
   std::vector<WordList> training;
   for (int i = 0; i < 1000; ++i)
     training.push_back(RandomImage(rng, words, per_image));
-  const auto tree = skyloc::host_eval::LearnChowLiuTree(training, words);
+  const auto tree = skyloc::tools::LearnChowLiuTree(training, words);
   FabMap2 fm;
   if (!tree.ok() || !fm.Init(*tree, {}).ok()) {
     state.SkipWithError("setup failed");

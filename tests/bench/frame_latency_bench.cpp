@@ -12,7 +12,7 @@
 #include <numeric>
 #include <vector>
 
-#include "frame_loop.h"
+#include "firmware/frame_loop.h"
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
@@ -22,7 +22,7 @@
 namespace {
 
 using namespace skyloc;
-using namespace skyloc::app;
+using namespace skyloc::firmware;
 
 constexpr int kWidth = 640, kHeight = 480, kFrames = 32, kRouteFrames = 10000;
 

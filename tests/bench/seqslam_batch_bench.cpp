@@ -13,10 +13,10 @@
 #include <cstdlib>
 #include <vector>
 
-#include "parallel.h"
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/seqslam_batch.h"
 #include "support/synthetic_descriptors.h"
+#include "tools/parallel.h"
 
 namespace {
 
@@ -83,7 +83,7 @@ void Blocked(benchmark::State& state, const DescriptorRows& ref, const Descripto
       state.SkipWithError("Init failed");
       return;
     }
-    skyloc::app::RunBlockedSeqSlam(engine, jobs);
+    skyloc::tools::RunBlockedSeqSlam(engine, jobs);
     bytes = engine.AllocatedBytes();
     benchmark::DoNotOptimize(m.data());
   }

@@ -14,7 +14,7 @@
 //   heading       dsp::HeadingEstimator on two strips ([heading] defaults: correlation + SURF)
 //   correlation   the same with surf = false (the cross-correlation only)
 //   filter        one dsp::RouteFilter step against ROUTE_FRAMES rows (the default matcher)
-//   frame         app::Pipeline::Localise: descriptor + strip + filter + state + heading
+//   frame         firmware::Pipeline::Localise: descriptor + strip + filter + state + heading
 //   render        renders the street frames into IMAGE_DIR for the stages above (set-up only)
 // It prints what it ran and a checksum of the results (so no stage can be optimised away).
 #include <chrono>
@@ -26,7 +26,7 @@
 #include <utility>
 #include <vector>
 
-#include "pipeline.h"
+#include "firmware/pipeline.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/segmentation.h"
@@ -35,7 +35,7 @@
 namespace {
 
 using namespace skyloc;
-using namespace skyloc::app;
+using namespace skyloc::firmware;
 
 constexpr int kWidth = 640, kHeight = 480, kImages = 2;
 

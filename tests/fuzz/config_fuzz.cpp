@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "config.h"
+#include "firmware/config.h"
 
 namespace {
 
@@ -16,7 +16,7 @@ void Require(bool condition) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using namespace skyloc::app;
+  using namespace skyloc::firmware;
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   skyloc::Result<Config> c = ParseConfig(text, "fuzz.toml");
   if (!c.ok()) {

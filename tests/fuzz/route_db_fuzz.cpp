@@ -18,12 +18,12 @@
 #include <string>
 #include <vector>
 
-#include "route_db.h"
+#include "firmware/route_db.h"
 
 namespace {
 
 std::vector<std::uint8_t> ValidRouteFile() {
-  using namespace skyloc::app;
+  using namespace skyloc::firmware;
   const std::string path = "/tmp/skyloc_route_fuzz_" + std::to_string(::getpid()) + ".db";
   RouteDbSettings settings;
   settings.descriptor_kind = 1;
@@ -57,7 +57,7 @@ std::vector<std::uint8_t> ValidRouteFile() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using namespace skyloc::app;
+  using namespace skyloc::firmware;
   static const std::vector<std::uint8_t> kValid = ValidRouteFile();
   static RouteFrames frames;
   static const bool allocated = frames.Allocate(64, 4).ok();

@@ -72,7 +72,7 @@ if(NOT rc EQUAL 2 OR NOT err MATCHES "--vocab \\(FAB-MAP\\) is for tilt and mano
   message(FATAL_ERROR "experiment speed --vocab: exit ${rc}, stderr:\n${err}")
 endif()
 # A file that is not a vocabulary: one error naming the file, exit 1 (the unit tests
-# damage real vocabularies byte by byte: tests/host_eval/fabmap_vocabulary_test.cpp).
+# damage real vocabularies byte by byte: tests/tools/fabmap_vocabulary_test.cpp).
 execute_process(COMMAND ${CMD} eval --reference ${WORK}/ref --query ${WORK}/query
                 --vocab ${WORK}/foreign.fabmap --method fabmap --out ${WORK}/out2
                 RESULT_VARIABLE rc ERROR_VARIABLE err)

@@ -133,21 +133,36 @@ grep -q "recovered" "$WORK/out" || fail "route recover: $(cat "$WORK/out")"
 expect_rc 0 "repeat on the recovered route" -- "${RUN[@]}" repeat --route "$WORK/kill.db" --config "$CONFIG" --frames 20
 
 # 9. replay: teach from one simulated recording, replay another (other jitter, tilt, dawn).
-if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/ref" --frames 60 --width 96 --height 96 >/dev/null 2>&1 &&
-  "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/qry" --frames 60 --width 96 --height 96 \
-    --run 2 --tilt 5 --lighting dawn >/dev/null 2>&1; then
+# A build with the lab's tools makes them with `skyloc simulate` (poses: replay scores
+# itself); the firmware-only build (ARM) records its own simulated camera (no poses).
+if "${RUN[@]}" --help | grep -q "^  simulate "; then
+  make_dataset() { # DIR FRAMES WIDTH HEIGHT [simulate flags...]
+    local dir=$1 frames=$2 w=$3 h=$4
+    shift 4
+    "${RUN[@]}" simulate --world city --spacing 1 --out "$dir" --frames "$frames" --width "$w" --height "$h" "$@" >/dev/null 2>&1
+  }
+  with_poses=1
+else
+  make_dataset() {
+    local dir=$1 frames=$2 w=$3 h=$4
+    shift 4
+    printf '[camera]\nkind = "sim"\nsim_world = "city"\nwidth = %d\nheight = %d\nfps = 200.0\n[descriptor]\nbands = 24\n' "$w" "$h" >"$WORK/record_$w.toml"
+    "${RUN[@]}" record "$dir" --config "$WORK/record_$w.toml" --frames "$frames" "$@" >/dev/null 2>&1
+  }
+  with_poses=0
+fi
+if make_dataset "$WORK/ref" 60 96 96 && make_dataset "$WORK/qry" 60 96 96 --run 2 --tilt 5 --lighting dawn; then
   expect_rc 0 "teach from a dataset" -- "${RUN[@]}" teach --route "$WORK/ds.db" --config "$CONFIG" --dataset "$WORK/ref"
   expect_err "60 frames committed" "teach from a dataset"
   expect_rc 0 "replay" -- "${RUN[@]}" replay "$WORK/qry" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
   [ "$(wc -l <"$WORK/out")" -eq 60 ] || fail "replay printed $(wc -l <"$WORK/out") lines"
-  expect_err "precision at 100% recall" "replay evaluation"
+  if [ "$with_poses" = 1 ]; then expect_err "precision at 100% recall" "replay evaluation"; fi
   expect_rc 1 "replay of a missing dataset" -- "${RUN[@]}" replay "$WORK/nothing" --route "$WORK/ds.db"
   expect_err "nothing" "replay of a missing dataset"
   # a frame of another size in a recording: a data-loss error naming the file, exit 1
   # (teach and replay), not a silently skipped frame.
   cp -r "$WORK/qry" "$WORK/odd"
-  if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/small" --frames 2 --width 64 \
-    --height 64 >/dev/null 2>&1; then
+  if make_dataset "$WORK/small" 2 64 64; then
     odd=$(sed -n '12p' "$WORK/odd/frames.csv" | cut -d, -f2)
     cp "$WORK/small/frames/$(sed -n '2p' "$WORK/small/frames.csv" | cut -d, -f2)" "$WORK/odd/frames/$odd"
     expect_rc 1 "replay with a frame of another size" -- "${RUN[@]}" replay "$WORK/odd" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
@@ -155,10 +170,10 @@ if "${RUN[@]}" simulate --world city --spacing 1 --out "$WORK/ref" --frames 60 -
     expect_rc 1 "teach with a frame of another size" -- "${RUN[@]}" teach --route "$WORK/odd.db" --config "$CONFIG" --dataset "$WORK/odd"
     expect_err "$odd) is 64x64 .*, expected 96x96" "teach with a frame of another size"
   else
-    fail "skyloc simulate could not write the 64x64 dataset"
+    fail "could not write the 64x64 dataset"
   fi
 else
-  fail "skyloc simulate could not write the replay datasets"
+  fail "could not write the replay datasets"
 fi
 
 # 10a. a start-up failure after the configuration (here: no such GPIO chip, or no libgpiod

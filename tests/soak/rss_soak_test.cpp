@@ -5,14 +5,14 @@
 
 #include <cstdio>
 
-#include "frame_loop.h"
+#include "firmware/frame_loop.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/process_memory.h"
 #include "skyloc/platform/signals.h"
 #include "skyloc/sim/street_source.h"
 
-namespace skyloc::app {
+namespace skyloc::firmware {
 namespace {
 
 TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
@@ -82,4 +82,4 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
 }
 
 }  // namespace
-}  // namespace skyloc::app
+}  // namespace skyloc::firmware

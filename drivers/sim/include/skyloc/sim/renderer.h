@@ -13,7 +13,7 @@
 //               camera frame above, so a camera file's mount angles tilt the view too.
 //               Pixels outside the image circle are black. A pinhole lens mounted with
 //               roll -90, yaw -90 (camera z = body +x, image right = body -y) is a
-//               forward camera (the 1D SURF experiment, host_eval/surf1d_experiment.h).
+//               forward camera (the 1D SURF experiment, app/tools/surf1d_experiment.h).
 //
 // Init() allocates a table of per-pixel ray directions; Render() allocates nothing and is
 // deterministic: the same world, pose, lighting and frame seed give the same bytes.

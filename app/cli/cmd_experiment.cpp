@@ -1,0 +1,667 @@
+// `skyloc experiment NAME --out DIR`: the paper's experiments on simulated runs (issue 5,
+// docs/RESULTS.md). Each writes DIR/results.md (a markdown table and the command that
+// made it), DIR/metrics.json, precision-recall plots DIR/pr_sky.svg and DIR/pr_vanilla.svg,
+// and frame correspondences DIR/correspondence.svg. The experiments are host evaluation
+// code (skyloc::tools): a build without SKYLOC_HOST_EVAL says they are not in it.
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iterator>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cli/commands.h"
+#include "firmware/config.h"
+#include "firmware/pipeline.h"
+#include "skyloc/dsp/localisation_state.h"
+#include "tools/experiment.h"
+#include "tools/output_file.h"
+#include "tools/svg_plot.h"
+#include "tools/vocabulary.h"
+
+namespace skyloc::cli {
+using namespace skyloc::firmware;
+using namespace skyloc::tools;
+namespace {
+
+constexpr const char* kUsage =
+    "usage: skyloc experiment tilt|manoeuvre|ants|speed|heading|surf1d --out DIR [options]\n"
+    "\n"
+    "  tilt       City loop, runs at tilt -30..30 paired alpha1 ~ -alpha2 (differences\n"
+    "             0..60): recall at 100 % precision, sky vs vanilla SeqSLAM\n"
+    "  manoeuvre  forest (BMX) and repetitive (Disposal) worlds, reference at noon vs a\n"
+    "             dawn run with zig-zag and bumps: precision at 100 % recall, ds 1/10/20\n"
+    "  ants       Seville habitat, ant1_route1 as reference vs other routes of ant 1 and\n"
+    "             of other ants, at ant height (0.01 m) and robot height (0.1 m)\n"
+    "  speed      forest and city, sampled in time at 10 fps: a taught run with stops vs\n"
+    "             repeats at 0.5x/1x/2x, with and without stops, level and +-15 deg bumps;\n"
+    "             OpenSeqSLAM vs the route filter (sky), ds 1/5/10/20\n"
+    "  heading    manoeuvre's runs (zig-zag +-20 deg, bumps +-15 deg): heading error of the\n"
+    "             horizon-strip cross-correlation and of 1D SURF + RANSAC against the\n"
+    "             poses, on frames the route filter matches correctly\n"
+    "  surf1d     the 1D SURF paper's ROC experiment, turning on the spot in the city\n"
+    "             (own options: skyloc experiment surf1d --help)\n"
+    "\n"
+    "options:\n"
+    "  --width W --height H   image size (default 320x240)\n"
+    "  --bands N              SH bands of the sky descriptor (default 120, as the paper)\n"
+    "  --grid G               its sampling grid: auto (the minimal unaliased grid for the\n"
+    "                         bands; default, every published table) or oversampled (the\n"
+    "                         firmware's; --bands 64 --grid oversampled is the firmware's\n"
+    "                         descriptor; docs/SKY_DESCRIPTOR.md, \"Grid\")\n"
+    "  --normalisation N      of the sky descriptor's spectrum: unit_l2 (the firmware's\n"
+    "                         default), none (the paper's eq. 3; the tables measured before\n"
+    "                         2026-11-26) or divide_by_a0\n"
+    "  --spacing M            frame spacing in metres (default 1; ants 0.05)\n"
+    "  --frames N             at most N frames a run (default: whole routes)\n"
+    "  --seed N               procedural world seed (default 1)\n"
+    "  --lateral M            speed: every repeat wanders sideways off the taught line within\n"
+    "                         +-M metres, 0..5 (default 0: on it; skyloc simulate --lateral)\n"
+    "  --data DIR             Seville data folder (default ../shared/data/seville2009)\n"
+    "  --attitude A           the gravity-aligned descriptor's zenith (tilt, manoeuvre,\n"
+    "                         speed): imu (the simulated IMU with noise and bias through\n"
+    "                         the attitude filter; default), truth (the true poses), none,\n"
+    "                         image (estimated from each frame's sky mask, experimental)\n"
+    "  --zenith M             --attitude image's method: skyline (the skyline's mean plane;\n"
+    "                         default) or centroid (the sky's centroid)\n"
+    "  --cap-elevation DEG    the cap's lower edge, 0..80 (default: from the experiment's\n"
+    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n"
+    "  --vocab VOCAB          tilt, manoeuvre: add FAB-MAP 2.0 on the visible images (the\n"
+    "                         fabmap column) with a vocabulary from `skyloc fabmap-train`,\n"
+    "                         trained on a run of another world (docs/FABMAP.md)\n";
+
+struct Options {
+  std::string name, out, data_dir = "../shared/data/seville2009";
+  std::string vocabulary_path;  // --vocab: FAB-MAP 2.0 (tilt, manoeuvre)
+  tools::ExperimentOptions experiment;
+  bool spacing_given = false;
+};
+
+bool ParseNumber(const char* text, double lo, double hi, double* value) {
+  char* end = nullptr;
+  *value = std::strtod(text, &end);
+  return end != text && *end == '\0' && *value >= lo && *value <= hi;
+}
+
+int ParseArgs(std::span<char* const> args, Options* o) {
+  if (args.empty() || args[0][0] == '-') {
+    std::fprintf(stderr,
+                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed, "
+                 "heading or surf1d\n");
+    return kExitUsage;
+  }
+  o->name = args[0];
+  if (o->name != "tilt" && o->name != "manoeuvre" && o->name != "ants" && o->name != "speed" &&
+      o->name != "heading") {
+    std::fprintf(stderr,
+                 "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed, "
+                 "heading, surf1d)\n",
+                 args[0]);
+    return kExitUsage;
+  }
+  for (std::size_t i = 1; i < args.size(); ++i) {
+    const char* flag = args[i];
+    if (i + 1 >= args.size()) {
+      std::fprintf(stderr, "skyloc experiment: %s needs a value (see --help)\n", flag);
+      return kExitUsage;
+    }
+    const char* v = args[++i];
+    double d = 0;
+    auto bad = [&](const char* expected) {
+      std::fprintf(stderr, "skyloc experiment: %s '%s': expected %s\n", flag, v, expected);
+      return kExitUsage;
+    };
+    tools::ExperimentOptions& e = o->experiment;
+    if (std::strcmp(flag, "--out") == 0) {
+      o->out = v;
+    } else if (std::strcmp(flag, "--data") == 0) {
+      o->data_dir = v;
+    } else if (std::strcmp(flag, "--vocab") == 0) {
+      if (o->name != "tilt" && o->name != "manoeuvre") {
+        std::fprintf(stderr, "skyloc experiment %s: --vocab (FAB-MAP) is for tilt and manoeuvre\n",
+                     o->name.c_str());
+        return kExitUsage;
+      }
+      o->vocabulary_path = v;
+    } else if (std::strcmp(flag, "--width") == 0) {
+      if (!ParseNumber(v, 16, 4096, &d) || d != std::floor(d))
+        return bad("pixels within 16..4096");
+      e.width = static_cast<int>(d);
+    } else if (std::strcmp(flag, "--height") == 0) {
+      if (!ParseNumber(v, 16, 4096, &d) || d != std::floor(d))
+        return bad("pixels within 16..4096");
+      e.height = static_cast<int>(d);
+    } else if (std::strcmp(flag, "--bands") == 0) {
+      if (!ParseNumber(v, 2, 200, &d) || d != std::floor(d))
+        return bad("an integer within 2..200");
+      e.bands = static_cast<int>(d);
+    } else if (std::strcmp(flag, "--grid") == 0) {
+      if (std::strcmp(v, "auto") == 0) {
+        e.oversampled_grid = false;
+      } else if (std::strcmp(v, "oversampled") == 0) {
+        e.oversampled_grid = true;
+      } else {
+        return bad("auto or oversampled");
+      }
+    } else if (std::strcmp(flag, "--spacing") == 0) {
+      if (!ParseNumber(v, 0.001, 100, &d))
+        return bad("metres within 0.001..100");
+      e.spacing_m = d;
+      o->spacing_given = true;
+    } else if (std::strcmp(flag, "--frames") == 0) {
+      if (!ParseNumber(v, 20, 1e6, &d) || d != std::floor(d))
+        return bad("an integer of at least 20");
+      e.max_frames = static_cast<int>(d);
+    } else if (std::strcmp(flag, "--attitude") == 0) {
+      if (std::strcmp(v, "none") == 0)
+        e.attitude = tools::AttitudeInput::kNone;
+      else if (std::strcmp(v, "truth") == 0)
+        e.attitude = tools::AttitudeInput::kTruth;
+      else if (std::strcmp(v, "imu") == 0)
+        e.attitude = tools::AttitudeInput::kSimulatedImu;
+      else if (std::strcmp(v, "image") == 0)
+        e.attitude = tools::AttitudeInput::kImage;
+      else
+        return bad("none, truth, imu or image");
+    } else if (std::strcmp(flag, "--zenith") == 0) {
+      if (std::strcmp(v, "skyline") == 0)
+        e.zenith.method = dsp::ZenithMethod::kSkylinePlane;
+      else if (std::strcmp(v, "centroid") == 0)
+        e.zenith.method = dsp::ZenithMethod::kSkyCentroid;
+      else
+        return bad("skyline or centroid");
+    } else if (std::strcmp(flag, "--normalisation") == 0) {
+      if (!NormalisationFromName(v, &e.normalisation))
+        return bad("unit_l2, none or divide_by_a0");
+    } else if (std::strcmp(flag, "--cap-elevation") == 0) {
+      if (!ParseNumber(v, 0, 80, &d))
+        return bad("degrees within 0..80");
+      e.cap.elevation_deg = d;
+    } else if (std::strcmp(flag, "--lateral") == 0) {
+      if (!ParseNumber(v, 0, 5, &d))
+        return bad("metres within 0..5");
+      e.lateral_m = d;
+    } else if (std::strcmp(flag, "--seed") == 0) {
+      if (!ParseNumber(v, 0, 1e15, &d) || d != std::floor(d))
+        return bad("a non-negative integer");
+      e.world_seed = static_cast<std::uint64_t>(d);
+    } else {
+      std::fprintf(stderr, "skyloc experiment: unknown option '%s' (see --help)\n", flag);
+      return kExitUsage;
+    }
+  }
+  if (o->out.empty()) {
+    std::fprintf(stderr, "skyloc experiment: --out DIR is required\n");
+    return kExitUsage;
+  }
+  return kExitOk;
+}
+
+// The methods an experiment compares, in column order: the JSON and file name of each
+// ("sky" -> pr_sky.svg) and its title.
+struct MethodName {
+  const char* key;
+  const char* title;
+};
+
+// A row of any experiment, as the writers see it: one score per method, in that order.
+struct Row {
+  std::string label;    // also the plot legend
+  std::string columns;  // markdown cells before the metrics
+  std::string json;     // JSON fields before the metrics
+  std::vector<const tools::MethodScore*> scores;
+};
+
+// printf into a std::string; for short pieces (at most 511 characters).
+std::string SummaryJson(const tools::MethodScore& m) {
+  std::string s = Format(
+      "{\"evaluated\": %d, \"with_ground_truth\": %d, \"correct\": %d, "
+      "\"precision_at_100_recall\": %.4f, \"recall_at_100_precision\": %.4f, \"auc\": %.4f, "
+      "\"curve\": [",
+      m.summary.evaluated, m.summary.with_ground_truth, m.summary.correct,
+      m.summary.precision_at_full_recall, m.summary.recall_at_full_precision,
+      m.summary.area_under_curve);
+  for (std::size_t i = 0; i < m.curve.size(); ++i)
+    s += Format("%s[%.4f, %.4f]", i ? ", " : "", m.curve[i].recall, m.curve[i].precision);
+  return s + "]}";
+}
+
+// Precision-recall curves of one method, one per row.
+std::string PrPlot(const char* title, const std::vector<Row>& rows, std::size_t method) {
+  std::vector<PrCurve> curves;
+  for (const Row& r : rows)
+    curves.push_back({r.label, r.scores[method]->curve, LineDash::kSolid});
+  return PrPlotSvg(title, curves);
+}
+
+// Frame correspondences (the paper's Figs. 5a, 8, 9): for every row, one panel per method
+// (the last method first: vanilla left of sky, as the paper).
+std::string CorrespondencePlot(const std::vector<Row>& rows, std::span<const MethodName> methods) {
+  std::vector<CorrespondencePanel> panels;
+  for (const Row& r : rows) {
+    for (std::size_t k = methods.size(); k-- > 0;) {
+      const tools::MethodScore& m = *r.scores[k];
+      CorrespondencePanel panel{std::string(methods[k].key) + ": " + r.label, {}, 1, {}};
+      for (std::size_t q = 0; q < m.truth.size(); ++q) {
+        panel.ground_truth.push_back(m.truth[q].nearest);
+        panel.reference_frames =
+            std::max({panel.reference_frames, m.truth[q].nearest + 1, m.matched[q] + 1});
+        if (m.matched[q] >= 0)
+          panel.matches.push_back({static_cast<int>(q), m.matched[q], m.correct[q]});
+      }
+      panels.push_back(std::move(panel));
+    }
+  }
+  return CorrespondenceSvg(panels, static_cast<int>(methods.size()));
+}
+
+Status WriteOutputs(const Options& o, const std::string& command, const std::string& header,
+                    const std::string& separator, std::span<const MethodName> methods,
+                    const std::vector<Row>& rows, const std::string& notes) {
+  if (::mkdir(o.out.c_str(), 0755) != 0 && errno != EEXIST)
+    return Status::FromErrno(errno, "cannot create '%s'", o.out.c_str());
+  std::string md = "# skyloc experiment " + o.name + "\n\n```\n" + command + "\n```\n\n" + header;
+  std::string rule = separator;
+  for (const char* metric : {"P@R100", "R@P100"}) {
+    for (const MethodName& m : methods) {
+      md += Format(" %s %s |", m.key, metric);
+      rule += "---|";
+    }
+  }
+  md += "\n" + rule + "\n";
+  std::string json = "{\n  \"experiment\": \"" + o.name + "\",\n  \"command\": \"" + command +
+                     "\",\n  \"rows\": [\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
+    md += r.columns;
+    for (const tools::MethodScore* m : r.scores)
+      md += Format(" %.0f %% |", 100 * m->summary.precision_at_full_recall);
+    for (const tools::MethodScore* m : r.scores)
+      md += Format(" %.0f %% |", 100 * m->summary.recall_at_full_precision);
+    md += "\n";
+    json += "    {" + r.json;
+    for (std::size_t k = 0; k < methods.size(); ++k)
+      json +=
+          (k ? ", \"" : "\"") + std::string(methods[k].key) + "\": " + SummaryJson(*r.scores[k]);
+    json += std::string("}") + (i + 1 < rows.size() ? ",\n" : "\n");
+  }
+  std::string plots;
+  for (const MethodName& m : methods)
+    plots += std::string("pr_") + m.key + ".svg, ";
+  md +=
+      "\nP@R100: precision at 100 % recall (every match accepted); R@P100: recall at 100 % "
+      "precision. Plots: " +
+      plots + "correspondence.svg.\n\n" + notes;
+  json += "  ]\n}\n";
+  SKYLOC_TRY(WriteText(o.out + "/results.md", md));
+  SKYLOC_TRY(WriteText(o.out + "/metrics.json", json));
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    SKYLOC_TRY(
+        WriteText(o.out + "/pr_" + methods[k].key + ".svg", PrPlot(methods[k].title, rows, k)));
+  }
+  SKYLOC_TRY(WriteText(o.out + "/correspondence.svg", CorrespondencePlot(rows, methods)));
+  return Status::Ok();
+}
+
+constexpr MethodName kDescriptorMethods[] = {
+    {"sky", "SeqSLAM (sky)"},
+    {"vanilla", "SeqSLAM (vanilla)"},
+    {"sky_filter", "Route filter (sky)"},
+    {"sky_cap", "SeqSLAM (sky, gravity-aligned cap)"},
+    {"sky_cap_filter", "Route filter (sky, gravity-aligned cap)"}};
+// The column after them in tilt and manoeuvre with --vocab.
+constexpr MethodName kFabmapMethod = {"fabmap", "FAB-MAP 2.0 (visible, SIFT)"};
+constexpr MethodName kMatcherMethods[] = {
+    {"openseqslam", "OpenSeqSLAM (sky)"},
+    {"filter", "Route filter (sky)"},
+    {"filter_cap", "Route filter (sky, gravity-aligned cap)"}};
+// The methods without the gravity-aligned columns (--attitude none, and ants).
+constexpr std::size_t kDescriptorMethodsWithoutCap = 3;
+constexpr std::size_t kMatcherMethodsWithoutCap = 2;
+
+// The firmware's state machine (default [state] settings, the filter's motion limits)
+// over a filter run: how many frames it shows LOCALISED, and how many of those are right.
+std::pair<int, int> LocalisedFrames(const tools::MethodScore& m) {
+  Config config;
+  config.seqslam.matcher = Matcher::kRouteFilter;
+  const std::vector<dsp::LocalisationState> states = ReplayStateMachine(config, m.matches);
+  int localised = 0, correct = 0;
+  for (std::size_t t = 0; t < states.size(); ++t) {
+    if (states[t] == dsp::LocalisationState::kLocalised) {
+      ++localised;
+      correct += m.correct[t] ? 1 : 0;
+    }
+  }
+  return {localised, correct};
+}
+
+void PrintProgress(const char* what, void* /*context*/) {
+  std::fprintf(stderr, "skyloc experiment: rendering %s\n", what);
+}
+
+std::string CommonNotes(const tools::ExperimentOptions& e) {
+  const std::string sampling =
+      e.sampling == sim::Sampling::kTime
+          ? Format(
+                "frames at %.3g fps along a speed profile (cruise %.3g m/s x the run's speed "
+                "ratio, a %.3g s stop at the start and %d more of %.3g-%.3g s unless stated)",
+                e.fps, e.speed.cruise_mps, e.speed.start_stop_s, e.speed.stops, e.speed.stop_min_s,
+                e.speed.stop_max_s) +
+                (e.lateral_m > 0
+                     ? Format("; every repeat wanders sideways off the taught line within +-%.3g m",
+                              e.lateral_m)
+                     : std::string())
+          : Format("frames every %.3g m with +-20 %% speed jitter", e.spacing_m);
+  return Format(
+             "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands on the %s "
+             "grid, ",
+             e.width, e.height, e.bands,
+             e.oversampled_grid ? "oversampled (the firmware's)" : "minimal unaliased") +
+         sampling +
+         Format(
+             ". OpenSeqSLAM: ds %d (unless stated), v %.1f..%.1f, R %d, Rwindow %d, centred "
+             "window. Route filter: ds as OpenSeqSLAM's, K %d, keyframe noise factor %.3g, "
+             "Rwindow %d, causal. Ground truth: the reference frames tied (within 1 cm) "
+             "for nearest by position; correct within %d frames of them; no truth farther "
+             "than %.3g m.\n",
+             e.seqslam.sequence_length, static_cast<double>(e.seqslam.v_min),
+             static_cast<double>(e.seqslam.v_max), e.seqslam.contrast_window,
+             e.seqslam.uniqueness_window, e.filter.max_advance,
+             static_cast<double>(e.filter.keyframe_noise_factor), e.filter.uniqueness_window,
+             e.tolerance_frames, e.max_offset_m);
+}
+
+std::string HeadingJson(const dsp::HeadingErrorSummary& e) {
+  return Format(
+      "{\"frames\": %d, \"estimated\": %d, \"median_deg\": %.3f, \"p90_deg\": %.3f, "
+      "\"max_deg\": %.3f}",
+      e.frames, e.estimated, e.median_deg, e.p90_deg, e.max_deg);
+}
+
+std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
+  if (e.estimated == 0)
+    return Format("— (0 of %d)", e.frames);
+  return Format("%.2f° / %.2f° (%d of %d)", e.median_deg, e.p90_deg, e.estimated, e.frames);
+}
+
+// `skyloc experiment heading`: its own tables (errors, not precision-recall).
+int RunHeading(const Options& o, const std::string& command) {
+  std::vector<tools::HeadingRow> rows;
+  if (Status s = tools::RunHeadingExperiment(o.experiment, &rows, PrintProgress, nullptr);
+      !s.ok()) {
+    std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
+    return kExitFailure;
+  }
+  // All worlds together: the done-when figure.
+  std::vector<double> pooled_correlation, pooled_surf;
+  int pooled_frames = 0;
+  for (const tools::HeadingRow& r : rows) {
+    pooled_frames += r.correlation.frames;
+    pooled_correlation.insert(pooled_correlation.end(), r.correlation_errors_deg.begin(),
+                              r.correlation_errors_deg.end());
+    pooled_surf.insert(pooled_surf.end(), r.surf_errors_deg.begin(), r.surf_errors_deg.end());
+  }
+  const dsp::HeadingErrorSummary all_correlation =
+      dsp::SummariseHeadingErrors(pooled_correlation, pooled_frames);
+  const dsp::HeadingErrorSummary all_surf = dsp::SummariseHeadingErrors(pooled_surf, pooled_frames);
+  std::string md = "# skyloc experiment heading\n\n```\n" + command +
+                   "\n```\n\nHeading error (absolute, median / 90th percentile, degrees; frames "
+                   "with an estimate of the correctly matched ones):\n\n"
+                   "| world | query frames | correctly matched | (b) cross-correlation | "
+                   "(a) 1D SURF + RANSAC | (b) tilt <= 10° | (b) tilt > 10° |\n"
+                   "|---|---|---|---|---|---|---|\n";
+  std::string json =
+      "{\n  \"experiment\": \"heading\",\n  \"command\": \"" + command + "\",\n  \"rows\": [\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const tools::HeadingRow& r = rows[i];
+    md += Format("| %s | %d | %d | %s | %s | %s | %s |\n", sim::WorldKindName(r.world),
+                 r.query_frames, r.match.summary.correct, HeadingCell(r.correlation).c_str(),
+                 HeadingCell(r.surf).c_str(), HeadingCell(r.correlation_level).c_str(),
+                 HeadingCell(r.correlation_tilted).c_str());
+    json += Format("    {\"world\": \"%s\", \"query_frames\": %d, \"correct_matches\": %d, ",
+                   sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct) +
+            "\"correlation\": " + HeadingJson(r.correlation) +
+            ", \"surf\": " + HeadingJson(r.surf) +
+            ", \"correlation_level\": " + HeadingJson(r.correlation_level) +
+            ", \"correlation_tilted\": " + HeadingJson(r.correlation_tilted) + "}" +
+            (i + 1 < rows.size() ? ",\n" : "\n");
+  }
+  md += Format("| all | | | %s | %s | | |\n", HeadingCell(all_correlation).c_str(),
+               HeadingCell(all_surf).c_str());
+  json += "  ],\n  \"all\": {\"correlation\": " + HeadingJson(all_correlation) +
+          ", \"surf\": " + HeadingJson(all_surf) + "}\n}\n";
+  const dsp::HorizonStripOptions& strip = o.experiment.strip;
+  md += Format(
+      "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "
+      "positive, the firmware's heading_deg). Matches: the route filter (ds %d) on the sky "
+      "descriptor, correct within %d frames. Strips: %d columns, %d rows over %.3g..%.3g "
+      "degrees above the body's horizon, from the UV frame, rounded to bytes as the route "
+      "stores them. Tilt: the query body's z from the zenith. Done when (issue 13): median < "
+      "3 degrees and 90th percentile < 10 degrees.\n\n",
+      o.experiment.seqslam.sequence_length, o.experiment.tolerance_frames, strip.n_azimuth,
+      strip.band_rows, strip.elevation_min_deg, strip.elevation_max_deg);
+  md += CommonNotes(o.experiment);
+  if (::mkdir(o.out.c_str(), 0755) != 0 && errno != EEXIST) {
+    std::fprintf(stderr, "skyloc experiment heading: cannot create '%s': %s\n", o.out.c_str(),
+                 std::strerror(errno));
+    return kExitFailure;
+  }
+  for (const auto& [name, text] : {std::pair{"/results.md", &md}, {"/metrics.json", &json}}) {
+    if (Status s = WriteText(o.out + name, *text); !s.ok()) {
+      std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
+      return kExitFailure;
+    }
+  }
+  std::fputs(md.c_str(), stdout);
+  std::printf("skyloc experiment heading: wrote %s/: results.md, metrics.json\n", o.out.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int RunExperiment(std::span<char* const> args) {
+  if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
+    return RunSurf1dExperiment(args);
+  for (char* const a : args) {
+    if (IsHelpFlag(a)) {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    }
+  }
+  Options o;
+  if (const int rc = ParseArgs(args, &o); rc != kExitOk)
+    return rc;
+  std::string command = "skyloc experiment";
+  for (char* const a : args)
+    command += std::string(" ") + a;
+  if (o.name == "heading")
+    return RunHeading(o, command);
+
+  std::vector<Row> rows;
+  Status status;
+  // Results live here so the rows can point at them.
+  std::vector<tools::TiltRow> tilt;
+  std::vector<tools::ManoeuvreRow> manoeuvre;
+  std::vector<tools::AntsRow> ants;
+  std::vector<tools::SpeedRow> speed;
+  const bool cap = o.experiment.attitude != tools::AttitudeInput::kNone;
+  std::vector<MethodName> methods(std::begin(kDescriptorMethods), std::end(kDescriptorMethods));
+  if (!cap || o.name == "ants")
+    methods.resize(kDescriptorMethodsWithoutCap);
+  tools::Vocabulary vocabulary;
+  const bool fabmap = !o.vocabulary_path.empty();
+  if (fabmap) {
+    Result<tools::Vocabulary> v = tools::LoadVocabulary(o.vocabulary_path);
+    if (!v.ok()) {
+      std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), v.status().message());
+      return kExitFailure;
+    }
+    vocabulary = std::move(*v);
+    o.experiment.fabmap_vocabulary = &vocabulary;
+    methods.push_back(kFabmapMethod);
+  }
+  // Tilt and manoeuvre rows: the descriptor methods in use, then FAB-MAP.
+  auto descriptor_scores = [&](const auto& r) {
+    std::vector<const tools::MethodScore*> s = {&r.sky, &r.vanilla, &r.sky_filter};
+    if (cap) {
+      s.push_back(&r.sky_cap);
+      s.push_back(&r.sky_cap_filter);
+    }
+    if (fabmap)
+      s.push_back(&r.fabmap);
+    return s;
+  };
+  std::string header, separator;
+  if (o.name == "tilt") {
+    const int differences[] = {0, 10, 20, 30, 40, 50, 60};
+    status = tools::RunTiltExperiment(o.experiment, differences, &tilt, PrintProgress, nullptr);
+    header = "| tilt difference | reference / query tilt |";
+    separator = "|---|---|";
+    for (const tools::TiltRow& r : tilt) {
+      rows.push_back({Format("%.0f deg", r.tilt_difference_deg),
+                      Format("| %.0f° | %+.0f° / %+.0f° |", r.tilt_difference_deg,
+                             r.reference_tilt_deg, r.query_tilt_deg),
+                      Format("\"tilt_difference_deg\": %.0f, \"reference_tilt_deg\": %.0f, "
+                             "\"query_tilt_deg\": %.0f, ",
+                             r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
+                      descriptor_scores(r)});
+    }
+  } else if (o.name == "manoeuvre") {
+    const int ds[] = {1, 10, 20};
+    status = tools::RunManoeuvreExperiment(o.experiment, ds, &manoeuvre, PrintProgress, nullptr);
+    header = "| world | ds |";
+    separator = "|---|---|";
+    for (const tools::ManoeuvreRow& r : manoeuvre) {
+      rows.push_back({Format("%s ds %d", sim::WorldKindName(r.world), r.sequence_length),
+                      Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
+                      Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world),
+                             r.sequence_length),
+                      descriptor_scores(r)});
+    }
+  } else if (o.name == "speed") {
+    o.experiment.sampling = sim::Sampling::kTime;
+    const int ds[] = {1, 5, 10, 20};
+    status = tools::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
+    methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
+    if (!cap)
+      methods.resize(kMatcherMethodsWithoutCap);
+    header =
+        "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
+    separator = "|---|---|---|---|---|---|---|";
+    for (const tools::SpeedRow& r : speed) {
+      const auto [localised, correct] = LocalisedFrames(r.filter);
+      rows.push_back(
+          {Format("%s %.1fx %s %s ds %d", sim::WorldKindName(r.world), r.speed_ratio,
+                  r.stops ? "stops" : "no-stops", r.bumps_deg > 0 ? "bumps" : "level",
+                  r.sequence_length),
+           Format("| %s | %.1fx | %s | %s | %d | %d | %d of %d |", sim::WorldKindName(r.world),
+                  r.speed_ratio, r.stops ? "yes" : "no",
+                  r.bumps_deg > 0 ? Format("±%.0f°", r.bumps_deg).c_str() : "level", r.query_frames,
+                  r.sequence_length, correct, localised),
+           Format("\"world\": \"%s\", \"speed_ratio\": %.2f, \"stops\": %s, \"bumps_deg\": %.0f, "
+                  "\"query_frames\": %d, \"ds\": %d, \"filter_localised\": %d, "
+                  "\"filter_localised_correct\": %d, ",
+                  sim::WorldKindName(r.world), r.speed_ratio, r.stops ? "true" : "false",
+                  r.bumps_deg, r.query_frames, r.sequence_length, localised, correct),
+           {&r.openseqslam, &r.filter, &r.filter_cap}});
+    }
+  } else {
+    if (!o.spacing_given)
+      o.experiment.spacing_m = 0.05;
+    o.experiment.max_offset_m = 0.25;
+    const double heights[] = {0.01, 0.1};
+    status =
+        tools::RunAntsExperiment(o.experiment, o.data_dir, heights, &ants, PrintProgress, nullptr);
+    header = "| query route | same ant | camera height | frames with truth |";
+    separator = "|---|---|---|---|";
+    for (const tools::AntsRow& r : ants) {
+      rows.push_back({Format("%s %.2f m", r.query.c_str(), r.camera_height_m),
+                      Format("| %s | %s | %.2f m | %.0f %% |", r.query.c_str(),
+                             r.same_ant ? "yes" : "no", r.camera_height_m, 100 * r.truth_fraction),
+                      Format("\"query\": \"%s\", \"same_ant\": %s, \"camera_height_m\": %.3f, "
+                             "\"truth_fraction\": %.4f, ",
+                             r.query.c_str(), r.same_ant ? "true" : "false", r.camera_height_m,
+                             r.truth_fraction),
+                      {&r.sky, &r.vanilla, &r.sky_filter}});
+    }
+  }
+  if (!status.ok()) {
+    std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), status.message());
+    return kExitFailure;
+  }
+  for (Row& r : rows)
+    r.scores.resize(methods.size());
+  std::string notes = CommonNotes(o.experiment);
+  if (cap && o.name != "ants") {
+    notes += Format(
+        "Gravity-aligned cap (sky_cap columns): zenith from %s; lower edge %s, taper %.3g "
+        "degrees.\n",
+        o.experiment.attitude == tools::AttitudeInput::kTruth ? "the true poses"
+        : o.experiment.attitude == tools::AttitudeInput::kImage
+            ? (o.experiment.zenith.method == dsp::ZenithMethod::kSkylinePlane
+                   ? "the image alone (dsp::ZenithEstimator: the skyline's mean plane)"
+                   : "the image alone (dsp::ZenithEstimator: the sky's centroid)")
+            : "the simulated IMU (noise and bias on) through the attitude filter",
+        o.experiment.cap.elevation_deg < 0
+            ? "from the experiment's largest tilt (dsp::CapElevationForTilt)"
+            : Format("%.3g degrees", o.experiment.cap.elevation_deg).c_str(),
+        o.experiment.cap.taper_deg);
+  }
+  if (cap && (o.name == "tilt" || o.name == "manoeuvre")) {
+    // The cap's zenith against the true poses, per scored pair of runs.
+    std::string table =
+        "\nThe cap's zenith against the true poses (degrees: mean / p95 / max over the run's "
+        "frames; frames with no estimate, then assumed level):\n\n"
+        "| row | reference run | query run | no estimate (ref / query) |\n|---|---|---|---|\n";
+    auto cell = [](const tools::ZenithError& z) {
+      return Format("%.2f / %.2f / %.2f", z.mean_deg, z.p95_deg, z.max_deg);
+    };
+    auto add = [&](const std::string& label, const tools::ZenithError& ref,
+                   const tools::ZenithError& query) {
+      table += Format("| %s | %s | %s | %d / %d |\n", label.c_str(), cell(ref).c_str(),
+                      cell(query).c_str(), ref.no_estimate, query.no_estimate);
+    };
+    for (std::size_t i = 0; i < tilt.size(); ++i)
+      add(rows[i].label, tilt[i].reference_zenith, tilt[i].query_zenith);
+    for (std::size_t i = 0; i < manoeuvre.size(); ++i)
+      add(rows[i].label, manoeuvre[i].reference_zenith, manoeuvre[i].query_zenith);
+    std::fputs(table.c_str(), stdout);
+    notes += table;
+  }
+  if (fabmap) {
+    // Format holds 511 characters: the path, of any length, goes in on its own.
+    notes += std::string(
+                 "\nFAB-MAP 2.0 (fabmap columns, docs/FABMAP.md): each query frame's visible "
+                 "image localised alone against every reference frame (no sequence") +
+             (o.name == "manoeuvre" ? ": the same score on every ds row" : "") +
+             "), uniqueness 1 - p(matched place). Vocabulary " + o.vocabulary_path +
+             Format(
+                 ": %d words, SIFT at %dx%d (at most %d a frame), %zu new-place samples, "
+                 "detector p(z|e) %.2f, p(z|not e) %.2f.\n",
+                 vocabulary.words, vocabulary.features.width, vocabulary.features.height,
+                 vocabulary.features.max_features, vocabulary.samples.size(),
+                 vocabulary.p_z_given_e, vocabulary.p_z_given_not_e);
+  }
+  if (o.name == "ants")
+    notes += std::string("Reference route ") + tools::kAntsReferenceRoute + ".\n";
+  if (const Status s = WriteOutputs(o, command, header, separator, methods, rows, notes); !s.ok()) {
+    std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), s.message());
+    return kExitFailure;
+  }
+  std::string files = "results.md, metrics.json, ";
+  for (const MethodName& m : methods)
+    files += std::string("pr_") + m.key + ".svg, ";
+  std::printf("skyloc experiment %s: wrote %s/: %scorrespondence.svg\n", o.name.c_str(),
+              o.out.c_str(), files.c_str());
+  return kExitOk;
+}
+
+}  // namespace skyloc::cli

@@ -1,0 +1,229 @@
+// `skyloc experiment surf1d --out DIR`: the 1D SURF paper's classification experiment on
+// the simulated city (sim/surf1d_experiment.h; docs/SURF1D.md, "The paper's experiment").
+// Writes DIR/results.md (the AUCs beside the paper's and the command), DIR/metrics.json
+// and DIR/roc.svg (the paper's Fig. 4).
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cli/commands.h"
+#include "tools/output_file.h"
+#include "tools/surf1d_experiment.h"
+#include "tools/svg_plot.h"
+
+namespace skyloc::cli {
+using namespace skyloc::tools;
+namespace {
+
+constexpr const char* kUsage =
+    "usage: skyloc experiment surf1d --out DIR [options]\n"
+    "\n"
+    "The 1D SURF paper's classification experiment (Anderson et al. 2012, section 4.1) in\n"
+    "the simulated city: the robot turns on the spot at each place taking N images evenly\n"
+    "over 360 degrees; every pair at a place is scored by 1D SURF (NN, NN with RANSAC).\n"
+    "Forward pinhole camera (the paper's 47.8 degrees): a pair matches when its headings\n"
+    "differ by less than 20 degrees. Upward fisheye, 360-degree strip: a pair matches when\n"
+    "it is at the same place (the other place's images are the non-matches).\n"
+    "Writes DIR/results.md, DIR/metrics.json and DIR/roc.svg.\n"
+    "\n"
+    "options:\n"
+    "  --images N             images a place (default 88, the paper's)\n"
+    "  --places N             places along the city route (default 2)\n"
+    "  --width W --height H   forward camera size (default 640x480)\n"
+    "  --fisheye-width W --fisheye-height H   upward camera size (default 640x480)\n"
+    "  --pitch DEG            forward camera pitch, nose up positive (default -5)\n"
+    "  --seed N               city seed (default 1)\n";
+
+bool ParseNumber(const char* text, double lo, double hi, double* value) {
+  char* end = nullptr;
+  *value = std::strtod(text, &end);
+  return end != text && *end == '\0' && *value >= lo && *value <= hi;
+}
+
+void PrintProgress(const char* what, void* /*context*/) {
+  std::fprintf(stderr, "skyloc experiment surf1d: %s\n", what);
+}
+
+// The curve with its points at least `step` apart (either axis), ends kept: thousands of
+// pairs give thousands of points, far more than a plot or a file needs (the AUCs are
+// computed on the full curves).
+std::vector<dsp::RocPoint> Thinned(const std::vector<dsp::RocPoint>& roc, double step = 0.002) {
+  std::vector<dsp::RocPoint> out;
+  for (std::size_t i = 0; i < roc.size(); ++i) {
+    if (i == 0 || i + 1 == roc.size() ||
+        std::fabs(roc[i].false_positive_rate - out.back().false_positive_rate) >= step ||
+        std::fabs(roc[i].true_positive_rate - out.back().true_positive_rate) >= step)
+      out.push_back(roc[i]);
+  }
+  return out;
+}
+
+std::string RocJson(const std::vector<dsp::RocPoint>& full) {
+  const std::vector<dsp::RocPoint> roc = Thinned(full);
+  std::string s = "[";
+  for (std::size_t i = 0; i < roc.size(); ++i)
+    s += Format("%s[%.5f, %.5f]", i ? ", " : "", roc[i].false_positive_rate,
+                roc[i].true_positive_rate);
+  return s + "]";
+}
+
+std::string CameraJson(const char* key, const tools::Surf1dCameraResult& r) {
+  return Format(
+             "  \"%s\": {\"camera\": \"%s\", \"strip_columns\": %d, \"mean_features\": %.1f, "
+             "\"matched_pairs\": %d, \"unmatched_pairs\": %d, \"auc_nn\": %.4f, "
+             "\"auc_ransac\": %.4f,\n",
+             key, r.camera.c_str(), r.strip_columns, r.mean_features, r.matched_pairs,
+             r.unmatched_pairs, r.auc_nn, r.auc_ransac) +
+         "    \"roc_nn_thinned\": " + RocJson(r.roc_nn) +
+         ",\n    \"roc_ransac_thinned\": " + RocJson(r.roc_ransac) + "}";
+}
+
+}  // namespace
+
+int RunSurf1dExperiment(std::span<char* const> args) {
+  std::string command = "skyloc experiment";
+  for (char* const a : args)
+    command += std::string(" ") + a;
+  tools::Surf1dExperimentOptions o;
+  std::string out;
+  for (std::size_t i = 1; i < args.size(); ++i) {
+    const char* flag = args[i];
+    if (IsHelpFlag(flag)) {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    }
+    if (i + 1 >= args.size()) {
+      std::fprintf(stderr, "skyloc experiment surf1d: %s needs a value (see --help)\n", flag);
+      return kExitUsage;
+    }
+    const char* v = args[++i];
+    double d = 0;
+    auto bad = [&](const char* expected) {
+      std::fprintf(stderr, "skyloc experiment surf1d: %s '%s': expected %s\n", flag, v, expected);
+      return kExitUsage;
+    };
+    auto integer = [&](double lo, double hi, int* value) {
+      if (!ParseNumber(v, lo, hi, &d) || d != std::floor(d))
+        return false;
+      *value = static_cast<int>(d);
+      return true;
+    };
+    if (std::strcmp(flag, "--out") == 0) {
+      out = v;
+    } else if (std::strcmp(flag, "--images") == 0) {
+      if (!integer(8, 1000, &o.images_per_place))
+        return bad("an integer within 8..1000");
+    } else if (std::strcmp(flag, "--places") == 0) {
+      if (!integer(2, 50, &o.places))
+        return bad("an integer within 2..50");
+    } else if (std::strcmp(flag, "--width") == 0) {
+      if (!integer(64, 4096, &o.width))
+        return bad("pixels within 64..4096");
+    } else if (std::strcmp(flag, "--height") == 0) {
+      if (!integer(16, 4096, &o.height))
+        return bad("pixels within 16..4096");
+    } else if (std::strcmp(flag, "--fisheye-width") == 0) {
+      if (!integer(16, 4096, &o.fisheye_width))
+        return bad("pixels within 16..4096");
+    } else if (std::strcmp(flag, "--fisheye-height") == 0) {
+      if (!integer(16, 4096, &o.fisheye_height))
+        return bad("pixels within 16..4096");
+    } else if (std::strcmp(flag, "--pitch") == 0) {
+      if (!ParseNumber(v, -20, 20, &o.pitch_deg))
+        return bad("degrees within -20..20");
+    } else if (std::strcmp(flag, "--seed") == 0) {
+      int seed = 0;
+      if (!integer(0, 1e9, &seed))
+        return bad("an integer within 0..1000000000");
+      o.world_seed = static_cast<std::uint64_t>(seed);
+    } else {
+      std::fprintf(stderr, "skyloc experiment surf1d: unknown option '%s' (see --help)\n", flag);
+      return kExitUsage;
+    }
+  }
+  if (out.empty()) {
+    std::fprintf(stderr,
+                 "skyloc experiment surf1d: --out DIR is required (where to write "
+                 "results.md, metrics.json, roc.svg)\n");
+    return kExitUsage;
+  }
+  tools::Surf1dCameraResult forward, fisheye;
+  if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress, nullptr);
+      !s.ok()) {
+    std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());
+    return kExitFailure;
+  }
+  std::string md = "# skyloc experiment surf1d\n\n```\n" + command +
+                   "\n```\n\n| camera | strip columns | features / image | matched / unmatched "
+                   "pairs | AUC NN | AUC NN with RANSAC |\n|---|---|---|---|---|---|\n";
+  md +=
+      "| paper: Nao forward camera, office (Table 1) | 160 | 59.2 | 480 / 2065 | 88.0 % | "
+      "89.6 % |\n";
+  for (const tools::Surf1dCameraResult* r : {&forward, &fisheye})
+    md += Format("| %s | %d | %.1f | %d / %d | %.1f %% | %.1f %% |\n", r->camera.c_str(),
+                 r->strip_columns, r->mean_features, r->matched_pairs, r->unmatched_pairs,
+                 100 * r->auc_nn, 100 * r->auc_ransac);
+  md += Format(
+      "\nForward camera with only the non-matching pairs that share no view (headings at "
+      "least %.3g degrees apart, %d pairs): AUC NN %.1f %%, NN with RANSAC %.1f %%.\n",
+      o.fov_deg, forward.disjoint_pairs, 100 * forward.auc_nn_disjoint,
+      100 * forward.auc_ransac_disjoint);
+  md += Format(
+      "\n%d images a place, %d places along the city route (seed %llu), camera %.2g m up. "
+      "Forward: pitch %.3g degrees with +-%.3g degrees of random roll and pitch per image, "
+      "the horizon row from the true attitude, every %d columns, a %d-row band; a pair "
+      "matches when its headings differ by less than %.3g degrees, pairs at one place only. "
+      "Fisheye: level, dsp::HorizonStrip's %d columns over %.3g..%.3g degrees of elevation; a "
+      "pair matches when it is at the same place. ROC: roc.svg.\n",
+      o.images_per_place, o.places, static_cast<unsigned long long>(o.world_seed),
+      o.camera_height_m, o.pitch_deg, o.attitude_jitter_deg, o.column_step, o.band_rows,
+      o.match_below_deg, o.fisheye_strip.n_azimuth, o.fisheye_strip.elevation_min_deg,
+      o.fisheye_strip.elevation_max_deg);
+  const std::string json =
+      "{\n  \"experiment\": \"surf1d\",\n  \"command\": \"" + command +
+      "\",\n  \"paper\": {\"auc_nn\": 0.880, \"auc_ransac\": 0.896},\n" +
+      CameraJson("forward", forward) + ",\n" +
+      Format(
+          "  \"forward_disjoint\": {\"unmatched_pairs\": %d, \"auc_nn\": "
+          "%.4f, \"auc_ransac\": %.4f},\n",
+          forward.disjoint_pairs, forward.auc_nn_disjoint, forward.auc_ransac_disjoint) +
+      CameraJson("fisheye", fisheye) + "\n}\n";
+  const std::vector<RocCurveLine> curves = {
+      {"forward pinhole, NN: AUC " + Format("%.3f", forward.auc_nn), Thinned(forward.roc_nn),
+       LineDash::kDashed},
+      {"forward pinhole, NN with RANSAC: AUC " + Format("%.3f", forward.auc_ransac),
+       Thinned(forward.roc_ransac), LineDash::kSolid},
+      {"upward fisheye 360, NN: AUC " + Format("%.3f", fisheye.auc_nn), Thinned(fisheye.roc_nn),
+       LineDash::kDashed},
+      {"upward fisheye 360, NN with RANSAC: AUC " + Format("%.3f", fisheye.auc_ransac),
+       Thinned(fisheye.roc_ransac), LineDash::kSolid}};
+  const std::string svg = RocPlotSvg("1D SURF recognition score, simulated city", curves);
+  if (::mkdir(out.c_str(), 0755) != 0 && errno != EEXIST) {
+    std::fprintf(stderr, "skyloc experiment surf1d: cannot create '%s': %s\n", out.c_str(),
+                 std::strerror(errno));
+    return kExitFailure;
+  }
+  using Output = std::pair<const char*, const std::string*>;
+  for (const auto& [name, text] :
+       {Output{"/results.md", &md}, Output{"/metrics.json", &json}, Output{"/roc.svg", &svg}}) {
+    if (Status s = WriteText(out + name, *text); !s.ok()) {
+      std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());
+      return kExitFailure;
+    }
+  }
+  std::fputs(md.c_str(), stdout);
+  std::printf("skyloc experiment surf1d: wrote %s/: results.md, metrics.json, roc.svg\n",
+              out.c_str());
+  return kExitOk;
+}
+
+}  // namespace skyloc::cli

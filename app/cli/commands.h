@@ -1,0 +1,54 @@
+// The skyloc subcommands. Each is a function taking the arguments after its name and
+// returning the process exit code; main() dispatches through kCommands.
+#pragma once
+
+#include <cstring>
+#include <span>
+#include <string_view>
+
+namespace skyloc::cli {
+
+using CommandFn = int (*)(std::span<char* const> args);
+
+struct Command {
+  const char* name;
+  const char* summary;
+  CommandFn run;
+};
+
+int RunDemo(std::span<char* const> args);
+int RunTeach(std::span<char* const> args);
+int RunRepeat(std::span<char* const> args);
+int RunReplay(std::span<char* const> args);
+int RunRecord(std::span<char* const> args);
+int RunRoute(std::span<char* const> args);
+int RunDescribe(std::span<char* const> args);
+// The lab's tools (SKYLOC_TOOLS builds only).
+int RunEval(std::span<char* const> args);
+int RunSurf1d(std::span<char* const> args);
+int RunSimulate(std::span<char* const> args);
+int RunExperiment(std::span<char* const> args);
+// `skyloc experiment surf1d` (cmd_experiment_surf1d.cpp); args[0] is "surf1d".
+int RunSurf1dExperiment(std::span<char* const> args);
+int RunFabmapTrain(std::span<char* const> args);
+
+// True for the flags that ask a command for its usage text.
+inline bool IsHelpFlag(const char* arg) {
+  return std::strcmp(arg, "--help") == 0 || std::strcmp(arg, "-h") == 0;
+}
+
+// The one way a command reports a bad command line, on stderr: "skyloc COMMAND: WHAT" with
+// WHAT's first %s replaced by `value`, then where the options are described. Returns
+// kExitUsage.
+int UsageError(const char* command, std::string_view what, std::string_view value = {});
+
+// A finite number at the start of `text`; with `end_out` the rest is left to the caller
+// (e.g. "X,Y"), without it the whole text must be the number.
+bool ParseFiniteDouble(const char* text, double* out, char** end_out = nullptr);
+
+// Exit codes shared by every command.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;  // a runtime error (device, file contents)
+inline constexpr int kExitUsage = 2;    // bad command line
+
+}  // namespace skyloc::cli

@@ -1,0 +1,325 @@
+#include "firmware/frame_loop.h"
+
+#include <cstdio>
+#include <cstring>
+#include <thread>
+
+#include "skyloc/platform/signals.h"
+
+namespace skyloc::firmware {
+
+void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t route_frames) {
+  char line[448];
+  const double t = static_cast<double>(r.timestamp.count()) * 1e-9;
+  const long long latency_us = static_cast<long long>(r.latency.count() / 1000);
+  int n;
+  if (mode == LoopMode::kRecord || mode == LoopMode::kWaitForButton) {
+    n = std::snprintf(line, sizeof line,
+                      "{\"frame\":%llu,\"timestamp\":%.6f,\"latency_us\":%lld}\n",
+                      static_cast<unsigned long long>(r.frame), t, latency_us);
+  } else if (mode == LoopMode::kTeach) {
+    n = std::snprintf(line, sizeof line,
+                      "{\"frame\":%llu,\"timestamp\":%.6f,\"route_frames\":%llu,\"threshold\":%d,"
+                      "\"sky_fraction\":%.4f,\"latency_us\":%lld}\n",
+                      static_cast<unsigned long long>(r.frame), t,
+                      static_cast<unsigned long long>(route_frames), r.threshold,
+                      static_cast<double>(r.sky_fraction), latency_us);
+  } else {
+    char index[24] = "null";
+    if (r.matched)
+      std::snprintf(index, sizeof index, "%lld", static_cast<long long>(r.best_index));
+    // null when there is no estimate (no match, a route without strips, no RANSAC model).
+    char heading[24] = "null", heading_confidence[24] = "null", surf[24] = "null";
+    if (r.has_heading) {
+      std::snprintf(heading, sizeof heading, "%.2f", static_cast<double>(r.heading_deg));
+      std::snprintf(heading_confidence, sizeof heading_confidence, "%.4f",
+                    static_cast<double>(r.heading_confidence));
+    }
+    if (r.has_heading_surf)
+      std::snprintf(surf, sizeof surf, "%.2f", static_cast<double>(r.heading_surf_deg));
+    n = std::snprintf(line, sizeof line,
+                      "{\"frame\":%llu,\"timestamp\":%.6f,\"best_index\":%s,\"uniqueness\":%.4f,"
+                      "\"confidence\":%.4f,\"state\":\"%s\",\"heading_deg\":%s,"
+                      "\"heading_confidence\":%s,\"heading_surf_deg\":%s,"
+                      "\"heading_surf_inliers\":%d,\"latency_us\":%lld}\n",
+                      static_cast<unsigned long long>(r.frame), t, index,
+                      static_cast<double>(r.uniqueness), static_cast<double>(r.confidence),
+                      dsp::LocalisationStateName(r.state), heading, heading_confidence, surf,
+                      r.has_heading_surf ? r.heading_surf_inliers : 0, latency_us);
+  }
+  if (n > 0 &&
+      std::fwrite(line, 1, static_cast<std::size_t>(n), out_) != static_cast<std::size_t>(n))
+    failed_ = true;
+  // One line per frame must reach a pipe reader promptly.
+  if (std::fflush(out_) != 0)
+    failed_ = true;
+}
+
+namespace {
+
+// What this loop has put on the status lines, so it can keep them moving between frames.
+enum class Shown : std::uint8_t { kNothing, kState, kTeaching };
+
+Nanoseconds Mod(Nanoseconds t, Nanoseconds period) {
+  Nanoseconds phase = t % period;
+  return phase < Nanoseconds(0) ? phase + period : phase;
+}
+
+// Teach with show_teaching: SEARCHING for the first half of every kTeachingPeriod, the
+// safe state for the second.
+Status ShowTeaching(drivers::StatusOutput& status, Nanoseconds now) {
+  if (Mod(now, kTeachingPeriod) < kTeachingPeriod / 2)
+    return status.Show(drivers::LocalisationState::kSearching, 0.0f, now);
+  return status.SafeState();
+}
+
+// When the lines next change if no frame comes first.
+Nanoseconds NextLineChange(const drivers::StatusOutput* status, Shown shown, Nanoseconds now) {
+  if (status == nullptr || shown == Shown::kNothing)
+    return drivers::StatusOutput::kNever;
+  const Nanoseconds blink = status->NextChange(now);
+  if (shown == Shown::kState)
+    return blink;
+  const Nanoseconds half = kTeachingPeriod / 2;
+  const Nanoseconds teaching = now + (half - Mod(now, half));
+  return teaching < blink ? teaching : blink;
+}
+
+// The lines as they are at `now` (a blink edge, or the teaching indicator's half period).
+Status MoveLines(drivers::StatusOutput* status, Shown shown, Nanoseconds now) {
+  if (status == nullptr || shown == Shown::kNothing)
+    return Status::Ok();
+  if (shown == Shown::kTeaching)
+    return ShowTeaching(*status, now);
+  return status->Refresh(now);
+}
+
+// The next frame, waiting until `deadline` at most, and moving the status lines at each
+// of their edges before it. A failure to move them goes to *lines_failed (fatal, as a
+// failed Show() is); the capture's own result is returned.
+Result<drivers::Frame> CaptureMovingLines(drivers::Camera& camera, drivers::StatusOutput* status,
+                                          Shown shown, const Clock& clock, Nanoseconds deadline,
+                                          Status* lines_failed) {
+  for (;;) {
+    const Nanoseconds now = clock.Now();
+    const Nanoseconds edge = NextLineChange(status, shown, now);
+    const Nanoseconds until = edge < deadline ? edge : deadline;
+    Result<drivers::Frame> captured = camera.Capture(until > now ? until - now : Nanoseconds(0));
+    if (edge >= deadline || captured.ok() ||
+        captured.status().code() != StatusCode::kDeadlineExceeded)
+      return captured;
+    // Past the deadline, a camera that gave up before the time it was given (its own
+    // time-out, a fake that does not wait) or a signal: the caller decides.
+    const Nanoseconds woken = clock.Now();
+    if (woken >= deadline || woken < until || StopRequested())
+      return captured;
+    if (Status moved = MoveLines(status, shown, woken); !moved.ok()) {
+      *lines_failed = moved;
+      return captured;
+    }
+  }
+}
+
+// Sleeps until `due` (pacing), moving the status lines at each of their edges before it.
+Status SleepMovingLines(drivers::StatusOutput* status, Shown shown, const Clock& clock,
+                        Nanoseconds due) {
+  Nanoseconds now = clock.Now();
+  while (due > now) {
+    const Nanoseconds edge = NextLineChange(status, shown, now);
+    const Nanoseconds wake = edge < due ? edge : due;
+    std::this_thread::sleep_for(wake - now);
+    if (wake == due)
+      break;
+    const Nanoseconds woken = clock.Now();
+    now = woken > wake ? woken : wake;  // a ManualClock does not move while we sleep
+    SKYLOC_TRY(MoveLines(status, shown, now));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
+                    RouteDbWriter* route, FrameSink* sink, const LoopOptions& options,
+                    LoopSummary* summary, drivers::AttitudeSource* attitude) {
+  if (options.mode == LoopMode::kTeach && route == nullptr)
+    return Status::Error(StatusCode::kInternal, "teach without a route database");
+  const Clock& clock = pipeline.clock();
+  LatencyTable& latency = pipeline.latency();
+  LoopSummary s;
+  // The caller's summary is written on every way out, the SKYLOC_TRY returns of a failed
+  // write included: a teach that dies at frame 40 still says it ran 40 frames.
+  struct PublishSummary {
+    const LoopSummary& from;
+    LoopSummary* to;
+    ~PublishSummary() { *to = from; }
+  } publish{s, summary};
+  int errors_in_a_row = 0;
+  Nanoseconds unavailable_since{-1};
+  Nanoseconds first_timestamp{-1};
+  Nanoseconds loop_start = clock.Now();
+  std::uint64_t last_sequence = 0;
+  bool have_sequence = false;
+  bool attitude_outage = false;   // warned about; cleared when an attitude comes back
+  Shown shown = Shown::kNothing;  // what the caller left on the lines is theirs
+
+  while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
+    if (TakeReportRequest()) {
+      std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
+                   static_cast<unsigned long long>(s.frames));
+      latency.Print(stderr);
+    }
+    if (options.button != nullptr && status != nullptr) {
+      for (;;) {
+        Result<drivers::ButtonEvent> edge = status->ReadButtonEvent();
+        if (!edge.ok()) {
+          if (edge.status().code() == StatusCode::kDeadlineExceeded)
+            break;  // no edge pending
+          Status failed = edge.status();
+          return failed.AddContext("the teach button");
+        }
+        options.button->OnEdge(*edge);
+      }
+      if (options.button->TakePress(clock.Now())) {
+        s.button_pressed = true;
+        break;
+      }
+    }
+    const Nanoseconds t0 = clock.Now();
+    Status lines_failed;
+    Result<drivers::Frame> captured = CaptureMovingLines(
+        camera, status, shown, clock, t0 + options.capture_timeout, &lines_failed);
+    const Nanoseconds t1 = clock.Now();
+    SKYLOC_TRY(lines_failed);
+    if (!captured.ok()) {
+      const StatusCode code = captured.status().code();
+      if (code == StatusCode::kOutOfRange) {
+        s.end_of_source = true;
+        break;
+      }
+      // A signal interrupted the wait: the loop condition sees the flag.
+      if (StopRequested())
+        break;
+      // No frame means no localisation: the lines go to the safe state until frames flow
+      // again, and the SeqSLAM sequence starts over (it needs consecutive frames).
+      if (status != nullptr)
+        (void)status->SafeState();
+      shown = Shown::kNothing;
+      pipeline.ResetTracking();
+      if (code == StatusCode::kDataLoss && options.recorded) {
+        return captured.status();
+      }
+      if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
+          ++errors_in_a_row < options.max_consecutive_errors) {
+        ++s.capture_errors;
+        continue;
+      }
+      if (code == StatusCode::kUnavailable && options.reconnect_timeout.count() > 0) {
+        if (unavailable_since.count() < 0)
+          unavailable_since = t1;
+        if (t1 - unavailable_since < options.reconnect_timeout) {
+          ++s.capture_errors;
+          // A driver that reports the loss without waiting must not make this spin.
+          if (t1 - t0 < std::chrono::milliseconds(10))
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+          continue;
+        }
+      }
+      Status fatal = captured.status();
+      // The drivers name their camera in their errors; name it here only if one did not.
+      if (std::strstr(fatal.message(), camera.info().name) != nullptr)
+        return fatal;
+      return fatal.AddContext("camera %s", camera.info().name);
+    }
+    errors_in_a_row = 0;
+    unavailable_since = Nanoseconds{-1};
+    latency.Record(pipeline.stages().capture, t1 - t0);
+    const drivers::Frame& frame = *captured;
+
+    if (options.paced) {
+      if (first_timestamp.count() < 0) {
+        first_timestamp = frame.timestamp;
+        loop_start = t1;
+      }
+      const Nanoseconds due = loop_start + (frame.timestamp - first_timestamp);
+      SKYLOC_TRY(SleepMovingLines(status, shown, clock, due));
+    }
+    // A jump in the sequence numbers (dropped frames) is fine for SeqSLAM's velocity
+    // band up to a point; a long gap breaks the sequence: start it again.
+    if (have_sequence && frame.sequence > last_sequence + 10)
+      pipeline.ResetTracking();
+    last_sequence = frame.sequence;
+    have_sequence = true;
+
+    FrameResult result;
+    result.frame = frame.sequence;
+    result.timestamp = frame.timestamp;
+    // The attitude at the frame's time; without one the frame is described as if level
+    // (the cap about the body's z axis), never dropped.
+    dsp::Attitude frame_attitude;
+    const dsp::Attitude* attitude_used = nullptr;
+    if (attitude != nullptr && pipeline.uses_attitude()) {
+      Result<dsp::Attitude> a = attitude->At(frame);
+      if (a.ok()) {
+        frame_attitude = *a;
+        attitude_used = &frame_attitude;
+        if (attitude_outage)
+          std::fprintf(stderr, "skyloc: attitude %s is back at frame %llu\n", attitude->name(),
+                       static_cast<unsigned long long>(frame.sequence));
+        attitude_outage = false;
+      } else {
+        ++s.attitude_missing;
+        if (!attitude_outage)
+          std::fprintf(stderr,
+                       "skyloc: warning: %s: frames are described as if level until it returns\n",
+                       a.status().message());
+        attitude_outage = true;
+      }
+    }
+    if (options.recorder != nullptr)
+      (void)options.recorder->Submit(frame, attitude_used);  // dropped frames are counted
+    if (options.mode == LoopMode::kRecord || options.mode == LoopMode::kWaitForButton) {
+      result.matched = false;  // the recorder has the frame; nothing else to do
+    } else if (options.mode == LoopMode::kTeach) {
+      SKYLOC_TRY(pipeline.Describe(frame.image, &result, attitude_used));
+      RouteFrameMeta meta;
+      meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
+      meta.pose = frame.pose;
+      {
+        StageTimer timer(latency, pipeline.stages().output, clock);
+        SKYLOC_TRY(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
+        if (status != nullptr && options.show_teaching) {
+          SKYLOC_TRY(ShowTeaching(*status, clock.Now()));
+          shown = Shown::kTeaching;
+        }
+      }
+    } else {
+      Status st = pipeline.Localise(frame, &result, attitude_used);
+      if (!st.ok()) {
+        // A frame the descriptor rejects (wrong size from a misbehaving driver) is
+        // skipped like a corrupt capture; the next frame may be fine.
+        if (options.recorded || ++errors_in_a_row >= options.max_consecutive_errors) {
+          return st;
+        }
+        ++s.capture_errors;
+        continue;
+      }
+      StageTimer timer(latency, pipeline.stages().output, clock);
+      if (status != nullptr) {
+        SKYLOC_TRY(status->Show(result.state, result.confidence, clock.Now()));
+        shown = Shown::kState;
+      }
+    }
+    const Nanoseconds done = clock.Now();
+    result.latency = done - t1;
+    latency.Record(pipeline.stages().total, done - t1);
+    ++s.state_frames[static_cast<int>(result.state)];
+    ++s.frames;
+    if (sink != nullptr)
+      sink->OnFrame(options.mode, result, route != nullptr ? route->frames_appended() : 0);
+  }
+  s.stopped = StopRequested();
+  return Status::Ok();
+}
+
+}  // namespace skyloc::firmware

@@ -1,0 +1,991 @@
+#include "firmware/route_db.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <iterator>
+#include <vector>
+
+#include "skyloc/dsp/spherical_harmonics.h"
+#include "skyloc/platform/bytes.h"
+#include "skyloc/platform/crc32.h"
+
+namespace skyloc::firmware {
+
+// The file is little-endian (StoreBytes/LoadBytes, platform/bytes.h).
+
+namespace {
+
+// A frame record's pose: six little-endian doubles, x, y, z (m), roll, pitch, yaw (deg),
+// zero when the camera did not know it (docs/ROUTE_DB.md).
+void StorePose(const drivers::Pose& pose, std::uint8_t* p) {
+  const double values[6] = {pose.x_m,      pose.y_m,       pose.z_m,
+                            pose.roll_deg, pose.pitch_deg, pose.yaw_deg};
+  for (int i = 0; i < 6; ++i)
+    StoreBytes<double>(p + 8 * i, values[i]);
+}
+
+drivers::Pose LoadPose(const std::uint8_t* p) {
+  drivers::Pose pose;
+  double* const fields[6] = {&pose.x_m,      &pose.y_m,       &pose.z_m,
+                             &pose.roll_deg, &pose.pitch_deg, &pose.yaw_deg};
+  for (int i = 0; i < 6; ++i)
+    *fields[i] = LoadBytes<double>(p + 8 * i);
+  return pose;
+}
+
+constexpr char kMagic[8] = {'S', 'K', 'Y', 'L', 'O', 'C', 'R', 'T'};
+constexpr std::uint32_t kChunkMagic = 0x4B4E4843u;  // "CHNK"
+constexpr std::uint32_t kChunkFrames = 1;
+constexpr std::uint32_t kChunkCommit = 2;
+constexpr std::uint32_t kMaxDim = 1u << 16;
+constexpr std::uint32_t kHasPose = 1u;
+
+std::uint32_t CrcOf(const std::uint8_t* p, std::size_t n) {
+  return Crc32(std::span<const std::uint8_t>(p, n));
+}
+
+// The fuzz target (tests/fuzz/route_db_fuzz.cpp) is built with this defined, so random
+// mutations are not all stopped by the checksums and reach the parsing behind them.
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+constexpr bool kVerifyChecksums = false;
+#else
+constexpr bool kVerifyChecksums = true;
+#endif
+bool CrcMatches(std::uint32_t stored, const std::uint8_t* p, std::size_t n) {
+  return !kVerifyChecksums || stored == CrcOf(p, n);
+}
+
+// Lens record flags (offset 12 of the record).
+constexpr std::uint32_t kLensKnown = 1u;     // the record describes the lens
+constexpr std::uint32_t kLensOcamHash = 2u;  // ocam_hash holds the OCamCalib polynomials' hash
+constexpr std::size_t kLensCrcOffset = kRouteDbLensRecordBytes - 4;
+
+// The lens record (docs/ROUTE_DB.md): h points just after the 64-byte header.
+void EncodeLensRecord(const RouteDbLens& l, std::uint8_t* h) {
+  std::memset(h, 0, kRouteDbLensRecordBytes);
+  if (l.known) {
+    StoreBytes<std::uint32_t>(h + 0, l.model);
+    StoreBytes<std::uint32_t>(h + 4, l.width);
+    StoreBytes<std::uint32_t>(h + 8, l.height);
+    StoreBytes<std::uint32_t>(h + 12, kLensKnown | (l.ocam_hash != 0 ? kLensOcamHash : 0u));
+    const double values[] = {l.centre_x, l.centre_y,  l.radius_px, l.fov_deg, l.fx,
+                             l.fy,       l.k[0],      l.k[1],      l.k[2],    l.k[3],
+                             l.roll_deg, l.pitch_deg, l.yaw_deg};
+    for (std::size_t i = 0; i < std::size(values); ++i)
+      StoreBytes<double>(h + 16 + 8 * i, values[i]);
+    StoreBytes<std::uint64_t>(h + 120, l.ocam_hash);
+  }
+  StoreBytes<std::uint32_t>(h + kLensCrcOffset, CrcOf(h, kLensCrcOffset));
+}
+
+RouteDbLens DecodeLensRecord(const std::uint8_t* h) {
+  RouteDbLens l;
+  const std::uint32_t flags = LoadBytes<std::uint32_t>(h + 12);
+  if ((flags & kLensKnown) == 0)
+    return l;
+  l.known = true;
+  l.model = LoadBytes<std::uint32_t>(h + 0);
+  l.width = LoadBytes<std::uint32_t>(h + 4);
+  l.height = LoadBytes<std::uint32_t>(h + 8);
+  double* values[] = {&l.centre_x, &l.centre_y,  &l.radius_px, &l.fov_deg, &l.fx,
+                      &l.fy,       &l.k[0],      &l.k[1],      &l.k[2],    &l.k[3],
+                      &l.roll_deg, &l.pitch_deg, &l.yaw_deg};
+  for (std::size_t i = 0; i < std::size(values); ++i)
+    *values[i] = LoadBytes<double>(h + 16 + 8 * i);
+  l.ocam_hash = (flags & kLensOcamHash) != 0 ? LoadBytes<std::uint64_t>(h + 120) : 0;
+  return l;
+}
+
+// The strip record (version 4, docs/ROUTE_DB.md): h points just after the lens record.
+constexpr std::size_t kStripCrcOffset = kRouteDbStripRecordBytes - 4;
+void EncodeStripRecord(const RouteDbStrip& strip, std::uint8_t* h) {
+  std::memset(h, 0, kRouteDbStripRecordBytes);
+  StoreBytes<std::uint32_t>(h + 0, strip.columns);
+  StoreBytes<std::uint32_t>(h + 4, strip.band_rows);
+  StoreBytes<std::int32_t>(h + 8, strip.elevation_min_cdeg);
+  StoreBytes<std::int32_t>(h + 12, strip.elevation_max_cdeg);
+  StoreBytes<std::uint32_t>(h + kStripCrcOffset, CrcOf(h, kStripCrcOffset));
+}
+
+RouteDbStrip DecodeStripRecord(const std::uint8_t* h) {
+  RouteDbStrip strip;
+  strip.columns = LoadBytes<std::uint32_t>(h + 0);
+  strip.band_rows = LoadBytes<std::uint32_t>(h + 4);
+  strip.elevation_min_cdeg = LoadBytes<std::int32_t>(h + 8);
+  strip.elevation_max_cdeg = LoadBytes<std::int32_t>(h + 12);
+  return strip;
+}
+
+void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
+  std::memset(h, 0, kRouteDbHeaderBytes);
+  std::memcpy(h, kMagic, sizeof kMagic);
+  StoreBytes<std::uint32_t>(h + 8, kRouteDbVersion);
+  StoreBytes<std::uint32_t>(h + 12, static_cast<std::uint32_t>(RouteDbDataOffset(kRouteDbVersion)));
+  StoreBytes<std::uint32_t>(h + 16, s.descriptor_kind);
+  StoreBytes<std::uint32_t>(h + 20, s.bands);
+  StoreBytes<std::uint32_t>(h + 24, s.rings);
+  StoreBytes<std::uint32_t>(h + 28, s.longitudes);
+  StoreBytes<std::uint32_t>(h + 32, s.dim);
+  StoreBytes<std::uint32_t>(h + 36, s.normalisation);
+  StoreBytes<std::uint64_t>(h + 40, s.lens_hash);
+  StoreBytes<std::uint32_t>(h + 48,
+                            static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim, s.strip.columns)));
+  StoreBytes<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
+  StoreBytes<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
+  StoreBytes<std::uint32_t>(h + 60, CrcOf(h, 60));
+  EncodeLensRecord(s.lens, h + kRouteDbHeaderBytes);
+  EncodeStripRecord(s.strip, h + kRouteDbHeaderBytes + kRouteDbLensRecordBytes);
+}
+
+void EncodeChunkHeader(std::uint32_t type, std::uint64_t first, std::uint32_t count,
+                       std::uint32_t payload_bytes, std::uint32_t payload_crc, std::uint8_t* h) {
+  StoreBytes<std::uint32_t>(h + 0, kChunkMagic);
+  StoreBytes<std::uint32_t>(h + 4, type);
+  StoreBytes<std::uint64_t>(h + 8, first);
+  StoreBytes<std::uint32_t>(h + 16, count);
+  StoreBytes<std::uint32_t>(h + 20, payload_bytes);
+  StoreBytes<std::uint32_t>(h + 24, payload_crc);
+  StoreBytes<std::uint32_t>(h + 28, CrcOf(h, 28));
+}
+
+bool ChunkHeaderIntact(const std::uint8_t* h) {
+  return LoadBytes<std::uint32_t>(h) == kChunkMagic &&
+         CrcMatches(LoadBytes<std::uint32_t>(h + 28), h, 28);
+}
+
+Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
+  if (file.gravity_cap_cdeg != want.gravity_cap_cdeg ||
+      file.gravity_cap_taper_cdeg != want.gravity_cap_taper_cdeg) {
+    auto describe = [](const RouteDbSettings& s, char* text, std::size_t size) {
+      if (s.gravity_cap_cdeg == kNoGravityCap)
+        std::snprintf(text, size, "no gravity cap");
+      else
+        std::snprintf(text, size, "a gravity cap above %.2f deg", s.gravity_cap_cdeg / 100.0);
+    };
+    // Short: the Status message holds 240 characters and the caller prefixes the path.
+    char in_file[48], wanted[48];
+    describe(file, in_file, sizeof in_file);
+    describe(want, wanted, sizeof wanted);
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with %s, this configuration has %s (taper %.2f/%.2f deg): set "
+                         "[attitude] as taught, or teach again",
+                         in_file, wanted, file.gravity_cap_taper_cdeg / 100.0,
+                         want.gravity_cap_taper_cdeg / 100.0);
+  }
+  if (file.normalisation != want.normalisation) {
+    // By name, with the setting to change: the default changed from "none" to "unit_l2" on
+    // 2026-11-26, so a route taught before meets a configuration that does not say which.
+    const auto name = [](std::uint32_t n) {
+      return n <= static_cast<std::uint32_t>(dsp::AmplitudeNormalisation::kUnitL2)
+                 ? dsp::AmplitudeNormalisationName(static_cast<dsp::AmplitudeNormalisation>(n))
+                 : "?";
+    };
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with [descriptor] normalisation = \"%s\" but this configuration "
+                         "has \"%s\": set normalisation = \"%s\" to repeat this route, or "
+                         "teach again",
+                         name(file.normalisation), name(want.normalisation),
+                         name(file.normalisation));
+  }
+  struct Field {
+    const char* name;
+    std::uint64_t in_file, wanted;
+    const char* fix;
+  };
+  // Short enough to survive a long route path in a Status (240 characters): the fix first.
+  constexpr const char* kRerun = "run with the configuration it was taught with, or teach again";
+  // The grid's rings and longitudes come from [descriptor] grid; a route taught with the
+  // defaults before 2026-11-26 was sampled on grid = "auto".
+  constexpr const char* kGridFix =
+      "set [descriptor] grid as taught (\"auto\" was the default before 2026-11-26), or teach "
+      "again";
+  const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind, kRerun},
+                          {"[descriptor] bands", file.bands, want.bands, kRerun},
+                          {"[descriptor] rings", file.rings, want.rings, kGridFix},
+                          {"[descriptor] longitudes", file.longitudes, want.longitudes, kGridFix},
+                          {"descriptor size", file.dim, want.dim, kRerun}};
+  for (const Field& f : fields) {
+    if (f.in_file != f.wanted) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "taught with %s = %llu but this configuration has %llu: %s", f.name,
+                           static_cast<unsigned long long>(f.in_file),
+                           static_cast<unsigned long long>(f.wanted), f.fix);
+    }
+  }
+  // A route without strips, or a configuration without heading, loads: heading is then
+  // off (the caller says so once). Two different strips would give a wrong heading.
+  if (file.strip.columns != 0 && want.strip.columns != 0 && !(file.strip == want.strip)) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with a %u-column horizon strip over %.2f..%.2f deg (%u rows), "
+                         "this configuration has %u columns over %.2f..%.2f deg (%u rows): set "
+                         "[heading] as taught, or teach again",
+                         file.strip.columns, file.strip.elevation_min_cdeg / 100.0,
+                         file.strip.elevation_max_cdeg / 100.0, file.strip.band_rows,
+                         want.strip.columns, want.strip.elevation_min_cdeg / 100.0,
+                         want.strip.elevation_max_cdeg / 100.0, want.strip.band_rows);
+  }
+  if (file.lens.known && want.lens.known)
+    return CheckRouteDbLens(file.lens, want.lens);
+  if (file.lens_hash != want.lens_hash) {
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with lens hash %016llx, this configuration has %016llx; the "
+                         "file is older than version 3 and stores no lens parameters: use the "
+                         "camera file it was taught with, or teach again",
+                         static_cast<unsigned long long>(file.lens_hash),
+                         static_cast<unsigned long long>(want.lens_hash));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// The lens record
+
+namespace {
+
+struct LensDiff {
+  // Whole items only, short enough that the fix and the caller's path still fit the
+  // 240-character Status message; the rest is counted.
+  static constexpr std::size_t kRoom = 100;
+  char text[kRoom + 1] = {};
+  std::size_t used = 0;
+  int count = 0;
+  int left_out = 0;
+};
+
+// Appends "; " and one difference if it fits whole, else counts it as left out.
+[[gnu::format(printf, 2, 3)]] void AddLensDiff(LensDiff* d, const char* format, ...) {
+  ++d->count;
+  char item[96];
+  std::va_list args;
+  va_start(args, format);
+  const int n = std::vsnprintf(item, sizeof item, format, args);
+  va_end(args);
+  const std::size_t separator = d->used > 0 ? 2 : 0;
+  if (n < 0 || d->used + separator + static_cast<std::size_t>(n) > LensDiff::kRoom) {
+    ++d->left_out;
+    return;
+  }
+  std::snprintf(d->text + d->used, sizeof d->text - d->used, "%s%s", separator > 0 ? "; " : "",
+                item);
+  d->used += separator + static_cast<std::size_t>(n);
+}
+
+}  // namespace
+
+const char* RouteDbLensModelName(std::uint32_t model) {
+  static constexpr const char* kNames[] = {"equidistant", "equisolid",       "kannala_brandt",
+                                           "ocamcalib",   "equirectangular", "pinhole"};
+  return model < std::size(kNames) ? kNames[model] : "unknown";
+}
+
+Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now) {
+  // What differs, in words, taught value first; as much as fits the Status message.
+  LensDiff d;
+  auto near = [](double a, double b, double tolerance) {
+    return std::fabs(a - b) <= tolerance;  // false for NaN
+  };
+  auto near_relative = [](double a, double b) {
+    return std::fabs(a - b) <=
+           kRouteDbLensRelativeTolerance * std::max(std::fabs(a), std::fabs(b)) + 1e-12;
+  };
+  if (taught.model != now.model)
+    AddLensDiff(&d, "model %s vs %s", RouteDbLensModelName(taught.model),
+                RouteDbLensModelName(now.model));
+  if (taught.width != now.width || taught.height != now.height)
+    AddLensDiff(&d, "image size %ux%u vs %ux%u", taught.width, taught.height, now.width,
+                now.height);
+  if (!near(taught.fov_deg, now.fov_deg, kRouteDbLensDegreeTolerance))
+    AddLensDiff(&d, "fov %.2f vs %.2f degrees", taught.fov_deg, now.fov_deg);
+  if (!near(taught.centre_x, now.centre_x, kRouteDbLensPixelTolerance))
+    AddLensDiff(&d, "centre x %.2f vs %.2f px", taught.centre_x, now.centre_x);
+  if (!near(taught.centre_y, now.centre_y, kRouteDbLensPixelTolerance))
+    AddLensDiff(&d, "centre y %.2f vs %.2f px", taught.centre_y, now.centre_y);
+  if (!near(taught.radius_px, now.radius_px, kRouteDbLensPixelTolerance))
+    AddLensDiff(&d, "radius %.2f vs %.2f px", taught.radius_px, now.radius_px);
+  if (!near_relative(taught.fx, now.fx) || !near_relative(taught.fy, now.fy))
+    AddLensDiff(&d, "fx/fy %g/%g vs %g/%g px", taught.fx, taught.fy, now.fx, now.fy);
+  for (std::size_t i = 0; i < taught.k.size(); ++i) {
+    if (!near_relative(taught.k[i], now.k[i]))
+      AddLensDiff(&d, "k%zu %g vs %g", i + 1, taught.k[i], now.k[i]);
+  }
+  if (taught.ocam_hash != now.ocam_hash)
+    AddLensDiff(&d, "OCamCalib polynomials (hash %016llx vs %016llx)",
+                static_cast<unsigned long long>(taught.ocam_hash),
+                static_cast<unsigned long long>(now.ocam_hash));
+  const double taught_mount[] = {taught.roll_deg, taught.pitch_deg, taught.yaw_deg};
+  const double now_mount[] = {now.roll_deg, now.pitch_deg, now.yaw_deg};
+  const char* mount_names[] = {"roll", "pitch", "yaw"};
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!near(taught_mount[i], now_mount[i], kRouteDbLensDegreeTolerance))
+      AddLensDiff(&d, "mount %s %.2f vs %.2f degrees", mount_names[i], taught_mount[i],
+                  now_mount[i]);
+  }
+  if (d.count == 0)
+    return Status::Ok();
+  // Short: the Status holds 240 characters and the caller puts the path in front.
+  return Status::Error(StatusCode::kFailedPrecondition,
+                       "lens differs (taught vs now): %s%s: use the camera file it was taught "
+                       "with, or teach again",
+                       d.text, d.left_out > 0 ? "; and more" : "");
+}
+
+void FormatRouteDbLens(const RouteDbLens& l, char* out, std::size_t size) {
+  if (!l.known) {
+    std::snprintf(out, size, "not stored (format older than version 3: only the lens hash)");
+    return;
+  }
+  const int n = std::snprintf(
+      out, size,
+      "%s %ux%u, fov %.2f degrees, centre %.2f %.2f px, radius %.2f px, mount roll %.2f "
+      "pitch %.2f yaw %.2f degrees",
+      RouteDbLensModelName(l.model), l.width, l.height, l.fov_deg, l.centre_x, l.centre_y,
+      l.radius_px, l.roll_deg, l.pitch_deg, l.yaw_deg);
+  if (n < 0 || static_cast<std::size_t>(n) >= size)
+    return;
+  const auto used = static_cast<std::size_t>(n);
+  if (l.fx != 0 || l.fy != 0) {
+    std::snprintf(out + used, size - used, ", fx %.6g fy %.6g, k %.6g %.6g %.6g %.6g", l.fx, l.fy,
+                  l.k[0], l.k[1], l.k[2], l.k[3]);
+  } else if (l.ocam_hash != 0) {
+    std::snprintf(out + used, size - used, ", OCamCalib polynomials hash %016llx",
+                  static_cast<unsigned long long>(l.ocam_hash));
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// RouteFrames
+
+Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns,
+                             RouteSink* sink) {
+  sink_ = sink;
+  const std::size_t kept = sink != nullptr ? 1 : capacity;
+  SKYLOC_TRY(descriptors_.Allocate(kept * dim));
+  SKYLOC_TRY(strips_.Allocate(kept * strip_columns));
+  SKYLOC_TRY(meta_.Allocate(capacity));
+  dim_ = dim;
+  strip_columns_ = strip_columns;
+  Clear();
+  return Status::Ok();
+}
+
+bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                         std::span<const std::uint8_t> strip) {
+  if (descriptor.size() != dim_ || (!strip.empty() && strip.size() != strip_columns_))
+    return false;
+  const Slot slot = Emplace(meta, !strip.empty());
+  if (slot.descriptor.empty())
+    return false;
+  std::memcpy(slot.descriptor.data(), descriptor.data(), slot.descriptor.size_bytes());
+  if (!strip.empty())
+    std::memcpy(slot.strip.data(), strip.data(), strip.size());
+  if (!Complete(slot).ok()) {
+    --size_;  // the sink refused it (full): the frame is not part of the route
+    return false;
+  }
+  return true;
+}
+
+Status RouteFrames::Complete(const Slot& slot) {
+  if (sink_ == nullptr)
+    return Status::Ok();
+  return sink_->AddFrame(slot.descriptor, slot.strip);
+}
+
+RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_strip) {
+  if (size_ >= meta_.size() || (with_strip && strip_columns_ == 0))
+    return {};
+  if (size_ == 0)
+    has_strips_ = with_strip;
+  else if (with_strip != has_strips_)
+    return {};
+  meta_[size_] = meta;
+  Slot slot;
+  slot.descriptor = {descriptors_.data() + (sink_ != nullptr ? 0 : size_ * dim_), dim_};
+  if (with_strip)
+    slot.strip = {strips_.data() + (sink_ != nullptr ? 0 : size_ * strip_columns_), strip_columns_};
+  ++size_;
+  return slot;
+}
+
+// ---------------------------------------------------------------------------------------
+// Loading
+
+Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report) {
+  RouteDbLoadReport r;
+  const std::size_t size = bytes.size();
+  const std::uint8_t* b = bytes.data();
+  if (size < kRouteDbHeaderBytes) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu bytes, shorter than the %zu-byte header: truncated, or not a "
+                         "route database",
+                         size, kRouteDbHeaderBytes);
+  }
+  if (std::memcmp(b, kMagic, sizeof kMagic) != 0)
+    return Status::Error(StatusCode::kInvalidArgument, "not a skyloc route database (no magic)");
+  const std::uint32_t version = LoadBytes<std::uint32_t>(b + 8);
+  if (version < 1 || version > kRouteDbVersion) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "route database version %u; this skyloc reads versions 1 to %u: %s",
+                         version, kRouteDbVersion,
+                         version > kRouteDbVersion ? "use the skyloc that taught it, or teach "
+                                                     "the route again"
+                                                   : "teach the route again");
+  }
+  const std::size_t data_offset = RouteDbDataOffset(version);
+  if (!CrcMatches(LoadBytes<std::uint32_t>(b + 60), b, 60) ||
+      LoadBytes<std::uint32_t>(b + 12) != data_offset) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "header (offset 0): checksum mismatch, the file "
+                         "is corrupt");
+  }
+  if (size < data_offset) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu bytes, shorter than the header and lens record (%zu bytes): "
+                         "truncated",
+                         size, data_offset);
+  }
+  const std::uint8_t* lens_record = b + kRouteDbHeaderBytes;
+  if (version >= 3 && !CrcMatches(LoadBytes<std::uint32_t>(lens_record + kLensCrcOffset),
+                                  lens_record, kLensCrcOffset)) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "lens record (offset %zu): checksum mismatch, the file is corrupt",
+                         kRouteDbHeaderBytes);
+  }
+  r.version = version;
+  RouteDbSettings& s = r.settings;
+  s.descriptor_kind = LoadBytes<std::uint32_t>(b + 16);
+  s.bands = LoadBytes<std::uint32_t>(b + 20);
+  s.rings = LoadBytes<std::uint32_t>(b + 24);
+  s.longitudes = LoadBytes<std::uint32_t>(b + 28);
+  s.dim = LoadBytes<std::uint32_t>(b + 32);
+  s.normalisation = LoadBytes<std::uint32_t>(b + 36);
+  s.lens_hash = LoadBytes<std::uint64_t>(b + 40);
+  s.gravity_cap_cdeg = version >= 2 ? LoadBytes<std::uint32_t>(b + 52) : kNoGravityCap;
+  s.gravity_cap_taper_cdeg = version >= 2 ? LoadBytes<std::uint32_t>(b + 56) : 0;
+  if (version >= 3)
+    s.lens = DecodeLensRecord(lens_record);
+  if (version >= 4) {
+    const std::uint8_t* strip_record = lens_record + kRouteDbLensRecordBytes;
+    if (!CrcMatches(LoadBytes<std::uint32_t>(strip_record + kStripCrcOffset), strip_record,
+                    kStripCrcOffset)) {
+      return Status::Error(StatusCode::kDataLoss,
+                           "strip record (offset %zu): checksum mismatch, the file is corrupt",
+                           kRouteDbHeaderBytes + kRouteDbLensRecordBytes);
+    }
+    s.strip = DecodeStripRecord(strip_record);
+    if (s.strip.columns > kMaxDim) {
+      return Status::Error(StatusCode::kDataLoss, "strip record: %u strip columns is invalid",
+                           s.strip.columns);
+    }
+  }
+  if (s.dim == 0 || s.dim > kMaxDim ||
+      LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim, s.strip.columns)) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "header (offset 0): descriptor size %u is "
+                         "invalid",
+                         s.dim);
+  }
+  if (expected != nullptr)
+    SKYLOC_TRY(CheckSettings(s, *expected));
+  if (out != nullptr) {
+    if (out->dim() != s.dim) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "descriptor size %u, but memory was set up for %zu", s.dim, out->dim());
+    }
+    out->Clear();
+  }
+  // The strips are kept when memory has room for exactly these; a route or configuration
+  // without them loads the descriptors only (CheckSettings refuses two different strips).
+  const bool keep_strips =
+      out != nullptr && s.strip.columns != 0 && out->strip_columns() == s.strip.columns;
+  const std::size_t record_bytes = RouteDbRecordBytes(s.dim, s.strip.columns);
+
+  std::size_t offset = data_offset;
+  std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
+  Status problem;
+  while (offset < size) {
+    ++chunk;
+    const std::size_t left = size - offset;
+    const std::uint8_t* h = b + offset;
+    if (left < kRouteDbChunkHeaderBytes) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: truncated header "
+                              "(%zu of %zu bytes)",
+                              chunk, offset, left, kRouteDbChunkHeaderBytes);
+      break;
+    }
+    if (!ChunkHeaderIntact(h)) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: header checksum mismatch", chunk, offset);
+      break;
+    }
+    const std::uint32_t type = LoadBytes<std::uint32_t>(h + 4);
+    const std::uint64_t first = LoadBytes<std::uint64_t>(h + 8);
+    const std::uint32_t count = LoadBytes<std::uint32_t>(h + 16);
+    const std::uint32_t payload_bytes = LoadBytes<std::uint32_t>(h + 20);
+    const std::uint32_t payload_crc = LoadBytes<std::uint32_t>(h + 24);
+    if (first != r.frames) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: starts at frame "
+                              "%llu, expected %zu",
+                              chunk, offset, static_cast<unsigned long long>(first), r.frames);
+      break;
+    }
+    if (type == kChunkCommit) {
+      if (count != 0 || payload_bytes != 0) {
+        problem = Status::Error(StatusCode::kDataLoss,
+                                "chunk %zu at offset %zu: malformed commit record", chunk, offset);
+        break;
+      }
+      offset += kRouteDbChunkHeaderBytes;
+      r.committed = true;
+      r.valid_bytes = offset;
+      r.trailing_bytes = size - offset;
+      break;
+    }
+    if (type != kChunkFrames || count == 0 ||
+        static_cast<std::uint64_t>(payload_bytes) != std::uint64_t{count} * record_bytes) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: malformed (type %u, %u frames, %u bytes)",
+                              chunk, offset, type, count, payload_bytes);
+      break;
+    }
+    if (left - kRouteDbChunkHeaderBytes < payload_bytes) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: truncated (%zu of "
+                              "%u payload bytes)",
+                              chunk, offset, left - kRouteDbChunkHeaderBytes, payload_bytes);
+      break;
+    }
+    const std::uint8_t* payload = h + kRouteDbChunkHeaderBytes;
+    if (!CrcMatches(payload_crc, payload, payload_bytes)) {
+      problem = Status::Error(StatusCode::kDataLoss,
+                              "chunk %zu at offset %zu: checksum mismatch "
+                              "(frames %zu..%zu)",
+                              chunk, offset, r.frames, r.frames + count - 1);
+      break;
+    }
+    if (out != nullptr) {
+      if (out->size() + count > out->capacity()) {
+        return Status::Error(StatusCode::kResourceExhausted,
+                             "the route has more than %zu frames (chunk %zu): raise [capacities] "
+                             "route_frames",
+                             out->capacity(), chunk);
+      }
+      for (std::uint32_t i = 0; i < count; ++i) {
+        const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
+        RouteFrameMeta meta;
+        meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
+        if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0)
+          meta.pose = LoadPose(rec + 16);
+        // Copied byte-wise: the input need not be aligned for float.
+        const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
+        if (slot.descriptor.size() != s.dim)
+          return Status::Error(StatusCode::kInternal, "route frames rejected a record");
+        std::memcpy(slot.descriptor.data(), rec + kRouteDbRecordFixedBytes,
+                    slot.descriptor.size_bytes());
+        if (keep_strips)
+          std::memcpy(slot.strip.data(), rec + kRouteDbRecordFixedBytes + 4 * std::size_t{s.dim},
+                      slot.strip.size());
+        if (Status added = out->Complete(slot); !added.ok()) {
+          return Status::Error(added.code(), "route frame %zu: %s", out->size() - 1,
+                               added.message());
+        }
+      }
+    }
+    r.frames += count;
+    ++r.chunks;
+    offset += kRouteDbChunkHeaderBytes + payload_bytes;
+    r.valid_bytes = offset;
+  }
+  if (r.valid_bytes == 0)
+    r.valid_bytes = data_offset;
+
+  if (!problem.ok()) {
+    // Damage followed by an intact chunk header is in the middle of the route: dropping
+    // the tail would hide the frames after it, so only --salvage does that.
+    std::size_t intact_after = 0;
+    for (std::size_t o = offset + 4; o + kRouteDbChunkHeaderBytes <= size; o += 4) {
+      if (ChunkHeaderIntact(b + o)) {
+        intact_after = o;
+        break;
+      }
+    }
+    if (intact_after != 0 && policy != RouteDbLoadPolicy::kSalvage) {
+      // Short: the Status holds 240 characters and the caller puts the path in front.
+      return Status::Error(StatusCode::kDataLoss,
+                           "%s; intact data follows at offset %zu: damaged mid-file, not cut "
+                           "short; 'route recover --salvage' keeps the %zu frames before it",
+                           problem.message(), intact_after, r.frames);
+    }
+    if (policy == RouteDbLoadPolicy::kStrict)
+      return problem;
+    r.dropped_bytes = size - r.valid_bytes;
+    r.damaged_mid_file = intact_after != 0;
+  } else if (r.trailing_bytes > 0 && policy == RouteDbLoadPolicy::kStrict) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu trailing bytes after the commit record at offset %zu: the %zu "
+                         "frames are complete but something was appended; 'skyloc route "
+                         "recover' cuts the trailing bytes off",
+                         r.trailing_bytes, r.valid_bytes, r.frames);
+  } else if (!r.committed && policy == RouteDbLoadPolicy::kStrict) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "no commit record after chunk %zu (offset %zu): teach was interrupted "
+                         "or the file truncated; 'skyloc route recover' keeps its %zu frames",
+                         r.chunks, r.valid_bytes, r.frames);
+  }
+  if (report != nullptr)
+    *report = r;
+  return Status::Ok();
+}
+
+namespace {
+
+const char* FileKind(mode_t mode) {
+  if (S_ISFIFO(mode))
+    return "a FIFO";
+  if (S_ISCHR(mode) || S_ISBLK(mode))
+    return "a device node";
+  if (S_ISDIR(mode))
+    return "a directory";
+  if (S_ISLNK(mode))
+    return "a symbolic link";
+  if (S_ISSOCK(mode))
+    return "a socket";
+  return "not a regular file";
+}
+
+Status NotARegularFile(const char* path, mode_t mode) {
+  return Status::Error(StatusCode::kInvalidArgument,
+                       "%s is %s, not a route database file: name a regular file", path,
+                       FileKind(mode));
+}
+
+// Opens an existing route file. O_NONBLOCK: opening a FIFO must not wait for a writer;
+// anything but a regular file is refused before it is read.
+Status OpenRegularFile(const char* path, int flags, UniqueFd* out) {
+  UniqueFd fd(::open(path, flags | O_NONBLOCK | O_CLOEXEC));
+  if (!fd.is_valid())
+    return Status::FromErrno(errno, "cannot open %s", path);
+  struct stat st {};
+  if (::fstat(fd.get(), &st) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", path);
+  if (!S_ISREG(st.st_mode))
+    return NotARegularFile(path, st.st_mode);
+  *out = std::move(fd);
+  return Status::Ok();
+}
+
+Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", path);
+  bytes->resize(static_cast<std::size_t>(st.st_size));
+  std::size_t done = 0;
+  while (done < bytes->size()) {
+    const ssize_t n = ::read(fd, bytes->data() + done, bytes->size() - done);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n < 0)
+      return Status::FromErrno(errno, "cannot read %s", path);
+    if (n == 0)
+      break;
+    done += static_cast<std::size_t>(n);
+  }
+  bytes->resize(done);
+  return Status::Ok();
+}
+
+Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, &fd));
+  return ReadAll(path, fd.get(), bytes);
+}
+
+Status WriteAll(int fd, const std::uint8_t* p, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR)
+      continue;
+    if (w < 0)
+      return Status::FromErrno(errno, "write failed");
+    p += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return Status::Ok();
+}
+
+Status SyncDirectoryOf(const char* path) {
+  char dir[256];
+  std::snprintf(dir, sizeof dir, "%s", path);
+  char* slash = std::strrchr(dir, '/');
+  if (slash == nullptr) {
+    std::snprintf(dir, sizeof dir, ".");
+  } else if (slash == dir) {
+    dir[1] = '\0';
+  } else {
+    *slash = '\0';
+  }
+  UniqueFd fd(::open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (!fd.is_valid() || ::fsync(fd.get()) != 0)
+    return Status::FromErrno(errno, "cannot sync directory %s", dir);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoadPolicy policy,
+                   RouteFrames* out, RouteDbLoadReport* report) {
+  std::vector<std::uint8_t> bytes;
+  SKYLOC_TRY(ReadWholeFile(path, &bytes));
+  Status s = ParseRouteDb(bytes, expected, policy, out, report);
+  if (!s.ok())
+    s.AddContext("route database %s", path);
+  return s;
+}
+
+Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage) {
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDWR, &fd));
+  // A running teach holds this lock while it writes: recovering under it would cut the
+  // chunk it is appending.
+  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    if (e == EWOULDBLOCK)
+      return Status::Error(StatusCode::kUnavailable,
+                           "%s is being written by a running teach (it holds the file's lock): "
+                           "stop that teach (SIGINT commits it) instead of recovering",
+                           path);
+    return Status::FromErrno(e, "cannot lock %s", path);
+  }
+  std::vector<std::uint8_t> bytes;
+  SKYLOC_TRY(ReadAll(path, fd.get(), &bytes));
+  RouteDbLoadReport r;
+  Status s = ParseRouteDb(
+      bytes, nullptr,
+      salvage ? RouteDbLoadPolicy::kSalvage : RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &r);
+  if (!s.ok())
+    return s.AddContext("route database %s", path);
+  if (!r.committed && r.frames == 0) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "route database %s: no intact frame to recover (%zu bytes after the "
+                         "header are damaged or torn); the file is left as it was: teach the "
+                         "route again",
+                         path, r.dropped_bytes);
+  }
+  if (r.damaged_mid_file) {
+    // Salvage drops intact data after the damage: keep the original beside it first.
+    char copy[300];
+    std::snprintf(copy, sizeof copy, "%s.damaged", path);
+    UniqueFd out(::open(copy, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
+    if (!out.is_valid())
+      return Status::FromErrno(errno, "cannot keep the damaged original as %s (remove or move it)",
+                               copy);
+    if (Status w = WriteAll(out.get(), bytes.data(), bytes.size()); !w.ok())
+      return w.AddContext("%s", copy);
+    if (::fsync(out.get()) != 0)
+      return Status::FromErrno(errno, "cannot sync %s", copy);
+  }
+  if (!r.committed || r.trailing_bytes > 0) {
+    if (::ftruncate(fd.get(), static_cast<off_t>(r.valid_bytes)) != 0 ||
+        ::lseek(fd.get(), 0, SEEK_END) < 0)
+      return Status::FromErrno(errno, "cannot cut the torn tail of %s", path);
+  }
+  if (!r.committed) {
+    std::uint8_t commit[kRouteDbChunkHeaderBytes];
+    EncodeChunkHeader(kChunkCommit, r.frames, 0, 0, Crc32({}), commit);
+    // Not SKYLOC_TRY(x.AddContext()): that binds a reference to a destroyed temporary.
+    if (Status w = WriteAll(fd.get(), commit, sizeof commit); !w.ok())
+      return w.AddContext("%s", path);
+  }
+  if ((!r.committed || r.trailing_bytes > 0) && ::fdatasync(fd.get()) != 0)
+    return Status::FromErrno(errno, "cannot sync %s", path);
+  if (report != nullptr)
+    *report = r;
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------
+// Writing
+
+RouteDbWriter::~RouteDbWriter() = default;
+
+Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
+                             std::size_t flush_every, bool overwrite) {
+  if (settings.dim == 0 || settings.dim > kMaxDim) {
+    return Status::Error(StatusCode::kInvalidArgument, "descriptor size %u is not 1..%u",
+                         settings.dim, kMaxDim);
+  }
+  if (flush_every == 0 || flush_every > (1u << 20))
+    return Status::Error(StatusCode::kInvalidArgument, "flush_every %zu is invalid", flush_every);
+  if (std::strlen(path) + 5 >= sizeof path_)
+    return Status::Error(StatusCode::kInvalidArgument, "path too long: %s", path);
+  // An existing route is replaced only with `overwrite`, and only if it is a regular file:
+  // a symlink, device node or FIFO at the path is not ours to replace.
+  bool replacing = false;
+  struct stat existing {};
+  if (::lstat(path, &existing) == 0) {
+    if (!S_ISREG(existing.st_mode)) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s is %s, not a route database file: teach does not replace it; "
+                           "give --route the path of a regular file",
+                           path, FileKind(existing.st_mode));
+    }
+    if (!overwrite) {
+      return Status::Error(StatusCode::kFailedPrecondition,
+                           "%s already exists: not replacing a taught route", path);
+    }
+    replacing = true;
+  } else if (errno != ENOENT) {
+    return Status::FromErrno(errno, "cannot check %s", path);
+  }
+  const std::size_t record_bytes = RouteDbRecordBytes(settings.dim, settings.strip.columns);
+  SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
+
+  char tmp[sizeof write_path_];
+  std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  // O_NOFOLLOW/O_NONBLOCK + the check below: a symlink or FIFO planted at FILE.tmp is
+  // refused, not followed or waited on.
+  UniqueFd fd(
+      ::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
+  if (!fd.is_valid())
+    return Status::FromErrno(errno, "cannot create %s", tmp);
+  struct stat created {};
+  if (::fstat(fd.get(), &created) != 0)
+    return Status::FromErrno(errno, "cannot stat %s", tmp);
+  if (!S_ISREG(created.st_mode))
+    return NotARegularFile(tmp, created.st_mode);
+  // Held until the writer closes: `route recover` refuses the file meanwhile.
+  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
+    return Status::FromErrno(errno, "cannot lock %s", tmp);
+  std::uint8_t header[RouteDbDataOffset(kRouteDbVersion)];
+  EncodeHeader(settings, header);
+  if (Status w = WriteAll(fd.get(), header, sizeof header); !w.ok())
+    return w.AddContext("%s", tmp);
+  if (::fsync(fd.get()) != 0)
+    return Status::FromErrno(errno, "cannot sync %s", tmp);
+  if (!replacing) {
+    // A new route: it appears under its name at once, so a crash leaves a recoverable
+    // FILE.db. A route being replaced stays untouched until Commit() renames FILE.db.tmp
+    // over it: a teach killed early must not cost the old route.
+    if (::rename(tmp, path) != 0) {
+      const int e = errno;
+      ::unlink(tmp);
+      return Status::FromErrno(e, "cannot rename %s to %s", tmp, path);
+    }
+    SKYLOC_TRY(SyncDirectoryOf(path));
+  }
+
+  fd_ = std::move(fd);
+  committed_ = false;
+  lost_ = 0;
+  std::snprintf(path_, sizeof path_, "%s", path);
+  std::snprintf(write_path_, sizeof write_path_, "%s", replacing ? tmp : path);
+  replacing_ = replacing;
+  settings_ = settings;
+  flush_every_ = flush_every;
+  pending_ = 0;
+  appended_ = 0;
+  durable_ = 0;
+  return Status::Ok();
+}
+
+Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                             std::span<const std::uint8_t> strip) {
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  if (descriptor.size() != settings_.dim) {
+    return Status::Error(StatusCode::kInvalidArgument, "descriptor has %zu values, expected %u",
+                         descriptor.size(), settings_.dim);
+  }
+  if (strip.size() != settings_.strip.columns) {
+    return Status::Error(StatusCode::kInvalidArgument, "horizon strip has %zu columns, expected %u",
+                         strip.size(), settings_.strip.columns);
+  }
+  std::uint8_t* rec = chunk_.data() + kRouteDbChunkHeaderBytes +
+                      pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns);
+  std::memset(rec, 0, kRouteDbRecordFixedBytes);
+  StoreBytes<std::uint64_t>(rec, meta.timestamp_ns);
+  StoreBytes<std::uint32_t>(rec + 8, meta.pose ? kHasPose : 0u);
+  if (meta.pose)
+    StorePose(*meta.pose, rec + 16);
+  std::memcpy(rec + kRouteDbRecordFixedBytes, descriptor.data(), descriptor.size_bytes());
+  if (!strip.empty())
+    std::memcpy(rec + kRouteDbRecordFixedBytes + descriptor.size_bytes(), strip.data(),
+                strip.size());
+  ++pending_;
+  ++appended_;
+  if (pending_ == flush_every_)
+    return Flush();
+  return Status::Ok();
+}
+
+Status RouteDbWriter::WriteChunk(std::uint32_t type, std::uint64_t first, std::uint32_t count,
+                                 std::size_t payload_bytes) {
+  std::uint8_t* h = chunk_.data();
+  const std::uint32_t crc = Crc32({h + kRouteDbChunkHeaderBytes, payload_bytes});
+  EncodeChunkHeader(type, first, count, static_cast<std::uint32_t>(payload_bytes), crc, h);
+  const off_t before = ::lseek(fd_.get(), 0, SEEK_CUR);
+  Status s = WriteAll(fd_.get(), h, kRouteDbChunkHeaderBytes + payload_bytes);
+  if (s.ok() && ::fdatasync(fd_.get()) != 0)
+    s = Status::FromErrno(errno, "fdatasync failed");
+  if (!s.ok()) {
+    // Cut a partly written chunk off again, so that a later retry appends after intact
+    // data (a torn chunk in the middle would make the file unloadable).
+    if (before >= 0 && ::ftruncate(fd_.get(), before) == 0)
+      (void)::lseek(fd_.get(), before, SEEK_SET);
+    return s.AddContext("route database %s", write_path_);
+  }
+  return Status::Ok();
+}
+
+Status RouteDbWriter::Flush() {
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  if (pending_ == 0)
+    return Status::Ok();
+  SKYLOC_TRY(WriteChunk(kChunkFrames, durable_, static_cast<std::uint32_t>(pending_),
+                        pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns)));
+  durable_ += pending_;
+  pending_ = 0;
+  return Status::Ok();
+}
+
+Status RouteDbWriter::Commit() {
+  if (!fd_.is_valid())
+    return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
+  // The last chunk may not fit (disk full, RLIMIT_FSIZE); WriteChunk has cut it off again.
+  // The 32-byte commit record may still fit: commit the frames already on the disk.
+  Status flushed = Flush();
+  lost_ = pending_;
+  pending_ = 0;
+  if (Status c = WriteChunk(kChunkCommit, durable_, 0, 0); !c.ok()) {
+    fd_.reset();  // closed uncommitted: `route recover` keeps the durable frames
+    return c;
+  }
+  committed_ = true;
+  if (replacing_) {
+    // The new route is complete and durable: now, atomically, it replaces the old one.
+    if (::rename(write_path_, path_) != 0)
+      return Status::FromErrno(errno, "cannot rename %s to %s (the new route is complete in %s)",
+                               write_path_, path_, write_path_);
+    SKYLOC_TRY(SyncDirectoryOf(path_));
+    replacing_ = false;
+  }
+  fd_.reset();
+  return flushed;
+}
+
+}  // namespace skyloc::firmware

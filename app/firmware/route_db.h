@@ -1,0 +1,306 @@
+// The route database file: what `skyloc teach` records and `skyloc repeat` loads.
+// Format and crash guarantees: docs/ROUTE_DB.md. In short: a versioned header with the
+// descriptor settings, then chunks of frame records, each with a CRC32, then a commit
+// record. Teach creates the file atomically (temp file + fsync + rename) and appends one
+// chunk per flush followed by fdatasync, so a crash loses at most the frames since the
+// last flush, and the loader finds every flushed frame intact.
+//
+// It lives in app/ beside the pipeline and the frame loop that teach and load it, and
+// stores the camera's drivers::Pose as the camera reports it.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include "skyloc/drivers/camera.h"
+#include "skyloc/platform/fixed_array.h"
+#include "skyloc/platform/status.h"
+#include "skyloc/platform/unique_fd.h"
+
+namespace skyloc::firmware {
+
+// The lens a route was taught with (version 3: the lens record after the header). Effective
+// values: the centre and radius are what the lens used, never "unset". Numbers only; app/
+// fills it from dsp::LensParams and dsp::Lens.
+struct RouteDbLens {
+  bool known = false;       // false: a version-1/2 file (only lens_hash), or not filled in
+  std::uint32_t model = 0;  // dsp::LensModel's number (RouteDbLensModelName spells it)
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  double centre_x = 0, centre_y = 0, radius_px = 0;  // pixels
+  double fov_deg = 0;
+  double fx = 0, fy = 0;      // Kannala-Brandt focal lengths, pixels (0 for other models)
+  std::array<double, 4> k{};  // Kannala-Brandt k1..k4
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;  // camera-to-body mount
+  // OCamCalib only: its polynomials (up to 2 x 32 terms), centre and affine part do not fit
+  // a fixed record, so a hash of them is stored instead (0 for the other models).
+  std::uint64_t ocam_hash = 0;
+
+  bool operator==(const RouteDbLens&) const = default;
+};
+
+// Tolerances of CheckRouteDbLens: a lens written out to a camera file and read back
+// compares equal to the one in memory.
+inline constexpr double kRouteDbLensPixelTolerance = 0.01;     // centre, radius
+inline constexpr double kRouteDbLensDegreeTolerance = 0.01;    // fov, mount angles
+inline constexpr double kRouteDbLensRelativeTolerance = 1e-6;  // fx, fy, k1..k4
+
+// "equidistant", "equisolid", "kannala_brandt", "ocamcalib", "equirectangular" (the
+// camera-file spelling of dsp::LensModel), "unknown" otherwise.
+const char* RouteDbLensModelName(std::uint32_t model);
+// Compares the taught lens with the running one within the tolerances above. The error
+// says in words what differs ("image size 320x240 vs 160x120", taught value first) and
+// the fix.
+Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now);
+// One line for `route info`: "equidistant 320x240, centre 159.50 119.50 px, ...".
+void FormatRouteDbLens(const RouteDbLens& lens, char* out, std::size_t size);
+
+// The horizon strip stored with every frame (version 4) for the heading of a recognised
+// place (docs/SURF1D.md): `columns` bytes per frame, the band mean of each azimuth column
+// rounded to 0..255. columns = 0: no strips (every file before version 4, or a route
+// taught with [heading] strip_columns = 0). Numbers only; app/ fills it from
+// dsp::HorizonStripOptions.
+struct RouteDbStrip {
+  std::uint32_t columns = 0;  // azimuth columns over 360 degrees; 0: none stored
+  std::uint32_t band_rows = 0;
+  std::int32_t elevation_min_cdeg = 0;  // band, hundredths of a degree above the horizon
+  std::int32_t elevation_max_cdeg = 0;
+
+  bool operator==(const RouteDbStrip&) const = default;
+};
+
+// What produced the descriptors; a route loads only into a pipeline with equal settings.
+struct RouteDbSettings {
+  std::uint32_t descriptor_kind = 0;
+  std::uint32_t bands = 0;
+  std::uint32_t rings = 0;
+  std::uint32_t longitudes = 0;
+  std::uint32_t dim = 0;  // floats per descriptor
+  std::uint32_t normalisation = 0;
+  // A hash of the lens parameters as configured (firmware::LensHash). Compared only when the
+  // file is version 1 or 2 (no lens record); version 3 compares `lens` instead.
+  std::uint64_t lens_hash = 0;
+  RouteDbLens lens;  // version 3; when both sides know it, it replaces the hash check
+  // The gravity-aligned cap the descriptors were computed with (version 2): its lower edge
+  // and taper in hundredths of a degree, or kNoGravityCap (every version-1 file).
+  std::uint32_t gravity_cap_cdeg = 0xffffffffu;
+  std::uint32_t gravity_cap_taper_cdeg = 0;
+  // Version 4. A file without strips loads into any configuration (heading is then off);
+  // a file with strips must match the configuration's strip unless that has none.
+  RouteDbStrip strip;
+
+  bool operator==(const RouteDbSettings&) const = default;
+};
+
+struct RouteFrameMeta {
+  std::uint64_t timestamp_ns = 0;
+  std::optional<drivers::Pose> pose;  // when the camera knew it
+};
+
+inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
+// Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
+// Version 3 added the lens record after the header. Version 4 added the strip record after
+// the lens record and a horizon strip at the end of every frame record. This version reads
+// 1 to 4, writes 4.
+inline constexpr std::uint32_t kRouteDbVersion = 4;
+inline constexpr std::size_t kRouteDbHeaderBytes = 64;
+inline constexpr std::size_t kRouteDbLensRecordBytes = 144;  // version 3, after the header
+inline constexpr std::size_t kRouteDbStripRecordBytes = 32;  // version 4, after the lens
+// Where the first chunk starts: after the header (versions 1, 2), the lens record (3) and
+// the strip record (4).
+constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
+  return kRouteDbHeaderBytes + (version >= 3 ? kRouteDbLensRecordBytes : 0) +
+         (version >= 4 ? kRouteDbStripRecordBytes : 0);
+}
+inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
+inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
+// A frame record: the fixed part, dim floats, then strip_columns bytes (version 4).
+constexpr std::size_t RouteDbRecordBytes(std::size_t dim, std::size_t strip_columns) {
+  return kRouteDbRecordFixedBytes + 4 * dim + strip_columns;
+}
+
+// Where a route's descriptors and strips go when RouteFrames does not keep them: the
+// firmware's pipeline (its matcher and its heading), so the route is in memory once, the
+// descriptors at the matcher's configured storage type (float32 or bfloat16), not also
+// as floats here (issue 18). RouteFrames then keeps only each frame's time and pose.
+class RouteSink {
+ public:
+  virtual void BeginRoute() = 0;  // a route starts: forget the frames added before
+  // strip: empty when the route has none.
+  virtual Status AddFrame(std::span<const float> descriptor,
+                          std::span<const std::uint8_t> strip) = 0;
+
+ protected:
+  ~RouteSink() = default;
+};
+
+// The frames of a route in memory, at a capacity fixed at start-up. strip_columns: room
+// for a horizon strip per frame (0: none); has_strips() says whether the loaded route
+// filled them (a file before version 4, or taught without strips, does not). With a
+// sink, descriptors and strips are handed to it as they arrive and not kept:
+// descriptor(i) and strip(i) are then empty.
+class RouteFrames {
+ public:
+  Status Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns = 0,
+                  RouteSink* sink = nullptr);
+  void Clear() {
+    size_ = 0;
+    has_strips_ = false;
+    if (sink_ != nullptr)
+      sink_->BeginRoute();
+  }
+  // False when full, or when `strip` is neither empty nor strip_columns() long. Every
+  // frame of a route has a strip or none does: the first Append decides.
+  [[nodiscard]] bool Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                            std::span<const std::uint8_t> strip = {});
+
+  std::size_t size() const { return size_; }
+  std::size_t capacity() const { return meta_.size(); }
+  std::size_t dim() const { return dim_; }
+  std::size_t strip_columns() const { return strip_columns_; }
+  bool has_strips() const { return has_strips_; }
+  // The sink the descriptors went to; nullptr: they are kept here.
+  const RouteSink* sink() const { return sink_; }
+  std::span<const float> descriptor(std::size_t i) const {
+    if (sink_ != nullptr)
+      return {};
+    return {descriptors_.data() + i * dim_, dim_};
+  }
+  // Frame i's horizon strip; empty when the route has none.
+  std::span<const std::uint8_t> strip(std::size_t i) const {
+    if (!has_strips_ || sink_ != nullptr)
+      return {};
+    return {strips_.data() + i * strip_columns_, strip_columns_};
+  }
+  const RouteFrameMeta& meta(std::size_t i) const { return meta_[i]; }
+
+  // Adds a frame and returns its storage to fill in (the loader copies straight into it):
+  // the descriptor, and the strip when `with_strip` (which the first frame decides for
+  // the route). Empty spans when full or when with_strip disagrees with the route. Once
+  // filled, Complete(slot) hands the descriptor to the sink, if there is one.
+  struct Slot {
+    std::span<float> descriptor;
+    std::span<std::uint8_t> strip;
+  };
+  [[nodiscard]] Slot Emplace(const RouteFrameMeta& meta, bool with_strip);
+  [[nodiscard]] Status Complete(const Slot& slot);
+
+ private:
+  RouteSink* sink_ = nullptr;
+  FixedArray<float> descriptors_;    // capacity x dim; with a sink: one frame, to fill
+  FixedArray<std::uint8_t> strips_;  // capacity x strip columns; with a sink: one frame
+  FixedArray<RouteFrameMeta> meta_;
+  std::size_t dim_ = 0;
+  std::size_t strip_columns_ = 0;
+  std::size_t size_ = 0;
+  bool has_strips_ = false;
+};
+
+enum class RouteDbLoadPolicy : std::uint8_t {
+  // The file must end with its commit record and every chunk must verify.
+  kStrict,
+  // A file without a commit record (teach was interrupted) loads every intact chunk; a
+  // damaged or incomplete tail is dropped and reported. Damage followed by an intact
+  // chunk is still an error: that is corruption, not an interrupted write.
+  kRecoverInterrupted,
+  // Like kRecoverInterrupted, but damage in the middle of the file is accepted too: every
+  // intact chunk before the first damage is kept, everything from the damage on is
+  // dropped (`skyloc route recover --salvage`).
+  kSalvage,
+};
+
+struct RouteDbLoadReport {
+  RouteDbSettings settings;   // as stored in the file
+  std::uint32_t version = 0;  // the file's format version
+  std::size_t frames = 0;
+  std::size_t chunks = 0;  // intact frame chunks
+  bool committed = false;
+  std::size_t valid_bytes = 0;    // the intact prefix (header + chunks [+ commit])
+  std::size_t dropped_bytes = 0;  // kRecoverInterrupted/kSalvage: bytes of the torn tail
+  // kSalvage: the damage was in the middle (intact chunks followed it and were dropped).
+  bool damaged_mid_file = false;
+  // Bytes after a valid commit record (something appended to a complete route): the
+  // route is committed; a strict load refuses the file, recovery cuts them off.
+  std::size_t trailing_bytes = 0;
+};
+
+// Parses a whole file's bytes (the loader and the fuzz target share this). `expected`
+// (may be null: accept what the file says) must equal the stored settings. On success
+// `out` holds the frames; on error the Status names the chunk and its byte offset.
+Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report);
+
+// Reads and parses `path`. Start-up only (reads the file into a temporary buffer).
+Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoadPolicy policy,
+                   RouteFrames* out, RouteDbLoadReport* report);
+
+// Makes an interrupted file loadable strictly again: keeps the intact chunks, cuts the
+// torn tail and appends the commit record; a committed file with trailing bytes loses
+// them. Fails (changing nothing) if the file is corrupt in a way recovery must not hide
+// (unless `salvage`: then the intact chunks before mid-file damage are kept, and the
+// original is first copied to FILE.damaged), if no frame is intact, if the path is not a
+// regular file, or if a running teach holds the file's lock.
+Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage = false);
+
+// Writes a route database during teach. Append() copies into a chunk buffer allocated by
+// Create(); every `flush_every` frames the chunk is written with one write() and made
+// durable with fdatasync(). Append() allocates nothing.
+class RouteDbWriter {
+ public:
+  RouteDbWriter() = default;
+  ~RouteDbWriter();  // Closes without committing: the file stays recoverable.
+  RouteDbWriter(const RouteDbWriter&) = delete;
+  RouteDbWriter& operator=(const RouteDbWriter&) = delete;
+
+  // Creates `path` atomically (path.tmp, fsync, rename, fsync of the directory). An
+  // existing file is kept and reported unless `overwrite`; with it, the frames go to
+  // path.tmp and Commit() renames that over the old route, so the old route stays whole
+  // until the new one is committed. A path that is a symlink, device node, FIFO or
+  // directory is refused, `overwrite` or not. The open file holds an
+  // exclusive flock() until it is closed, so `route recover` refuses a file being taught.
+  Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
+                bool overwrite);
+  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0.
+  Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
+                std::span<const std::uint8_t> strip = {});
+  // Writes the buffered frames as one chunk and waits until they are on the disk.
+  Status Flush();
+  // Flush, append the commit record, sync, close. After this the writer is closed. When
+  // the last chunk cannot be written (disk full), the commit record is still appended for
+  // the frames already on the disk: the error is returned, committed() is true and
+  // frames_lost() says how many frames did not fit. When even the commit record cannot
+  // be written, committed() is false and `skyloc route recover` keeps frames_durable().
+  Status Commit();
+  bool committed() const { return committed_; }
+  std::uint64_t frames_lost() const { return lost_; }
+
+  bool is_open() const { return fd_.is_valid(); }
+  // The file the frames go to: the route's path, or path.tmp while replacing a route.
+  const char* write_path() const { return write_path_; }
+  bool replacing() const { return replacing_; }
+  std::uint64_t frames_appended() const { return appended_; }
+  // Frames known to be on the disk.
+  std::uint64_t frames_durable() const { return durable_; }
+
+ private:
+  Status WriteChunk(std::uint32_t type, std::uint64_t first, std::uint32_t count,
+                    std::size_t payload_bytes);
+
+  UniqueFd fd_;
+  char path_[256] = {};
+  char write_path_[264] = {};
+  bool replacing_ = false;
+  bool committed_ = false;
+  std::uint64_t lost_ = 0;
+  RouteDbSettings settings_;
+  FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
+  std::size_t flush_every_ = 0;
+  std::size_t pending_ = 0;
+  std::uint64_t appended_ = 0;
+  std::uint64_t durable_ = 0;
+};
+
+}  // namespace skyloc::firmware

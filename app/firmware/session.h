@@ -1,0 +1,69 @@
+// One run of the firmware: `skyloc teach`, `skyloc repeat`, `skyloc replay` (and the demo
+// calls the same). Start-up reads the configuration, opens the camera, builds the
+// pipeline and opens or loads the route database, all at their configured sizes; then
+// the frame loop; then the clean shutdown: the route database flushed and committed, the
+// status lines in their safe state, the latency table printed.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "firmware/config.h"
+#include "firmware/frame_loop.h"
+
+namespace skyloc::firmware {
+
+// A simulated run (camera.kind = "sim"); the world, its seed and the image size come from
+// the configuration ([camera] sim_world, sim_seed, width, height, lens_file).
+struct SimRun {
+  double spacing_m = 1.0;     // mean distance between frames
+  double speed_jitter = 0.2;  // speed varies within (1 +- jitter)
+  double camera_height_m = 1.0;
+  double tilt_deg = 0;            // constant pitch (the paper's alpha)
+  double zigzag_deg = 0;          // yaw weave amplitude
+  double bumps_deg = 0;           // roll/pitch random walk bound
+  double yaw_deg = 0;             // constant heading offset
+  std::string lighting = "noon";  // noon, dawn, overcast
+  std::uint64_t run_seed = 1;     // jitter or speed profile and stops, bumps, clouds, noise
+  double speed_ratio = 1.0;       // [camera] sim_sampling = "time": scales the cruise speed
+};
+
+struct SessionArgs {
+  LoopMode mode = LoopMode::kRepeat;
+  std::string route_path;
+  std::string config_path;  // empty: the built-in defaults (config/skyloc.toml's values)
+  std::string dataset;      // replay: frames from this dataset folder
+  bool paced = false;       // replay at the recorded pace
+  bool force = false;       // teach: replace an existing route database
+  // The demo: a simulated camera and status output are the point, not a mistake to warn of.
+  bool simulation_expected = false;
+  std::uint64_t max_frames = 0;
+  std::FILE* json = stdout;  // one line per frame; null for none
+  FrameSink* extra_sink = nullptr;
+  double tolerance_m = 2.0;  // replay/demo: a match within this distance is correct
+  // --record DIR (teach, repeat) and `skyloc record DIR`: the frames into this dataset folder.
+  std::string record_dir;
+  const char* label = "skyloc";
+  // camera.kind = "sim": how this run moves and what the light is like.
+  SimRun sim;
+};
+
+struct SessionReport {
+  LoopSummary loop;
+  std::uint64_t route_frames = 0;  // recorded (teach) or loaded (repeat, replay)
+  bool evaluated = false;          // replay/demo with poses: precision/recall below
+  double precision_at_full_recall = 0;
+  double recall_at_full_precision = 0;
+  double area_under_curve = 0;
+  int evaluated_matches = 0;
+  int correct_matches = 0;
+  // Frames shown LOCALISED whose match was correct, of those shown LOCALISED.
+  std::uint64_t localised_frames = 0;
+  std::uint64_t localised_correct = 0;
+};
+
+// Returns the exit code; errors are printed to stderr as "label: message".
+int RunSession(const SessionArgs& args, SessionReport* report = nullptr);
+
+}  // namespace skyloc::firmware

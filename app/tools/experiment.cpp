@@ -1,0 +1,740 @@
+#include "tools/experiment.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "skyloc/dsp/heading.h"
+#include "skyloc/dsp/sky_descriptor.h"
+#include "skyloc/dsp/vanilla_descriptor.h"
+#include "skyloc/sim/imu_model.h"
+#include "tools/fabmap_eval.h"
+#include "tools/features.h"
+
+namespace skyloc::tools {
+
+// The simulator's worlds, renderer and motion, which the experiments drive.
+using sim::BuildTrajectory;
+using sim::DefaultSimLens;
+using sim::EstimateAttitudes;
+using sim::ImuModelConfig;
+using sim::ImuSeedForRun;
+using sim::LightingPreset;
+using sim::LoadRouteCsv;
+using sim::LoadSevilleWorld;
+using sim::MakeProceduralWorld;
+using sim::MotionConfig;
+using sim::Point2;
+using sim::Renderer;
+using sim::Sampling;
+using sim::Spectrum;
+using sim::TrajectoryPoint;
+using sim::World;
+using sim::WorldKind;
+using sim::WorldKindName;
+
+const char* AttitudeInputName(AttitudeInput input) {
+  switch (input) {
+    case AttitudeInput::kNone:
+      return "none";
+    case AttitudeInput::kTruth:
+      return "truth";
+    case AttitudeInput::kSimulatedImu:
+      return "imu";
+    case AttitudeInput::kImage:
+      return "image";
+  }
+  return "?";
+}
+
+namespace {
+
+// The zenith the gravity-aligned cap uses at each frame of a run (body frame: the lens's).
+// The simulated IMU's noise and bias are seeded from the run's own seed.
+Status RunAttitudes(const std::vector<TrajectoryPoint>& trajectory, AttitudeInput input,
+                    std::uint64_t seed, std::vector<dsp::Attitude>* out) {
+  out->clear();
+  if (input == AttitudeInput::kNone)
+    return Status::Ok();
+  if (input == AttitudeInput::kImage) {  // estimated frame by frame in DescribeRun
+    out->assign(trajectory.size(), dsp::Attitude{});
+    return Status::Ok();
+  }
+  if (input == AttitudeInput::kTruth) {
+    for (const TrajectoryPoint& t : trajectory) {
+      out->push_back(dsp::AttitudeFromRollPitch(static_cast<std::int64_t>(t.time_s * 1e9),
+                                                t.pose.roll_deg, t.pose.pitch_deg));
+    }
+  } else {
+    ImuModelConfig imu;
+    imu.seed = ImuSeedForRun(seed);
+    SKYLOC_TRY(EstimateAttitudes(trajectory, imu, dsp::AttitudeFilterParams{}, out));
+  }
+  return Status::Ok();
+}
+
+// The largest tilt (angle between body z and the world zenith) a run with these manoeuvres
+// reaches: a constant pitch plus roll and pitch bumps, each up to bumps_deg.
+double LargestTiltDeg(double tilt_deg, double bumps_deg) {
+  constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+  const double pitch = (std::fabs(tilt_deg) + bumps_deg) * kDegToRad;
+  const double roll = bumps_deg * kDegToRad;
+  return std::acos(std::cos(pitch) * std::cos(roll)) / kDegToRad;
+}
+
+// The options with the cap on (when attitude is) at the elevation a user expecting tilts up
+// to max_tilt_deg would configure, unless the caller set one.
+// The angle between each frame's cap zenith and the true one.
+ZenithError ZenithErrorOf(const std::vector<TrajectoryPoint>& trajectory,
+                          const std::vector<dsp::Attitude>& attitude, int no_estimate) {
+  ZenithError e;
+  e.no_estimate = no_estimate;
+  if (attitude.size() != trajectory.size() || attitude.empty())
+    return e;
+  std::vector<double> errors;
+  errors.reserve(attitude.size());
+  for (std::size_t i = 0; i < attitude.size(); ++i) {
+    const std::array<double, 3> truth =
+        dsp::UpFromRollPitch(trajectory[i].pose.roll_deg, trajectory[i].pose.pitch_deg);
+    const std::array<double, 3>& u = attitude[i].up;
+    const double c = std::clamp(u[0] * truth[0] + u[1] * truth[1] + u[2] * truth[2], -1.0, 1.0);
+    errors.push_back(std::acos(c) * 180.0 / 3.14159265358979323846);
+  }
+  e.frames = static_cast<int>(errors.size());
+  double sum = 0;
+  for (const double x : errors)
+    sum += x;
+  e.mean_deg = sum / static_cast<double>(errors.size());
+  std::sort(errors.begin(), errors.end());
+  e.max_deg = errors.back();
+  e.p95_deg = errors[std::min(errors.size() - 1,
+                              static_cast<std::size_t>(0.95 * static_cast<double>(errors.size())))];
+  return e;
+}
+
+ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_deg) {
+  ExperimentOptions o = options;
+  o.cap.enabled = options.attitude != AttitudeInput::kNone;
+  if (o.cap.elevation_deg < 0)
+    o.cap.elevation_deg = dsp::CapElevationForTilt(max_tilt_deg, DefaultSimLens(8, 8).fov_deg);
+  return o;
+}
+
+}  // namespace
+
+Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
+                   const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
+  MotionConfig motion = spec.motion;
+  motion.sampling = options.sampling;
+  motion.frame_spacing_m = options.spacing_m;
+  motion.fps = options.fps;
+  motion.speed = options.speed;
+  motion.height_m = options.camera_height_m;
+  motion.max_frames = options.max_frames;
+  out->label = spec.label;
+  SKYLOC_TRY(BuildTrajectory(route, closed, motion, &out->trajectory));
+  out->closed_loop = closed && motion.max_frames == 0;
+  Renderer renderer;
+  SKYLOC_TRY(renderer.Init(&world, DefaultSimLens(options.width, options.height)));
+  dsp::SkyDescriptor sky;
+  dsp::SkyDescriptorOptions sky_options;
+  sky_options.bands = options.bands;
+  sky_options.grid = options.oversampled_grid ? dsp::OversampledShGridConfig(options.bands)
+                                              : dsp::DefaultShGridConfig(options.bands);
+  sky_options.normalisation = options.normalisation;
+  if (const dsp::DescriptorError e = sky.Init(renderer.lens(), sky_options); !e.ok())
+    return Status::Error(StatusCode::kInvalidArgument, "sky descriptor: %s", e.message);
+  dsp::SkyDescriptor sky_cap;
+  if (options.cap.enabled) {
+    dsp::SkyDescriptorOptions cap_options = sky_options;
+    cap_options.cap = options.cap;
+    if (const dsp::DescriptorError e = sky_cap.Init(renderer.lens(), cap_options); !e.ok())
+      return Status::Error(StatusCode::kInvalidArgument, "gravity-aligned sky descriptor: %s",
+                           e.message);
+    SKYLOC_TRY(RunAttitudes(out->trajectory, options.attitude, motion.seed, &out->attitude));
+  } else {
+    out->attitude.clear();
+  }
+  // The image's own zenith: from the hemisphere descriptor's samples (the same grid).
+  dsp::ZenithEstimator zenith;
+  const bool from_image = options.cap.enabled && options.attitude == AttitudeInput::kImage;
+  if (from_image && !zenith.Init(sky.grid(), options.zenith))
+    return Status::Error(StatusCode::kInvalidArgument, "zenith estimator: options out of range");
+  int no_estimate = 0;
+  const auto w = static_cast<std::size_t>(options.width);
+  const auto h = static_cast<std::size_t>(options.height);
+  std::vector<std::uint8_t> uv(w * h), visible(w * h * 3);
+  const dsp::MutableImageView uv_view{uv.data(), options.width, options.height, w,
+                                      dsp::PixelFormat::kGrey8};
+  const dsp::MutableImageView visible_view{visible.data(), options.width, options.height, w * 3,
+                                           dsp::PixelFormat::kRgb24};
+  const std::size_t n = out->trajectory.size();
+  const auto bands = static_cast<std::size_t>(options.bands);
+  out->sky.assign(n * bands, 0.0f);
+  out->vanilla.assign(n * dsp::kVanillaDescriptorSize, 0.0f);
+  out->sky_cap.assign(options.cap.enabled ? n * bands : 0, 0.0f);
+  dsp::HorizonStrip horizon;
+  if (options.strips) {
+    if (const dsp::HorizonStripError e = horizon.Init(renderer.lens(), options.strip);
+        e != dsp::HorizonStripError::kOk)
+      return Status::Error(StatusCode::kInvalidArgument, "horizon strip: %s",
+                           dsp::HorizonStripErrorMessage(e));
+  }
+  const auto columns = options.strips ? static_cast<std::size_t>(options.strip.n_azimuth) : 0;
+  out->strips.assign(n * columns, 0);
+  std::vector<float> strip(columns);
+  const Vocabulary* vocabulary = options.vanilla ? options.fabmap_vocabulary : nullptr;
+  out->fabmap_words.assign(vocabulary != nullptr ? n : 0, WordList{});
+  std::vector<float> sift;
+  double sky_fraction = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const drivers::Pose& pose = out->trajectory[i].pose;
+    SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kUv, i, uv_view));
+    if (options.vanilla)
+      SKYLOC_TRY(renderer.Render(pose, spec.lighting, Spectrum::kVisible, i, visible_view));
+    dsp::SegmentationResult segmentation;
+    if (const dsp::DescriptorError e = sky.Compute(
+            uv_view, std::span<float>(out->sky).subspan(i * bands, bands), &segmentation);
+        !e.ok())
+      return Status::Error(StatusCode::kInternal, "sky descriptor of frame %zu: %s", i, e.message);
+    sky_fraction += segmentation.sky_fraction;
+    if (options.strips) {
+      // The firmware's strip: from the same UV frame, rounded to bytes as the route stores it.
+      if (const dsp::HorizonStripError e = horizon.Extract(uv_view, strip);
+          e != dsp::HorizonStripError::kOk)
+        return Status::Error(StatusCode::kInternal, "horizon strip of frame %zu: %s", i,
+                             dsp::HorizonStripErrorMessage(e));
+      for (std::size_t j = 0; j < columns; ++j)
+        out->strips[i * columns + j] =
+            static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
+    }
+    if (from_image) {
+      const auto t_ns = static_cast<std::int64_t>(out->trajectory[i].time_s * 1e9);
+      if (!zenith.Estimate(sky.samples(), t_ns, &out->attitude[i])) {
+        out->attitude[i] = dsp::AttitudeFromRollPitch(t_ns, 0, 0);
+        ++no_estimate;
+      }
+    }
+    if (options.cap.enabled) {
+      if (const dsp::DescriptorError e =
+              sky_cap.Compute(uv_view, std::span<float>(out->sky_cap).subspan(i * bands, bands),
+                              nullptr, &out->attitude[i]);
+          !e.ok())
+        return Status::Error(StatusCode::kInternal,
+                             "gravity-aligned sky descriptor of frame %zu: %s", i, e.message);
+    }
+    if (!options.vanilla)
+      continue;
+    if (vocabulary != nullptr) {
+      if (Status s = ImageWords(visible_view, *vocabulary, &sift, &out->fabmap_words[i]); !s.ok())
+        return s.AddContext("FAB-MAP words of frame %zu", i);
+    }
+    if (const dsp::VanillaError e = dsp::VanillaDescriptor(
+            visible_view,
+            std::span<float>(out->vanilla)
+                .subspan(i * dsp::kVanillaDescriptorSize, dsp::kVanillaDescriptorSize));
+        e != dsp::VanillaError::kOk)
+      return Status::Error(StatusCode::kInternal, "vanilla descriptor of frame %zu: %s", i,
+                           dsp::VanillaErrorMessage(e));
+  }
+  out->mean_sky_fraction = n > 0 ? sky_fraction / static_cast<double>(n) : 0;
+  out->zenith_error = ZenithErrorOf(out->trajectory, out->attitude, no_estimate);
+  return Status::Ok();
+}
+
+namespace {
+
+Status FabmapMatches(const RunDescriptors& reference, const RunDescriptors& query,
+                     const ExperimentOptions& options, std::span<dsp::SeqSlamMatch> matches) {
+  if (options.fabmap_vocabulary == nullptr ||
+      reference.fabmap_words.size() != reference.trajectory.size() ||
+      query.fabmap_words.size() != query.trajectory.size())
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "FAB-MAP: the runs were described without a vocabulary");
+  SKYLOC_TRY_ASSIGN(const std::vector<FabmapQueryMatch> found,
+                    LocaliseWithFabmap(*options.fabmap_vocabulary, reference.fabmap_words,
+                                       query.fabmap_words, FabMapParams{}));
+  for (std::size_t q = 0; q < matches.size() && q < found.size(); ++q) {
+    // As `skyloc eval --method fabmap`: the most probable reference place, even when the
+    // new place is more probable (its uniqueness is then >= 0.5 and the PR sweep drops it
+    // early); the score is unused.
+    dsp::SeqSlamMatch& m = matches[q];
+    m.valid = found[q].reference >= 0;
+    m.reference = found[q].reference;
+    m.row = found[q].reference;
+    m.uniqueness = static_cast<float>(found[q].uniqueness);
+  }
+  return Status::Ok();
+}
+
+Status SequenceMatches(const RunDescriptors& reference, const RunDescriptors& query,
+                       RunDescriptor descriptor, const ExperimentOptions& options,
+                       ExperimentMatcher matcher, std::span<dsp::SeqSlamMatch> matches) {
+  const int dim =
+      descriptor == RunDescriptor::kVanilla ? dsp::kVanillaDescriptorSize : options.bands;
+  const auto n_query = static_cast<int>(query.trajectory.size());
+  auto descriptors = [descriptor](const RunDescriptors& run) -> const std::vector<float>& {
+    switch (descriptor) {
+      case RunDescriptor::kSkyCap:
+        return run.sky_cap;
+      case RunDescriptor::kVanilla:
+        return run.vanilla;
+      case RunDescriptor::kSky:
+      case RunDescriptor::kFabmap:
+        break;
+    }
+    return run.sky;
+  };
+  const std::vector<float>& ref_descriptors = descriptors(reference);
+  const std::vector<float>& query_descriptors = descriptors(query);
+  if (ref_descriptors.empty() || query_descriptors.empty())
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "the runs were described without that descriptor");
+  dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
+  if (matcher == ExperimentMatcher::kOpenSeqSlam) {
+    e = dsp::BatchSeqSlam(ref_descriptors, query_descriptors, dim, options.seqslam,
+                          dsp::SeqSlamWindow::kCentred, matches);
+  } else {
+    dsp::RouteFilterParams p = options.filter;
+    p.sequence_length = options.seqslam.sequence_length;
+    dsp::RouteFilter filter;
+    const auto n_ref = static_cast<int>(ref_descriptors.size() / static_cast<std::size_t>(dim));
+    const auto row = [dim](const std::vector<float>& d, int i) {
+      return std::span<const float>(d).subspan(
+          static_cast<std::size_t>(i) * static_cast<std::size_t>(dim),
+          static_cast<std::size_t>(dim));
+    };
+    e = filter.Init(p, dim, std::max(1, n_ref));
+    for (int r = 0; e == dsp::SeqSlamError::kOk && r < n_ref; ++r)
+      e = filter.AddReference(row(ref_descriptors, r));
+    if (e == dsp::SeqSlamError::kOk)
+      e = filter.FinishRoute();
+    for (int t = 0; e == dsp::SeqSlamError::kOk && t < n_query; ++t)
+      e = filter.Step(row(query_descriptors, t), &matches[static_cast<std::size_t>(t)]);
+  }
+  if (e != dsp::SeqSlamError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "%s: %s",
+                         matcher == ExperimentMatcher::kOpenSeqSlam ? "SeqSLAM" : "route filter",
+                         dsp::SeqSlamErrorMessage(e));
+  return Status::Ok();
+}
+
+// Precision-recall of the matches against the position ground truth.
+Status ScoreMatches(const RunDescriptors& reference, const RunDescriptors& query,
+                    const ExperimentOptions& options, std::vector<dsp::SeqSlamMatch> matches,
+                    MethodScore* out) {
+  const auto n_query = static_cast<int>(query.trajectory.size());
+  // Ground truth from the poses, the same rule as `skyloc eval`.
+  auto positions = [](const RunDescriptors& run) {
+    std::vector<dsp::Position3> p;
+    for (const TrajectoryPoint& t : run.trajectory)
+      p.push_back({t.pose.x_m, t.pose.y_m, t.pose.z_m});
+    return p;
+  };
+  const std::vector<dsp::Position3> reference_xyz = positions(reference);
+  const std::vector<dsp::Position3> query_xyz = positions(query);
+  out->truth.assign(static_cast<std::size_t>(n_query), dsp::TruthInterval{});
+  dsp::GroundTruthFromPositions(reference_xyz, query_xyz, options.max_offset_m, out->truth);
+  // A full lap of a closed route: its last frame is next to its first.
+  const dsp::MatchTolerance tolerance{
+      options.tolerance_frames, 0,
+      reference.closed_loop ? static_cast<int>(reference.trajectory.size()) : 0};
+  out->matched.assign(static_cast<std::size_t>(n_query), -1);
+  out->correct.assign(static_cast<std::size_t>(n_query), false);
+  std::vector<dsp::EvaluatedMatch> evaluated;
+  for (std::size_t q = 0; q < static_cast<std::size_t>(n_query); ++q) {
+    const dsp::SeqSlamMatch& m = matches[q];
+    if (!m.valid)
+      continue;
+    out->matched[q] = m.reference;
+    dsp::EvaluatedMatch em;
+    em.uniqueness = m.uniqueness;
+    em.has_ground_truth = out->truth[q].has_truth();
+    em.correct =
+        dsp::MatchIsCorrect(m.reference, out->truth[q], tolerance, reference_xyz, query_xyz[q]);
+    out->correct[q] = em.correct;
+    evaluated.push_back(em);
+  }
+  std::vector<std::size_t> order(evaluated.size());
+  out->curve.assign(evaluated.size(), dsp::PrPoint{});
+  const std::size_t points = dsp::PrecisionRecallCurve(evaluated, order, out->curve);
+  out->curve.resize(points);
+  out->summary = dsp::SummarisePrecisionRecall(evaluated, out->curve);
+  out->matches = std::move(matches);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
+                 RunDescriptor descriptor, const ExperimentOptions& options, MethodScore* out,
+                 ExperimentMatcher matcher) {
+  const auto n_query = static_cast<int>(query.trajectory.size());
+  std::vector<dsp::SeqSlamMatch> matches(static_cast<std::size_t>(n_query));
+  if (descriptor == RunDescriptor::kFabmap) {
+    SKYLOC_TRY(FabmapMatches(reference, query, options, matches));
+  } else {
+    SKYLOC_TRY(SequenceMatches(reference, query, descriptor, options, matcher, matches));
+  }
+  return ScoreMatches(reference, query, options, std::move(matches), out);
+}
+
+namespace {
+
+void Report(ProgressFn progress, void* context, const char* what) {
+  if (progress != nullptr)
+    progress(what, context);
+}
+
+}  // namespace
+
+Status RunTiltExperiment(const ExperimentOptions& tilt_options,
+                         std::span<const int> differences_deg, std::vector<TiltRow>* rows,
+                         ProgressFn progress, void* context) {
+  // Runs pitch up to 30 degrees either way.
+  const ExperimentOptions options = WithCapFor(tilt_options, LargestTiltDeg(30, 0));
+  World world;
+  SKYLOC_TRY(MakeProceduralWorld(WorldKind::kCity, options.world_seed, &world));
+  // Runs by tilt; index 7 is the second alpha = 0 run.
+  std::vector<RunDescriptors> runs(8);
+  std::vector<bool> done(8, false);
+  auto run_index = [](int alpha, bool second) { return second ? 7 : (alpha + 30) / 10; };
+  auto get = [&](int alpha, bool second, RunDescriptors** run) -> Status {
+    const int i = run_index(alpha, second);
+    if (!done[static_cast<std::size_t>(i)]) {
+      RunSpec spec;
+      char label[64];
+      std::snprintf(label, sizeof label, "city tilt %+d%s", alpha, second ? " (second run)" : "");
+      spec.label = label;
+      Report(progress, context, label);
+      spec.motion.tilt_deg = alpha;
+      spec.motion.seed = static_cast<std::uint64_t>(100 + i);
+      // The paper's runs: the same place at about the same time of day (3 pm).
+      LightingPreset("noon", static_cast<std::uint64_t>(200 + i), &spec.lighting);
+      SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, spec, options,
+                             &runs[static_cast<std::size_t>(i)]));
+      done[static_cast<std::size_t>(i)] = true;
+    }
+    *run = &runs[static_cast<std::size_t>(i)];
+    return Status::Ok();
+  };
+  rows->clear();
+  for (const int difference : differences_deg) {
+    if (difference < 0 || difference > 60 || difference % 10 != 0) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "tilt difference %d: expected 0, 10, ..., 60 degrees", difference);
+    }
+    // alpha1 ~ -alpha2: 0 -> (0, 0'), 10 -> (10, 0), 20 -> (10, -10), 30 -> (20, -10), ...
+    const int alpha1 = (difference / 2 + 9) / 10 * 10;
+    const int alpha2 = alpha1 - difference;
+    RunDescriptors* reference = nullptr;
+    RunDescriptors* query = nullptr;
+    SKYLOC_TRY(get(alpha1, false, &reference));
+    SKYLOC_TRY(get(alpha2, difference == 0, &query));
+    TiltRow row;
+    row.tilt_difference_deg = difference;
+    row.reference_tilt_deg = alpha1;
+    row.query_tilt_deg = alpha2;
+    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSky, options, &row.sky));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kVanilla, options, &row.vanilla));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSky, options, &row.sky_filter,
+                         ExperimentMatcher::kRouteFilter));
+    if (options.cap.enabled) {
+      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap));
+      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap_filter,
+                           ExperimentMatcher::kRouteFilter));
+    }
+    if (options.fabmap_vocabulary != nullptr)
+      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kFabmap, options, &row.fabmap));
+    row.reference_zenith = reference->zenith_error;
+    row.query_zenith = query->zenith_error;
+    rows->push_back(std::move(row));
+  }
+  return Status::Ok();
+}
+
+namespace {
+
+// The manoeuvre experiment's two runs in a world (also the heading experiment's), rendered
+// and described: a smooth reference at noon, and a query at dawn that weaves +-20 degrees
+// and bumps.
+Status DescribeManoeuvreRuns(WorldKind kind, double bumps_deg, const ExperimentOptions& options,
+                             ProgressFn progress, void* context, RunDescriptors* reference,
+                             RunDescriptors* query) {
+  World world;
+  SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
+  RunSpec reference_spec;
+  reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
+  reference_spec.motion.seed = 301;
+  LightingPreset("noon", 401, &reference_spec.lighting);
+  RunSpec query_spec;
+  query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
+  query_spec.motion.seed = 302;
+  query_spec.motion.zigzag_deg = 20;
+  query_spec.motion.zigzag_period_m = 12;
+  query_spec.motion.bumps_deg = bumps_deg;
+  LightingPreset("dawn", 402, &query_spec.lighting);
+  Report(progress, context, reference_spec.label.c_str());
+  SKYLOC_TRY(
+      DescribeRun(world, world.route, world.route_closed, reference_spec, options, reference));
+  Report(progress, context, query_spec.label.c_str());
+  return DescribeRun(world, world.route, world.route_closed, query_spec, options, query);
+}
+
+}  // namespace
+
+Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
+                              std::span<const int> ds_values, std::vector<ManoeuvreRow>* rows,
+                              ProgressFn progress, void* context) {
+  constexpr double kBumpsDeg = 15;
+  const ExperimentOptions options = WithCapFor(manoeuvre_options, LargestTiltDeg(0, kBumpsDeg));
+  rows->clear();
+  for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
+    RunDescriptors reference, query;
+    SKYLOC_TRY(
+        DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, context, &reference, &query));
+    // FAB-MAP matches single images: one score for the world, shown on each ds row.
+    MethodScore fabmap;
+    if (options.fabmap_vocabulary != nullptr)
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kFabmap, options, &fabmap));
+    for (const int ds : ds_values) {
+      ExperimentOptions o = options;
+      o.seqslam.sequence_length = ds;
+      ManoeuvreRow row;
+      row.world = kind;
+      row.sequence_length = ds;
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kVanilla, o, &row.vanilla));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky_filter,
+                           ExperimentMatcher::kRouteFilter));
+      if (o.cap.enabled) {
+        SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap));
+        SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap_filter,
+                             ExperimentMatcher::kRouteFilter));
+      }
+      row.fabmap = fabmap;
+      row.reference_zenith = reference.zenith_error;
+      row.query_zenith = query.zenith_error;
+      rows->push_back(std::move(row));
+    }
+  }
+  return Status::Ok();
+}
+
+namespace {
+
+// Angle of the body's z axis from the world zenith, degrees (roll then pitch).
+double TiltDeg(const drivers::Pose& pose) {
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  return std::acos(std::clamp(std::cos(pose.roll_deg * kDeg) * std::cos(pose.pitch_deg * kDeg),
+                              -1.0, 1.0)) /
+         kDeg;
+}
+
+}  // namespace
+
+Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vector<HeadingRow>* rows,
+                            ProgressFn progress, void* context) {
+  constexpr double kBumpsDeg = 15;
+  constexpr double kLevelTiltDeg = 10;
+  ExperimentOptions options = heading_options;
+  options.strips = true;
+  options.vanilla = false;
+  options.cap.enabled = false;
+  const auto n = static_cast<std::size_t>(options.strip.n_azimuth);
+  dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
+  if (const dsp::HeadingError e = estimator.Init(options.strip.n_azimuth, {});
+      e != dsp::HeadingError::kOk)
+    return Status::Error(StatusCode::kInvalidArgument, "heading: %s", dsp::HeadingErrorMessage(e));
+  std::vector<float> stored(n), test(n);
+  rows->clear();
+  for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
+    RunDescriptors reference, query;
+    SKYLOC_TRY(
+        DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, context, &reference, &query));
+    HeadingRow row;
+    row.world = kind;
+    row.query_frames = static_cast<int>(query.trajectory.size());
+    SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, options, &row.match,
+                         ExperimentMatcher::kRouteFilter));
+    std::vector<double> correlation, surf, level, tilted;  // signed errors, degrees
+    int frames = 0, level_frames = 0;
+    for (std::size_t q = 0; q < query.trajectory.size(); ++q) {
+      if (!row.match.correct[q])
+        continue;
+      const auto r = static_cast<std::size_t>(row.match.matched[q]);
+      for (std::size_t j = 0; j < n; ++j) {
+        stored[j] = reference.strips[r * n + j];
+        test[j] = query.strips[q * n + j];
+      }
+      const drivers::Pose& query_pose = query.trajectory[q].pose;
+      // The truth: how far the robot is turned from the taught frame's heading.
+      const double truth =
+          dsp::WrapDegrees(query_pose.yaw_deg - reference.trajectory[r].pose.yaw_deg);
+      const bool is_level = TiltDeg(query_pose) <= kLevelTiltDeg;
+      ++frames;
+      level_frames += is_level ? 1 : 0;
+      dsp::HeadingEstimate estimate;
+      if (estimator.Estimate(stored, test, &estimate) != dsp::HeadingError::kOk)
+        return Status::Error(StatusCode::kInternal, "heading of query frame %zu", q);
+      if (estimate.has_correlation) {
+        const double error = dsp::WrapDegrees(estimate.correlation_deg - truth);
+        correlation.push_back(error);
+        (is_level ? level : tilted).push_back(error);
+      }
+      if (estimate.has_surf)
+        surf.push_back(dsp::WrapDegrees(estimate.surf_deg - truth));
+    }
+    row.correlation_errors_deg = correlation;
+    row.surf_errors_deg = surf;
+    row.correlation = dsp::SummariseHeadingErrors(correlation, frames);
+    row.surf = dsp::SummariseHeadingErrors(surf, frames);
+    row.correlation_level = dsp::SummariseHeadingErrors(level, level_frames);
+    row.correlation_tilted = dsp::SummariseHeadingErrors(tilted, frames - level_frames);
+    rows->push_back(std::move(row));
+  }
+  return Status::Ok();
+}
+
+Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
+                         std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
+                         ProgressFn progress, void* context) {
+  World world;
+  SKYLOC_TRY(LoadSevilleWorld((seville_dir + "/world5000_triangles.csv").c_str(), &world));
+  struct Query {
+    const char* name;
+    bool same_ant;
+  };
+  static constexpr Query kQueries[] = {
+      {"ant1_route2", true},  {"ant1_route3", true},  {"ant1_route4", true},
+      {"ant1_route5", true},  {"ant2_route1", false}, {"ant3_route1", false},
+      {"ant4_route1", false}, {"ant7_route1", false},
+  };
+  auto load = [&](const char* name, std::vector<Point2>* route) {
+    return LoadRouteCsv((seville_dir + "/routes/" + name + ".csv").c_str(), route);
+  };
+  std::vector<Point2> reference_route;
+  SKYLOC_TRY(load(kAntsReferenceRoute, &reference_route));
+  rows->clear();
+  for (const double height : camera_heights_m) {
+    ExperimentOptions o = options;
+    o.camera_height_m = height;
+    RunSpec reference_spec;
+    char label[96];
+    std::snprintf(label, sizeof label, "%s at %.2f m", kAntsReferenceRoute, height);
+    reference_spec.label = label;
+    reference_spec.motion.seed = 501;
+    LightingPreset("noon", 601, &reference_spec.lighting);
+    RunDescriptors reference;
+    Report(progress, context, label);
+    SKYLOC_TRY(DescribeRun(world, reference_route, false, reference_spec, o, &reference));
+    std::uint64_t k = 0;
+    for (const Query& q : kQueries) {
+      ++k;
+      std::vector<Point2> route;
+      SKYLOC_TRY(load(q.name, &route));
+      RunSpec spec;
+      std::snprintf(label, sizeof label, "%s at %.2f m", q.name, height);
+      spec.label = label;
+      spec.motion.seed = 510 + k;
+      LightingPreset("noon", 610 + k, &spec.lighting);
+      RunDescriptors query;
+      Report(progress, context, label);
+      SKYLOC_TRY(DescribeRun(world, route, false, spec, o, &query));
+      AntsRow row;
+      row.query = q.name;
+      row.same_ant = q.same_ant;
+      row.camera_height_m = height;
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kVanilla, o, &row.vanilla));
+      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky_filter,
+                           ExperimentMatcher::kRouteFilter));
+      const auto with_truth =
+          std::count_if(row.sky.truth.begin(), row.sky.truth.end(),
+                        [](const dsp::TruthInterval& t) { return t.has_truth(); });
+      row.truth_fraction = row.sky.truth.empty() ? 0
+                                                 : static_cast<double>(with_truth) /
+                                                       static_cast<double>(row.sky.truth.size());
+      rows->push_back(std::move(row));
+    }
+  }
+  return Status::Ok();
+}
+
+Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<const int> ds_values,
+                          std::vector<SpeedRow>* rows, ProgressFn progress, void* context) {
+  constexpr double kBumpsDeg = 15;
+  const ExperimentOptions options = WithCapFor(speed_options, LargestTiltDeg(0, kBumpsDeg));
+  rows->clear();
+  ExperimentOptions base = options;
+  base.sampling = Sampling::kTime;
+  base.vanilla = false;  // the matchers are compared on the sky descriptor
+  for (WorldKind kind : {WorldKind::kForest, WorldKind::kCity}) {
+    World world;
+    SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
+    // The taught run: the default profile (a stop at the start and two on the way).
+    RunSpec reference_spec;
+    reference_spec.label = std::string(WorldKindName(kind)) + " taught run (1x, stops)";
+    reference_spec.motion.seed = 501;
+    LightingPreset("noon", 601, &reference_spec.lighting);
+    RunDescriptors reference;
+    Report(progress, context, reference_spec.label.c_str());
+    SKYLOC_TRY(
+        DescribeRun(world, world.route, world.route_closed, reference_spec, base, &reference));
+    std::uint64_t seed = 510;
+    for (const double bumps : {0.0, kBumpsDeg}) {
+      for (const bool stops : {true, false}) {
+        for (const double ratio : {0.5, 1.0, 2.0}) {
+          ++seed;
+          ExperimentOptions o = base;
+          // A frame budget covers the taught run; a repeat stays within the stretch the
+          // taught run covered (0.9: its own stops and speed targets differ).
+          if (options.max_frames > 0)
+            o.max_frames = static_cast<int>(0.9 * options.max_frames / ratio);
+          if (!stops) {
+            o.speed.stops = 0;
+            o.speed.start_stop_s = 0;
+          }
+          RunSpec query_spec;
+          char label[160];
+          std::snprintf(label, sizeof label, "%s repeat %.1fx, %s, %s", WorldKindName(kind), ratio,
+                        stops ? "stops" : "no stops", bumps > 0 ? "+-15 deg bumps" : "level");
+          query_spec.label = label;
+          query_spec.motion.seed = seed;  // its stops, speed targets and bumps are its own
+          query_spec.motion.speed_ratio = ratio;
+          query_spec.motion.bumps_deg = bumps;
+          query_spec.motion.lateral_m = options.lateral_m;
+          LightingPreset("noon", 600 + seed, &query_spec.lighting);  // other clouds and noise
+          RunDescriptors query;
+          Report(progress, context, label);
+          SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, o, &query));
+          for (const int ds : ds_values) {
+            ExperimentOptions scored = o;
+            scored.seqslam.sequence_length = ds;
+            SpeedRow row;
+            row.world = kind;
+            row.speed_ratio = ratio;
+            row.stops = stops;
+            row.bumps_deg = bumps;
+            row.sequence_length = ds;
+            row.query_frames = static_cast<int>(query.trajectory.size());
+            SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, scored, &row.openseqslam,
+                                 ExperimentMatcher::kOpenSeqSlam));
+            SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, scored, &row.filter,
+                                 ExperimentMatcher::kRouteFilter));
+            if (scored.cap.enabled) {
+              SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, scored,
+                                   &row.filter_cap, ExperimentMatcher::kRouteFilter));
+            }
+            rows->push_back(std::move(row));
+          }
+        }
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace skyloc::tools
