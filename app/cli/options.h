@@ -1,0 +1,134 @@
+// The one command-line option parser of every skyloc command. A command lists its options
+// in a table (name, value name, help line, range or choices, where the value goes); the
+// table parses the arguments, refuses a bad one with one message in one style, and prints
+// the help. Exit codes: kExitUsage (2) for a bad command line, kExitFailure (1) for a
+// failure after it parsed (commands.h).
+//
+//   OptionTable t("teach", "--route FILE.db [options]", "Records a route ...");
+//   t.Text("--route", "FILE.db", "the route database to write", &route);
+//   t.Count("--frames", "N", "stop after N frames (default: until a signal)", &frames);
+//   t.Number("--tilt", "DEG", "constant pitch of the simulated run", {-90, 90}, &tilt);
+//   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun) return ExitCode(o);
+//
+// A bad value is told as "skyloc teach: --frames 'x': expected a whole number >= 0 (stop
+// after N frames ...)" followed by where the options are described.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <initializer_list>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace skyloc::cli {
+
+// What Parse found: run the command, the help was printed (exit 0), or the command line
+// was refused and the reason printed (exit 2).
+enum class ParseOutcome : std::uint8_t { kRun, kHelpPrinted, kRefused };
+int ExitCode(ParseOutcome outcome);  // kRun: 0 as well; the caller runs instead
+
+// A closed or open interval of real numbers for Number().
+struct NumberRange {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_open = false;  // true: the value must be > min, not >= min
+  bool max_open = false;
+};
+// (0, inf): a length, a rate, a tolerance.
+inline constexpr NumberRange kPositive{0, std::numeric_limits<double>::infinity(), true, false};
+
+class OptionTable {
+ public:
+  // `synopsis` follows "usage: skyloc COMMAND "; `description` is the prose under it.
+  OptionTable(const char* command, const char* synopsis, const char* description);
+
+  // A flag without a value.
+  void Flag(const char* name, const char* help, bool* out);
+  // Any text (a path, a name checked later).
+  void Text(const char* name, const char* value, const char* help, std::string* out);
+  // A whole number in [min, max].
+  void Int(const char* name, const char* value, const char* help, std::int64_t min,
+           std::int64_t max, int* out);
+  void Int(const char* name, const char* value, const char* help, std::int64_t min,
+           std::int64_t max, std::int64_t* out);
+  // A whole number >= 0 (a count, a seed).
+  void Count(const char* name, const char* value, const char* help, std::uint64_t* out);
+  // Repeatable whole numbers in [min, max]: each occurrence appends one.
+  void IntList(const char* name, const char* value, const char* help, std::int64_t min,
+               std::int64_t max, std::vector<int>* out);
+  // A finite real number in `range`.
+  void Number(const char* name, const char* value, const char* help, NumberRange range,
+              double* out);
+  // One of the named values; `repeat` appends each occurrence to `list` instead.
+  template <typename E>
+  void Choice(const char* name, const char* help,
+              std::initializer_list<std::pair<const char*, E>> choices, E* out) {
+    AddChoice(name, help, Names(choices),
+              [out, choices](std::size_t i) { *out = std::data(choices)[i].second; });
+  }
+  template <typename E>
+  void ChoiceList(const char* name, const char* help,
+                  std::initializer_list<std::pair<const char*, E>> choices, std::vector<E>* list) {
+    AddChoice(name, help, Names(choices),
+              [list, choices](std::size_t i) { list->push_back(std::data(choices)[i].second); });
+  }
+  // A value the command parses itself (e.g. "X,Y"): `parse` returns false and sets
+  // `expected` (what a good value looks like) to refuse it.
+  void Custom(const char* name, const char* value, const char* help,
+              std::function<bool(const char* text, std::string* expected)> parse);
+  // Words that are not options, in order: between `min` and `max` of them.
+  void Positional(const char* value, const char* help, std::size_t min, std::size_t max,
+                  std::vector<std::string>* out);
+
+  // Parses `args` (the words after the command's name). --help / -h anywhere prints the
+  // help on stdout. Every option may be given once unless it is a list.
+  ParseOutcome Parse(std::span<char* const> args);
+  // True when the option was on the command line (after Parse).
+  bool Given(std::string_view name) const;
+  // A refusal found after Parse (options that exclude each other, a missing one): prints
+  // "skyloc COMMAND: WHAT" and where the options are described; returns kExitUsage.
+  int Refuse(std::string_view what) const;
+  void PrintHelp(std::FILE* out) const;
+  const char* command() const { return command_; }
+
+ private:
+  struct Option {
+    std::string name;
+    std::string value;  // empty: a flag
+    std::string help;
+    bool repeatable = false;
+    bool given = false;
+    // Parses and stores; false with `expected` set refuses the value.
+    std::function<bool(const char* text, std::string* expected)> store;
+  };
+  template <typename E>
+  static std::vector<std::string> Names(std::initializer_list<std::pair<const char*, E>> choices) {
+    std::vector<std::string> names;
+    for (const auto& c : choices)
+      names.emplace_back(c.first);
+    return names;
+  }
+  void AddChoice(const char* name, const char* help, std::vector<std::string> names,
+                 std::function<void(std::size_t)> pick);
+  void Add(Option option);
+  Option* Find(std::string_view name);
+  const Option* Find(std::string_view name) const;
+
+  const char* command_;
+  const char* synopsis_;
+  const char* description_;
+  std::vector<Option> options_;
+  struct PositionalSpec {
+    std::string value, help;
+    std::size_t min = 0, max = 0;
+    std::vector<std::string>* out = nullptr;
+  };
+  std::vector<PositionalSpec> positional_;
+};
+
+}  // namespace skyloc::cli
