@@ -61,6 +61,8 @@ const char* StatusCodeName(StatusCode code) {
       return "PERMISSION_DENIED";
     case StatusCode::kUnimplemented:
       return "UNIMPLEMENTED";
+    case StatusCode::kAlreadyExists:
+      return "ALREADY_EXISTS";
     case StatusCode::kInternal:
       return "INTERNAL";
   }
@@ -73,6 +75,8 @@ StatusCode StatusCodeFromErrno(int saved_errno) {
       return StatusCode::kOk;
     case ENOENT:
       return StatusCode::kNotFound;
+    case EEXIST:
+      return StatusCode::kAlreadyExists;
     case EACCES:
     case EPERM:
       return StatusCode::kPermissionDenied;

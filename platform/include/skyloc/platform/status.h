@@ -16,6 +16,7 @@ enum class StatusCode : std::uint8_t {
   kOk = 0,
   kInvalidArgument,     // bad input: a config value, a file's contents, a CLI flag
   kNotFound,            // a file, device or key that does not exist
+  kAlreadyExists,       // a file (a route, a recording) that would be replaced
   kOutOfRange,          // a value or index outside what is allowed
   kResourceExhausted,   // a fixed-capacity buffer is full
   kFailedPrecondition,  // called in the wrong state (not initialised, already streaming)
