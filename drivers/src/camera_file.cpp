@@ -8,8 +8,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <initializer_list>
+#include <iterator>
+#include <limits>
 #include <string>
 
+#include "skyloc/drivers/toml_keys.h"
 #include "skyloc/drivers/toml_text.h"
 
 namespace skyloc::drivers {
@@ -18,119 +21,25 @@ namespace {
 using dsp::LensModel;
 using dsp::LensParams;
 
-// Where a key sits, for messages: "camera.toml:7: lens.fov_deg".
-struct Where {
-  const char* source;
-  const char* table;
-  const char* key;
-  unsigned line;
-};
+constexpr double kAny = std::numeric_limits<double>::infinity();
 
-Where At(const char* source, const char* table, const char* key, const toml::node& node) {
-  return {source, table, key, static_cast<unsigned>(node.source().begin.line)};
-}
-
-Status KeyError(const Where& w, const char* what) {
-  return Status::Error(StatusCode::kInvalidArgument, "%s:%u: %s.%s %s", w.source, w.line, w.table,
-                       w.key, what);
-}
-
-// Unknown keys are errors: a misspelt key must not silently leave a default in place.
-Status CheckKeys(const toml::table& table, const char* source, const char* table_name,
-                 std::initializer_list<const char*> allowed) {
-  for (auto&& [key, node] : table) {
-    bool known = false;
-    for (const char* a : allowed)
-      known = known || key.str() == a;
-    if (!known) {
-      std::string list;
-      for (const char* a : allowed) {
-        if (!list.empty())
-          list += ", ";
-        list += a;
-      }
-      return Status::Error(StatusCode::kInvalidArgument,
-                           "%s:%u: unknown key '%s' in [%s]: remove it or use one of: %s", source,
-                           static_cast<unsigned>(node.source().begin.line),
-                           std::string(key.str()).c_str(), table_name, list.c_str());
-    }
-  }
-  return Status::Ok();
-}
-
-// A number (integer or float) if present; `present` says whether it was.
-Status GetNumber(const toml::table& table, const char* source, const char* table_name,
-                 const char* key, double* out, bool* present = nullptr) {
-  const toml::node* node = table.get(key);
-  if (present != nullptr)
-    *present = node != nullptr;
-  if (node == nullptr)
-    return Status::Ok();
-  const Where w = At(source, table_name, key, *node);
-  if (!node->is_number())
-    return KeyError(w, "must be a number");
-  const double v = node->value<double>().value_or(NAN);
-  if (!std::isfinite(v))
-    return KeyError(w, "must be a finite number");
-  *out = v;
-  return Status::Ok();
-}
-
-Status GetInteger(const toml::table& table, const char* source, const char* table_name,
-                  const char* key, long min, long max, int* out, bool* present) {
-  const toml::node* node = table.get(key);
-  *present = node != nullptr;
-  if (node == nullptr)
-    return Status::Ok();
-  const Where w = At(source, table_name, key, *node);
-  if (!node->is_integer())
-    return KeyError(w, "must be a whole number of pixels (e.g. 640)");
-  const std::int64_t v = node->value<std::int64_t>().value_or(0);
-  if (v < min || v > max) {
-    char what[96];
-    std::snprintf(what, sizeof what, "= %lld is out of range: use %ld..%ld",
-                  static_cast<long long>(v), min, max);
-    return KeyError(w, what);
-  }
-  *out = static_cast<int>(v);
-  return Status::Ok();
-}
-
-// A fixed-length array of numbers.
-Status GetNumbers(const toml::table& table, const char* source, const char* table_name,
-                  const char* key, std::size_t count, double* out, bool* present) {
-  const toml::node* node = table.get(key);
-  *present = node != nullptr;
-  if (node == nullptr)
-    return Status::Ok();
-  const Where w = At(source, table_name, key, *node);
-  const toml::array* array = node->as_array();
-  char what[96];
-  std::snprintf(what, sizeof what, "must be an array of %zu numbers", count);
-  if (array == nullptr || array->size() != count)
-    return KeyError(w, what);
-  for (std::size_t i = 0; i < count; ++i) {
-    const toml::node* item = array->get(i);
-    if (item == nullptr || !item->is_number())
-      return KeyError(w, what);
-    out[i] = item->value<double>().value_or(NAN);
-    if (!std::isfinite(out[i]))
-      return KeyError(w, what);
-  }
-  return Status::Ok();
+// Declares `keys` as the table's keys and refuses any other before anything is read: a
+// misspelt key must not silently leave a default in place.
+Status CheckKeys(TomlKeyReader* r, std::initializer_list<const char*> keys) {
+  for (const char* key : keys)
+    r->Has(key);
+  return r->Finish();
 }
 
 // A key that does not apply to the chosen model is an error rather than ignored.
-Status RejectFor(const toml::table& lens, const char* source, const char* model,
-                 std::initializer_list<const char*> keys) {
+void RejectFor(TomlKeyReader* r, const char* model, std::initializer_list<const char*> keys) {
   for (const char* key : keys) {
-    if (const toml::node* node = lens.get(key)) {
+    if (r->Has(key)) {
       char what[128];
       std::snprintf(what, sizeof what, "does not apply to model \"%s\": remove it", model);
-      return KeyError(At(source, "lens", key, *node), what);
+      r->Invalid(key, what);
     }
   }
-  return Status::Ok();
 }
 
 std::string Directory(const char* path) {
@@ -143,88 +52,82 @@ std::string Directory(const char* path) {
 }
 
 Status ParseLens(const toml::table& lens, const char* source, const char* base_dir, LensParams* p) {
-  SKYLOC_TRY(
-      CheckKeys(lens, source, "lens",
-                {"model", "fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"}));
-  if (const toml::node* node = lens.get("model")) {
-    const Where w = At(source, "lens", "model", *node);
-    const std::optional<std::string> name = node->value<std::string>();
-    if (!name || !dsp::ParseLensModel(name->c_str(), &p->model))
-      return KeyError(w,
-                      "must be one of \"equidistant\", \"equisolid\", \"kannala_brandt\", "
-                      "\"ocamcalib\", \"equirectangular\", \"pinhole\"");
-  }
+  TomlKeyReader r(&lens, "lens", source, TomlKeyNaming::kDotted);
+  SKYLOC_TRY(CheckKeys(
+      &r, {"model", "fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"}));
+  constexpr const char* kModels[] = {"equidistant", "equisolid",       "kannala_brandt",
+                                     "ocamcalib",   "equirectangular", "pinhole"};
+  std::size_t model_index = std::size(kModels);
+  r.Choice("model", kModels, &model_index);
+  SKYLOC_TRY(r.status());
+  if (model_index < std::size(kModels))
+    dsp::ParseLensModel(kModels[model_index], &p->model);
   const char* model = dsp::LensModelName(p->model);
-  bool present = false;
-  SKYLOC_TRY(GetNumber(lens, source, "lens", "fov_deg", &p->fov_deg, &present));
-  if (present && !(p->fov_deg > 0.0 && p->fov_deg <= 360.0))
-    return KeyError(At(source, "lens", "fov_deg", *lens.get("fov_deg")),
-                    "is out of range: use a field of view in (0, 360] degrees, e.g. 185");
-  double centre[2];
-  SKYLOC_TRY(GetNumbers(lens, source, "lens", "centre", 2, centre, &present));
-  if (present) {
-    p->centre_x = centre[0];
-    p->centre_y = centre[1];
-  }
-  SKYLOC_TRY(GetNumber(lens, source, "lens", "radius_px", &p->radius_px, &present));
-  if (present && !(p->radius_px > 0.0))
-    return KeyError(At(source, "lens", "radius_px", *lens.get("radius_px")),
-                    "must be a positive number of pixels");
+  r.Double("fov_deg", &p->fov_deg, -kAny, kAny);
+  if (r.ok() && r.Has("fov_deg") && !(p->fov_deg > 0.0 && p->fov_deg <= 360.0))
+    r.Invalid("fov_deg", "is out of range: use a field of view in (0, 360] degrees, e.g. 185");
+  double centre[2] = {p->centre_x, p->centre_y};
+  r.Numbers("centre", 2, centre);
+  p->centre_x = centre[0];
+  p->centre_y = centre[1];
+  r.Double("radius_px", &p->radius_px, -kAny, kAny);
+  if (r.ok() && r.Has("radius_px") && !(p->radius_px > 0.0))
+    r.Invalid("radius_px", "must be a positive number of pixels");
+  SKYLOC_TRY(r.status());
 
   switch (p->model) {
     case LensModel::kEquidistant:
     case LensModel::kEquisolid:
-      SKYLOC_TRY(RejectFor(lens, source, model, {"fx", "fy", "k", "ocamcalib_file"}));
+      RejectFor(&r, model, {"fx", "fy", "k", "ocamcalib_file"});
       break;
     case LensModel::kEquirectangular:
-      SKYLOC_TRY(RejectFor(lens, source, model,
-                           {"fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"}));
+      RejectFor(&r, model, {"fov_deg", "centre", "radius_px", "fx", "fy", "k", "ocamcalib_file"});
       break;
     case LensModel::kPinhole: {
-      SKYLOC_TRY(RejectFor(lens, source, model, {"radius_px", "fx", "fy", "k", "ocamcalib_file"}));
-      const toml::node* fov = lens.get("fov_deg");
-      if (fov == nullptr)
+      RejectFor(&r, model, {"radius_px", "fx", "fy", "k", "ocamcalib_file"});
+      SKYLOC_TRY(r.status());
+      if (!r.Has("fov_deg"))
         return Status::Error(StatusCode::kInvalidArgument,
                              "%s: model \"pinhole\" needs lens.fov_deg (the horizontal field "
                              "of view across the image width, degrees, below 180)",
                              source);
       if (!(p->fov_deg < 180.0))
-        return KeyError(At(source, "lens", "fov_deg", *fov),
-                        "is out of range for a pinhole: use a horizontal field of view below "
-                        "180 degrees, e.g. 47.8");
+        r.Invalid("fov_deg",
+                  "is out of range for a pinhole: use a horizontal field of view below 180 "
+                  "degrees, e.g. 47.8");
       break;
     }
     case LensModel::kKannalaBrandt: {
-      SKYLOC_TRY(RejectFor(lens, source, model, {"ocamcalib_file"}));
-      bool has_fx = false, has_fy = false;
-      SKYLOC_TRY(GetNumber(lens, source, "lens", "fx", &p->fx, &has_fx));
-      SKYLOC_TRY(GetNumber(lens, source, "lens", "fy", &p->fy, &has_fy));
-      if (!has_fx || !has_fy)
+      RejectFor(&r, model, {"ocamcalib_file"});
+      r.Double("fx", &p->fx, -kAny, kAny);
+      r.Double("fy", &p->fy, -kAny, kAny);
+      SKYLOC_TRY(r.status());
+      if (!r.Has("fx") || !r.Has("fy"))
         return Status::Error(StatusCode::kInvalidArgument,
                              "%s: model \"kannala_brandt\" needs lens.fx and lens.fy (pixels, "
                              "OpenCV's K[0][0] and K[1][1])",
                              source);
-      for (const char* key : {"fx", "fy"}) {
-        if (!(*lens.get(key)->value<double>() > 0.0))
-          return KeyError(At(source, "lens", key, *lens.get(key)),
-                          "must be a positive focal length in pixels");
-      }
-      SKYLOC_TRY(GetNumbers(lens, source, "lens", "k", 4, p->k.data(), &present));
+      if (!(p->fx > 0.0))
+        r.Invalid("fx", "must be a positive focal length in pixels");
+      if (!(p->fy > 0.0))
+        r.Invalid("fy", "must be a positive focal length in pixels");
+      r.Numbers("k", 4, p->k.data());
       break;
     }
     case LensModel::kOCamCalib: {
-      SKYLOC_TRY(RejectFor(lens, source, model, {"fx", "fy", "k", "centre"}));
-      const toml::node* node = lens.get("ocamcalib_file");
-      if (node == nullptr)
+      RejectFor(&r, model, {"fx", "fy", "k", "centre"});
+      SKYLOC_TRY(r.status());
+      if (!r.Has("ocamcalib_file"))
         return Status::Error(StatusCode::kInvalidArgument,
                              "%s: model \"ocamcalib\" needs lens.ocamcalib_file = "
                              "\"calib_results.txt\" (the OCamCalib toolbox output)",
                              source);
-      const std::optional<std::string> file = node->value<std::string>();
-      if (!file || file->empty())
-        return KeyError(At(source, "lens", "ocamcalib_file", *node),
-                        "must be a file name (relative to the camera file)");
-      const std::string path = (*file)[0] == '/' ? *file : std::string(base_dir) + "/" + *file;
+      std::string file;
+      r.String("ocamcalib_file", &file, true);
+      if (r.ok() && file.empty())
+        r.Invalid("ocamcalib_file", "must be a file name (relative to the camera file)");
+      SKYLOC_TRY(r.status());
+      const std::string path = file[0] == '/' ? file : std::string(base_dir) + "/" + file;
       Result<dsp::OCamCalibModel> ocam = LoadOCamCalibFile(path.c_str());
       if (!ocam.ok()) {
         Status s = ocam.status();
@@ -234,7 +137,7 @@ Status ParseLens(const toml::table& lens, const char* source, const char* base_d
       break;
     }
   }
-  return Status::Ok();
+  return r.status();
 }
 
 }  // namespace
@@ -298,7 +201,8 @@ Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* le
 Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* source,
                                         const char* base_dir) {
   SKYLOC_TRY_ASSIGN(const toml::table root, ParseTomlText(text, source));
-  SKYLOC_TRY(CheckKeys(root, source, "top level", {"image", "lens", "mount"}));
+  TomlKeyReader top(&root, "top level", source, TomlKeyNaming::kDotted);
+  SKYLOC_TRY(CheckKeys(&top, {"image", "lens", "mount"}));
   for (const char* name : {"image", "lens", "mount"}) {
     const toml::node* node = root.get(name);
     if (node != nullptr && !node->is_table())
@@ -310,11 +214,12 @@ Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* sourc
   if (image == nullptr)
     return Status::Error(StatusCode::kInvalidArgument,
                          "%s: missing [image] with width and height (pixels)", source);
-  SKYLOC_TRY(CheckKeys(*image, source, "image", {"width", "height"}));
-  bool has_width = false, has_height = false;
-  SKYLOC_TRY(GetInteger(*image, source, "image", "width", 1, 65534, &p.width, &has_width));
-  SKYLOC_TRY(GetInteger(*image, source, "image", "height", 1, 65534, &p.height, &has_height));
-  if (!has_width || !has_height)
+  TomlKeyReader r(image, "image", source, TomlKeyNaming::kDotted);
+  SKYLOC_TRY(CheckKeys(&r, {"width", "height"}));
+  r.Int("width", &p.width, 1, 65534);
+  r.Int("height", &p.height, 1, 65534);
+  SKYLOC_TRY(r.status());
+  if (!r.Has("width") || !r.Has("height"))
     return Status::Error(StatusCode::kInvalidArgument,
                          "%s: [image] needs both width and height (pixels)", source);
 
@@ -322,15 +227,12 @@ Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* sourc
     SKYLOC_TRY(ParseLens(*lens, source, base_dir, &p));
 
   if (const toml::table* mount = root.get_as<toml::table>("mount")) {
-    SKYLOC_TRY(CheckKeys(*mount, source, "mount", {"roll_deg", "pitch_deg", "yaw_deg"}));
-    SKYLOC_TRY(GetNumber(*mount, source, "mount", "roll_deg", &p.roll_deg));
-    SKYLOC_TRY(GetNumber(*mount, source, "mount", "pitch_deg", &p.pitch_deg));
-    SKYLOC_TRY(GetNumber(*mount, source, "mount", "yaw_deg", &p.yaw_deg));
-    for (const char* key : {"roll_deg", "pitch_deg", "yaw_deg"}) {
-      const toml::node* node = mount->get(key);
-      if (node != nullptr && std::fabs(node->value<double>().value_or(0.0)) > 360.0)
-        return KeyError(At(source, "mount", key, *node), "is out of range: use -360..360 degrees");
-    }
+    TomlKeyReader m(mount, "mount", source, TomlKeyNaming::kDotted);
+    SKYLOC_TRY(CheckKeys(&m, {"roll_deg", "pitch_deg", "yaw_deg"}));
+    m.Double("roll_deg", &p.roll_deg, -360, 360);
+    m.Double("pitch_deg", &p.pitch_deg, -360, 360);
+    m.Double("yaw_deg", &p.yaw_deg, -360, 360);
+    SKYLOC_TRY(m.status());
   }
   dsp::Lens lens;
   SKYLOC_TRY(InitLens(p, source, &lens));
