@@ -5,12 +5,13 @@
 
 #include <cerrno>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <vector>
 
+#include "skyloc/drivers/toml_keys.h"
 #include "skyloc/drivers/toml_text.h"
 #include "skyloc/dsp/sh_grid.h"
 
@@ -27,6 +28,8 @@ constexpr EnumName<CameraKind> kCameraKinds[] = {{"sim", CameraKind::kSim},
                                                  {"v4l2", CameraKind::kV4l2},
                                                  {"libcamera", CameraKind::kLibcamera},
                                                  {"dataset", CameraKind::kDataset}};
+constexpr EnumName<SimSampling> kSimSamplings[] = {{"distance", SimSampling::kDistance},
+                                                   {"time", SimSampling::kTime}};
 constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
     {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
 constexpr EnumName<GridPreset> kGridPresets[] = {{"oversampled", GridPreset::kOversampled},
@@ -73,202 +76,41 @@ bool ValueOf(const EnumName<E> (&names)[N], std::string_view name, E* out) {
   return false;
 }
 
-template <typename E, std::size_t N>
-std::string Choices(const EnumName<E> (&names)[N]) {
-  std::string s;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (i > 0)
-      s += i + 1 == N ? " or " : ", ";
-    s += '"';
-    s += names[i].name;
-    s += '"';
-  }
-  return s;
-}
-
-// Reads the keys of one [section], remembering which it consumed so that anything left
-// over is reported as unknown. The first error wins; later reads are no-ops.
-class SectionReader {
+// Reads the keys of one [section] through drivers::TomlKeyReader; adds the enums of this
+// file's name tables. The first error of every section lands in `*error`.
+class SectionReader : public drivers::TomlKeyReader {
  public:
-  SectionReader(const toml::table* table, const char* section, std::string_view source,
+  SectionReader(const toml::table* table, const char* section, const std::string& source,
                 Status* error)
-      : table_(table), section_(section), source_(source), error_(error) {}
+      : TomlKeyReader(table, section, source.c_str(), drivers::TomlKeyNaming::kSection),
+        error_(error) {}
+  SectionReader(const SectionReader&) = delete;
+  SectionReader& operator=(const SectionReader&) = delete;
+  ~SectionReader() = default;
 
-  void Int(const char* key, int* out, std::int64_t lo, std::int64_t hi) {
-    std::int64_t v = *out;
-    Int64(key, &v, lo, hi);
-    *out = static_cast<int>(v);
-  }
-  void Int64(const char* key, std::int64_t* out, std::int64_t lo, std::int64_t hi) {
-    const toml::node* node = Find(key);
-    if (node == nullptr)
-      return;
-    const auto* value = node->as_integer();
-    if (value == nullptr) {
-      Fail(node, key, "must be an integer in %lld..%lld (default %lld)", Ll(lo), Ll(hi), Ll(*out));
-      return;
-    }
-    const std::int64_t v = value->get();
-    if (v < lo || v > hi) {
-      Fail(node, key, "= %lld is out of range: must be %lld..%lld (default %lld)", Ll(v), Ll(lo),
-           Ll(hi), Ll(*out));
-      return;
-    }
-    *out = v;
-  }
-  void Double(const char* key, double* out, double lo, double hi) {
-    const toml::node* node = Find(key);
-    if (node == nullptr)
-      return;
-    double v = 0;
-    if (const auto* f = node->as_floating_point()) {
-      v = f->get();
-    } else if (const auto* i = node->as_integer()) {
-      v = static_cast<double>(i->get());
-    } else {
-      Fail(node, key, "must be a number in %g..%g (default %g)", lo, hi, *out);
-      return;
-    }
-    if (!std::isfinite(v) || v < lo || v > hi) {
-      Fail(node, key, "= %g is out of range: must be %g..%g (default %g)", v, lo, hi, *out);
-      return;
-    }
-    *out = v;
-  }
-  // A float parameter of dsp (the state machine's thresholds): read as a double, range
-  // checked, then rounded to float once.
-  void Float(const char* key, float* out, double lo, double hi) {
-    double v = static_cast<double>(*out);
-    Double(key, &v, lo, hi);
-    *out = static_cast<float>(v);
-  }
-  void Bool(const char* key, bool* out) {
-    const toml::node* node = Find(key);
-    if (node == nullptr)
-      return;
-    const auto* value = node->as_boolean();
-    if (value == nullptr) {
-      Fail(node, key, "must be true or false (default %s)", *out ? "true" : "false");
-      return;
-    }
-    *out = value->get();
-  }
-  void String(const char* key, std::string* out, bool allow_empty) {
-    const toml::node* node = Find(key);
-    if (node == nullptr)
-      return;
-    const auto* value = node->as_string();
-    if (value == nullptr) {
-      Fail(node, key, "must be a string (default \"%s\")", out->c_str());
-      return;
-    }
-    if (!allow_empty && value->get().empty()) {
-      Fail(node, key, "must not be empty (default \"%s\")", out->c_str());
-      return;
-    }
-    *out = value->get();
-  }
   template <typename E, std::size_t N>
   void Enum(const char* key, E* out, const EnumName<E> (&names)[N]) {
-    const toml::node* node = Find(key);
-    if (node == nullptr)
-      return;
-    const auto* value = node->as_string();
-    if (value != nullptr && ValueOf(names, value->get(), out))
-      return;
-    Fail(node, key, "must be one of %s (default \"%s\")", Choices(names).c_str(),
-         NameOf(names, *out));
-  }
-  void OneOf(const char* key, std::string* out, std::initializer_list<const char*> allowed) {
-    const toml::node* node = Find(key);
-    if (node == nullptr)
-      return;
-    const auto* value = node->as_string();
-    if (value != nullptr) {
-      for (const char* a : allowed) {
-        if (value->get() == a) {
-          *out = a;
-          return;
-        }
-      }
+    std::vector<const char*> list;
+    std::size_t index = N;
+    for (std::size_t i = 0; i < N; ++i) {
+      list.push_back(names[i].name);
+      if (names[i].value == *out)
+        index = i;
     }
-    std::string choices;
-    for (const char* a : allowed) {
-      choices += choices.empty() ? "\"" : ", \"";
-      choices += a;
-      choices += '"';
-    }
-    Fail(node, key, "must be one of %s (default \"%s\")", choices.c_str(), out->c_str());
+    Choice(key, list, &index);
+    if (index < N)
+      *out = names[index].value;
   }
-
-  // An error about a combination of keys, reported at `key`.
-  void Invalid(const char* key, const char* message) {
-    // The key may be missing (its default is what clashes): then point at the section.
-    const toml::node* node = table_ == nullptr ? nullptr : table_->get(key);
-    Fail(node != nullptr ? node : table_, key, "%s", message);
-  }
-
-  // Reports the first key nobody asked for.
+  // Reports the first key nobody asked for; keeps the first error of all.
   void Finish() {
-    if (table_ == nullptr || !error_->ok())
-      return;
-    for (auto&& [k, node] : *table_) {
-      bool known = false;
-      for (std::size_t i = 0; i < known_count_; ++i)
-        known = known || k.str() == known_[i];
-      if (!known) {
-        const std::string name(k.str());
-        const int line = static_cast<int>(node.source().begin.line);
-        const std::string source(source_);
-        *error_ = Status::Error(StatusCode::kInvalidArgument,
-                                "%s:%d: key %s is not known in [%s]: check its spelling and "
-                                "section against config/skyloc.toml",
-                                source.c_str(), line, name.c_str(), section_);
-        return;
-      }
-    }
+    const Status s = TomlKeyReader::Finish();
+    if (error_->ok())
+      *error_ = s;
   }
 
  private:
-  static long long Ll(std::int64_t v) { return static_cast<long long>(v); }
-
-  const toml::node* Find(const char* key) {
-    if (known_count_ < kMaxKeys)
-      known_[known_count_++] = key;
-    if (table_ == nullptr || !error_->ok())
-      return nullptr;
-    return table_->get(key);
-  }
-
-  void Fail(const toml::node* node, const char* key, const char* format, ...)
-      __attribute__((format(printf, 4, 5))) {
-    if (!error_->ok())
-      return;
-    char detail[160];
-    va_list args;
-    va_start(args, format);
-    std::vsnprintf(detail, sizeof detail, format, args);
-    va_end(args);
-    const int line = node != nullptr ? static_cast<int>(node->source().begin.line) : 0;
-    const std::string source(source_);
-    if (line > 0) {
-      *error_ = Status::Error(StatusCode::kInvalidArgument, "%s:%d: [%s] %s %s", source.c_str(),
-                              line, section_, key, detail);
-    } else {
-      *error_ = Status::Error(StatusCode::kInvalidArgument, "%s: [%s] %s %s", source.c_str(),
-                              section_, key, detail);
-    }
-  }
-
-  static constexpr std::size_t kMaxKeys = 32;  // [camera] has 19
-  const toml::table* table_;
-  const char* section_;
-  std::string_view source_;
   Status* error_;
-  const char* known_[kMaxKeys] = {};
-  std::size_t known_count_ = 0;
 };
-
 }  // namespace
 
 void ResolveDescriptorGrid(DescriptorConfig* d) {
@@ -362,63 +204,66 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   auto section = [&](const char* name) { return root.get_as<toml::table>(name); };
 
   {
-    SectionReader r(section("camera"), "camera", source_name, &error);
+    SectionReader r(section("camera"), "camera", source, &error);
     r.Enum("kind", &c.camera.kind, kCameraKinds);
     r.String("device", &c.camera.device, false);
     r.String("dataset", &c.camera.dataset, true);
     r.String("lens_file", &c.camera.lens_file, true);
-    r.OneOf("sim_world", &c.camera.sim_world, {"city", "forest", "repetitive", "street"});
-    r.Int64("sim_seed", &c.camera.sim_seed, 0, INT64_MAX);
-    r.OneOf("sim_sampling", &c.camera.sim_sampling, {"distance", "time"});
-    r.Double("sim_speed_mps", &c.camera.sim_speed_mps, 0.01, 100.0);
-    r.Double("sim_speed_band", &c.camera.sim_speed_band, 0.0, 0.99);
-    r.Double("sim_accel_mps2", &c.camera.sim_accel_mps2, 0.01, 100.0);
-    r.Double("sim_start_stop_s", &c.camera.sim_start_stop_s, 0.0, 3600.0);
-    r.Int("sim_stops", &c.camera.sim_stops, 0, 1000);
-    r.Double("sim_stop_min_s", &c.camera.sim_stop_min_s, 0.0, 3600.0);
-    r.Double("sim_stop_max_s", &c.camera.sim_stop_max_s, 0.0, 3600.0);
-    if (error.ok() && c.camera.sim_stop_min_s > c.camera.sim_stop_max_s)
+    SimRunConfig& sim = c.camera.sim;
+    r.OneOf("sim_world", &sim.world, {"city", "forest", "repetitive", "street"});
+    std::int64_t seed = static_cast<std::int64_t>(sim.seed);
+    r.Int64("sim_seed", &seed, 0, INT64_MAX);
+    sim.seed = static_cast<std::uint64_t>(seed);
+    r.Enum("sim_sampling", &sim.sampling, kSimSamplings);
+    r.Double("sim_speed_mps", &sim.speed_mps, 0.01, 100.0);
+    r.Double("sim_speed_band", &sim.speed_band, 0.0, 0.99);
+    r.Double("sim_accel_mps2", &sim.accel_mps2, 0.01, 100.0);
+    r.Double("sim_start_stop_s", &sim.start_stop_s, 0.0, 3600.0);
+    r.Int("sim_stops", &sim.stops, 0, 1000);
+    r.Double("sim_stop_min_s", &sim.stop_min_s, 0.0, 3600.0);
+    r.Double("sim_stop_max_s", &sim.stop_max_s, 0.0, 3600.0);
+    if (r.ok() && sim.stop_min_s > sim.stop_max_s)
       r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
     r.Int("width", &c.camera.width, 16, 8192);
     r.Int("height", &c.camera.height, 16, 8192);
     r.Double("fps", &c.camera.fps, 0.1, 1000.0);
     r.Int("frame_timeout_ms", &c.camera.frame_timeout_ms, 1, 60000);
     r.Int("reconnect_timeout_ms", &c.camera.reconnect_timeout_ms, 0, 600000);
-    if (error.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())
+    if (r.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())
       r.Invalid("dataset", "must name the dataset folder when kind = \"dataset\"");
     r.Finish();
   }
   {
-    SectionReader r(section("segmentation"), "segmentation", source_name, &error);
+    SectionReader r(section("segmentation"), "segmentation", source, &error);
     r.Enum("method", &c.segmentation.method, kSegmentationMethods);
     r.Int("threshold", &c.segmentation.threshold, 0, 254);
     r.Finish();
   }
   {
-    SectionReader r(section("descriptor"), "descriptor", source_name, &error);
+    SectionReader r(section("descriptor"), "descriptor", source, &error);
     r.Int("bands", &c.descriptor.bands, 1, 256);
     r.Enum("grid", &c.descriptor.grid, kGridPresets);
     r.Int("rings", &c.descriptor.rings, 0, 1024);
     r.Int("longitudes", &c.descriptor.longitudes, 0, 4096);
     r.Enum("normalisation", &c.descriptor.normalisation, kNormalisations);
-    if (error.ok() && c.descriptor.grid == GridPreset::kCustom) {
+    if (r.ok() && c.descriptor.grid == GridPreset::kCustom) {
       if (c.descriptor.rings < 1)
         r.Invalid("rings", "must be 1..1024 when grid = \"custom\"");
       else if (c.descriptor.longitudes < 4)
         r.Invalid("longitudes", "must be 4..4096 when grid = \"custom\"");
-    } else if (error.ok() && (c.descriptor.rings != 0 || c.descriptor.longitudes != 0)) {
+    } else if (r.ok() && (c.descriptor.rings != 0 || c.descriptor.longitudes != 0)) {
       r.Invalid(c.descriptor.rings != 0 ? "rings" : "longitudes",
                 "is only used with grid = \"custom\"; remove it or set grid = \"custom\"");
     }
     const toml::table* t = section("descriptor");
-    if (error.ok() && c.descriptor.grid == GridPreset::kPaper && t != nullptr &&
-        t->contains("bands") && c.descriptor.bands != 120)
+    if (r.ok() && c.descriptor.grid == GridPreset::kPaper && t != nullptr && t->contains("bands") &&
+        c.descriptor.bands != 120)
       r.Invalid("bands", "must be 120 (or left out) with grid = \"paper\"");
     ResolveDescriptorGrid(&c.descriptor);
     r.Finish();
   }
   {
-    SectionReader r(section("seqslam"), "seqslam", source_name, &error);
+    SectionReader r(section("seqslam"), "seqslam", source, &error);
     r.Enum("matcher", &c.seqslam.matcher, kMatchers);
     dsp::RouteFilterParams& filter = c.seqslam.filter;
     dsp::SeqSlamParams& open = c.seqslam.openseqslam;
@@ -434,18 +279,18 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     filter.uniqueness_window = rwindow;
     open.uniqueness_window = rwindow;
     r.Int("contrast_r", &open.contrast_window, 0, 1000);
-    if (error.ok() && open.v_max < open.v_min)
+    if (r.ok() && open.v_max < open.v_min)
       r.Invalid("vmax", "must not be smaller than vmin");
     r.Finish();
   }
   {
-    SectionReader r(section("capacities"), "capacities", source_name, &error);
+    SectionReader r(section("capacities"), "capacities", source, &error);
     r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
     r.Enum("route_storage", &c.capacities.route_storage, kRouteStorages);
     r.Finish();
   }
   {
-    SectionReader r(section("state"), "state", source_name, &error);
+    SectionReader r(section("state"), "state", source, &error);
     r.Float("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
     r.Float("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
     r.Float("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
@@ -453,12 +298,12 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Int("drop_frames", &c.state.drop_frames, 1, 1000);
     r.Int("lost_frames", &c.state.lost_frames, 1, 10000);
     r.Double("index_tolerance", &c.state.index_tolerance, 0.0, 10000.0);
-    if (error.ok() && c.state.stay_confidence > c.state.enter_confidence)
+    if (r.ok() && c.state.stay_confidence > c.state.enter_confidence)
       r.Invalid("stay_confidence", "must not be above enter_confidence (hysteresis)");
     r.Finish();
   }
   {
-    SectionReader r(section("status"), "status", source_name, &error);
+    SectionReader r(section("status"), "status", source, &error);
     r.Enum("kind", &c.status.kind, kStatusOutputKinds);
     r.String("chip", &c.status.chip, false);
     r.Int("line_lost", &c.status.line_lost, 0, 511);
@@ -469,7 +314,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Int("button_line", &c.status.button_line, -1, 511);
     r.Bool("button_active_low", &c.status.button_active_low);
     r.Int("button_debounce_ms", &c.status.button_debounce_ms, 0, 1000);
-    if (error.ok() && c.status.encoding == StatusEncoding::kPerState) {
+    if (r.ok() && c.status.encoding == StatusEncoding::kPerState) {
       if (c.status.line_localised == c.status.line_lost ||
           c.status.line_localised == c.status.line_searching)
         r.Invalid("line_localised", "must differ from line_lost and line_searching");
@@ -479,31 +324,31 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     // The button is an input: it cannot share a pin with a lit indicator.
     const StatusConfig& st = c.status;
     const bool per_state = st.encoding == StatusEncoding::kPerState;
-    if (error.ok() && st.button_line >= 0 &&
+    if (r.ok() && st.button_line >= 0 &&
         (st.button_line == st.line_localised ||
          (per_state && (st.button_line == st.line_lost || st.button_line == st.line_searching))))
       r.Invalid("button_line",
                 per_state ? "must differ from line_lost, line_searching and line_localised "
                             "(-1: no button)"
                           : "must differ from line_localised, the blinking line (-1: no button)");
-    if (error.ok() && st.button_line >= 0 && st.kind == StatusOutputKind::kNone)
+    if (r.ok() && st.button_line >= 0 && st.kind == StatusOutputKind::kNone)
       r.Invalid("button_line", "needs kind = \"gpio\" (the button is read on its chip), or -1");
     r.Finish();
   }
   {
-    SectionReader r(section("realtime"), "realtime", source_name, &error);
+    SectionReader r(section("realtime"), "realtime", source, &error);
     r.Int("sched_fifo_priority", &c.realtime.sched_fifo_priority, 0, 99);
     r.Bool("mlockall", &c.realtime.mlockall);
     r.Int("cpu_affinity", &c.realtime.cpu_affinity, -1, 1023);
     r.Finish();
   }
   {
-    SectionReader r(section("route_db"), "route_db", source_name, &error);
+    SectionReader r(section("route_db"), "route_db", source, &error);
     r.Int("flush_every", &c.route_db.flush_every, 1, 100000);
     r.Finish();
   }
   {
-    SectionReader r(section("attitude"), "attitude", source_name, &error);
+    SectionReader r(section("attitude"), "attitude", source, &error);
     AttitudeConfig& a = c.attitude;
     r.Enum("kind", &a.kind, kAttitudeKinds);
     r.String("device", &a.device, true);
@@ -519,22 +364,22 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Double("filter_ki", &a.filter_ki, 0.0, 100.0);
     r.Double("accel_gate_mps2", &a.accel_gate_mps2, 0.0, 100.0);
     r.Int("stale_ms", &a.stale_ms, 1, 60000);
-    if (error.ok() && a.kind == AttitudeKind::kIio && a.device.empty())
+    if (r.ok() && a.kind == AttitudeKind::kIio && a.device.empty())
       r.Invalid("device",
                 "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
                 "name, e.g. \"bmi160\")");
-    if (error.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
+    if (r.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
       r.Invalid("kind",
                 "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "
                 "it needs [camera] kind = \"dataset\"");
-    if (error.ok() && a.kind == AttitudeKind::kSim && c.camera.kind != CameraKind::kSim)
+    if (r.ok() && a.kind == AttitudeKind::kSim && c.camera.kind != CameraKind::kSim)
       r.Invalid("kind",
                 "\"sim\" simulates the IMU of the simulated camera's run: it needs "
                 "[camera] kind = \"sim\"");
     r.Finish();
   }
   {
-    SectionReader r(section("heading"), "heading", source_name, &error);
+    SectionReader r(section("heading"), "heading", source, &error);
     dsp::HorizonStripOptions& h = c.heading.strip;
     dsp::HeadingOptions& e = c.heading.estimate;
     r.Int("strip_columns", &h.n_azimuth, 0, 4096);
@@ -545,11 +390,11 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Float("surf_threshold", &e.features.threshold, 0.0, 255.0);
     r.Int("surf_max_features", &e.max_features, 1, 4096);
     r.Int("surf_min_inliers", &e.min_surf_inliers, 2, 4096);
-    if (error.ok() && h.n_azimuth != 0 && h.n_azimuth < 148)
+    if (r.ok() && h.n_azimuth != 0 && h.n_azimuth < 148)
       r.Invalid("strip_columns",
                 "must be 0 (no heading) or at least 148: 1D SURF's widest filter spans 147 "
                 "columns");
-    if (error.ok() && h.elevation_min_deg > h.elevation_max_deg)
+    if (r.ok() && h.elevation_min_deg > h.elevation_max_deg)
       r.Invalid("elevation_min_deg", "must not be above elevation_max_deg");
     r.Finish();
   }

@@ -35,6 +35,38 @@ const char* StatusOutputKindName(StatusOutputKind kind);
 const char* StatusEncodingName(StatusEncoding encoding);
 const char* AttitudeKindName(AttitudeKind kind);
 
+// How a simulated run samples its route: a frame every spacing_m metres on average, or a
+// frame every 1/fps seconds along a speed profile with stops (docs/SIMULATOR.md).
+enum class SimSampling : std::uint8_t { kDistance, kTime };
+
+// A simulated run: the one description that the [camera] sim_* keys, the SIM flags of
+// teach, repeat and record, and `skyloc simulate` fill. Its defaults are the
+// configuration's; `skyloc simulate` starts from SimulateDefaults() (sim_run.h).
+struct SimRunConfig {
+  std::string world = "city";  // city | forest | repetitive; config: street; simulate: seville
+  std::uint64_t seed = 1;      // the procedural world's seed
+  std::uint64_t run_seed = 1;  // speed jitter or profile and stops, bumps, clouds, noise
+  SimSampling sampling = SimSampling::kDistance;
+  double spacing_m = 1.0;     // kDistance: mean distance between frames
+  double speed_jitter = 0.2;  // kDistance: speed varies within (1 +- jitter)
+  double speed_mps = 1.0;     // kTime: sim::SpeedProfile's fields
+  double speed_band = 0.3;
+  double accel_mps2 = 0.5;
+  double start_stop_s = 2.0;
+  int stops = 2;
+  double stop_min_s = 2.0;
+  double stop_max_s = 6.0;
+  double speed_ratio = 1.0;  // kTime: scales the cruise speed (a faster repeat run)
+  double camera_height_m = 1.0;
+  double tilt_deg = 0;            // constant pitch, nose up positive (the paper's alpha)
+  double zigzag_deg = 0;          // yaw weave amplitude
+  double bumps_deg = 0;           // roll/pitch random walk bound
+  double yaw_deg = 0;             // constant heading offset
+  std::string lighting = "noon";  // noon, dawn, overcast
+
+  bool operator==(const SimRunConfig&) const = default;
+};
+
 struct CameraConfig {
   CameraKind kind = CameraKind::kSim;
   std::string device = "/dev/video0";  // v4l2: path or "driver:card"; libcamera: camera id
@@ -43,18 +75,9 @@ struct CameraConfig {
       lens_file;  // camera/lens TOML (relative: to the config file); empty: 185° equidistant
   // Not a key: lens_file is a replayed dataset's own camera.toml (set by the session).
   bool lens_file_from_dataset = false;
-  std::string sim_world = "city";  // kind = sim: city | forest | repetitive
-  std::int64_t sim_seed = 1;
-  // kind = sim (not "street"): "distance" (a frame every metre, the demo's) or "time" (a
-  // frame every 1/fps seconds along a speed profile with stops; docs/SIMULATOR.md).
-  std::string sim_sampling = "distance";
-  double sim_speed_mps = 1.0;  // sim_sampling = "time": sim::SpeedProfile's fields
-  double sim_speed_band = 0.3;
-  double sim_accel_mps2 = 0.5;
-  double sim_start_stop_s = 2.0;
-  int sim_stops = 2;
-  double sim_stop_min_s = 2.0;
-  double sim_stop_max_s = 6.0;
+  // kind = sim: the world and how a run through it is sampled (the sim_* keys); the
+  // command line's SIM flags give the rest of the run.
+  SimRunConfig sim;
   int width = 640;
   int height = 480;
   double fps = 30.0;

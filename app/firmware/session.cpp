@@ -26,6 +26,7 @@
 #include "skyloc/drivers/gpio_status_output.h"
 #endif
 #include "firmware/button_teach.h"
+#include "firmware/sim_run.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/platform/realtime.h"
 #include "skyloc/platform/signals.h"
@@ -191,12 +192,13 @@ Status MakeAttitudeSource(const Config& config, const CameraSource& camera, Atti
   return Status::Ok();
 }
 
-Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* source) {
-  if (config.camera.sim_world == "street") {
+Status MakeSimSource(const Config& config, const SimRunConfig& command_line, CameraSource* source) {
+  const SimRunConfig run = ConfiguredSimRun(config.camera.sim, command_line);
+  if (run.world == "street") {
     sim::StreetOptions o;
     o.width = config.camera.width;
     o.height = config.camera.height;
-    o.seed = static_cast<std::uint64_t>(config.camera.sim_seed);
+    o.seed = run.seed;
     o.fps = config.camera.fps;
     o.paced = true;  // a live run: frames come at the camera's rate
     o.step_m = run.spacing_m;
@@ -211,43 +213,18 @@ Status MakeSimSource(const Config& config, const SimRun& run, CameraSource* sour
     return Status::Ok();
   }
   sim::WorldKind kind{};
-  if (!sim::ParseWorldKind(config.camera.sim_world.c_str(), &kind))
+  if (!sim::ParseWorldKind(run.world.c_str(), &kind))
     return Status::Error(StatusCode::kInvalidArgument, "[camera] sim_world \"%s\" is unknown",
-                         config.camera.sim_world.c_str());
+                         run.world.c_str());
   source->world = std::make_unique<sim::World>();
-  SKYLOC_TRY(sim::MakeProceduralWorld(kind, static_cast<std::uint64_t>(config.camera.sim_seed),
-                                      source->world.get()));
-  sim::MotionConfig motion;
-  motion.frame_spacing_m = run.spacing_m;
-  motion.speed_jitter = run.speed_jitter;
-  motion.height_m = run.camera_height_m;
-  motion.tilt_deg = run.tilt_deg;
-  motion.zigzag_deg = run.zigzag_deg;
-  motion.bumps_deg = run.bumps_deg;
-  motion.yaw_offset_deg = run.yaw_deg;
-  motion.fps = config.camera.fps;
-  if (config.camera.sim_sampling == "time") {
-    motion.sampling = sim::Sampling::kTime;
-    motion.speed.cruise_mps = config.camera.sim_speed_mps;
-    motion.speed.band = config.camera.sim_speed_band;
-    motion.speed.accel_mps2 = config.camera.sim_accel_mps2;
-    motion.speed.start_stop_s = config.camera.sim_start_stop_s;
-    motion.speed.stops = config.camera.sim_stops;
-    motion.speed.stop_min_s = config.camera.sim_stop_min_s;
-    motion.speed.stop_max_s = config.camera.sim_stop_max_s;
-    motion.speed_ratio = run.speed_ratio;
-  }
-  motion.seed = run.run_seed;
+  SKYLOC_TRY(sim::MakeProceduralWorld(kind, run.seed, source->world.get()));
+  const sim::MotionConfig motion = SimMotionConfig(run, config.camera.fps);
   source->run_seed = run.run_seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));
   sim::RenderedSourceConfig camera;
   SKYLOC_TRY_ASSIGN(camera.lens, LensFromConfig(config));
-  if (!sim::LightingPreset(run.lighting.c_str(), run.run_seed, &camera.lighting))
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "lighting \"%s\" is not dawn, noon or "
-                         "overcast",
-                         run.lighting.c_str());
+  SKYLOC_TRY_ASSIGN(camera.lighting, SimLighting(run));
   auto rendered =
       std::make_unique<sim::RenderedSource>(source->world.get(), source->trajectory, camera);
   source->camera = std::make_unique<drivers::SimulatedCamera>(rendered->camera_config(),
@@ -366,9 +343,9 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
                   info.width, info.height);
   } else if (cam.kind == CameraKind::kSim) {
     std::snprintf(camera, sizeof camera,
-                  "camera sim (SIMULATED world \"%s\", seed %lld), %s %dx%d @ %g fps",
-                  cam.sim_world.c_str(), static_cast<long long>(cam.sim_seed), format, info.width,
-                  info.height, cam.fps);
+                  "camera sim (SIMULATED world \"%s\", seed %llu), %s %dx%d @ %g fps",
+                  cam.sim.world.c_str(), static_cast<unsigned long long>(cam.sim.seed), format,
+                  info.width, info.height, cam.fps);
   } else {
     std::snprintf(
         camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", CameraKindName(cam.kind),

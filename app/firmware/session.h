@@ -14,21 +14,6 @@
 
 namespace skyloc::firmware {
 
-// A simulated run (camera.kind = "sim"); the world, its seed and the image size come from
-// the configuration ([camera] sim_world, sim_seed, width, height, lens_file).
-struct SimRun {
-  double spacing_m = 1.0;     // mean distance between frames
-  double speed_jitter = 0.2;  // speed varies within (1 +- jitter)
-  double camera_height_m = 1.0;
-  double tilt_deg = 0;            // constant pitch (the paper's alpha)
-  double zigzag_deg = 0;          // yaw weave amplitude
-  double bumps_deg = 0;           // roll/pitch random walk bound
-  double yaw_deg = 0;             // constant heading offset
-  std::string lighting = "noon";  // noon, dawn, overcast
-  std::uint64_t run_seed = 1;     // jitter or speed profile and stops, bumps, clouds, noise
-  double speed_ratio = 1.0;       // [camera] sim_sampling = "time": scales the cruise speed
-};
-
 struct SessionArgs {
   LoopMode mode = LoopMode::kRepeat;
   std::string route_path;
@@ -45,8 +30,9 @@ struct SessionArgs {
   // --record DIR (teach, repeat) and `skyloc record DIR`: the frames into this dataset folder.
   std::string record_dir;
   const char* label = "skyloc";
-  // camera.kind = "sim": how this run moves and what the light is like.
-  SimRun sim;
+  // camera.kind = "sim": how this run moves and what the light is like (the world and
+  // its sampling come from the configuration: ConfiguredSimRun, sim_run.h).
+  SimRunConfig sim;
 };
 
 struct SessionReport {

@@ -1,0 +1,64 @@
+#include "firmware/sim_run.h"
+
+namespace skyloc::firmware {
+
+SimRunConfig SimulateDefaults(bool seville) {
+  SimRunConfig run;
+  run.sampling = SimSampling::kTime;
+  if (seville) {
+    run.speed_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
+    run.camera_height_m = 0.01;
+  }
+  return run;
+}
+
+SimRunConfig ConfiguredSimRun(const SimRunConfig& configured, const SimRunConfig& command_line) {
+  SimRunConfig run = command_line;
+  run.world = configured.world;
+  run.seed = configured.seed;
+  run.sampling = configured.sampling;
+  run.spacing_m = configured.spacing_m;
+  run.speed_jitter = configured.speed_jitter;
+  run.speed_mps = configured.speed_mps;
+  run.speed_band = configured.speed_band;
+  run.accel_mps2 = configured.accel_mps2;
+  run.start_stop_s = configured.start_stop_s;
+  run.stops = configured.stops;
+  run.stop_min_s = configured.stop_min_s;
+  run.stop_max_s = configured.stop_max_s;
+  return run;
+}
+
+sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps) {
+  sim::MotionConfig motion;
+  motion.sampling =
+      run.sampling == SimSampling::kTime ? sim::Sampling::kTime : sim::Sampling::kDistance;
+  motion.frame_spacing_m = run.spacing_m;
+  motion.speed_jitter = run.speed_jitter;
+  motion.speed.cruise_mps = run.speed_mps;
+  motion.speed.band = run.speed_band;
+  motion.speed.accel_mps2 = run.accel_mps2;
+  motion.speed.start_stop_s = run.start_stop_s;
+  motion.speed.stops = run.stops;
+  motion.speed.stop_min_s = run.stop_min_s;
+  motion.speed.stop_max_s = run.stop_max_s;
+  motion.speed_ratio = run.speed_ratio;
+  motion.fps = fps;
+  motion.height_m = run.camera_height_m;
+  motion.tilt_deg = run.tilt_deg;
+  motion.zigzag_deg = run.zigzag_deg;
+  motion.bumps_deg = run.bumps_deg;
+  motion.yaw_offset_deg = run.yaw_deg;
+  motion.seed = run.run_seed;
+  return motion;
+}
+
+Result<sim::Lighting> SimLighting(const SimRunConfig& run) {
+  sim::Lighting lighting;
+  if (!sim::LightingPreset(run.lighting.c_str(), run.run_seed, &lighting))
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "lighting \"%s\" is not dawn, noon or overcast", run.lighting.c_str());
+  return lighting;
+}
+
+}  // namespace skyloc::firmware
