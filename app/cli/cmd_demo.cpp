@@ -16,12 +16,10 @@ namespace skyloc::cli {
 using namespace skyloc::firmware;
 namespace {
 
-constexpr const char* kUsage =
-    "usage: skyloc demo [--world city|forest|repetitive] [--quick]\n"
-    "  Teaches a route in a simulated world (a camera at 10 frames a second on a robot\n"
-    "  that stops on the way), repeats it 1.5x faster with tilt, zig-zag and dawn light,\n"
-    "  and prints precision/recall and the latency of every stage. --quick: a short run\n"
-    "  on small frames (the test suite's).\n";
+constexpr const char* kDescription =
+    "Teaches a route in a simulated world (a camera at 10 frames a second on a robot that\n"
+    "stops on the way), repeats it 1.5x faster with tilt, zig-zag and dawn light, and\n"
+    "prints precision/recall and the latency of every stage.\n";
 
 // One line that rewrites itself on a terminal, or a line every 50 frames otherwise.
 class ProgressLine final : public FrameSink {
@@ -65,23 +63,20 @@ class ProgressLine final : public FrameSink {
 int RunDemo(std::span<char* const> args) {
   std::string world = "city";
   bool quick = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (std::strcmp(args[i], "--quick") == 0) {
-      quick = true;
-    } else if (std::strcmp(args[i], "--world") == 0 && i + 1 < args.size()) {
-      world = args[++i];
-    } else if (IsHelpFlag(args[i])) {
-      std::fputs(kUsage, stdout);
-      return kExitOk;
-    } else {
-      std::fprintf(stderr, "skyloc demo: unknown argument '%s'\n%s", args[i], kUsage);
-      return kExitUsage;
-    }
-  }
-  if (world != "city" && world != "forest" && world != "repetitive") {
-    std::fprintf(stderr, "skyloc demo: --world is city, forest or repetitive\n");
-    return kExitUsage;
-  }
+  OptionTable t("demo", "[--world city|forest|repetitive] [--quick]", kDescription);
+  t.Custom("--world", "city|forest|repetitive", "the procedural world (default city)",
+           [&world](const char* text, std::string* expected) {
+             if (std::strcmp(text, "city") != 0 && std::strcmp(text, "forest") != 0 &&
+                 std::strcmp(text, "repetitive") != 0) {
+               *expected = "city, forest or repetitive";
+               return false;
+             }
+             world = text;
+             return true;
+           });
+  t.Flag("--quick", "a short run on small frames (the test suite's)", &quick);
+  if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
+    return ExitCode(o);
 
   char dir[] = "/tmp/skyloc_demo_XXXXXX";
   if (::mkdtemp(dir) == nullptr) {

@@ -24,103 +24,63 @@
 namespace skyloc::cli {
 namespace {
 
-constexpr char kUsage[] =
-    "usage: skyloc surf1d IMAGE_A IMAGE_B [--camera FILE.toml] [--elevation MIN,MAX]\n"
-    "                     [--columns N] [--threshold T] [--plot FILE.svg]\n"
-    "\n"
+constexpr char kDescription[] =
     "1D SURF (Anderson et al. 2012, docs/SURF1D.md) between two images of one camera: the\n"
     "horizon strip of each (the mean of a band of elevations, every azimuth), its features,\n"
     "the matches (nearest-neighbour ratio test, RANSAC on x_B = b_s x_A + b_d), both\n"
     "recognition scores (sum of 1/distance over the matches, and over RANSAC's inliers)\n"
     "and the heading of B relative to A, by RANSAC's inliers and by circular correlation\n"
-    "of the whole strips.\n"
-    "\n"
-    "  --camera FILE       camera file (docs/CAMERA_FILE.md); without one, a square-ish image\n"
-    "                      is an equidistant 185-degree fisheye filling the short side and a\n"
-    "                      2:1 image an equirectangular panorama\n"
-    "  --elevation MIN,MAX the strip's band of elevations, degrees (default 0,20)\n"
-    "  --columns N         strip length over 360 degrees (default 360)\n"
-    "  --threshold T       1D SURF's response threshold (default 2)\n"
-    "  --plot FILE.svg     draw both strips, their features and the matches (inliers green)\n"
-    "\n"
+    "of the whole strips. Without --camera, a square-ish image is an equidistant\n"
+    "185-degree fisheye filling the short side and a 2:1 image an equirectangular\n"
+    "panorama.\n"
     "Exit status: 0 done, 1 an image or the camera file could not be used, 2 bad command\n"
     "line.\n";
 
 constexpr int kMaxFeatures = 1024;
 
 struct Options {
-  const char* image_a = nullptr;
-  const char* image_b = nullptr;
-  const char* camera = nullptr;
-  const char* plot = nullptr;
+  std::vector<std::string> images;  // IMAGE_A IMAGE_B
+  std::string camera;
+  std::string plot;
   dsp::HorizonStripOptions strip;
   dsp::Surf1dOptions surf;
 };
 
-int Usage(std::string_view what, std::string_view value = {}) {
-  return UsageError("surf1d", what, value);
-}
-
+// Returns kExitOk, the help's kExitOk with `*done`, or kExitUsage after printing one error.
 int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const char* a = args[i];
-    if (IsHelpFlag(a)) {
-      std::fputs(kUsage, stdout);
-      *done = true;
-      return kExitOk;
-    }
-    if (a[0] != '-' || a[1] == '\0') {
-      if (o->image_a == nullptr)
-        o->image_a = a;
-      else if (o->image_b == nullptr)
-        o->image_b = a;
-      else
-        return Usage("one pair of images, got a third: '%s'", a);
-      continue;
-    }
-    const char* v = i + 1 < args.size() ? args[i + 1] : nullptr;
-    if (v == nullptr)
-      return Usage("%s needs a value", a);
-    ++i;
-    double d = 0;
-    if (std::strcmp(a, "--camera") == 0) {
-      o->camera = v;
-    } else if (std::strcmp(a, "--plot") == 0) {
-      o->plot = v;
-    } else if (std::strcmp(a, "--elevation") == 0) {
-      char* end = nullptr;
-      double hi = 0;
-      if (!ParseFiniteDouble(v, &d, &end) || *end != ',' || !ParseFiniteDouble(end + 1, &hi) ||
-          !(d >= -90 && d <= hi && hi <= 90))
-        return Usage("--elevation '%s': give MIN,MAX degrees, -90 <= MIN <= MAX <= 90", v);
-      o->strip.elevation_min_deg = d;
-      o->strip.elevation_max_deg = hi;
-    } else if (std::strcmp(a, "--columns") == 0) {
-      if (!ParseFiniteDouble(v, &d) || d != std::floor(d) || d < 64 || d > 4096)
-        return Usage("--columns '%s': give a whole number of columns, 64..4096", v);
-      o->strip.n_azimuth = static_cast<int>(d);
-    } else if (std::strcmp(a, "--threshold") == 0) {
-      if (!ParseFiniteDouble(v, &d) || d < 0 || d > 1000)
-        return Usage("--threshold '%s': give a response threshold of 0..1000", v);
-      o->surf.threshold = static_cast<float>(d);
-    } else {
-      return Usage("unknown option '%s'", a);
-    }
+  OptionTable t("surf1d", "IMAGE_A IMAGE_B [options]", kDescription);
+  t.Positional("IMAGE_A IMAGE_B", "the two images", 0, 2, &o->images);
+  t.Text("--camera", "FILE", "camera file (docs/CAMERA_FILE.md)", &o->camera);
+  t.NumberPair(
+      "--elevation", "MIN,MAX", "the strip's band of elevations, degrees (default 0,20)",
+      "MIN,MAX degrees, -90 <= MIN <= MAX <= 90",
+      [](double lo, double hi) { return lo >= -90 && lo <= hi && hi <= 90; },
+      &o->strip.elevation_min_deg, &o->strip.elevation_max_deg);
+  t.Int("--columns", "N", "strip length over 360 degrees (default 360)", 64, 4096,
+        &o->strip.n_azimuth);
+  double threshold = static_cast<double>(o->surf.threshold);
+  t.Number("--threshold", "T", "1D SURF's response threshold (default 2)", {0, 1000}, &threshold);
+  t.Text("--plot", "FILE.svg", "draw both strips, their features and the matches (inliers green)",
+         &o->plot);
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
+    *done = true;
+    return ExitCode(outcome);
   }
-  if (o->image_b == nullptr)
-    return Usage("%s", "give two images: IMAGE_A IMAGE_B");
+  o->surf.threshold = static_cast<float>(threshold);
+  if (o->images.size() != 2)
+    return t.Refuse("give two images: IMAGE_A IMAGE_B");
   return kExitOk;
 }
 
 // The lens of an image: the camera file's (its size must match), or describe's guess.
 Result<dsp::LensParams> LensFor(const Options& o, int width, int height, const char* path) {
-  if (o.camera != nullptr) {
-    SKYLOC_TRY_ASSIGN(dsp::LensParams p, drivers::LoadCameraFile(o.camera));
+  if (!o.camera.empty()) {
+    SKYLOC_TRY_ASSIGN(dsp::LensParams p, drivers::LoadCameraFile(o.camera.c_str()));
     if (p.width != width || p.height != height)
       return Status::Error(StatusCode::kInvalidArgument,
                            "'%s' is %dx%d but camera file '%s' describes %dx%d images: use the "
                            "camera file made for this camera",
-                           path, width, height, o.camera, p.width, p.height);
+                           path, width, height, o.camera.c_str(), p.width, p.height);
     return p;
   }
   return drivers::GuessLensForImage(width, height, path);
@@ -136,7 +96,8 @@ Status Extract(const Options& o, const char* path, dsp::Surf1d* surf, View* view
   SKYLOC_TRY_ASSIGN(const drivers::OwnedImage image, drivers::LoadImage(path));
   SKYLOC_TRY_ASSIGN(const dsp::LensParams params, LensFor(o, image.width(), image.height(), path));
   dsp::Lens lens;
-  SKYLOC_TRY(drivers::InitLens(params, o.camera != nullptr ? o.camera : "the guessed lens", &lens));
+  SKYLOC_TRY(
+      drivers::InitLens(params, !o.camera.empty() ? o.camera.c_str() : "the guessed lens", &lens));
   dsp::HorizonStrip strip;
   if (const dsp::HorizonStripError e = strip.Init(lens, o.strip); e != dsp::HorizonStripError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "%s: horizon strip: %s", path,
@@ -241,7 +202,8 @@ int RunSurf1d(std::span<char* const> args) {
     return rc;
   dsp::Surf1d surf;
   View a, b;
-  for (auto [path, view] : {std::pair{o.image_a, &a}, std::pair{o.image_b, &b}}) {
+  for (auto [path, view] :
+       {std::pair{o.images[0].c_str(), &a}, std::pair{o.images[1].c_str(), &b}}) {
     if (const Status s = Extract(o, path, &surf, view); !s.ok()) {
       std::fprintf(stderr, "skyloc surf1d: %s\n", s.message());
       return kExitFailure;
@@ -285,17 +247,17 @@ int RunSurf1d(std::span<char* const> args) {
   } else {
     std::printf("heading (strip correlation): %s\n", dsp::StripAlignmentErrorMessage(e));
   }
-  if (o.plot != nullptr) {
+  if (!o.plot.empty()) {
     const std::string svg = PlotSvg(a, b, matcher, n);
-    std::FILE* f = std::fopen(o.plot, "w");
+    std::FILE* f = std::fopen(o.plot.c_str(), "w");
     const bool written = f != nullptr && std::fwrite(svg.data(), 1, svg.size(), f) == svg.size();
     const int saved_errno = errno;
     if (f == nullptr || std::fclose(f) != 0 || !written) {
-      std::fprintf(stderr, "skyloc surf1d: cannot write the plot %s: %s\n", o.plot,
+      std::fprintf(stderr, "skyloc surf1d: cannot write the plot %s: %s\n", o.plot.c_str(),
                    std::strerror(f == nullptr || !written ? saved_errno : errno));
       return kExitFailure;
     }
-    std::printf("plot: %s\n", o.plot);
+    std::printf("plot: %s\n", o.plot.c_str());
   }
   return kExitOk;
 }

@@ -6,6 +6,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "skyloc/sim/renderer.h"
+#include "skyloc/sim/world.h"
+
 namespace skyloc::cli {
 
 int UsageError(const char* command, std::string_view what, std::string_view value) {
@@ -15,6 +18,67 @@ int UsageError(const char* command, std::string_view what, std::string_view valu
   std::fprintf(stderr, "skyloc %s: %s\nRun 'skyloc %s --help' for the options.\n", command,
                message.c_str(), command);
   return kExitUsage;
+}
+
+void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfig* run) {
+  if (which == SimRunOptions::kWorldAndRun) {
+    t->Custom("--world", "NAME", "seville (needs the shared data folder) or a procedural world",
+              [run](const char* text, std::string* expected) {
+                sim::WorldKind kind{};
+                if (!sim::ParseWorldKind(text, &kind)) {
+                  *expected = "seville, city, forest or repetitive";
+                  return false;
+                }
+                run->world = sim::WorldKindName(kind);
+                return true;
+              });
+    t->Count("--seed", "N", "procedural world seed (default 1)", &run->seed);
+  }
+  t->Count("--run", "N",
+           "run seed: speed profile and stops (or speed jitter), bumps, clouds, sensor noise "
+           "(default 1)",
+           &run->run_seed);
+  if (which == SimRunOptions::kWorldAndRun) {
+    constexpr NumberRange kFraction{0, 1, false, true};
+    t->Number("--speed", "M/S", "mean cruise speed (default 1; seville 0.5)", {0, 100, true},
+              &run->speed_mps);
+    t->Number("--speed-band", "F", "cruise speed varies within (1 +- F) (default 0.3)", kFraction,
+              &run->speed_band);
+    t->Number("--accel", "A", "acceleration and braking, m/s^2 (default 0.5)", {0, 100, true},
+              &run->accel_mps2);
+    t->Number("--start-stop", "S", "seconds standing before the start (default 2)", {0, 3600},
+              &run->start_stop_s);
+    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000, &run->stops);
+    t->NumberPair(
+        "--stop-seconds", "MIN,MAX", "each stop's length, seconds (default 2,6)",
+        "MIN,MAX seconds with 0 <= MIN <= MAX <= 3600",
+        [](double lo, double hi) { return lo >= 0 && lo <= hi && hi <= 3600; }, &run->stop_min_s,
+        &run->stop_max_s);
+    t->Number("--spacing", "M",
+              "distance sampling instead: a frame every M metres on average (seville: 0.05); "
+              "not with the time-sampling options",
+              kPositive, &run->spacing_m);
+    t->Number("--jitter", "F", "with --spacing: speed varies within (1 +- F) (default 0.2)",
+              kFraction, &run->speed_jitter);
+    t->Number("--camera-height", "M", "camera above the ground (default 1, seville 0.01: an ant)",
+              kPositive, &run->camera_height_m);
+  }
+  t->Number("--tilt", "DEG", "constant pitch, nose up positive (the paper's alpha)", {-90, 90},
+            &run->tilt_deg);
+  t->Number("--zigzag", "DEG", "yaw weave amplitude", {-180, 180}, &run->zigzag_deg);
+  t->Number("--bumps", "DEG", "bounded random walk of roll and pitch, up to +-DEG", {0, 45},
+            &run->bumps_deg);
+  t->Number("--yaw", "DEG", "constant heading offset of the camera", {}, &run->yaw_deg);
+  t->Custom("--lighting", "NAME", "dawn, noon (default) or overcast",
+            [run](const char* text, std::string* expected) {
+              sim::Lighting probe;
+              if (!sim::LightingPreset(text, 0, &probe)) {
+                *expected = "dawn, noon or overcast";
+                return false;
+              }
+              run->lighting = text;
+              return true;
+            });
 }
 
 bool ParseFiniteDouble(const char* text, double* out, char** end_out) {

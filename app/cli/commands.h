@@ -6,6 +6,9 @@
 #include <span>
 #include <string_view>
 
+#include "cli/options.h"
+#include "firmware/config.h"
+
 namespace skyloc::cli {
 
 using CommandFn = int (*)(std::span<char* const> args);
@@ -45,6 +48,16 @@ int UsageError(const char* command, std::string_view what, std::string_view valu
 // A finite number at the start of `text`; with `end_out` the rest is left to the caller
 // (e.g. "X,Y"), without it the whole text must be the number.
 bool ParseFiniteDouble(const char* text, double* out, char** end_out = nullptr);
+
+// Which of a simulated run's options a command takes: the run through a configured world
+// (teach, repeat, record on camera.kind = "sim") or the whole run (`skyloc simulate`).
+enum class SimRunOptions : std::uint8_t { kRun, kWorldAndRun };
+
+// The one place the options of a simulated run are declared: --run, --tilt, --zigzag,
+// --bumps, --yaw, --lighting; with kWorldAndRun also --world, --seed, the sampling options
+// (--spacing, --jitter; --speed, --speed-band, --accel, --start-stop, --stops,
+// --stop-seconds) and --camera-height. Each fills its field of `run`.
+void AddSimRunOptions(OptionTable* table, SimRunOptions which, firmware::SimRunConfig* run);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

@@ -84,6 +84,18 @@ void OptionTable::Text(const char* name, const char* value, const char* help, st
        }});
 }
 
+void OptionTable::TextList(const char* name, const char* value, const char* help,
+                           std::vector<std::string>* out) {
+  Add({name, value, help, true, false, [out](const char* text, std::string* expected) {
+         if (*text == '\0') {
+           *expected = "a value that is not empty";
+           return false;
+         }
+         out->emplace_back(text);
+         return true;
+       }});
+}
+
 void OptionTable::Int(const char* name, const char* value, const char* help, std::int64_t min,
                       std::int64_t max, std::int64_t* out) {
   Add({name, value, help, false, false, [=](const char* text, std::string* expected) {
@@ -150,6 +162,24 @@ void OptionTable::Number(const char* name, const char* value, const char* help, 
            return false;
          }
          *out = v;
+         return true;
+       }});
+}
+
+void OptionTable::NumberPair(const char* name, const char* value, const char* help,
+                             const char* expected, std::function<bool(double a, double b)> accept,
+                             double* a, double* b) {
+  Add({name, value, help, false, false,
+       [expected, accept = std::move(accept), a, b](const char* text, std::string* why) {
+         const char* comma = std::strchr(text, ',');
+         double first = 0, second = 0;
+         if (comma == nullptr || !ParseReal(std::string(text, comma).c_str(), &first) ||
+             !ParseReal(comma + 1, &second) || !accept(first, second)) {
+           *why = expected;
+           return false;
+         }
+         *a = first;
+         *b = second;
          return true;
        }});
 }

@@ -51,6 +51,9 @@ class OptionTable {
   void Flag(const char* name, const char* help, bool* out);
   // Any text (a path, a name checked later).
   void Text(const char* name, const char* value, const char* help, std::string* out);
+  // Repeatable text: each occurrence appends one.
+  void TextList(const char* name, const char* value, const char* help,
+                std::vector<std::string>* out);
   // A whole number in [min, max].
   void Int(const char* name, const char* value, const char* help, std::int64_t min,
            std::int64_t max, int* out);
@@ -64,6 +67,10 @@ class OptionTable {
   // A finite real number in `range`.
   void Number(const char* name, const char* value, const char* help, NumberRange range,
               double* out);
+  // Two finite numbers "A,B" (a range, a direction) that `accept` takes; `expected`
+  // tells what a good value looks like when it does not.
+  void NumberPair(const char* name, const char* value, const char* help, const char* expected,
+                  std::function<bool(double a, double b)> accept, double* a, double* b);
   // One of the named values; `repeat` appends each occurrence to `list` instead.
   template <typename E>
   void Choice(const char* name, const char* help,

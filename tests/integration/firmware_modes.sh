@@ -90,6 +90,21 @@ printf '[seqslam]\nds = 0\n' >"$WORK/bad.toml"
 expect_rc 1 "bad config" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/bad.toml"
 expect_err "bad.toml:2: \[seqslam\] ds" "bad config"
 expect_rc 2 "missing --route" -- "${RUN[@]}" repeat --config "$CONFIG"
+expect_err "skyloc repeat: --route FILE.db is required" "missing --route"
+expect_rc 2 "tilt out of range" -- "${RUN[@]}" teach --route "$WORK/t.db" --tilt 95
+expect_err "skyloc teach: --tilt '95': expected a number in \[-90, 90\]" "tilt out of range"
+[ ! -e "$WORK/t.db" ] || fail "a refused teach command line created its route database"
+expect_rc 2 "frames not a count" -- "${RUN[@]}" record "$WORK/rec" --frames x
+expect_err "skyloc record: --frames 'x': expected a whole number >= 0" "frames not a count"
+expect_rc 2 "replay --pace" -- "${RUN[@]}" replay "$WORK" --route "$DB" --pace slow
+expect_err "skyloc replay: --pace 'slow': expected recorded or fast" "replay --pace"
+expect_rc 0 "route info --help" -- "${RUN[@]}" route info --help
+grep -q "^usage: skyloc route info FILE.db | recover \[--salvage\] FILE.db" "$WORK/out" ||
+  fail "route info --help did not print route's help: $(cat "$WORK/out")"
+expect_rc 2 "route bogus" -- "${RUN[@]}" route bogus "$DB"
+expect_err "skyloc route: unknown subcommand 'bogus': expected info or recover" "route bogus"
+expect_rc 2 "route info --salvage" -- "${RUN[@]}" route info --salvage "$DB"
+expect_err "skyloc route: --salvage is for 'route recover' only" "route info --salvage"
 expect_rc 1 "--config DIR" -- "${RUN[@]}" teach --route "$WORK/dir.db" --config "$WORK" --frames 5
 expect_err "config $WORK is a directory" "--config DIR"
 

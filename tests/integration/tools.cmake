@@ -73,7 +73,7 @@ add_test(NAME cli.simulate_bad_stop_seconds_exits_2 COMMAND ${CMAKE_COMMAND}
   "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
 add_test(NAME cli.simulate_bad_lateral_exits_2 COMMAND ${CMAKE_COMMAND}
   -DCMD=${skyloc_exe} "-DARGS=simulate;--world;forest;--lateral;7;--out;unused"
-  -DEXPECT_RC=2 "-DEXPECT_STDERR=--lateral '7': expected metres within 0..5"
+  -DEXPECT_RC=2 "-DEXPECT_STDERR=--lateral '7': expected a number in \\[0, 5\\]"
   "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
 add_test(NAME cli.simulate_bad_world_exits_2 COMMAND ${CMAKE_COMMAND}
   -DCMD=${skyloc_exe} "-DARGS=simulate;--world;moon;--out;unused" -DEXPECT_RC=2
