@@ -64,16 +64,9 @@ int RunDemo(std::span<char* const> args) {
   std::string world = "city";
   bool quick = false;
   OptionTable t("demo", "[--world city|forest|repetitive] [--quick]", kDescription);
-  t.Custom("--world", "city|forest|repetitive", "the procedural world (default city)",
-           [&world](const char* text, std::string* expected) {
-             if (std::strcmp(text, "city") != 0 && std::strcmp(text, "forest") != 0 &&
-                 std::strcmp(text, "repetitive") != 0) {
-               *expected = "city, forest or repetitive";
-               return false;
-             }
-             world = text;
-             return true;
-           });
+  t.Choice<std::string>("--world", "the procedural world (default city)",
+                        {{"city", "city"}, {"forest", "forest"}, {"repetitive", "repetitive"}},
+                        &world);
   t.Flag("--quick", "a short run on small frames (the test suite's)", &quick);
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);

@@ -1,7 +1,6 @@
-// skyloc teach / repeat / replay / route: the firmware's modes. Argument parsing only;
-// the work is in session.cpp.
+// skyloc teach / repeat / record / replay / route: the firmware's modes. Argument parsing
+// only (each command's OptionTable); the work is in session.cpp and route_db.cpp.
 #include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -13,38 +12,37 @@ namespace skyloc::cli {
 using namespace skyloc::firmware;
 namespace {
 
-constexpr const char* kTeachUsage =
+constexpr const char* kTeachDescription =
     "Records the sky descriptors of a route into FILE.db until SIGINT/SIGTERM, the end of\n"
     "the camera's run or N frames; prints one JSON line per frame. --dataset: teach from a\n"
     "recorded dataset folder instead of the configured camera. --record DIR: also write\n"
     "every frame into the dataset folder DIR (for replay and eval). The simulated run's\n"
     "options (--run ... --lighting) apply to camera.kind = \"sim\" only.\n";
-constexpr const char* kRepeatUsage =
+constexpr const char* kRepeatDescription =
     "Localises live against a taught route; one JSON line per frame (frame, timestamp,\n"
     "best_index, uniqueness, confidence, state, latency_us) until SIGINT/SIGTERM. The\n"
     "simulated run's options: as for teach. A finite run with poses ends with\n"
     "precision/recall. --record DIR: also write every frame into the dataset folder DIR.\n";
-constexpr const char* kRecordUsage =
+constexpr const char* kRecordDescription =
     "Records the configured camera into the dataset folder DIR (docs/DATASETS.md):\n"
     "frames/NNNNNN.png, frames.csv with timestamps (and roll/pitch when [attitude] gives\n"
     "them), camera.toml. A writer thread keeps up with the camera or drops frames (counted);\n"
     "a full disk stops the recording and keeps what was written. Until SIGINT/SIGTERM/\n"
     "SIGHUP or N frames; one JSON line per frame. replay and eval read DIR.\n";
-constexpr const char* kReplayUsage =
+constexpr const char* kReplayDescription =
     "Runs a recorded dataset folder through the same pipeline as repeat; with poses,\n"
     "prints precision/recall (a match within X metres, default 2, is correct).\n";
-constexpr const char* kRouteUsage =
+constexpr const char* kRouteDescription =
     "info: what the file holds. recover: make an interrupted teach loadable (keeps every\n"
     "intact chunk, cuts a torn tail or trailing bytes, appends the commit record); it\n"
     "refuses a file a running teach is writing. --salvage: also for damage in the middle:\n"
     "keeps the intact chunks before it (the original is kept as FILE.db.damaged).\n";
 
-// Parses with `t` (its options bound to `s`) and runs the session.
-int ParseAndRun(OptionTable& t, std::span<char* const> args, const SessionArgs& s,
-                bool route_required) {
+// teach and repeat: parses with `t` (its options bound to `s`) and runs the session.
+int ParseAndRun(OptionTable& t, std::span<char* const> args, const SessionArgs& s) {
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);
-  if (route_required && s.route_path.empty())
+  if (s.route_path.empty())
     return t.Refuse("--route FILE.db is required");
   return RunSession(s) == 0 ? kExitOk : kExitFailure;
 }
@@ -62,33 +60,33 @@ int RunTeach(std::span<char* const> args) {
   SessionArgs s;
   s.mode = LoopMode::kTeach;
   s.label = "skyloc teach";
-  OptionTable t("teach", "--route FILE.db [options]", kTeachUsage);
+  OptionTable t("teach", "--route FILE.db [options]", kTeachDescription);
   t.Text("--route", "FILE.db", "the route database to write", &s.route_path);
   AddCommonOptions(t, &s);
   t.Text("--dataset", "DIR", "teach from this recorded dataset folder", &s.dataset);
   t.Flag("--force", "replace an existing route database", &s.force);
   t.Text("--record", "DIR", "also write every frame into this dataset folder", &s.record_dir);
   AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
-  return ParseAndRun(t, args, s, true);
+  return ParseAndRun(t, args, s);
 }
 
 int RunRepeat(std::span<char* const> args) {
   SessionArgs s;
   s.mode = LoopMode::kRepeat;
   s.label = "skyloc repeat";
-  OptionTable t("repeat", "--route FILE.db [options]", kRepeatUsage);
+  OptionTable t("repeat", "--route FILE.db [options]", kRepeatDescription);
   t.Text("--route", "FILE.db", "the taught route database", &s.route_path);
   AddCommonOptions(t, &s);
   t.Text("--record", "DIR", "also write every frame into this dataset folder", &s.record_dir);
   AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
-  return ParseAndRun(t, args, s, true);
+  return ParseAndRun(t, args, s);
 }
 
 int RunRecord(std::span<char* const> args) {
   SessionArgs s;
   s.mode = LoopMode::kRecord;
   s.label = "skyloc record";
-  OptionTable t("record", "DIR [options]", kRecordUsage);
+  OptionTable t("record", "DIR [options]", kRecordDescription);
   std::vector<std::string> dir;
   t.Positional("DIR", "the dataset folder to record into", 1, 1, &dir);
   AddCommonOptions(t, &s);
@@ -103,23 +101,13 @@ int RunReplay(std::span<char* const> args) {
   SessionArgs s;
   s.mode = LoopMode::kRepeat;
   s.label = "skyloc replay";
-  OptionTable t("replay", "DATASET --route FILE.db [options]", kReplayUsage);
+  OptionTable t("replay", "DATASET --route FILE.db [options]", kReplayDescription);
   std::vector<std::string> dataset;
   t.Positional("DATASET", "the recorded dataset folder", 1, 1, &dataset);
   t.Text("--route", "FILE.db", "the taught route database", &s.route_path);
   AddCommonOptions(t, &s);
-  t.Custom("--pace", "recorded|fast",
-           "at the recorded frame times, or as fast as it runs "
-           "(default fast)",
-           [&s](const char* text, std::string* expected) {
-             const bool recorded = std::strcmp(text, "recorded") == 0;
-             if (!recorded && std::strcmp(text, "fast") != 0) {
-               *expected = "recorded or fast";
-               return false;
-             }
-             s.paced = recorded;
-             return true;
-           });
+  t.Choice<bool>("--pace", "at the recorded frame times, or as fast as it runs (default fast)",
+                 {{"recorded", true}, {"fast", false}}, &s.paced);
   t.Number("--tolerance-m", "X", "a match within X metres is correct (default 2)", kPositive,
            &s.tolerance_m);
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
@@ -131,7 +119,7 @@ int RunReplay(std::span<char* const> args) {
 }
 
 int RunRoute(std::span<char* const> args) {
-  OptionTable t("route", "info FILE.db | recover [--salvage] FILE.db", kRouteUsage);
+  OptionTable t("route", "info FILE.db | recover [--salvage] FILE.db", kRouteDescription);
   std::vector<std::string> words;
   bool salvage = false;
   t.Positional("info|recover FILE.db", "what to do, and the route database", 2, 2, &words);

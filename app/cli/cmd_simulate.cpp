@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <optional>
 #include <string>
 #include <vector>
@@ -61,14 +60,8 @@ struct Options {
 
 // Returns kExitOk, the help's kExitOk with `*done`, or kExitUsage after printing one error.
 int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
-  // The sampling defaults depend on the world (Seville: an ant): the options are parsed
-  // into the defaults of the world they name.
-  bool seville = false;
-  for (std::size_t i = 0; i + 1 < args.size(); ++i)
-    seville = seville ||
-              (std::strcmp(args[i], "--world") == 0 && std::strcmp(args[i + 1], "seville") == 0);
-  o->run = firmware::SimulateDefaults(seville);
-  o->run.world.clear();
+  o->run = firmware::SimulateDefaults(/*seville=*/false);
+  o->run.world.clear();  // --world is required
   OptionTable t("simulate", "--world NAME --out DIR [options]", kDescription);
   t.Text("--out", "DIR", "the dataset folder to write", &o->out);
   t.Text("--route", "FILE", "route CSV (x_cm,y_cm,... or x_m,y_m,...)", &o->route_file);
@@ -96,16 +89,8 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   t.Int("--height", "H", "image height of the default lens (default 240)", 8, 8192, &o->height);
   t.Text("--camera", "FILE", "a camera file (docs/CAMERA_FILE.md) instead: size, lens, mount",
          &o->camera_file);
-  t.Custom("--mode", "M", "uv (default), visible or both",
-           [o](const char* text, std::string* expected) {
-             if (std::strcmp(text, "uv") != 0 && std::strcmp(text, "visible") != 0 &&
-                 std::strcmp(text, "both") != 0) {
-               *expected = "uv, visible or both";
-               return false;
-             }
-             o->mode = text;
-             return true;
-           });
+  t.Choice<std::string>("--mode", "uv (default), visible or both",
+                        {{"uv", "uv"}, {"visible", "visible"}, {"both", "both"}}, &o->mode);
   if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
     *done = true;
     return ExitCode(outcome);
@@ -135,6 +120,13 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
         "[image] table)");
   if (spacing)
     o->run.sampling = firmware::SimSampling::kDistance;
+  if (o->run.world == "seville") {  // an ant's run unless told otherwise
+    const firmware::SimRunConfig ant = firmware::SimulateDefaults(/*seville=*/true);
+    if (!t.Given("--speed"))
+      o->run.speed_mps = ant.speed_mps;
+    if (!t.Given("--camera-height"))
+      o->run.camera_height_m = ant.camera_height_m;
+  }
   o->sun_given = t.Given("--sun");
   o->clouds_given = t.Given("--clouds");
   return kExitOk;
@@ -241,6 +233,31 @@ class Progress {
   std::size_t last_decile_ = 0;
 };
 
+// The run's motion: the one conversion of a simulated run, and simulate's own options.
+sim::MotionConfig Motion(const Options& o) {
+  sim::MotionConfig motion = firmware::SimMotionConfig(o.run, o.fps);
+  motion.zigzag_period_m = o.zigzag_period;
+  motion.lateral_m = o.lateral;
+  motion.start_m = o.start;
+  motion.max_frames = o.frames;
+  return motion;
+}
+
+// The run's lighting preset, with the options that override it piecewise.
+Result<sim::Lighting> Lighting(const Options& o) {
+  SKYLOC_TRY_ASSIGN(sim::Lighting lighting, firmware::SimLighting(o.run));
+  lighting.exposure_ev += o.exposure;
+  if (o.sun_given) {
+    lighting.sun_azimuth_deg = o.sun_azimuth;
+    lighting.sun_elevation_deg = o.sun_elevation;
+  }
+  if (o.clouds_given)
+    lighting.cloud_cover = o.clouds;
+  if (o.no_flare)
+    lighting.flare = 0;
+  return lighting;
+}
+
 int Fail(const Status& s) {
   std::fprintf(stderr, "skyloc simulate: %s\n", s.message());
   return kExitFailure;
@@ -284,28 +301,14 @@ int RunSimulate(std::span<char* const> args) {
     closed = world.route_closed;
   }
 
-  sim::MotionConfig motion = firmware::SimMotionConfig(o.run, o.fps);
-  motion.zigzag_period_m = o.zigzag_period;
-  motion.lateral_m = o.lateral;
-  motion.start_m = o.start;
-  motion.max_frames = o.frames;
+  const sim::MotionConfig motion = Motion(o);
   std::vector<sim::TrajectoryPoint> trajectory;
   if (const Status s = sim::BuildTrajectory(route, closed, motion, &trajectory); !s.ok())
     return Fail(Status(s).AddContext("route"));
 
-  Result<sim::Lighting> preset = firmware::SimLighting(o.run);
-  if (!preset.ok())
-    return Fail(preset.status());
-  sim::Lighting lighting = *preset;
-  lighting.exposure_ev += o.exposure;
-  if (o.sun_given) {
-    lighting.sun_azimuth_deg = o.sun_azimuth;
-    lighting.sun_elevation_deg = o.sun_elevation;
-  }
-  if (o.clouds_given)
-    lighting.cloud_cover = o.clouds;
-  if (o.no_flare)
-    lighting.flare = 0;
+  Result<sim::Lighting> lighting = Lighting(o);
+  if (!lighting.ok())
+    return Fail(lighting.status());
 
   ManualClock clock;  // unused for stamps: the trajectory's times stamp the frames
   Output storage[2];
@@ -337,7 +340,7 @@ int RunSimulate(std::span<char* const> args) {
     sim::RenderedSourceConfig config;
     config.lens = lens;
     config.spectrum = out.spectrum;
-    config.lighting = lighting;
+    config.lighting = *lighting;
     out.source.emplace(&world, trajectory, config);
     out.camera.emplace(out.source->camera_config(), &*out.source, &clock);
     if (Status s = out.camera->Open(); !s.ok())
@@ -346,7 +349,7 @@ int RunSimulate(std::span<char* const> args) {
       return Fail(s);
     if (Status s = WriteCameraFile(out.dir, o, out.source->renderer().lens()); !s.ok())
       return Fail(s);
-    if (Status s = WriteSimulationToml(out.dir, o, out.spectrum, lighting, motion); !s.ok())
+    if (Status s = WriteSimulationToml(out.dir, o, out.spectrum, *lighting, motion); !s.ok())
       return Fail(s);
   }
 
