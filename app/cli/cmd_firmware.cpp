@@ -164,6 +164,20 @@ int ParseModeArgs(const char* name, const char* usage, std::span<char* const> ar
   return -1;
 }
 
+// The configuration --config names (the built-in defaults without it), then the run.
+int RunWithConfigFile(const SessionArgs& s) {
+  Config config = DefaultConfig();
+  if (!s.config_path.empty()) {
+    Result<Config> loaded = LoadConfigFile(s.config_path.c_str());
+    if (!loaded.ok()) {
+      std::fprintf(stderr, "%s: %s\n", s.label, loaded.status().message());
+      return kExitFailure;
+    }
+    config = *loaded;
+  }
+  return RunSession(config, s) == 0 ? kExitOk : kExitFailure;
+}
+
 }  // namespace
 
 int RunTeach(std::span<char* const> args) {
@@ -172,7 +186,7 @@ int RunTeach(std::span<char* const> args) {
   s.label = "skyloc teach";
   if (const int rc = ParseModeArgs("teach", kTeachUsage, args, &s, false); rc >= 0)
     return rc;
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 int RunRepeat(std::span<char* const> args) {
@@ -181,7 +195,7 @@ int RunRepeat(std::span<char* const> args) {
   s.label = "skyloc repeat";
   if (const int rc = ParseModeArgs("repeat", kRepeatUsage, args, &s, false); rc >= 0)
     return rc;
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 int RunRecord(std::span<char* const> args) {
@@ -190,7 +204,7 @@ int RunRecord(std::span<char* const> args) {
   s.label = "skyloc record";
   if (const int rc = ParseModeArgs("record", kRecordUsage, args, &s, false); rc >= 0)
     return rc;
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 int RunReplay(std::span<char* const> args) {
@@ -199,7 +213,7 @@ int RunReplay(std::span<char* const> args) {
   s.label = "skyloc replay";
   if (const int rc = ParseModeArgs("replay", kReplayUsage, args, &s, true); rc >= 0)
     return rc;
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 int RunRoute(std::span<char* const> args) {
