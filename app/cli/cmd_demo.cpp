@@ -4,6 +4,7 @@
 // the same session code as `skyloc teach` and `skyloc repeat`.
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -105,11 +106,18 @@ int RunDemo(std::span<char* const> args) {
     return kExitUsage;
   }
 
-  // The route database goes into a folder of its own in the working directory for the
-  // run, and is removed at the end.
-  char dir[] = "skyloc_demo_XXXXXX";
-  if (::mkdtemp(dir) == nullptr) {
-    std::perror("skyloc demo: cannot create a folder for the route in the working directory");
+  // The configuration is built in memory; the taught route is a real route database (teach
+  // and repeat run exactly as on the robot), in a folder of its own under $TMPDIR (or
+  // /tmp), removed at the end.
+  const char* tmp = std::getenv("TMPDIR");
+  std::string dir =
+      std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/skyloc_demo_XXXXXX";
+  if (::mkdtemp(dir.data()) == nullptr) {
+    const int saved = errno;
+    std::fprintf(stderr,
+                 "skyloc demo: cannot create a folder for the route (%s): %s; set TMPDIR to a "
+                 "writable folder\n",
+                 dir.c_str(), std::strerror(saved));
     return kExitFailure;
   }
   const std::string route_path = std::string(dir) + "/route.db";
@@ -175,7 +183,7 @@ int RunDemo(std::span<char* const> args) {
     std::printf("   the per-stage latency tables are above (stderr)\n");
   }
   std::remove(route_path.c_str());
-  ::rmdir(dir);
+  ::rmdir(dir.c_str());
   return rc == 0 ? kExitOk : kExitFailure;
 }
 

@@ -1,12 +1,13 @@
-// `skyloc demo --quick` runs on a configuration built in memory: it creates nothing in
-// /tmp while it runs (watched with inotify, so a file made and removed again is seen too),
-// and the folder it keeps its route in, in the working directory, is gone at the end.
+// `skyloc demo --quick` runs on a configuration built in memory: the only thing it creates
+// is the folder of its route database under $TMPDIR (watched with inotify, so a file made
+// and removed again is seen too), gone at the end.
 #include <gtest/gtest.h>
 #include <sys/inotify.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <climits>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -57,14 +58,21 @@ class CreationWatch {
   int watch_ = -1;
 };
 
-TEST(Demo, QuickRunLeavesNothingInTmpOrTheWorkingDirectory) {
+// The demo writes no configuration file: its route database is the only file it makes, in
+// a folder of its own under $TMPDIR, and nothing is left there or in the working directory.
+TEST(Demo, QuickRunWritesOnlyItsRouteAndLeavesNothing) {
   const skyloc::testing::ScratchDir work("skyloc_cli_demo_");
+  const skyloc::testing::ScratchDir tmp("skyloc_cli_demo_tmp_");
   ASSERT_FALSE(work.path().empty());
+  ASSERT_FALSE(tmp.path().empty());
   const std::filesystem::path before = std::filesystem::current_path();
   std::filesystem::current_path(work.path());
+  const char* old_tmpdir = std::getenv("TMPDIR");
+  const std::string saved_tmpdir = old_tmpdir != nullptr ? old_tmpdir : "";
+  ::setenv("TMPDIR", tmp.path().c_str(), 1);
 
-  CreationWatch tmp("/tmp");
-  ASSERT_TRUE(tmp.ok()) << std::strerror(errno);
+  CreationWatch watch(tmp.path().c_str());
+  ASSERT_TRUE(watch.ok()) << std::strerror(errno);
   char quick[] = "--quick";
   char* args[] = {quick};
   ::testing::internal::CaptureStdout();
@@ -72,16 +80,20 @@ TEST(Demo, QuickRunLeavesNothingInTmpOrTheWorkingDirectory) {
   const int rc = RunDemo(args);
   const std::string out = ::testing::internal::GetCapturedStdout();
   const std::string err = ::testing::internal::GetCapturedStderr();
-  std::vector<std::string> created = tmp.Created();
+  const std::vector<std::string> created = watch.Created();
   std::filesystem::current_path(before);
+  if (old_tmpdir != nullptr)
+    ::setenv("TMPDIR", saved_tmpdir.c_str(), 1);
+  else
+    ::unsetenv("TMPDIR");
 
   ASSERT_EQ(rc, kExitOk) << out << err;
   EXPECT_NE(out.find("3. result:"), std::string::npos) << out;
-  // Other processes may use /tmp meanwhile; the demo's names start with "skyloc_demo".
-  for (const std::string& name : created)
-    EXPECT_NE(name.rfind("skyloc_demo", 0), 0u) << "the demo created /tmp/" << name;
-  EXPECT_EQ(out.find("/tmp"), std::string::npos) << out;
-  EXPECT_EQ(err.find("/tmp"), std::string::npos) << err;
+  ASSERT_EQ(created.size(), 1u) << "the demo made more than its route's folder";
+  EXPECT_EQ(created[0].rfind("skyloc_demo_", 0), 0u) << created[0];
+  EXPECT_EQ(err.find(".toml"), std::string::npos) << err;  // no configuration file
+  EXPECT_NE(err.find(tmp.path() + "/" + created[0] + "/route.db"), std::string::npos) << err;
+  EXPECT_TRUE(std::filesystem::is_empty(tmp.path())) << tmp.path();
   EXPECT_TRUE(std::filesystem::is_empty(work.path())) << work.path();
 }
 
