@@ -4,6 +4,7 @@
 // the same session code as `skyloc teach` and `skyloc repeat`.
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -58,6 +59,28 @@ class ProgressLine final : public FrameSink {
   std::uint64_t frames_ = 0;
 };
 
+// The demo's configuration: the built-in defaults with a simulated camera at a fixed
+// frame rate on a robot that starts standing, cruises at changing speeds and stops on the
+// way (docs/SIMULATOR.md, "Motion"); --quick: small frames, fewer bands, a shorter run.
+Config DemoConfig(const char* world, bool quick) {
+  Config c = DefaultConfig();
+  c.camera.kind = CameraKind::kSim;
+  c.camera.sim.world = world;
+  c.camera.width = quick ? 96 : 320;
+  c.camera.height = quick ? 96 : 240;
+  c.camera.fps = 10;
+  c.camera.sim.sampling = SimSampling::kTime;
+  c.camera.sim.speed_mps = quick ? 3.0 : 2.0;
+  c.camera.sim.start_stop_s = 2;
+  c.camera.sim.stops = quick ? 1 : 2;
+  c.camera.sim.stop_min_s = 2;
+  c.camera.sim.stop_max_s = 3;
+  c.descriptor.bands = quick ? 24 : 64;
+  ResolveDescriptorGrid(&c.descriptor);  // the grid follows the bands
+  c.source = "the demo's own settings";
+  return c;
+}
+
 }  // namespace
 
 int RunDemo(std::span<char* const> args) {
@@ -71,30 +94,22 @@ int RunDemo(std::span<char* const> args) {
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);
 
-  char dir[] = "/tmp/skyloc_demo_XXXXXX";
-  if (::mkdtemp(dir) == nullptr) {
-    std::perror("skyloc demo: cannot create a directory in /tmp");
+  // The configuration is built in memory; the taught route is a real route database (teach
+  // and repeat run exactly as on the robot), in a folder of its own under $TMPDIR (or
+  // /tmp), removed at the end.
+  const char* tmp = std::getenv("TMPDIR");
+  std::string dir =
+      std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/skyloc_demo_XXXXXX";
+  if (::mkdtemp(dir.data()) == nullptr) {
+    const int saved = errno;
+    std::fprintf(stderr,
+                 "skyloc demo: cannot create a folder for the route (%s): %s; set TMPDIR to a "
+                 "writable folder\n",
+                 dir.c_str(), std::strerror(saved));
     return kExitFailure;
   }
-  const std::string config_path = std::string(dir) + "/skyloc.toml";
   const std::string route_path = std::string(dir) + "/route.db";
-  // The demo's configuration, written out so the run is what `skyloc teach --config`
-  // would do with it.
-  if (std::FILE* f = std::fopen(config_path.c_str(), "w")) {
-    std::fprintf(f, "[camera]\nkind = \"sim\"\nsim_world = \"%s\"\nwidth = %d\nheight = %d\n",
-                 world.c_str(), quick ? 96 : 320, quick ? 96 : 240);
-    // A camera at a fixed frame rate on a robot that starts standing, cruises at changing
-    // speeds and stops on the way (docs/SIMULATOR.md, "Motion").
-    std::fprintf(f,
-                 "fps = 10\nsim_sampling = \"time\"\nsim_speed_mps = %.1f\nsim_start_stop_s = 2\n"
-                 "sim_stops = %d\nsim_stop_min_s = 2\nsim_stop_max_s = 3\n",
-                 quick ? 3.0 : 2.0, quick ? 1 : 2);
-    std::fprintf(f, "[descriptor]\nbands = %d\n", quick ? 24 : 64);
-    std::fclose(f);
-  } else {
-    std::perror("skyloc demo: cannot write the configuration");
-    return kExitFailure;
-  }
+  const Config config = DemoConfig(world.c_str(), quick);
 
   std::printf("skyloc demo: %s world, upward 185-degree fisheye, %s frames\n", world.c_str(),
               quick ? "96x96" : "320x240");
@@ -104,7 +119,6 @@ int RunDemo(std::span<char* const> args) {
   SessionArgs teach;
   teach.mode = LoopMode::kTeach;
   teach.route_path = route_path;
-  teach.config_path = config_path;
   teach.json = nullptr;
   teach.label = "teach";
   teach.simulation_expected = true;
@@ -112,7 +126,7 @@ int RunDemo(std::span<char* const> args) {
   ProgressLine teach_progress("teach");
   teach.extra_sink = &teach_progress;
   SessionReport taught;
-  const int teach_rc = RunSession(teach, &taught);
+  const int teach_rc = RunSession(config, teach, &taught);
   teach_progress.Finish();
 
   int rc = teach_rc;
@@ -124,7 +138,6 @@ int RunDemo(std::span<char* const> args) {
     SessionArgs repeat;
     repeat.mode = LoopMode::kRepeat;
     repeat.route_path = route_path;
-    repeat.config_path = config_path;
     repeat.json = nullptr;
     repeat.label = "repeat";
     repeat.simulation_expected = true;
@@ -138,7 +151,7 @@ int RunDemo(std::span<char* const> args) {
     repeat.tolerance_m = 2.0;
     ProgressLine repeat_progress("repeat");
     repeat.extra_sink = &repeat_progress;
-    rc = RunSession(repeat, &repeated);
+    rc = RunSession(config, repeat, &repeated);
     repeat_progress.Finish();
   }
   if (rc == 0) {
@@ -155,12 +168,10 @@ int RunDemo(std::span<char* const> args) {
                   static_cast<unsigned long long>(repeated.loop.frames),
                   static_cast<unsigned long long>(repeated.localised_correct));
     }
-    std::printf("   the per-stage latency tables are above (stderr); files in %s are removed\n",
-                dir);
+    std::printf("   the per-stage latency tables are above (stderr)\n");
   }
   std::remove(route_path.c_str());
-  std::remove(config_path.c_str());
-  ::rmdir(dir);
+  ::rmdir(dir.c_str());
   return rc == 0 ? kExitOk : kExitFailure;
 }
 

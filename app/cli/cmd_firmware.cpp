@@ -38,13 +38,27 @@ constexpr const char* kRouteDescription =
     "refuses a file a running teach is writing. --salvage: also for damage in the middle:\n"
     "keeps the intact chunks before it (the original is kept as FILE.db.damaged).\n";
 
+// The configuration --config names (the built-in defaults without it), then the run.
+int RunWithConfigFile(const SessionArgs& s) {
+  Config config = DefaultConfig();
+  if (!s.config_path.empty()) {
+    Result<Config> loaded = LoadConfigFile(s.config_path.c_str());
+    if (!loaded.ok()) {
+      std::fprintf(stderr, "%s: %s\n", s.label, loaded.status().message());
+      return kExitFailure;
+    }
+    config = *loaded;
+  }
+  return RunSession(config, s) == 0 ? kExitOk : kExitFailure;
+}
+
 // teach and repeat: parses with `t` (its options bound to `s`) and runs the session.
 int ParseAndRun(OptionTable& t, std::span<char* const> args, const SessionArgs& s) {
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);
   if (s.route_path.empty())
     return t.Refuse("--route FILE.db is required");
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 void AddCommonOptions(OptionTable& t, SessionArgs* s) {
@@ -94,7 +108,7 @@ int RunRecord(std::span<char* const> args) {
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);
   s.record_dir = dir.front();
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 int RunReplay(std::span<char* const> args) {
@@ -115,7 +129,7 @@ int RunReplay(std::span<char* const> args) {
   if (s.route_path.empty())
     return t.Refuse("--route FILE.db is required");
   s.dataset = dataset.front();
-  return RunSession(s) == 0 ? kExitOk : kExitFailure;
+  return RunWithConfigFile(s);
 }
 
 int RunRoute(std::span<char* const> args) {

@@ -40,9 +40,10 @@ inline bool IsHelpFlag(const char* arg) {
   return std::strcmp(arg, "--help") == 0 || std::strcmp(arg, "-h") == 0;
 }
 
-// The one way a command reports a bad command line, on stderr: "skyloc COMMAND: WHAT" with
-// WHAT's first %s replaced by `value`, then where the options are described. Returns
-// kExitUsage.
+// A bad command line found after the option table (cli/options.h) has parsed it, e.g. a
+// value that must match another: "skyloc COMMAND: WHAT" on stderr with WHAT's first %s
+// replaced by `value`, then where the options are described. Returns kExitUsage. The
+// option table itself reports the options it checks (name, range, choices).
 int UsageError(const char* command, std::string_view what, std::string_view value = {});
 
 // A finite number at the start of `text`; with `end_out` the rest is left to the caller

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <vector>
 
+#include "skyloc/drivers/status_pattern.h"
 #include "skyloc/drivers/toml_keys.h"
 #include "skyloc/drivers/toml_text.h"
 #include "skyloc/dsp/sh_grid.h"
@@ -46,8 +47,11 @@ constexpr EnumName<dsp::AmplitudeNormalisation> kNormalisations[] = {
 constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
                                                              {"sim", StatusOutputKind::kSim},
                                                              {"gpio", StatusOutputKind::kGpio}};
-constexpr EnumName<StatusEncoding> kStatusEncodings[] = {{"per-state", StatusEncoding::kPerState},
-                                                         {"blink", StatusEncoding::kBlink}};
+constexpr EnumName<drivers::StatusLineMode> kStatusLineModes[] = {
+    {drivers::StatusLineModeName(drivers::StatusLineMode::kLinePerState),
+     drivers::StatusLineMode::kLinePerState},
+    {drivers::StatusLineModeName(drivers::StatusLineMode::kBlink),
+     drivers::StatusLineMode::kBlink}};
 constexpr EnumName<Matcher> kMatchers[] = {{"filter", Matcher::kRouteFilter},
                                            {"openseqslam", Matcher::kOpenSeqSlam}};
 constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNone},
@@ -142,9 +146,6 @@ void ResolveDescriptorGrid(DescriptorConfig* d) {
 const char* CameraKindName(CameraKind kind) {
   return NameOf(kCameraKinds, kind);
 }
-const char* SegmentationMethodName(SegmentationMethod method) {
-  return NameOf(kSegmentationMethods, method);
-}
 const char* GridPresetName(GridPreset preset) {
   return NameOf(kGridPresets, preset);
 }
@@ -153,9 +154,6 @@ bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* o
 }
 const char* StatusOutputKindName(StatusOutputKind kind) {
   return NameOf(kStatusOutputKinds, kind);
-}
-const char* StatusEncodingName(StatusEncoding encoding) {
-  return NameOf(kStatusEncodings, encoding);
 }
 const char* AttitudeKindName(AttitudeKind kind) {
   return NameOf(kAttitudeKinds, kind);
@@ -309,12 +307,12 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Int("line_lost", &c.status.line_lost, 0, 511);
     r.Int("line_searching", &c.status.line_searching, 0, 511);
     r.Int("line_localised", &c.status.line_localised, 0, 511);
-    r.Enum("encoding", &c.status.encoding, kStatusEncodings);
+    r.Enum("encoding", &c.status.encoding, kStatusLineModes);
     r.Bool("active_low", &c.status.active_low);
     r.Int("button_line", &c.status.button_line, -1, 511);
     r.Bool("button_active_low", &c.status.button_active_low);
     r.Int("button_debounce_ms", &c.status.button_debounce_ms, 0, 1000);
-    if (r.ok() && c.status.encoding == StatusEncoding::kPerState) {
+    if (r.ok() && c.status.encoding == drivers::StatusLineMode::kLinePerState) {
       if (c.status.line_localised == c.status.line_lost ||
           c.status.line_localised == c.status.line_searching)
         r.Invalid("line_localised", "must differ from line_lost and line_searching");
@@ -323,7 +321,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     }
     // The button is an input: it cannot share a pin with a lit indicator.
     const StatusConfig& st = c.status;
-    const bool per_state = st.encoding == StatusEncoding::kPerState;
+    const bool per_state = st.encoding == drivers::StatusLineMode::kLinePerState;
     if (r.ok() && st.button_line >= 0 &&
         (st.button_line == st.line_localised ||
          (per_state && (st.button_line == st.line_lost || st.button_line == st.line_searching))))

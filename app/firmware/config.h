@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 
+#include "skyloc/drivers/status_pattern.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/localisation_state.h"
@@ -22,17 +23,14 @@ enum class CameraKind : std::uint8_t { kSim, kV4l2, kLibcamera, kDataset };
 enum class SegmentationMethod : std::uint8_t { kOtsu, kFixed };
 enum class GridPreset : std::uint8_t { kOversampled, kAuto, kPaper, kCustom };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
-enum class StatusEncoding : std::uint8_t { kPerState, kBlink };
 enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 
 const char* CameraKindName(CameraKind kind);
-const char* SegmentationMethodName(SegmentationMethod method);
 const char* GridPresetName(GridPreset preset);
 // dsp::AmplitudeNormalisationName gives the name of a normalisation.
 // "none", "divide_by_a0" or "unit_l2" (the config's names); false for anything else.
 bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out);
 const char* StatusOutputKindName(StatusOutputKind kind);
-const char* StatusEncodingName(StatusEncoding encoding);
 const char* AttitudeKindName(AttitudeKind kind);
 
 // How a simulated run samples its route: a frame every spacing_m metres on average, or a
@@ -152,7 +150,7 @@ struct StatusConfig {
   int line_lost = 17;
   int line_searching = 27;
   int line_localised = 22;
-  StatusEncoding encoding = StatusEncoding::kPerState;
+  drivers::StatusLineMode encoding = drivers::StatusLineMode::kLinePerState;
   bool active_low = false;  // every output line: an indicator lit by driving its pin low
   // The teach button's input line; -1: no button. A button to ground with a pull-up reads
   // low when pressed, the usual wiring, hence active-low by default.
@@ -228,7 +226,9 @@ struct HeadingConfig {
 };
 
 struct Config {
-  std::string source;  // the file it was read from; empty: the built-in defaults
+  // The file it was read from, or what built it in memory (the demo); empty: the built-in
+  // defaults.
+  std::string source;
   CameraConfig camera;
   SegmentationConfig segmentation;
   DescriptorConfig descriptor;

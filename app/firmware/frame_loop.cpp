@@ -1,7 +1,6 @@
 #include "firmware/frame_loop.h"
 
 #include <cstdio>
-#include <cstring>
 #include <thread>
 
 #include "skyloc/platform/signals.h"
@@ -225,11 +224,9 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
           continue;
         }
       }
-      Status fatal = captured.status();
-      // The drivers name their camera in their errors; name it here only if one did not.
-      if (std::strstr(fatal.message(), camera.info().name) != nullptr)
-        return fatal;
-      return fatal.AddContext("camera %s", camera.info().name);
+      // Every Capture() error names its camera (drivers/camera.h, checked by the camera
+      // compliance test), so the message already says which device failed.
+      return captured.status();
     }
     errors_in_a_row = 0;
     unavailable_since = Nanoseconds{-1};

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
 
 namespace skyloc::firmware {
@@ -177,13 +178,11 @@ Status Pipeline::Init(const Config& config) {
                                   config.capacities.route_frames, storage);
   }
   if (matcher_error != dsp::SeqSlamError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[seqslam]: %s",
-                         dsp::SeqSlamErrorMessage(matcher_error));
+    return DspStatus(matcher_error, "[seqslam]");
 
   const dsp::StateMachineParams sm = StateMachineParamsFrom(config);
   if (const dsp::StateMachineError e = state_.Init(sm); e != dsp::StateMachineError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[state]: %s",
-                         dsp::StateMachineErrorMessage(e));
+    return DspStatus(e, "[state]");
 
   route_settings_ = {};
   route_settings_.descriptor_kind = kDescriptorSkyShAmplitudes;
@@ -229,8 +228,7 @@ Status Pipeline::InitHeading(const HeadingConfig& config) {
   const dsp::HorizonStripOptions& strip = config.strip;
   if (const dsp::HorizonStripError e = horizon_.Init(lens_, strip);
       e != dsp::HorizonStripError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
-                         dsp::HorizonStripErrorMessage(e));
+    return DspStatus(e, "[heading]");
   // The band as the route records it: hundredths of a degree, so a value written to the
   // config file and read back compares equal.
   route_settings_.strip.columns = static_cast<std::uint32_t>(strip.n_azimuth);
@@ -241,8 +239,7 @@ Status Pipeline::InitHeading(const HeadingConfig& config) {
       static_cast<std::int32_t>(std::lround(strip.elevation_max_deg * 100));
   if (const dsp::HeadingError e = heading_.Init(strip.n_azimuth, config.estimate);
       e != dsp::HeadingError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[heading]: %s",
-                         dsp::HeadingErrorMessage(e));
+    return DspStatus(e, "[heading]");
   return Status::Ok();
 }
 
@@ -266,8 +263,7 @@ Status Pipeline::AddFrame(std::span<const float> descriptor, std::span<const std
                                       ? filter_.AddReference(descriptor)
                                       : seqslam_.AddReference(descriptor);
       e != dsp::SeqSlamError::kOk)
-    return Status::Error(StatusCode::kResourceExhausted, "route frame %zu: %s", route_frames_added_,
-                         dsp::SeqSlamErrorMessage(e));
+    return DspStatus(e, "route frame %zu", route_frames_added_);
   // Strips of another length cannot be compared (the route loader refuses them; this
   // guards a route built in memory): a route with any frame without one has no heading.
   const std::size_t columns = strip_.size();
@@ -299,8 +295,7 @@ Status Pipeline::SetRoute(const RouteFrames& route) {
   }
   if (matcher_ == Matcher::kRouteFilter) {
     if (const dsp::SeqSlamError e = filter_.FinishRoute(); e != dsp::SeqSlamError::kOk)
-      return Status::Error(StatusCode::kFailedPrecondition, "route: %s",
-                           dsp::SeqSlamErrorMessage(e));
+      return DspStatus(e, "route");
   }
   route_strip_frames_ = route.has_strips() && route_strips_complete_ ? route_frames_added_ : 0;
   ResetTracking();
@@ -325,9 +320,8 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
   if (const dsp::DescriptorError e =
           descriptor_.Compute(image, amplitudes_.span(), &segmentation, attitude);
       !e.ok()) {
-    return Status::Error(StatusCode::kDataLoss, "frame %llu (%dx%d %s): %s",
-                         static_cast<unsigned long long>(result->frame), image.width, image.height,
-                         dsp::PixelFormatName(image.format), e.message);
+    return DspStatus(e, "frame %llu (%dx%d %s)", static_cast<unsigned long long>(result->frame),
+                     image.width, image.height, dsp::PixelFormatName(image.format));
   }
   result->threshold = segmentation.threshold;
   result->sky_fraction = static_cast<float>(segmentation.sky_fraction);
@@ -336,9 +330,8 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
     // one side and down on the other (docs/RESULTS.md, "Heading").
     if (const dsp::HorizonStripError e = horizon_.Extract(image, strip_.span());
         e != dsp::HorizonStripError::kOk)
-      return Status::Error(StatusCode::kDataLoss, "frame %llu: horizon strip: %s",
-                           static_cast<unsigned long long>(result->frame),
-                           dsp::HorizonStripErrorMessage(e));
+      return DspStatus(e, "frame %llu: horizon strip",
+                       static_cast<unsigned long long>(result->frame));
     for (std::size_t j = 0; j < strip_.size(); ++j)
       strip_bytes_[j] = static_cast<std::uint8_t>(std::lround(std::clamp(strip_[j], 0.0f, 255.0f)));
   }
@@ -380,8 +373,7 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
                                         ? filter_.Step(amplitudes_.span(), &match)
                                         : seqslam_.Step(amplitudes_.span(), &match);
         e != dsp::SeqSlamError::kOk)
-      return Status::Error(StatusCode::kFailedPrecondition, "seqslam: %s",
-                           dsp::SeqSlamErrorMessage(e));
+      return DspStatus(e, "seqslam");
   }
   result->matched = match.valid;
   result->best_index = match.valid ? match.reference : -1;

@@ -844,7 +844,7 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
                            path, FileKind(existing.st_mode));
     }
     if (!overwrite) {
-      return Status::Error(StatusCode::kFailedPrecondition,
+      return Status::Error(StatusCode::kAlreadyExists,
                            "%s already exists: not replacing a taught route", path);
     }
     replacing = true;

@@ -125,7 +125,7 @@ constexpr std::size_t RouteDbRecordBytes(std::size_t dim, std::size_t strip_colu
 // Where a route's descriptors and strips go when RouteFrames does not keep them: the
 // firmware's pipeline (its matcher and its heading), so the route is in memory once, the
 // descriptors at the matcher's configured storage type (float32 or bfloat16), not also
-// as floats here (issue 18). RouteFrames then keeps only each frame's time and pose.
+// as floats here. RouteFrames then keeps only each frame's time and pose.
 class RouteSink {
  public:
   virtual void BeginRoute() = 0;  // a route starts: forget the frames added before

@@ -26,6 +26,7 @@
 #include "skyloc/drivers/gpio_status_output.h"
 #endif
 #include "firmware/button_teach.h"
+#include "firmware/session_lines.h"
 #include "firmware/sim_run.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/platform/realtime.h"
@@ -285,11 +286,6 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
                        CameraKindName(config.camera.kind));
 }
 
-drivers::StatusLineMode LineMode(const Config& config) {
-  return config.status.encoding == StatusEncoding::kBlink ? drivers::StatusLineMode::kBlink
-                                                          : drivers::StatusLineMode::kLinePerState;
-}
-
 Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config,
                                                                 const Clock* clock) {
   switch (config.status.kind) {
@@ -297,7 +293,7 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
       return std::unique_ptr<drivers::StatusOutput>();
     case StatusOutputKind::kSim: {
       drivers::SimulatedStatusOutputConfig c;
-      c.mode = LineMode(config);
+      c.mode = config.status.encoding;
       c.has_button = config.status.button_line >= 0;
       return std::unique_ptr<drivers::StatusOutput>(
           std::make_unique<drivers::SimulatedStatusOutput>(c, clock));
@@ -306,7 +302,7 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
 #if SKYLOC_WITH_GPIOD
       drivers::GpioStatusOutputConfig c;
       std::snprintf(c.chip, sizeof c.chip, "%s", config.status.chip.c_str());
-      c.mode = LineMode(config);
+      c.mode = config.status.encoding;
       c.active_low = config.status.active_low;
       c.button_line = config.status.button_line;
       c.button_active_low = config.status.button_active_low;
@@ -329,429 +325,324 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
                        "(libgpiod-dev was missing at build time); use \"sim\" or \"none\"");
 }
 
-// The one start-up line: what the run reads, shows and writes, so a simulated or wrong
-// device cannot go unnoticed; then a loud warning for a live mode on a simulation.
-void PrintStartup(const SessionArgs& args, const Config& config, const drivers::CameraInfo& info,
-                  const RouteDbWriter& writer, std::size_t loaded_frames) {
-  const CameraConfig& cam = config.camera;
-  const bool dataset = !args.dataset.empty() || cam.kind == CameraKind::kDataset;
-  char camera[400];
-  const char* format = dsp::PixelFormatName(info.format);
-  if (dataset) {
-    std::snprintf(camera, sizeof camera, "camera dataset %s (recorded), %s %dx%d",
-                  args.dataset.empty() ? cam.dataset.c_str() : args.dataset.c_str(), format,
-                  info.width, info.height);
-  } else if (cam.kind == CameraKind::kSim) {
-    std::snprintf(camera, sizeof camera,
-                  "camera sim (SIMULATED world \"%s\", seed %llu), %s %dx%d @ %g fps",
-                  cam.sim.world.c_str(), static_cast<unsigned long long>(cam.sim.seed), format,
-                  info.width, info.height, cam.fps);
-  } else {
-    std::snprintf(
-        camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", CameraKindName(cam.kind),
-        cam.kind == CameraKind::kLibcamera && cam.device == "/dev/video0" ? "(the first camera)"
-                                                                          : cam.device.c_str(),
-        format, info.width, info.height, cam.fps);
-  }
-  char status[200];
-  switch (config.status.kind) {
-    case StatusOutputKind::kGpio:
-      if (config.status.encoding == StatusEncoding::kBlink)
-        std::snprintf(status, sizeof status, "status gpio %s line %d (blink)",
-                      config.status.chip.c_str(), config.status.line_localised);
-      else
-        std::snprintf(status, sizeof status, "status gpio %s lines %d/%d/%d (per-state)",
-                      config.status.chip.c_str(), config.status.line_lost,
-                      config.status.line_searching, config.status.line_localised);
-      break;
-    case StatusOutputKind::kSim:
-      std::snprintf(status, sizeof status, "status sim (SIMULATED, no GPIO line)");
-      break;
-    case StatusOutputKind::kNone:
-      std::snprintf(status, sizeof status, "status none");
-      break;
-  }
-  if (config.status.button_line >= 0 && config.status.kind != StatusOutputKind::kNone) {
-    const std::size_t used = std::strlen(status);
-    std::snprintf(status + used, sizeof status - used, ", teach button line %d%s",
-                  config.status.button_line,
-                  config.status.button_active_low ? " (active-low)" : "");
-  }
-  char route[80];
-  if (args.mode == LoopMode::kRepeat && loaded_frames == 0)
-    std::snprintf(route, sizeof route, "none yet: the teach button teaches it");
-  else if (args.mode == LoopMode::kTeach)
-    std::snprintf(route, sizeof route, "%s", writer.replacing() ? "replacing it at commit" : "new");
-  else
-    std::snprintf(route, sizeof route, "%zu frames", loaded_frames);
-  if (args.mode == LoopMode::kRecord) {
-    std::fprintf(stderr, "%s: %s; %s; recording into %s; config %s\n", args.label, camera, status,
-                 args.record_dir.c_str(),
-                 config.source.empty() ? "built-in defaults" : config.source.c_str());
-  } else {
-    std::fprintf(stderr, "%s: %s; %s; route %s (%s); config %s\n", args.label, camera, status,
-                 args.route_path.c_str(), route,
-                 config.source.empty() ? "built-in defaults" : config.source.c_str());
-  }
+// Everything one run holds, from start-up to shut-down; each stage fills or uses its part.
+struct Session {
+  Session(const SessionArgs& a, const Config& c)
+      : args(a), config(c), label(a.label), json(a.json) {}
 
-  if (args.simulation_expected || dataset)
-    return;
-  const char* from = config.source.empty() ? "the built-in defaults" : config.source.c_str();
-  if (cam.kind == CameraKind::kSim) {
-    std::fprintf(stderr,
-                 "%s: WARNING: the camera is SIMULATED ([camera] kind = \"sim\" in %s): this %s "
-                 "uses a rendered world, not what the robot sees; set [camera] kind = \"v4l2\" "
-                 "or \"libcamera\"\n",
-                 args.label, from,
-                 args.mode == LoopMode::kTeach    ? "teach"
-                 : args.mode == LoopMode::kRecord ? "recording"
-                                                  : "repeat");
-  }
-  if (args.mode == LoopMode::kRepeat && config.status.kind == StatusOutputKind::kSim) {
-    std::fprintf(stderr,
-                 "%s: WARNING: the status output is SIMULATED ([status] kind = \"sim\" in %s): "
-                 "no GPIO line will change; set [status] kind = \"gpio\"\n",
-                 args.label, from);
-  }
-}
-
-void PrintWarning(const char* label, const Status& s) {
-  if (!s.ok())
-    std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
-}
-
-// Everything after the configuration is read. Errors return; RunSession prints them.
-Status Run(const SessionArgs& args, Config config, SessionReport* report) {
-  const char* label = args.label;
-  SKYLOC_TRY(InstallSignalHandlers());
-
-  // The camera first: its real frame size is what the pipeline is built for.
+  const SessionArgs& args;
+  Config config;  // the camera's real size and a dataset's lens filled in at start-up
+  const char* label;
   CameraSource source;
-  SKYLOC_TRY(MakeCamera(config, args, &source));
-  drivers::Camera* camera = source.camera.get();
-  const drivers::CameraInfo& info = camera->info();
-  if (config.camera.kind == CameraKind::kSim || !args.dataset.empty() ||
-      config.camera.kind == CameraKind::kDataset) {
-    config.camera.width = info.width;  // a recorded or simulated source fixes the size
-    config.camera.height = info.height;
-    // A dataset recorded with its camera file: use that lens unless the config names one.
-    if (config.camera.lens_file.empty() && !source.camera_file.empty()) {
-      config.camera.lens_file = source.camera_file;
-      config.camera.lens_file_from_dataset = true;
-    }
-  } else if (info.width != config.camera.width || info.height != config.camera.height) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
-                         "height to what the camera supports",
-                         info.name, info.width, info.height, config.camera.width,
-                         config.camera.height);
-  }
-
+  drivers::Camera* camera = nullptr;
   // One clock for the run: the pipeline's stages, the frame loop (through the pipeline),
   // the simulated status output and its button's edges.
   MonotonicClock clock;
-  Pipeline pipeline(clock);
-  SKYLOC_TRY(pipeline.Init(config));
+  Pipeline pipeline{clock};
   AttitudeParts attitude;
-  SKYLOC_TRY(MakeAttitudeSource(config, source, &attitude));
-
-  RouteDbWriter writer;
-  RouteFrames route;
+  RouteFrames route;     // repeat: the loaded route's frames (time and pose)
+  RouteDbWriter writer;  // teach
   // repeat (live, not replay) with a teach button: a press teaches a new route
   // (button_teach.h), so a missing or empty route is something to wait for, not an error.
-  const bool teach_button = args.mode == LoopMode::kRepeat && args.dataset.empty() &&
-                            config.status.button_line >= 0 &&
-                            config.status.kind != StatusOutputKind::kNone;
-  if (args.mode == LoopMode::kRepeat) {
-    // The descriptors and strips go straight to the pipeline (held once, at the matcher's
-    // storage type); `route` keeps each frame's time and pose for the replay's truth.
-    SKYLOC_TRY(route.Allocate(static_cast<std::size_t>(config.capacities.route_frames),
-                              static_cast<std::size_t>(pipeline.dim()),
-                              pipeline.strip_settings().columns, pipeline.route_sink()));
-    RouteDbLoadReport loaded;
-    const RouteDbSettings want = pipeline.route_settings();
-    struct stat st {};
-    const bool missing = ::lstat(args.route_path.c_str(), &st) != 0 && errno == ENOENT;
-    if (!(teach_button && missing)) {
-      SKYLOC_TRY(
-          LoadRouteDb(args.route_path.c_str(), &want, RouteDbLoadPolicy::kStrict, &route, &loaded));
-    }
-    if (teach_button && route.size() == 0) {
-      std::fprintf(stderr,
-                   "%s: route %s %s: waiting for the teach button (line %d): press it to "
-                   "start teaching, press again to commit the route and repeat on it\n",
-                   label, args.route_path.c_str(), missing ? "does not exist yet" : "has no frames",
-                   config.status.button_line);
-    } else if (route.size() == 0) {
-      return Status::Error(StatusCode::kFailedPrecondition,
-                           "route %s has no frames: teach it "
-                           "again",
-                           args.route_path.c_str());
-    }
-    if (route.size() > 0)
-      SKYLOC_TRY(pipeline.SetRoute(route));
-    report->route_frames = route.size();
-    // One note, at start-up: a route without strips still localises, without heading.
-    if (pipeline.strip_settings().columns != 0 && !pipeline.heading_enabled()) {
-      if (loaded.version < 4)
-        std::fprintf(stderr,
-                     "%s: route %s has no horizon strips (format v%u): heading is off; "
-                     "re-teach to get heading\n",
-                     args.label, args.route_path.c_str(), loaded.version);
-      else
-        std::fprintf(stderr,
-                     "%s: route %s was taught with [heading] strip_columns = 0: heading is "
-                     "off; re-teach to get heading\n",
-                     args.label, args.route_path.c_str());
-    }
-  }
-
-  SKYLOC_TRY_ASSIGN(std::unique_ptr<drivers::StatusOutput> status,
-                    MakeStatusOutput(config, &clock));
-  if (status) {
-    if (Status open = status->Open(); !open.ok()) {
-      return open.AddContext("[status] kind = \"%s\", chip = \"%s\"",
-                             StatusOutputKindName(config.status.kind), config.status.chip.c_str());
-    }
-  }
-  // The route database is created last, so a start-up failure leaves no empty route
-  // behind (and an existing one untouched).
-  if (args.mode == LoopMode::kTeach) {
-    Status created =
-        writer.Create(args.route_path.c_str(), pipeline.route_settings(),
-                      static_cast<std::size_t>(config.route_db.flush_every), args.force);
-    if (!args.force && std::strstr(created.message(), "already exists") != nullptr)  // problem, fix
-      created = Status::Error(created.code(), "%s; pass --force to replace it", created.message());
-    SKYLOC_TRY(created);
-    if (writer.replacing()) {
-      std::fprintf(stderr,
-                   "%s: replacing route %s when this teach commits; until then the old route "
-                   "is kept and the frames go to %s\n",
-                   label, args.route_path.c_str(), writer.write_path());
-    }
-  }
-
-  PrintStartup(args, config, info, writer, route.size());
-
-  ResultRecorder recorder;
-  // A finite run (a dataset, a simulated trajectory, --frames) keeps every result for the
-  // evaluation at the end; it needs poses, which those sources have.
-  std::size_t run_frames = source.frames;
-  if (args.max_frames > 0 && (run_frames == 0 || args.max_frames < run_frames))
-    run_frames = static_cast<std::size_t>(args.max_frames);
-  // (Not with the teach button: the routes change under the results.)
-  const bool evaluate = args.mode == LoopMode::kRepeat && run_frames > 0 && !teach_button;
-  if (evaluate)
-    SKYLOC_TRY(recorder.Allocate(run_frames));
-  JsonLinesSink json(args.json);
-  TeeSink outer(args.json != nullptr ? &json : nullptr, args.extra_sink);
-  TeeSink sink(&outer, evaluate ? &recorder : nullptr);
-
-  // Real-time setup last: mlockall(MCL_FUTURE) then covers nothing new.
-  RealtimeOptions rt;
-  rt.sched_fifo_priority = config.realtime.sched_fifo_priority;
-  rt.lock_memory = config.realtime.mlockall;
-  rt.cpu = config.realtime.cpu_affinity;
-  const RealtimeReport rt_report = ApplyRealtime(rt);
-  PrintWarning(label, rt_report.scheduling);
-  PrintWarning(label, rt_report.memory_lock);
-  PrintWarning(label, rt_report.affinity);
-
-  // The recording: its folder is created last, after everything else could start.
-  FrameRecorder frame_recorder;
-  if (!args.record_dir.empty()) {
-    FrameRecorderOptions ro;
-    ro.dir = args.record_dir;
-    ro.with_attitude = attitude.source != nullptr && pipeline.uses_attitude();
-    Result<std::string> camera_toml =
-        drivers::CameraFileText(pipeline.lens(),
-                                "Written by skyloc when it recorded this run: the camera's lens "
-                                "(docs/CAMERA_FILE.md).");
-    if (camera_toml.ok())
-      ro.camera_toml = *camera_toml;
-    else
-      PrintWarning(label,
-                   Status(camera_toml.status()).AddContext("no camera.toml in %s", ro.dir.c_str()));
-    SKYLOC_TRY(frame_recorder.Open(ro, info).AddContext("--record %s", ro.dir.c_str()));
-    std::fprintf(stderr, "%s: recording every frame%s into %s\n", label,
-                 ro.with_attitude ? " and its roll/pitch" : "", ro.dir.c_str());
-  }
-
-  SKYLOC_TRY(camera->Start());
+  bool teach_button = false;
+  std::unique_ptr<drivers::StatusOutput> status;
+  ResultRecorder results;
+  bool evaluate = false;  // results are kept for the evaluation at the end
+  JsonLinesSink json;
+  std::unique_ptr<TeeSink> outer, sink;
+  FrameRecorder recorder;  // --record
   LoopOptions loop;
+  bool capped = false;  // teach stops at the route's capacity
+};
+
+// The camera first: its real frame size is what the pipeline is built for.
+Status OpenCamera(Session* s) {
+  SKYLOC_TRY(MakeCamera(s->config, s->args, &s->source));
+  s->camera = s->source.camera.get();
+  const drivers::CameraInfo& info = s->camera->info();
+  CameraConfig& cam = s->config.camera;
+  if (cam.kind == CameraKind::kSim || !s->args.dataset.empty() ||
+      cam.kind == CameraKind::kDataset) {
+    cam.width = info.width;  // a recorded or simulated source fixes the size
+    cam.height = info.height;
+    // A dataset recorded with its camera file: use that lens unless the config names one.
+    if (cam.lens_file.empty() && !s->source.camera_file.empty()) {
+      cam.lens_file = s->source.camera_file;
+      cam.lens_file_from_dataset = true;
+    }
+  } else if (info.width != cam.width || info.height != cam.height) {
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
+                         "height to what the camera supports",
+                         info.name, info.width, info.height, cam.width, cam.height);
+  }
+  return Status::Ok();
+}
+
+// repeat: the route database into the pipeline (the descriptors and strips, held once at
+// the matcher's storage type) and `route` (each frame's time and pose, for the truth).
+Status LoadRoute(Session* s) {
+  const SessionArgs& args = s->args;
+  Pipeline& pipeline = s->pipeline;
+  SKYLOC_TRY(s->route.Allocate(static_cast<std::size_t>(s->config.capacities.route_frames),
+                               static_cast<std::size_t>(pipeline.dim()),
+                               pipeline.strip_settings().columns, pipeline.route_sink()));
+  RouteDbLoadReport loaded;
+  const RouteDbSettings want = pipeline.route_settings();
+  struct stat st {};
+  const bool missing = ::lstat(args.route_path.c_str(), &st) != 0 && errno == ENOENT;
+  if (!(s->teach_button && missing)) {
+    SKYLOC_TRY(LoadRouteDb(args.route_path.c_str(), &want, RouteDbLoadPolicy::kStrict, &s->route,
+                           &loaded));
+  }
+  if (s->teach_button && s->route.size() == 0) {
+    std::fprintf(stderr,
+                 "%s: route %s %s: waiting for the teach button (line %d): press it to "
+                 "start teaching, press again to commit the route and repeat on it\n",
+                 s->label, args.route_path.c_str(),
+                 missing ? "does not exist yet" : "has no frames", s->config.status.button_line);
+  } else if (s->route.size() == 0) {
+    return Status::Error(StatusCode::kFailedPrecondition, "route %s has no frames: teach it again",
+                         args.route_path.c_str());
+  }
+  if (s->route.size() > 0)
+    SKYLOC_TRY(pipeline.SetRoute(s->route));
+  // One note, at start-up: a route without strips still localises, without heading.
+  if (pipeline.strip_settings().columns != 0 && !pipeline.heading_enabled()) {
+    if (loaded.version < 4)
+      std::fprintf(stderr,
+                   "%s: route %s has no horizon strips (format v%u): heading is off; "
+                   "re-teach to get heading\n",
+                   s->label, args.route_path.c_str(), loaded.version);
+    else
+      std::fprintf(stderr,
+                   "%s: route %s was taught with [heading] strip_columns = 0: heading is "
+                   "off; re-teach to get heading\n",
+                   s->label, args.route_path.c_str());
+  }
+  return Status::Ok();
+}
+
+Status OpenStatusOutput(Session* s) {
+  SKYLOC_TRY_ASSIGN(s->status, MakeStatusOutput(s->config, &s->clock));
+  if (s->status) {
+    if (Status open = s->status->Open(); !open.ok()) {
+      return open.AddContext("[status] kind = \"%s\", chip = \"%s\"",
+                             StatusOutputKindName(s->config.status.kind),
+                             s->config.status.chip.c_str());
+    }
+  }
+  return Status::Ok();
+}
+
+// teach: the route database is created after everything else started, so a start-up
+// failure leaves no empty route behind (and an existing one untouched).
+Status CreateRoute(Session* s) {
+  const SessionArgs& args = s->args;
+  Status created =
+      s->writer.Create(args.route_path.c_str(), s->pipeline.route_settings(),
+                       static_cast<std::size_t>(s->config.route_db.flush_every), args.force);
+  if (created.code() == StatusCode::kAlreadyExists)
+    return Status::Error(created.code(), "%s; pass --force to replace it", created.message());
+  SKYLOC_TRY(created);
+  if (s->writer.replacing()) {
+    std::fprintf(stderr,
+                 "%s: replacing route %s when this teach commits; until then the old route "
+                 "is kept and the frames go to %s\n",
+                 s->label, args.route_path.c_str(), s->writer.write_path());
+  }
+  return Status::Ok();
+}
+
+// --record: the recording's folder is created last, after everything else could start.
+Status OpenRecording(Session* s) {
+  FrameRecorderOptions ro;
+  ro.dir = s->args.record_dir;
+  ro.with_attitude = s->attitude.source != nullptr && s->pipeline.uses_attitude();
+  Result<std::string> camera_toml =
+      drivers::CameraFileText(s->pipeline.lens(),
+                              "Written by skyloc when it recorded this run: the camera's lens "
+                              "(docs/CAMERA_FILE.md).");
+  if (camera_toml.ok())
+    ro.camera_toml = *camera_toml;
+  else
+    PrintWarning(s->label,
+                 Status(camera_toml.status()).AddContext("no camera.toml in %s", ro.dir.c_str()));
+  SKYLOC_TRY(s->recorder.Open(ro, s->camera->info()).AddContext("--record %s", ro.dir.c_str()));
+  std::fprintf(stderr, "%s: recording every frame%s into %s\n", s->label,
+               ro.with_attitude ? " and its roll/pitch" : "", ro.dir.c_str());
+  return Status::Ok();
+}
+
+// Where the frames' results go: the JSON lines, the caller's sink and, for a finite run
+// (a dataset, a simulated trajectory, --frames) the evaluation at the end, which needs the
+// poses those sources have. Not with the teach button: the routes change under the results.
+Status ConnectSinks(Session* s) {
+  std::size_t run_frames = s->source.frames;
+  if (s->args.max_frames > 0 && (run_frames == 0 || s->args.max_frames < run_frames))
+    run_frames = static_cast<std::size_t>(s->args.max_frames);
+  s->evaluate = s->args.mode == LoopMode::kRepeat && run_frames > 0 && !s->teach_button;
+  if (s->evaluate)
+    SKYLOC_TRY(s->results.Allocate(run_frames));
+  s->outer =
+      std::make_unique<TeeSink>(s->args.json != nullptr ? &s->json : nullptr, s->args.extra_sink);
+  s->sink = std::make_unique<TeeSink>(s->outer.get(), s->evaluate ? &s->results : nullptr);
+  return Status::Ok();
+}
+
+// Real-time set-up last before the loop: mlockall(MCL_FUTURE) then covers nothing new.
+void ApplyRealtimeConfig(const Session& s) {
+  RealtimeOptions rt;
+  rt.sched_fifo_priority = s.config.realtime.sched_fifo_priority;
+  rt.lock_memory = s.config.realtime.mlockall;
+  rt.cpu = s.config.realtime.cpu_affinity;
+  const RealtimeReport report = ApplyRealtime(rt);
+  PrintWarning(s.label, report.scheduling);
+  PrintWarning(s.label, report.memory_lock);
+  PrintWarning(s.label, report.affinity);
+}
+
+// Start-up: camera, pipeline, attitude, route, status output, route writer, the start-up
+// line, the result sinks, real time, recording, the camera's stream; all at their
+// configured sizes. An error
+// returns at once: the parts opened so far close as the session goes.
+Status StartUp(Session* s, SessionReport* report) {
+  const SessionArgs& args = s->args;
+  SKYLOC_TRY(InstallSignalHandlers());
+  SKYLOC_TRY(OpenCamera(s));
+  SKYLOC_TRY(s->pipeline.Init(s->config));
+  SKYLOC_TRY(MakeAttitudeSource(s->config, s->source, &s->attitude));
+  s->teach_button = args.mode == LoopMode::kRepeat && args.dataset.empty() &&
+                    s->config.status.button_line >= 0 &&
+                    s->config.status.kind != StatusOutputKind::kNone;
+  if (args.mode == LoopMode::kRepeat) {
+    SKYLOC_TRY(LoadRoute(s));
+    report->route_frames = s->route.size();
+  }
+  SKYLOC_TRY(OpenStatusOutput(s));
+  if (args.mode == LoopMode::kTeach)
+    SKYLOC_TRY(CreateRoute(s));
+  PrintStartup(args, s->config, s->camera->info(), s->writer, s->route.size());
+  SKYLOC_TRY(ConnectSinks(s));
+  ApplyRealtimeConfig(*s);
+  if (!args.record_dir.empty())
+    SKYLOC_TRY(OpenRecording(s));
+  return s->camera->Start();
+}
+
+// The loop: frames until a signal, the end of the source, --frames or a full route; with
+// the teach button, repeat and teach by turns. Returns the loop's own error.
+Status RunLoop(Session* s, SessionReport* report) {
+  const SessionArgs& args = s->args;
+  LoopOptions& loop = s->loop;
   loop.mode = args.mode;
-  loop.recorder = frame_recorder.is_open() ? &frame_recorder : nullptr;
+  loop.recorder = s->recorder.is_open() ? &s->recorder : nullptr;
   loop.max_frames = args.max_frames;
   // Teach stops when the route is as long as repeat can load.
-  const auto route_capacity = static_cast<std::uint64_t>(config.capacities.route_frames);
-  const bool capped =
+  const auto route_capacity = static_cast<std::uint64_t>(s->config.capacities.route_frames);
+  s->capped =
       args.mode == LoopMode::kTeach && (loop.max_frames == 0 || loop.max_frames > route_capacity);
-  if (capped)
+  if (s->capped)
     loop.max_frames = route_capacity;
   loop.paced = args.paced;
-  loop.recorded = !args.dataset.empty() || config.camera.kind == CameraKind::kDataset;
-  loop.capture_timeout = std::chrono::milliseconds(config.camera.frame_timeout_ms);
-  loop.reconnect_timeout = std::chrono::milliseconds(config.camera.reconnect_timeout_ms);
-  Status loop_status;
-  if (teach_button) {
-    ButtonDebouncer button(std::chrono::milliseconds(config.status.button_debounce_ms));
-    ButtonTeachSetup setup;
-    setup.camera = camera;
-    setup.status = status.get();
-    setup.pipeline = &pipeline;
-    setup.route = &route;
-    setup.route_path = args.route_path.c_str();
-    setup.flush_every = static_cast<std::size_t>(config.route_db.flush_every);
-    setup.sink = &sink;
-    setup.attitude = attitude.source.get();
-    setup.label = label;
-    ButtonTeachReport taught;
-    loop_status = RunRepeatWithButton(setup, loop, &button, &taught);
-    report->loop = taught.loop;
-    report->route_frames = route.size();
-  } else {
-    loop_status = RunFrameLoop(*camera, status.get(), pipeline,
-                               args.mode == LoopMode::kTeach ? &writer : nullptr, &sink, loop,
-                               &report->loop, attitude.source.get());
+  loop.recorded = !args.dataset.empty() || s->config.camera.kind == CameraKind::kDataset;
+  loop.capture_timeout = std::chrono::milliseconds(s->config.camera.frame_timeout_ms);
+  loop.reconnect_timeout = std::chrono::milliseconds(s->config.camera.reconnect_timeout_ms);
+  if (!s->teach_button) {
+    return RunFrameLoop(*s->camera, s->status.get(), s->pipeline,
+                        args.mode == LoopMode::kTeach ? &s->writer : nullptr, s->sink.get(), loop,
+                        &report->loop, s->attitude.source.get());
   }
+  ButtonDebouncer button(std::chrono::milliseconds(s->config.status.button_debounce_ms));
+  ButtonTeachSetup setup;
+  setup.camera = s->camera;
+  setup.status = s->status.get();
+  setup.pipeline = &s->pipeline;
+  setup.route = &s->route;
+  setup.route_path = args.route_path.c_str();
+  setup.flush_every = static_cast<std::size_t>(s->config.route_db.flush_every);
+  setup.sink = s->sink.get();
+  setup.attitude = s->attitude.source.get();
+  setup.label = s->label;
+  ButtonTeachReport taught;
+  const Status looped = RunRepeatWithButton(setup, loop, &button, &taught);
+  report->loop = taught.loop;
+  report->route_frames = s->route.size();
+  return looped;
+}
 
-  if (capped && report->loop.frames == route_capacity) {
+// teach: commit what was taught, whatever happened in the loop. Returns the commit's
+// error, unless the loop's own (the failed write) already says it.
+Status CommitRoute(Session* s, const Status& loop_status, SessionReport* report) {
+  const auto route_capacity = static_cast<std::uint64_t>(s->config.capacities.route_frames);
+  if (s->capped && report->loop.frames == route_capacity) {
     std::fprintf(stderr,
                  "%s: the route is full ([capacities] route_frames = %llu): raise it to "
                  "teach a longer route\n",
-                 label, static_cast<unsigned long long>(route_capacity));
+                 s->label, static_cast<unsigned long long>(route_capacity));
   }
-  // Shutdown, whatever happened in the loop: keep what was taught, lines to safe state.
-  Status shutdown;
-  if (args.mode == LoopMode::kTeach && writer.is_open()) {
-    shutdown = writer.Commit();
-    report->route_frames = writer.frames_durable();
-    const auto kept = static_cast<unsigned long long>(writer.frames_durable());
-    if (shutdown.ok()) {
-      std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
-                   kept);
-    } else if (writer.committed()) {
-      // Disk full: what was on the disk is committed, the last chunk is not.
-      std::fprintf(stderr,
-                   "%s: route %s: %llu frames kept and committed; the last %llu did not fit: "
-                   "%s\n",
-                   label, args.route_path.c_str(), kept,
-                   static_cast<unsigned long long>(writer.frames_lost()), shutdown.message());
-    } else {
-      // The fix depends on why: a full disk needs space, anything else (EIO: a failing card
-      // or cable) needs the storage looked at first.
-      const int e = shutdown.sys_errno();
-      const bool full = e == ENOSPC || e == EFBIG || e == EDQUOT;
-      std::fprintf(stderr,
-                   "%s: route %s: %llu frames kept on the disk but NOT committed (%s): %s, "
-                   "then run 'skyloc route recover %s'\n",
-                   label, writer.write_path(), kept, shutdown.message(),
-                   full ? "free some space" : "check the storage (dmesg shows the device's errors)",
-                   writer.write_path());
-    }
-    // The loop's own error (the failed write) is printed at the end; this was said.
-    if (!shutdown.ok() && !loop_status.ok())
-      shutdown = Status::Ok();
+  if (s->args.mode != LoopMode::kTeach || !s->writer.is_open())
+    return Status::Ok();
+  const Status committed = s->writer.Commit();
+  report->route_frames = s->writer.frames_durable();
+  PrintCommit(s->args, s->writer, committed);
+  return loop_status.ok() ? committed : Status::Ok();
+}
+
+// Shut-down, whatever happened in the loop: the route committed, the recording closed,
+// the lines in their safe state, the devices closed, the counters and latency printed,
+// the evaluation. Returns the loop's error first, then the commit's.
+Status ShutDown(Session* s, const Status& loop_status, SessionReport* report) {
+  const Status committed = CommitRoute(s, loop_status, report);
+  if (s->recorder.is_open()) {
+    const Status closed = s->recorder.Close();
+    PrintRecording(s->label, s->recorder, closed);
   }
-  if (frame_recorder.is_open()) {
-    const Status closed = frame_recorder.Close();
-    const FrameRecorderCounters c = frame_recorder.counters();
-    std::fprintf(stderr,
-                 "%s: recording %s: %llu frames written, %llu dropped (the disk slower than the "
-                 "camera)%s%s\n",
-                 label, frame_recorder.dir().c_str(), static_cast<unsigned long long>(c.written),
-                 static_cast<unsigned long long>(c.dropped),
-                 closed.ok() ? "" : "; stopped: ", closed.ok() ? "" : closed.message());
-    if (c.without_attitude > 0)
-      std::fprintf(stderr, "%s: recording: %llu frames had no attitude (written as level)\n", label,
-                   static_cast<unsigned long long>(c.without_attitude));
+  if (s->status) {
+    PrintWarning(s->label, s->status->SafeState());
+    s->status->Close();
   }
-  if (status) {
-    PrintWarning(label, status->SafeState());
-    status->Close();
+  s->camera->Stop();
+  s->camera->Close();
+  if (s->attitude.source) {
+    PrintAttitude(s->label, *s->attitude.source);
+    s->attitude.source->Close();
   }
-  camera->Stop();
-  camera->Close();
-  if (attitude.source) {
-    const drivers::AttitudeCounters& c = attitude.source->counters();
-    std::fprintf(stderr,
-                 "%s: attitude %s: %llu frames with an attitude, %llu described as level "
-                 "(%llu none or stale, %llu source gone)\n",
-                 label, attitude.source->name(), static_cast<unsigned long long>(c.estimates),
-                 static_cast<unsigned long long>(c.missing + c.unavailable),
-                 static_cast<unsigned long long>(c.missing),
-                 static_cast<unsigned long long>(c.unavailable));
-    attitude.source->Close();
-  }
-  pipeline.latency().Print(stderr);
-  if (json.write_failed())
-    std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", label);
-  if (evaluate) {
+  s->pipeline.latency().Print(stderr);
+  if (s->json.write_failed())
+    std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", s->label);
+  if (s->evaluate) {
     // Sized from the run's length, so only a source that delivers more frames than it
     // announced fills it; the evaluation then covers the frames kept, and says so.
-    if (recorder.dropped() > 0)
+    if (s->results.dropped() > 0)
       std::fprintf(stderr,
                    "%s: warning: evaluating the first %zu frames only (%llu more came "
                    "than the run announced)\n",
-                   label, recorder.results().size(),
-                   static_cast<unsigned long long>(recorder.dropped()));
-    Evaluate(recorder.results(), route, args.tolerance_m, report);
+                   s->label, s->results.results().size(),
+                   static_cast<unsigned long long>(s->results.dropped()));
+    Evaluate(s->results.results(), s->route, s->args.tolerance_m, report);
   }
   SKYLOC_TRY(loop_status);
-  return shutdown;
-}
-
-// The run's closing lines on stderr: frames by state and capture errors, and the
-// evaluation when there was one.
-void PrintSummary(const SessionArgs& args, const SessionReport& r) {
-  if (args.mode == LoopMode::kRecord) {
-    std::fprintf(stderr, "%s: %llu frames captured, %llu capture errors%s\n", args.label,
-                 static_cast<unsigned long long>(r.loop.frames),
-                 static_cast<unsigned long long>(r.loop.capture_errors),
-                 r.loop.stopped ? ", stopped by signal" : "");
-    return;
-  }
-  std::fprintf(stderr,
-               "%s: %llu frames (%llu LOST, %llu SEARCHING, %llu LOCALISED), %llu capture "
-               "errors%s\n",
-               args.label, static_cast<unsigned long long>(r.loop.frames),
-               static_cast<unsigned long long>(r.loop.state_frames[0]),
-               static_cast<unsigned long long>(r.loop.state_frames[1]),
-               static_cast<unsigned long long>(r.loop.state_frames[2]),
-               static_cast<unsigned long long>(r.loop.capture_errors),
-               r.loop.stopped ? ", stopped by signal" : "");
-  if (r.evaluated) {
-    std::fprintf(stderr,
-                 "%s: precision at 100%% recall %.3f, recall at 100%% precision %.3f, AUC %.3f "
-                 "(%d matches, %d correct within %.1f m); LOCALISED frames correct: %llu of "
-                 "%llu\n",
-                 args.label, r.precision_at_full_recall, r.recall_at_full_precision,
-                 r.area_under_curve, r.evaluated_matches, r.correct_matches, args.tolerance_m,
-                 static_cast<unsigned long long>(r.localised_correct),
-                 static_cast<unsigned long long>(r.localised_frames));
-  }
+  return committed;
 }
 
 }  // namespace
 
-int RunSession(const SessionArgs& args, SessionReport* report) {
+int RunSession(const Config& config, const SessionArgs& args, SessionReport* report) {
   SessionReport local;
   if (report == nullptr)
     report = &local;
-  Config config = DefaultConfig();
-  if (!args.config_path.empty()) {
-    Result<Config> loaded = LoadConfigFile(args.config_path.c_str());
-    if (!loaded.ok()) {
-      std::fprintf(stderr, "%s: %s\n", args.label, loaded.status().message());
-      return 1;
-    }
-    config = *loaded;
+  Session session(args, config);
+  Status s = StartUp(&session, report);
+  if (s.ok()) {
+    const Status loop_status = RunLoop(&session, report);
+    s = ShutDown(&session, loop_status, report);
   }
-  const Status s = Run(args, config, report);
   if (!s.ok()) {
+    report->failure = s.code();
     std::fprintf(stderr, "%s: %s\n", args.label, s.message());
     // What ran before the error is still the user's to know (the frames a teach kept are
-    // said by Run itself).
+    // said by the shut-down itself).
     if (report->loop.frames > 0)
       PrintSummary(args, *report);
     return 1;

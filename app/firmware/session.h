@@ -1,8 +1,8 @@
 // One run of the firmware: `skyloc teach`, `skyloc repeat`, `skyloc replay` (and the demo
-// calls the same). Start-up reads the configuration, opens the camera, builds the
-// pipeline and opens or loads the route database, all at their configured sizes; then
-// the frame loop; then the clean shutdown: the route database flushed and committed, the
-// status lines in their safe state, the latency table printed.
+// calls the same). Start-up opens the camera, builds the pipeline from the configuration
+// and opens or loads the route database, all at their configured sizes; then the frame
+// loop; then the clean shutdown: the route database flushed and committed, the status
+// lines in their safe state, the latency table printed.
 #pragma once
 
 #include <cstdint>
@@ -17,10 +17,12 @@ namespace skyloc::firmware {
 struct SessionArgs {
   LoopMode mode = LoopMode::kRepeat;
   std::string route_path;
-  std::string config_path;  // empty: the built-in defaults (config/skyloc.toml's values)
-  std::string dataset;      // replay: frames from this dataset folder
-  bool paced = false;       // replay at the recorded pace
-  bool force = false;       // teach: replace an existing route database
+  // --config: the command reads it (LoadConfigFile) and hands RunSession the Config;
+  // empty: the built-in defaults (config/skyloc.toml's values).
+  std::string config_path;
+  std::string dataset;  // replay: frames from this dataset folder
+  bool paced = false;   // replay at the recorded pace
+  bool force = false;   // teach: replace an existing route database
   // The demo: a simulated camera and status output are the point, not a mistake to warn of.
   bool simulation_expected = false;
   std::uint64_t max_frames = 0;
@@ -36,6 +38,7 @@ struct SessionArgs {
 };
 
 struct SessionReport {
+  StatusCode failure = StatusCode::kOk;  // why the run failed (its message went to stderr)
   LoopSummary loop;
   std::uint64_t route_frames = 0;  // recorded (teach) or loaded (repeat, replay)
   bool evaluated = false;          // replay/demo with poses: precision/recall below
@@ -49,7 +52,8 @@ struct SessionReport {
   std::uint64_t localised_correct = 0;
 };
 
+// Runs `config` (a file's, the built-in defaults or one built in memory, as the demo's).
 // Returns the exit code; errors are printed to stderr as "label: message".
-int RunSession(const SessionArgs& args, SessionReport* report = nullptr);
+int RunSession(const Config& config, const SessionArgs& args, SessionReport* report = nullptr);
 
 }  // namespace skyloc::firmware

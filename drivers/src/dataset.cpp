@@ -358,7 +358,7 @@ Status DatasetWriter::Open(const std::string& dir, Columns columns) {
   if (csv_ == nullptr) {
     const int saved = errno;
     if (saved == EEXIST) {
-      return Status::Error(StatusCode::kFailedPrecondition,
+      return Status::Error(StatusCode::kAlreadyExists,
                            "%s already exists: choose a new folder (a recording is never "
                            "overwritten)",
                            csv_path.c_str());
@@ -499,20 +499,23 @@ Status DatasetCamera::DoStart() {
 
 Result<Frame> DatasetCamera::DoCapture(Nanoseconds /*timeout*/) {
   if (next_ >= dataset_.frames.size()) {
-    return Status::Error(StatusCode::kOutOfRange, "dataset %s: end of the %zu frames",
-                         dataset_.dir.c_str(), dataset_.frames.size());
+    return Status::Error(StatusCode::kOutOfRange, "camera %s: end of the %zu frames", info_.name,
+                         dataset_.frames.size());
   }
   const std::size_t i = next_++;
   const DatasetFrame& f = dataset_.frames[i];
-  SKYLOC_TRY_ASSIGN(current_, LoadImage(dataset_.FramePath(i).c_str()));
+  Result<OwnedImage> loaded = LoadImage(dataset_.FramePath(i).c_str());
+  if (!loaded.ok())
+    return Status(loaded.status()).AddContext("camera %s", info_.name);
+  current_ = std::move(*loaded);
   if (current_.width() != info_.width || current_.height() != info_.height ||
       current_.format() != info_.format) {
     return Status::Error(StatusCode::kDataLoss,
-                         "dataset %s: frame %zu (%s) is %dx%d %s, expected %dx%d %s like the "
+                         "camera %s: frame %zu (%s) is %dx%d %s, expected %dx%d %s like the "
                          "first frame: re-record it or remove it from frames.csv",
-                         dataset_.dir.c_str(), i, f.file.c_str(), current_.width(),
-                         current_.height(), dsp::PixelFormatName(current_.format()), info_.width,
-                         info_.height, dsp::PixelFormatName(info_.format));
+                         info_.name, i, f.file.c_str(), current_.width(), current_.height(),
+                         dsp::PixelFormatName(current_.format()), info_.width, info_.height,
+                         dsp::PixelFormatName(info_.format));
   }
   Frame frame;
   frame.image = current_.view();

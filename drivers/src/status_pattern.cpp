@@ -61,17 +61,14 @@ Nanoseconds StatusPattern::NextEdge(LocalisationState state, float confidence,
 }
 
 Result<StatusLineMode> ParseStatusLineMode(const char* text) {
-  if (text != nullptr && std::strcmp(text, "per-state") == 0)
-    return StatusLineMode::kLinePerState;
-  if (text != nullptr && std::strcmp(text, "blink") == 0)
-    return StatusLineMode::kBlink;
-  return Status::Error(StatusCode::kInvalidArgument,
-                       "status line mode '%s' is not known: use \"per-state\" or \"blink\"",
-                       text != nullptr ? text : "");
-}
-
-const char* StatusLineModeName(StatusLineMode mode) {
-  return mode == StatusLineMode::kBlink ? "blink" : "per-state";
+  for (const StatusLineMode mode : {StatusLineMode::kLinePerState, StatusLineMode::kBlink}) {
+    if (text != nullptr && std::strcmp(text, StatusLineModeName(mode)) == 0)
+      return mode;
+  }
+  return Status::Error(
+      StatusCode::kInvalidArgument, "status line mode '%s' is not known: use \"%s\" or \"%s\"",
+      text != nullptr ? text : "", StatusLineModeName(StatusLineMode::kLinePerState),
+      StatusLineModeName(StatusLineMode::kBlink));
 }
 
 }  // namespace skyloc::drivers

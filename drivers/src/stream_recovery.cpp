@@ -52,16 +52,4 @@ void StreamRecovery::ReopenSucceeded(Nanoseconds now) {
   Started(now);
 }
 
-const char* StreamRecoveryStateName(StreamRecovery::State state) {
-  switch (state) {
-    case StreamRecovery::State::kStreaming:
-      return "streaming";
-    case StreamRecovery::State::kBackingOff:
-      return "backing off";
-    case StreamRecovery::State::kFailed:
-      return "failed";
-  }
-  return "unknown";
-}
-
 }  // namespace skyloc::drivers

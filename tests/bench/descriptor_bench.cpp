@@ -78,7 +78,7 @@ BENCHMARK_CAPTURE(BM_Descriptor, direct, SamplingPath::kDirect, Cap::kOff)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Descriptor, via_mask, SamplingPath::kViaMask, Cap::kOff)
     ->Unit(benchmark::kMicrosecond);
-// The gravity-aligned cap (issue 12): the extra cost is one dot product and compare per
+// The gravity-aligned cap: the extra cost is one dot product and compare per
 // sample (a cosine on the taper's samples only); the reference is `direct` above.
 BENCHMARK_CAPTURE(BM_Descriptor, direct_gravity_cap, SamplingPath::kDirect, Cap::kGravity)
     ->Unit(benchmark::kMicrosecond);
@@ -194,7 +194,7 @@ void BM_ProjectAndAmplitudes(benchmark::State& state) {
 }
 BENCHMARK(BM_ProjectAndAmplitudes)->Unit(benchmark::kMicrosecond);
 
-// Heading of a matched frame (issue 13), the two ways app::Pipeline::EstimateHeading runs
+// Heading of a matched frame, the two ways firmware::Pipeline::EstimateHeading runs
 // them after the matcher picks a route frame, beside the descriptor: the route frame's
 // strip (360 bytes, as the route database stores it) against a query frame turned by 25
 // degrees. A skyline of a few harmonics over azimuth-textured ground, so 1D SURF finds a

@@ -1,4 +1,4 @@
-// Whole-run batch SeqSLAM at dataset scale (issue 17): 3576 x 3576 vanilla-sized
+// Whole-run batch SeqSLAM at dataset scale: 3576 x 3576 vanilla-sized
 // descriptors (64 x 32 = 2048 values; synthetic, we have no Nordland frames), ds 10,
 // v 0.8-1.2, R 10, centred window. The reference measured in the same run is the
 // whole-matrix engine (BatchSeqSlam: one DifferenceColumn per query, N x M floats twice),

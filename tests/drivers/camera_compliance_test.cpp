@@ -414,6 +414,9 @@ TEST_P(CameraCompliance, ZeroTimeoutReturnsAFrameOrDeadlineExceeded) {
     Result<Frame> frame = camera().Capture(Nanoseconds(0));
     if (!frame.ok()) {
       EXPECT_EQ(frame.status().code(), StatusCode::kDeadlineExceeded) << frame.status().message();
+      // The frame loop passes a capture error on as it is: it must say which camera failed.
+      EXPECT_NE(std::string(frame.status().message()).find(camera().info().name), std::string::npos)
+          << frame.status().message();
     }
   }
   // The stream is still healthy afterwards.

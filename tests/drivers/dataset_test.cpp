@@ -99,7 +99,7 @@ TEST(Dataset, KilledWriterLeavesAValidPrefixAndIsNeverOverwritten) {
   }
   DatasetWriter again;
   const Status s = again.Open(dir, false);
-  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(s.code(), StatusCode::kAlreadyExists);
   EXPECT_NE(std::string(s.message()).find("already exists"), std::string::npos) << s.message();
 }
 

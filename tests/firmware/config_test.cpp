@@ -118,7 +118,7 @@ stale_ms = 100
   EXPECT_TRUE(c->realtime.mlockall);
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
   EXPECT_EQ(c->status.kind, StatusOutputKind::kGpio);
-  EXPECT_EQ(c->status.encoding, StatusEncoding::kBlink);
+  EXPECT_EQ(c->status.encoding, drivers::StatusLineMode::kBlink);
   EXPECT_TRUE(c->status.active_low);
   EXPECT_EQ(c->status.button_line, 5);
   EXPECT_FALSE(c->status.button_active_low);

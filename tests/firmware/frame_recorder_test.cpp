@@ -153,7 +153,7 @@ TEST(FrameRecorder, RefusesAFolderThatHoldsARecording) {
   }
   FrameRecorder r;
   const Status s = r.Open(o, Info());
-  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(s.code(), StatusCode::kAlreadyExists);
   EXPECT_NE(std::string(s.message()).find("already exists"), std::string::npos) << s.message();
 }
 

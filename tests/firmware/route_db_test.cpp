@@ -193,7 +193,7 @@ TEST_F(RouteDbTest, RefusesToReplaceATaughtRoute) {
   Teach(3, 10, true);
   RouteDbWriter w;
   Status s = w.Create(path_.c_str(), Settings(), 10, false);
-  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(s.code(), StatusCode::kAlreadyExists);
   EXPECT_NE(std::string(s.message()).find("already exists"), std::string::npos);
   EXPECT_TRUE(Parse(Bytes()).ok());
   EXPECT_EQ(frames_.size(), 3u);

@@ -1,4 +1,4 @@
-// The route is held once (issue 18, finding 6): a route loaded from the database through
+// The route is held once: a route loaded from the database through
 // the pipeline's RouteSink goes straight into the matcher and the heading, and RouteFrames
 // keeps only each frame's time and pose. Checked against the same file loaded the other
 // way (RouteFrames keeping everything, the pipeline copying it): every repeated frame must

@@ -1,4 +1,4 @@
-# `skyloc eval --method surf1d` (issue 13 item 3): the 1D SURF recognition score as a place
+# `skyloc eval --method surf1d`: the 1D SURF recognition score as a place
 # recogniser beside sky and vanilla, single-image and with OpenSeqSLAM over its scores.
 #  1. A route against itself: every frame's strip matches its own copy exactly (distance
 #     0, the largest score there is), so "single" must pick the query's own frame, every

@@ -3,7 +3,7 @@
 # 1.6 degrees on x86-64 and armhf, 90th percentile 5.9 (x86-64) and 16.6 (armhf, whose
 # renderer rounds differently: SIMULATOR.md on determinism) over ~150 frames, so the bound
 # on the tail is loose here (the experiments are host_eval code now, so the test runs in
-# native builds only; the bound stays what both targets passed); issue 13's bar (median < 3, p90 < 10) is checked on the
+# native builds only; the bound stays what both targets passed); the heading goal's bar (median < 3, p90 < 10) is checked on the
 # full-size run in docs/RESULTS.md. The truth is the simulator's poses, not the strip code.
 set(dir ${WORK_DIR}/experiment_heading)
 file(REMOVE_RECURSE ${dir})

@@ -13,16 +13,15 @@ foreach(mode batch streaming distance)
     "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/eval_check.cmake)
 endforeach()
 # eval --out: a non-empty folder needs --force; a full disk never leaves a truncated file.
-add_test(NAME cli.eval_out_folder COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/eval_out.sh
-  ${skyloc_exe} $<TARGET_FILE:make_eval_datasets> ${CMAKE_CROSSCOMPILING_EMULATOR})
-set_tests_properties(cli.eval_out_folder PROPERTIES PASS_REGULAR_EXPRESSION "all checks passed"
-  TIMEOUT 300)
+skyloc_expect_output(cli.eval_out_folder COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/eval_out.sh
+  ${skyloc_exe} $<TARGET_FILE:make_eval_datasets> ${CMAKE_CROSSCOMPILING_EMULATOR}
+  OUTPUT "all checks passed")
+set_tests_properties(cli.eval_out_folder PROPERTIES TIMEOUT 300)
 # eval --attitude dataset: the cap levelled by each frame's recorded roll/pitch.
-add_test(NAME cli.eval_attitude_dataset COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
+skyloc_expect_output(cli.eval_attitude_dataset COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR} "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
-  -P ${CMAKE_CURRENT_SOURCE_DIR}/eval_attitude.cmake)
-set_tests_properties(cli.eval_attitude_dataset PROPERTIES PASS_REGULAR_EXPRESSION
-  "all checks passed" TIMEOUT 600)
+  -P ${CMAKE_CURRENT_SOURCE_DIR}/eval_attitude.cmake OUTPUT "all checks passed")
+set_tests_properties(cli.eval_attitude_dataset PROPERTIES TIMEOUT 600)
 add_test(NAME cli.eval_missing_dataset_exits_1 COMMAND ${CMAKE_COMMAND}
   -DCMD=${skyloc_exe} "-DARGS=eval;--reference;/nonexistent/ref;--query;/nonexistent/q;--out;/tmp/x"
   -DEXPECT_RC=1 -DEXPECT_STDERR=/nonexistent/ref\ does\ not\ exist
@@ -48,21 +47,19 @@ add_test(NAME cli.eval_bad_ds_exits_2 COMMAND ${CMAKE_COMMAND}
   -DCMD=${skyloc_exe} "-DARGS=eval;--ds;0" -DEXPECT_RC=2 -DEXPECT_STDERR=sequence\ length
   "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
 # skyloc surf1d: the heading of a turned view by both methods, the plot, bad input.
-add_test(NAME cli.surf1d_heading COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
+skyloc_expect_output(cli.surf1d_heading COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR} "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
-  -P ${CMAKE_CURRENT_SOURCE_DIR}/surf1d_command.cmake)
-set_tests_properties(cli.surf1d_heading PROPERTIES PASS_REGULAR_EXPRESSION "all checks passed")
+  -P ${CMAKE_CURRENT_SOURCE_DIR}/surf1d_command.cmake OUTPUT "all checks passed")
 add_test(NAME cli.simulate_writes_datasets COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR} "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
   -P ${CMAKE_CURRENT_SOURCE_DIR}/simulate_dataset.cmake)
 add_test(NAME cli.simulate_time_sampled COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR} "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
   -P ${CMAKE_CURRENT_SOURCE_DIR}/simulate_time.cmake)
-# The help names the time-sampling flags (they were once parsed but not listed).
-add_test(NAME cli.simulate_help_lists_sampling COMMAND ${CMAKE_CROSSCOMPILING_EMULATOR}
-  ${skyloc_exe} simulate --help)
-set_tests_properties(cli.simulate_help_lists_sampling PROPERTIES PASS_REGULAR_EXPRESSION
-  "--fps N.*--speed M/S.*--speed-band F.*--accel A.*--start-stop S.*--stops N.*--stop-seconds MIN,MAX.*--spacing M")
+# The help names every time-sampling flag.
+skyloc_expect_output(cli.simulate_help_lists_sampling COMMAND ${CMAKE_CROSSCOMPILING_EMULATOR}
+  ${skyloc_exe} simulate --help
+  OUTPUT "--fps N.*--speed M/S.*--speed-band F.*--accel A.*--start-stop S.*--stops N.*--stop-seconds MIN,MAX.*--spacing M")
 add_test(NAME cli.simulate_mixed_sampling_exits_2 COMMAND ${CMAKE_COMMAND}
   -DCMD=${skyloc_exe} "-DARGS=simulate;--world;city;--spacing;1;--fps;10;--out;unused"
   -DEXPECT_RC=2 "-DEXPECT_STDERR=--fps samples in time but --spacing samples in distance"
@@ -114,7 +111,7 @@ add_test(NAME cli.experiment_bad_grid_exits_2 COMMAND ${CMAKE_COMMAND}
 
 # FAB-MAP 2.0 (host builds only): train a vocabulary on one simulated visible-light run,
 # evaluate two others, and refuse a file that is not a vocabulary.
-add_test(NAME cli.fabmap_train_eval COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
-  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fabmap -P ${CMAKE_CURRENT_SOURCE_DIR}/fabmap_check.cmake)
-set_tests_properties(cli.fabmap_train_eval PROPERTIES
-  PASS_REGULAR_EXPRESSION "all fabmap checks passed" LABELS integration TIMEOUT 300)
+skyloc_expect_output(cli.fabmap_train_eval COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
+  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fabmap -P ${CMAKE_CURRENT_SOURCE_DIR}/fabmap_check.cmake
+  OUTPUT "all fabmap checks passed")
+set_tests_properties(cli.fabmap_train_eval PROPERTIES TIMEOUT 300)

@@ -60,7 +60,7 @@ void ExpectSame(const std::vector<dsp::SeqSlamMatch>& a, const std::vector<dsp::
   }
 }
 
-// The acceptance test of issue 17: block size and thread count do not change a bit of the
+// Block size and thread count do not change a bit of the
 // result, for float and for byte descriptors.
 TEST(BlockedSeqSlamThreads, BitIdenticalToTheUnblockedOneThreadEngine) {
   SKIP_UNDER_EMULATION();

@@ -1,4 +1,4 @@
-# The route database on storage that really fails, made by the kernel (issue 16):
+# The route database on storage that really fails, made by the kernel:
 #   1. a block device that starts failing every write mid-teach: a device-mapper table
 #      switched from `linear` to `flakey ... error_writes` over a loop device holding an
 #      ext2 file system. skyloc teach must report the failure and exit 1, keep every

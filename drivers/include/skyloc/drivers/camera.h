@@ -44,7 +44,8 @@ struct CameraInfo {
   dsp::PixelFormat format = dsp::PixelFormat::kGrey8;
 };
 
-// Health counters every camera keeps; the pipeline reports them at exit.
+// Health counters every camera keeps, for the tests and a debugger to read; the firmware
+// does not print them (its frame loop counts capture errors itself).
 struct CameraCounters {
   std::uint64_t frames = 0;    // frames delivered by Capture()
   std::uint64_t dropped = 0;   // gaps in the sequence numbers
@@ -65,6 +66,8 @@ class Camera {
   // Waits up to `timeout` for the next frame. kDeadlineExceeded on timeout; kUnavailable
   // when the device is gone and could not be recovered; kDataLoss for a corrupt frame
   // (the next Capture() may succeed). End of a finite source (a dataset) is kOutOfRange.
+  // Every error's message names the camera (info().name), so the frame loop passes it on
+  // as it is; the camera compliance test checks it.
   Result<Frame> Capture(Nanoseconds timeout);
   void Stop();
   void Close();

@@ -68,8 +68,12 @@ class StatusPattern {
   StatusLineMode mode_;
 };
 
-// Parses "per-state" / "blink" (configuration files, test environment).
+// The one name of each mode: "per-state", "blink" ([status] encoding in the configuration,
+// the test environment).
+constexpr const char* StatusLineModeName(StatusLineMode mode) {
+  return mode == StatusLineMode::kBlink ? "blink" : "per-state";
+}
+// The mode StatusLineModeName gives `text`; kInvalidArgument for any other text.
 Result<StatusLineMode> ParseStatusLineMode(const char* text);
-const char* StatusLineModeName(StatusLineMode mode);
 
 }  // namespace skyloc::drivers

@@ -71,6 +71,4 @@ class StreamRecovery {
   Nanoseconds backoff_{0};
 };
 
-const char* StreamRecoveryStateName(StreamRecovery::State state);
-
 }  // namespace skyloc::drivers

@@ -1,4 +1,4 @@
-// The heading of a recognised place (issue 13): how far the robot is turned from the view
+// The heading of a recognised place: how far the robot is turned from the view
 // a route frame was taught with, from the two frames' horizon strips (horizon_strip.h),
 // two ways:
 //   (b) circular cross-correlation of the whole strips (strip_alignment.h): the main

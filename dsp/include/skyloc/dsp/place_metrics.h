@@ -111,7 +111,7 @@ std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,
 PrSummary SummarisePrecisionRecall(std::span<const EvaluatedMatch> matches,
                                    std::span<const PrPoint> curve);
 
-// ---- Heading error (issue 13): eval and the heading experiment --------------------------
+// ---- Heading error: eval and the heading experiment --------------------------
 
 struct HeadingErrorSummary {
   int frames = 0;     // frames the heading was asked for (correctly matched ones)

@@ -1,4 +1,4 @@
-// The batch SeqSLAM engine at dataset scale (issue 17): a cache-blocked difference matrix,
+// The batch SeqSLAM engine at dataset scale: a cache-blocked difference matrix,
 // an optional 8-bit descriptor, and a run that computes and consumes the matrix by blocks
 // of query columns, so it needs N x (block + ds) floats instead of N x M.
 //

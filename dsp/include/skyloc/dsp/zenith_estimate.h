@@ -1,4 +1,4 @@
-// The zenith from the image alone (issue 12 item 3): with no attitude source, estimate the
+// The zenith from the image alone: with no attitude source, estimate the
 // world's zenith in the body frame from the sky samples the descriptor already has
 // (SkyDescriptor::samples(), on its grid), for the gravity-aligned cap.
 // docs/SKY_DESCRIPTOR.md, "Tilt without an attitude source", has the method and the numbers.

@@ -1,5 +1,7 @@
-// Time behind an injectable interface: the pipeline, drivers and latency counters take a
-// Clock&, so tests drive time by hand and the firmware reads CLOCK_MONOTONIC.
+// Time behind an injectable interface: the pipeline, its latency counters and the simulated
+// drivers (camera, IMU, status output) take a Clock, so tests drive time by hand. The real
+// devices (V4L2, libcamera, the IIO IMU) stamp their samples with CLOCK_MONOTONIC themselves,
+// the time MonotonicClock reads, so their timestamps and the pipeline's agree.
 #pragma once
 
 #include <chrono>
