@@ -87,6 +87,13 @@ add_test(NAME cli.eval_surf1d COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK=${CMAKE_CURRENT_BINARY_DIR}/eval_surf1d "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
   -P ${CMAKE_CURRENT_SOURCE_DIR}/eval_surf1d.cmake)
 
+# One metrics.json schema: eval's and an experiment's files share it (docs/METRICS.md).
+add_test(NAME cli.metrics_schema_shared COMMAND ${CMAKE_COMMAND}
+  -DGEN=$<TARGET_FILE:make_eval_datasets> -DCMD=${skyloc_exe}
+  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/metrics_schema "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
+  -P ${CMAKE_CURRENT_SOURCE_DIR}/metrics_schema.cmake)
+set_tests_properties(cli.metrics_schema_shared PROPERTIES PASS_REGULAR_EXPRESSION
+  "all checks passed")
 # The experiments.
 add_test(NAME cli.experiment_writes_outputs COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR} "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
