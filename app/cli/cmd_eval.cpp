@@ -50,7 +50,14 @@ constexpr const char* kDescription =
     "matches: matches.csv gives each frame's state, metrics.json the share of LOCALISED\n"
     "frames that are correct. Sky runs with horizon strips also print it with frames whose\n"
     "1D SURF score against the matched frame is below 25..400 counted as no match (landmark\n"
-    "confirmation, docs/RESULTS.md).\n";
+    "confirmation, docs/RESULTS.md).\n"
+    "--method fabmap is FAB-MAP 2.0 on SIFT words (docs/FABMAP.md): one run, no matcher or\n"
+    "sequence length. --method surf1d is the 1D SURF recognition score (NN with RANSAC) of\n"
+    "the [heading] strips through the sky lens: \"single\" (each query's best-scoring\n"
+    "frame) and OpenSeqSLAM over the scores at each --ds; every query against every frame,\n"
+    "slow on long routes. --camera: docs/CAMERA_FILE.md; the default lens is equidistant\n"
+    "185 degrees filling the short image side (equirectangular for 2:1 images), as skyloc\n"
+    "describe. --attitude dataset: docs/SKY_DESCRIPTOR.md, \"Tilt\".\n";
 
 struct EvalOptions {
   std::string reference, query, out;
@@ -80,12 +87,8 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
   t->Flag("--force", "write into an --out folder that is not empty (its results are replaced)",
           &o->force);
   t->ChoiceList("--method",
-                "descriptor (repeat to compare; default: sky and vanilla, and fabmap too with "
-                "--vocab). fabmap: FAB-MAP 2.0 on SIFT words (docs/FABMAP.md), one run, no "
-                "matcher or sequence length. surf1d: the 1D SURF recognition score (NN with "
-                "RANSAC) of the [heading] strips (the sky lens), \"single\" (each query's "
-                "best-scoring frame) and OpenSeqSLAM over the scores at each --ds; every query "
-                "against every frame: slow on long routes",
+                "descriptor to score (repeat to compare; default: sky and vanilla, and fabmap "
+                "with --vocab)",
                 {{name(ScoredDescriptor::kSky), ScoredDescriptor::kSky},
                  {name(ScoredDescriptor::kVanilla), ScoredDescriptor::kVanilla},
                  {name(ScoredDescriptor::kFabmap), ScoredDescriptor::kFabmap},
@@ -115,9 +118,8 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
             "reference frame)",
             {0, 100}, keyframe_noise);
   t->Text("--config", "FILE",
-          "the firmware configuration whose [state] settings (and [seqslam] max_advance, "
-          "keyframe_noise_factor, [descriptor] bands, grid, normalisation) the runs use "
-          "(default: the built-in defaults)",
+          "the firmware configuration whose [state], [seqslam] and [descriptor] the runs use "
+          "(default: the built-in ones)",
           &o->config_file);
   t->Text("--gt", "FILE", "ground truth CSV: query_index,reference_index (-1: off route)",
           &o->gt_file);
@@ -129,9 +131,8 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
          "with --gt or pose-derived truth: correct within +-N frames (default 5, as the paper)", 0,
          std::numeric_limits<int>::max(), &o->frame_tolerance);
   t->Text("--camera", "FILE.toml",
-          "sky: the camera file (docs/CAMERA_FILE.md) for both runs; otherwise each dataset's "
-          "camera.toml, otherwise an equidistant 185-degree lens filling the short image side "
-          "(equirectangular for 2:1 images), as skyloc describe",
+          "sky: the camera file for both runs (default: each dataset's camera.toml, else a "
+          "lens guessed from the image's shape)",
           &o->describe.camera);
   t->Custom("--lens", "MODEL",
             "sky: override the lens model (equidistant, equisolid or "
@@ -148,20 +149,20 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
             });
   t->Number("--fov", "DEG", "sky: override the field of view, degrees", {0, 360, true, false}, fov);
   t->Int("--bands", "N",
-         "sky: spherical-harmonic bands, on the configuration's grid (default: "
-         "[descriptor] of --config, as the firmware: 64 bands on the oversampled 48 x 256 grid)",
+         "sky: spherical-harmonic bands on the configuration's grid (default: [descriptor] "
+         "bands, 64)",
          1, 512, bands);
   t->Int("--jobs", "N",
          "threads for the descriptors and the batch matcher (default: all "
          "cores); the results do not depend on it",
          1, 1024, &o->describe.jobs);
   t->Choice("--vanilla-precision",
-            "vanilla with the batch matcher: the descriptor in 8 bits (steps of 1/16 of a "
-            "patch's std, as accurate, measured: docs/SEQSLAM.md) or as floats (default byte)",
+            "vanilla in the batch matcher: 8 bits a value (default; as accurate, "
+            "docs/SEQSLAM.md) or floats",
             {{"byte", true}, {"float", false}}, &o->vanilla_bytes);
   t->Choice("--attitude",
             "sky: dataset describes the sky above the gravity-aligned cap, each frame levelled "
-            "by its recorded roll and pitch (docs/SKY_DESCRIPTOR.md, \"Tilt\"); default none",
+            "by its recorded roll and pitch (default none)",
             {{"none", false}, {"dataset", true}}, &o->describe.attitude_from_dataset);
   t->Number("--max-tilt", "DEG",
             "with --attitude dataset: the largest tilt the cap must survive (default: "
