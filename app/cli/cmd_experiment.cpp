@@ -22,6 +22,7 @@
 #include "firmware/config.h"
 #include "firmware/pipeline.h"
 #include "skyloc/dsp/localisation_state.h"
+#include "tools/eval_results.h"
 #include "tools/experiment.h"
 #include "tools/output_file.h"
 #include "tools/svg_plot.h"
@@ -220,18 +221,9 @@ struct Row {
   std::vector<const tools::MethodScore*> scores;
 };
 
-// printf into a std::string; for short pieces (at most 511 characters).
+// One method's scores: the fields every metrics.json shares (docs/METRICS.md).
 std::string SummaryJson(const tools::MethodScore& m) {
-  std::string s = Format(
-      "{\"evaluated\": %d, \"with_ground_truth\": %d, \"correct\": %d, "
-      "\"precision_at_100_recall\": %.4f, \"recall_at_100_precision\": %.4f, \"auc\": %.4f, "
-      "\"curve\": [",
-      m.summary.evaluated, m.summary.with_ground_truth, m.summary.correct,
-      m.summary.precision_at_full_recall, m.summary.recall_at_full_precision,
-      m.summary.area_under_curve);
-  for (std::size_t i = 0; i < m.curve.size(); ++i)
-    s += Format("%s[%.4f, %.4f]", i ? ", " : "", m.curve[i].recall, m.curve[i].precision);
-  return s + "]}";
+  return "{" + tools::ScoreFieldsJson(m.summary, m.curve) + "}";
 }
 
 // Precision-recall curves of one method, one per row.
@@ -277,8 +269,9 @@ Status WriteOutputs(const Options& o, const std::string& command, const std::str
     }
   }
   md += "\n" + rule + "\n";
-  std::string json = "{\n  \"experiment\": \"" + o.name + "\",\n  \"command\": \"" + command +
-                     "\",\n  \"rows\": [\n";
+  std::string json = tools::MetricsJsonHead("experiment") +
+                     "  \"experiment\": " + tools::JsonString(o.name) +
+                     ",\n  \"command\": " + tools::JsonString(command) + ",\n  \"rows\": [\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
     md += r.columns;
@@ -379,13 +372,6 @@ std::string CommonNotes(const tools::ExperimentOptions& e) {
              e.tolerance_frames, e.max_offset_m);
 }
 
-std::string HeadingJson(const dsp::HeadingErrorSummary& e) {
-  return Format(
-      "{\"frames\": %d, \"estimated\": %d, \"median_deg\": %.3f, \"p90_deg\": %.3f, "
-      "\"max_deg\": %.3f}",
-      e.frames, e.estimated, e.median_deg, e.p90_deg, e.max_deg);
-}
-
 std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
   if (e.estimated == 0)
     return Format("— (0 of %d)", e.frames);
@@ -419,7 +405,9 @@ int RunHeading(const Options& o, const std::string& command) {
                    "(a) 1D SURF + RANSAC | (b) tilt <= 10° | (b) tilt > 10° |\n"
                    "|---|---|---|---|---|---|---|\n";
   std::string json =
-      "{\n  \"experiment\": \"heading\",\n  \"command\": \"" + command + "\",\n  \"rows\": [\n";
+      tools::MetricsJsonHead("experiment") +
+      "  \"experiment\": \"heading\",\n  \"command\": " + tools::JsonString(command) +
+      ",\n  \"rows\": [\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const tools::HeadingRow& r = rows[i];
     md += Format("| %s | %d | %d | %s | %s | %s | %s |\n", sim::WorldKindName(r.world),
@@ -428,16 +416,16 @@ int RunHeading(const Options& o, const std::string& command) {
                  HeadingCell(r.correlation_tilted).c_str());
     json += Format("    {\"world\": \"%s\", \"query_frames\": %d, \"correct_matches\": %d, ",
                    sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct) +
-            "\"correlation\": " + HeadingJson(r.correlation) +
-            ", \"surf\": " + HeadingJson(r.surf) +
-            ", \"correlation_level\": " + HeadingJson(r.correlation_level) +
-            ", \"correlation_tilted\": " + HeadingJson(r.correlation_tilted) + "}" +
+            "\"correlation\": " + tools::HeadingSummaryJson(r.correlation) +
+            ", \"surf\": " + tools::HeadingSummaryJson(r.surf) +
+            ", \"correlation_level\": " + tools::HeadingSummaryJson(r.correlation_level) +
+            ", \"correlation_tilted\": " + tools::HeadingSummaryJson(r.correlation_tilted) + "}" +
             (i + 1 < rows.size() ? ",\n" : "\n");
   }
   md += Format("| all | | | %s | %s | | |\n", HeadingCell(all_correlation).c_str(),
                HeadingCell(all_surf).c_str());
-  json += "  ],\n  \"all\": {\"correlation\": " + HeadingJson(all_correlation) +
-          ", \"surf\": " + HeadingJson(all_surf) + "}\n}\n";
+  json += "  ],\n  \"all\": {\"correlation\": " + tools::HeadingSummaryJson(all_correlation) +
+          ", \"surf\": " + tools::HeadingSummaryJson(all_surf) + "}\n}\n";
   const dsp::HorizonStripOptions& strip = o.experiment.strip;
   md += Format(
       "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "
@@ -529,8 +517,8 @@ int RunExperiment(std::span<char* const> args) {
       rows.push_back({Format("%.0f deg", r.tilt_difference_deg),
                       Format("| %.0f° | %+.0f° / %+.0f° |", r.tilt_difference_deg,
                              r.reference_tilt_deg, r.query_tilt_deg),
-                      Format("\"tilt_difference_deg\": %.0f, \"reference_tilt_deg\": %.0f, "
-                             "\"query_tilt_deg\": %.0f, ",
+                      Format("\"tilt_difference_deg\": %.6f, \"reference_tilt_deg\": %.6f, "
+                             "\"query_tilt_deg\": %.6f, ",
                              r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
                       descriptor_scores(r)});
     }
@@ -566,7 +554,7 @@ int RunExperiment(std::span<char* const> args) {
                   r.speed_ratio, r.stops ? "yes" : "no",
                   r.bumps_deg > 0 ? Format("±%.0f°", r.bumps_deg).c_str() : "level", r.query_frames,
                   r.sequence_length, correct, localised),
-           Format("\"world\": \"%s\", \"speed_ratio\": %.2f, \"stops\": %s, \"bumps_deg\": %.0f, "
+           Format("\"world\": \"%s\", \"speed_ratio\": %.6f, \"stops\": %s, \"bumps_deg\": %.6f, "
                   "\"query_frames\": %d, \"ds\": %d, \"filter_localised\": %d, "
                   "\"filter_localised_correct\": %d, ",
                   sim::WorldKindName(r.world), r.speed_ratio, r.stops ? "true" : "false",
@@ -586,8 +574,8 @@ int RunExperiment(std::span<char* const> args) {
       rows.push_back({Format("%s %.2f m", r.query.c_str(), r.camera_height_m),
                       Format("| %s | %s | %.2f m | %.0f %% |", r.query.c_str(),
                              r.same_ant ? "yes" : "no", r.camera_height_m, 100 * r.truth_fraction),
-                      Format("\"query\": \"%s\", \"same_ant\": %s, \"camera_height_m\": %.3f, "
-                             "\"truth_fraction\": %.4f, ",
+                      Format("\"query\": \"%s\", \"same_ant\": %s, \"camera_height_m\": %.6f, "
+                             "\"truth_fraction\": %.6f, ",
                              r.query.c_str(), r.same_ant ? "true" : "false", r.camera_height_m,
                              r.truth_fraction),
                       {&r.sky, &r.vanilla, &r.sky_filter}});

@@ -185,11 +185,12 @@ void OptionTable::NumberPair(const char* name, const char* value, const char* he
 }
 
 void OptionTable::AddChoice(const char* name, const char* help, std::vector<std::string> names,
-                            std::function<void(std::size_t)> pick) {
+                            bool repeatable, std::function<void(std::size_t)> pick) {
   std::string value;
   for (std::size_t i = 0; i < names.size(); ++i)
     value += (i == 0 ? "" : "|") + names[i];
-  Add({name, value, help, false, false, [names, pick](const char* text, std::string* expected) {
+  Add({name, value, help, repeatable, false,
+       [names, pick](const char* text, std::string* expected) {
          for (std::size_t i = 0; i < names.size(); ++i) {
            if (names[i] == text) {
              pick(i);

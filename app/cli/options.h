@@ -72,16 +72,17 @@ class OptionTable {
   void NumberPair(const char* name, const char* value, const char* help, const char* expected,
                   std::function<bool(double a, double b)> accept, double* a, double* b);
   // One of the named values; `repeat` appends each occurrence to `list` instead.
+  // The values are copied: an initializer_list's array lives only as long as the call.
   template <typename E>
   void Choice(const char* name, const char* help,
               std::initializer_list<std::pair<const char*, E>> choices, E* out) {
-    AddChoice(name, help, Names(choices),
+    AddChoice(name, help, Names(choices), false,
               [out, values = Values(choices)](std::size_t i) { *out = values[i]; });
   }
   template <typename E>
   void ChoiceList(const char* name, const char* help,
                   std::initializer_list<std::pair<const char*, E>> choices, std::vector<E>* list) {
-    AddChoice(name, help, Names(choices),
+    AddChoice(name, help, Names(choices), true,
               [list, values = Values(choices)](std::size_t i) { list->push_back(values[i]); });
   }
   // A value the command parses itself (e.g. "X,Y"): `parse` returns false and sets
@@ -120,7 +121,6 @@ class OptionTable {
       names.emplace_back(c.first);
     return names;
   }
-  // The values are copied: a braced list's array lives only as long as the call.
   template <typename E>
   static std::vector<E> Values(std::initializer_list<std::pair<const char*, E>> choices) {
     std::vector<E> values;
@@ -129,7 +129,7 @@ class OptionTable {
     return values;
   }
   void AddChoice(const char* name, const char* help, std::vector<std::string> names,
-                 std::function<void(std::size_t)> pick);
+                 bool repeatable, std::function<void(std::size_t)> pick);
   void Add(Option option);
   Option* Find(std::string_view name);
   const Option* Find(std::string_view name) const;

@@ -158,6 +158,12 @@ const char* StatusOutputKindName(StatusOutputKind kind) {
 const char* AttitudeKindName(AttitudeKind kind) {
   return NameOf(kAttitudeKinds, kind);
 }
+const char* MatcherName(Matcher matcher) {
+  return NameOf(kMatchers, matcher);
+}
+bool ParseMatcher(std::string_view name, Matcher* out) {
+  return ValueOf(kMatchers, name, out);
+}
 
 Config DefaultConfig() {
   Config c;

@@ -117,6 +117,11 @@ enum class Matcher : std::uint8_t {
   kOpenSeqSlam,  // dsp/seqslam.h streaming engine: OpenSeqSLAM's enhancement and search
 };
 
+// "filter" or "openseqslam": the one spelling of [seqslam] matcher, `skyloc eval --matcher`
+// and the experiments' files. ParseMatcher is false for any other name.
+const char* MatcherName(Matcher matcher);
+bool ParseMatcher(std::string_view name, Matcher* out);
+
 // The two matchers' own parameter structs. The keys: ds and rwindow set both
 // (sequence_length, uniqueness_window); max_advance and keyframe_noise_factor are the
 // filter's; vmin, vmax, vstep (v_min, v_max, v_step) and contrast_r (contrast_window)

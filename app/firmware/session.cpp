@@ -102,11 +102,7 @@ void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, do
   }
   if (matches.empty())
     return;
-  std::vector<std::size_t> order(matches.size());
-  std::vector<dsp::PrPoint> curve(matches.size());
-  const std::size_t points = dsp::PrecisionRecallCurve(matches, order, curve);
-  const dsp::PrSummary pr =
-      dsp::SummarisePrecisionRecall(matches, std::span<const dsp::PrPoint>(curve.data(), points));
+  const dsp::PrSummary pr = dsp::EvaluatePrecisionRecall(matches).summary;
   report->evaluated = true;
   report->precision_at_full_recall = pr.precision_at_full_recall;
   report->recall_at_full_precision = pr.recall_at_full_precision;

@@ -6,16 +6,19 @@
 #include <cstdio>
 #include <utility>
 
+#include "firmware/dsp_status.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
 #include "skyloc/sim/imu_model.h"
+#include "tools/eval_score.h"
 #include "tools/fabmap_eval.h"
 #include "tools/features.h"
 
 namespace skyloc::tools {
 
 // The simulator's worlds, renderer and motion, which the experiments drive.
+using firmware::Matcher;
 using sim::BuildTrajectory;
 using sim::DefaultSimLens;
 using sim::EstimateAttitudes;
@@ -246,143 +249,6 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 
 namespace {
 
-Status FabmapMatches(const RunDescriptors& reference, const RunDescriptors& query,
-                     const ExperimentOptions& options, std::span<dsp::SeqSlamMatch> matches) {
-  if (options.fabmap_vocabulary == nullptr ||
-      reference.fabmap_words.size() != reference.trajectory.size() ||
-      query.fabmap_words.size() != query.trajectory.size())
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "FAB-MAP: the runs were described without a vocabulary");
-  SKYLOC_TRY_ASSIGN(const std::vector<FabmapQueryMatch> found,
-                    LocaliseWithFabmap(*options.fabmap_vocabulary, reference.fabmap_words,
-                                       query.fabmap_words, FabMapParams{}));
-  for (std::size_t q = 0; q < matches.size() && q < found.size(); ++q) {
-    // As `skyloc eval --method fabmap`: the most probable reference place, even when the
-    // new place is more probable (its uniqueness is then >= 0.5 and the PR sweep drops it
-    // early); the score is unused.
-    dsp::SeqSlamMatch& m = matches[q];
-    m.valid = found[q].reference >= 0;
-    m.reference = found[q].reference;
-    m.row = found[q].reference;
-    m.uniqueness = static_cast<float>(found[q].uniqueness);
-  }
-  return Status::Ok();
-}
-
-Status SequenceMatches(const RunDescriptors& reference, const RunDescriptors& query,
-                       RunDescriptor descriptor, const ExperimentOptions& options,
-                       ExperimentMatcher matcher, std::span<dsp::SeqSlamMatch> matches) {
-  const int dim =
-      descriptor == RunDescriptor::kVanilla ? dsp::kVanillaDescriptorSize : options.bands;
-  const auto n_query = static_cast<int>(query.trajectory.size());
-  auto descriptors = [descriptor](const RunDescriptors& run) -> const std::vector<float>& {
-    switch (descriptor) {
-      case RunDescriptor::kSkyCap:
-        return run.sky_cap;
-      case RunDescriptor::kVanilla:
-        return run.vanilla;
-      case RunDescriptor::kSky:
-      case RunDescriptor::kFabmap:
-        break;
-    }
-    return run.sky;
-  };
-  const std::vector<float>& ref_descriptors = descriptors(reference);
-  const std::vector<float>& query_descriptors = descriptors(query);
-  if (ref_descriptors.empty() || query_descriptors.empty())
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "the runs were described without that descriptor");
-  dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
-  if (matcher == ExperimentMatcher::kOpenSeqSlam) {
-    e = dsp::BatchSeqSlam(ref_descriptors, query_descriptors, dim, options.seqslam,
-                          dsp::SeqSlamWindow::kCentred, matches);
-  } else {
-    dsp::RouteFilterParams p = options.filter;
-    p.sequence_length = options.seqslam.sequence_length;
-    dsp::RouteFilter filter;
-    const auto n_ref = static_cast<int>(ref_descriptors.size() / static_cast<std::size_t>(dim));
-    const auto row = [dim](const std::vector<float>& d, int i) {
-      return std::span<const float>(d).subspan(
-          static_cast<std::size_t>(i) * static_cast<std::size_t>(dim),
-          static_cast<std::size_t>(dim));
-    };
-    e = filter.Init(p, dim, std::max(1, n_ref));
-    for (int r = 0; e == dsp::SeqSlamError::kOk && r < n_ref; ++r)
-      e = filter.AddReference(row(ref_descriptors, r));
-    if (e == dsp::SeqSlamError::kOk)
-      e = filter.FinishRoute();
-    for (int t = 0; e == dsp::SeqSlamError::kOk && t < n_query; ++t)
-      e = filter.Step(row(query_descriptors, t), &matches[static_cast<std::size_t>(t)]);
-  }
-  if (e != dsp::SeqSlamError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "%s: %s",
-                         matcher == ExperimentMatcher::kOpenSeqSlam ? "SeqSLAM" : "route filter",
-                         dsp::SeqSlamErrorMessage(e));
-  return Status::Ok();
-}
-
-// Precision-recall of the matches against the position ground truth.
-Status ScoreMatches(const RunDescriptors& reference, const RunDescriptors& query,
-                    const ExperimentOptions& options, std::vector<dsp::SeqSlamMatch> matches,
-                    MethodScore* out) {
-  const auto n_query = static_cast<int>(query.trajectory.size());
-  // Ground truth from the poses, the same rule as `skyloc eval`.
-  auto positions = [](const RunDescriptors& run) {
-    std::vector<dsp::Position3> p;
-    for (const TrajectoryPoint& t : run.trajectory)
-      p.push_back({t.pose.x_m, t.pose.y_m, t.pose.z_m});
-    return p;
-  };
-  const std::vector<dsp::Position3> reference_xyz = positions(reference);
-  const std::vector<dsp::Position3> query_xyz = positions(query);
-  out->truth.assign(static_cast<std::size_t>(n_query), dsp::TruthInterval{});
-  dsp::GroundTruthFromPositions(reference_xyz, query_xyz, options.max_offset_m, out->truth);
-  // A full lap of a closed route: its last frame is next to its first.
-  const dsp::MatchTolerance tolerance{
-      options.tolerance_frames, 0,
-      reference.closed_loop ? static_cast<int>(reference.trajectory.size()) : 0};
-  out->matched.assign(static_cast<std::size_t>(n_query), -1);
-  out->correct.assign(static_cast<std::size_t>(n_query), false);
-  std::vector<dsp::EvaluatedMatch> evaluated;
-  for (std::size_t q = 0; q < static_cast<std::size_t>(n_query); ++q) {
-    const dsp::SeqSlamMatch& m = matches[q];
-    if (!m.valid)
-      continue;
-    out->matched[q] = m.reference;
-    dsp::EvaluatedMatch em;
-    em.uniqueness = m.uniqueness;
-    em.has_ground_truth = out->truth[q].has_truth();
-    em.correct =
-        dsp::MatchIsCorrect(m.reference, out->truth[q], tolerance, reference_xyz, query_xyz[q]);
-    out->correct[q] = em.correct;
-    evaluated.push_back(em);
-  }
-  std::vector<std::size_t> order(evaluated.size());
-  out->curve.assign(evaluated.size(), dsp::PrPoint{});
-  const std::size_t points = dsp::PrecisionRecallCurve(evaluated, order, out->curve);
-  out->curve.resize(points);
-  out->summary = dsp::SummarisePrecisionRecall(evaluated, out->curve);
-  out->matches = std::move(matches);
-  return Status::Ok();
-}
-
-}  // namespace
-
-Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
-                 RunDescriptor descriptor, const ExperimentOptions& options, MethodScore* out,
-                 ExperimentMatcher matcher) {
-  const auto n_query = static_cast<int>(query.trajectory.size());
-  std::vector<dsp::SeqSlamMatch> matches(static_cast<std::size_t>(n_query));
-  if (descriptor == RunDescriptor::kFabmap) {
-    SKYLOC_TRY(FabmapMatches(reference, query, options, matches));
-  } else {
-    SKYLOC_TRY(SequenceMatches(reference, query, descriptor, options, matcher, matches));
-  }
-  return ScoreMatches(reference, query, options, std::move(matches), out);
-}
-
-namespace {
-
 void Report(ProgressFn progress, void* context, const char* what) {
   if (progress != nullptr)
     progress(what, context);
@@ -437,17 +303,21 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
     row.tilt_difference_deg = difference;
     row.reference_tilt_deg = alpha1;
     row.query_tilt_deg = alpha2;
-    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSky, options, &row.sky));
-    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kVanilla, options, &row.vanilla));
-    SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSky, options, &row.sky_filter,
-                         ExperimentMatcher::kRouteFilter));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, options,
+                         &row.sky));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam,
+                         options, &row.vanilla));
+    SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
+                         &row.sky_filter));
     if (options.cap.enabled) {
-      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap));
-      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kSkyCap, options, &row.sky_cap_filter,
-                           ExperimentMatcher::kRouteFilter));
+      SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam,
+                           options, &row.sky_cap));
+      SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter,
+                           options, &row.sky_cap_filter));
     }
     if (options.fabmap_vocabulary != nullptr)
-      SKYLOC_TRY(ScoreRuns(*reference, *query, RunDescriptor::kFabmap, options, &row.fabmap));
+      SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kFabmap, Matcher::kOpenSeqSlam,
+                           options, &row.fabmap));
     row.reference_zenith = reference->zenith_error;
     row.query_zenith = query->zenith_error;
     rows->push_back(std::move(row));
@@ -498,21 +368,25 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
     // FAB-MAP matches single images: one score for the world, shown on each ds row.
     MethodScore fabmap;
     if (options.fabmap_vocabulary != nullptr)
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kFabmap, options, &fabmap));
+      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kFabmap, Matcher::kOpenSeqSlam,
+                           options, &fabmap));
     for (const int ds : ds_values) {
       ExperimentOptions o = options;
       o.seqslam.sequence_length = ds;
       ManoeuvreRow row;
       row.world = kind;
       row.sequence_length = ds;
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky));
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kVanilla, o, &row.vanilla));
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky_filter,
-                           ExperimentMatcher::kRouteFilter));
+      SKYLOC_TRY(
+          ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam, o,
+                           &row.vanilla));
+      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, o,
+                           &row.sky_filter));
       if (o.cap.enabled) {
-        SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap));
-        SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, o, &row.sky_cap_filter,
-                             ExperimentMatcher::kRouteFilter));
+        SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam, o,
+                             &row.sky_cap));
+        SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter, o,
+                             &row.sky_cap_filter));
       }
       row.fabmap = fabmap;
       row.reference_zenith = reference.zenith_error;
@@ -547,7 +421,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
   if (const dsp::HeadingError e = estimator.Init(options.strip.n_azimuth, {});
       e != dsp::HeadingError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "heading: %s", dsp::HeadingErrorMessage(e));
+    return firmware::DspStatus(e, "heading");
   std::vector<float> stored(n), test(n);
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
@@ -557,8 +431,8 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
     HeadingRow row;
     row.world = kind;
     row.query_frames = static_cast<int>(query.trajectory.size());
-    SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, options, &row.match,
-                         ExperimentMatcher::kRouteFilter));
+    SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
+                         &row.match));
     std::vector<double> correlation, surf, level, tilted;  // signed errors, degrees
     int frames = 0, level_frames = 0;
     for (std::size_t q = 0; q < query.trajectory.size(); ++q) {
@@ -647,10 +521,12 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
       row.query = q.name;
       row.same_ant = q.same_ant;
       row.camera_height_m = height;
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky));
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kVanilla, o, &row.vanilla));
-      SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, o, &row.sky_filter,
-                           ExperimentMatcher::kRouteFilter));
+      SKYLOC_TRY(
+          ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, o, &row.sky));
+      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam, o,
+                           &row.vanilla));
+      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, o,
+                           &row.sky_filter));
       const auto with_truth =
           std::count_if(row.sky.truth.begin(), row.sky.truth.end(),
                         [](const dsp::TruthInterval& t) { return t.has_truth(); });
@@ -720,13 +596,13 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
             row.bumps_deg = bumps;
             row.sequence_length = ds;
             row.query_frames = static_cast<int>(query.trajectory.size());
-            SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, scored, &row.openseqslam,
-                                 ExperimentMatcher::kOpenSeqSlam));
-            SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSky, scored, &row.filter,
-                                 ExperimentMatcher::kRouteFilter));
+            SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam,
+                                 scored, &row.openseqslam));
+            SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter,
+                                 scored, &row.filter));
             if (scored.cap.enabled) {
-              SKYLOC_TRY(ScoreRuns(reference, query, RunDescriptor::kSkyCap, scored,
-                                   &row.filter_cap, ExperimentMatcher::kRouteFilter));
+              SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap,
+                                   Matcher::kRouteFilter, scored, &row.filter_cap));
             }
             rows->push_back(std::move(row));
           }

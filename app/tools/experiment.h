@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/config.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/route_filter.h"
@@ -28,6 +29,7 @@
 #include "skyloc/sim/renderer.h"
 #include "skyloc/sim/world.h"
 #include "tools/chow_liu.h"
+#include "tools/eval_match.h"
 #include "tools/vocabulary.h"
 
 namespace skyloc::tools {
@@ -130,20 +132,12 @@ struct MethodScore {
   std::vector<bool> correct;               // per query frame: matched and correct
 };
 
-// Which descriptor of a run is scored.
-// kFabmap is FAB-MAP 2.0 on the visible image's words: each query frame localised alone
-// (no sequence, no matcher), uniqueness 1 - p(matched place).
-enum class RunDescriptor : std::uint8_t { kSky, kSkyCap, kVanilla, kFabmap };
-
-// Which matcher scores a pair of runs: OpenSeqSLAM (batch, centred window, as the paper)
-// or the route filter (the firmware's, causal).
-enum class ExperimentMatcher : std::uint8_t { kOpenSeqSlam, kRouteFilter };
-
-// The matcher over `query` against `reference` with the chosen descriptors, then
-// precision-recall against the position ground truth.
+// The matcher over `query` against `reference` with the chosen descriptor (kSky, kSkyCap,
+// kVanilla or kFabmap; FAB-MAP localises each query frame alone, no sequence or matcher),
+// then precision-recall against the position ground truth (tools/eval_score.h).
 Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
-                 RunDescriptor descriptor, const ExperimentOptions& options, MethodScore* out,
-                 ExperimentMatcher matcher = ExperimentMatcher::kOpenSeqSlam);
+                 ScoredDescriptor descriptor, firmware::Matcher matcher,
+                 const ExperimentOptions& options, MethodScore* out);
 
 // ---- The experiments -------------------------------------------------------------------
 

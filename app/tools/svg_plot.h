@@ -18,7 +18,7 @@ enum class LineDash : std::uint8_t { kSolid, kDashed, kDotted };
 
 struct PrCurve {
   std::string name;                  // the legend text
-  std::vector<dsp::PrPoint> points;  // as dsp::PrecisionRecallCurve gives them: rising recall
+  std::vector<dsp::PrPoint> points;  // as dsp::EvaluatePrecisionRecall gives them: rising recall
   LineDash dash = LineDash::kSolid;
 };
 

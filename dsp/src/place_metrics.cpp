@@ -59,6 +59,9 @@ bool MatchIsCorrect(int matched, const TruthInterval& truth, const MatchToleranc
                      (matched + lap <= truth.last + tolerance.frames));
 }
 
+namespace {
+
+// Fills `curve` (matches.size() points at most) and returns the number of points written.
 std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,
                                  std::span<std::size_t> order, std::span<PrPoint> curve) {
   const std::size_t n = std::min(matches.size(), order.size());
@@ -118,6 +121,17 @@ PrSummary SummarisePrecisionRecall(std::span<const EvaluatedMatch> matches,
       s.recall_at_full_precision = std::max(s.recall_at_full_precision, p.recall);
   }
   return s;
+}
+
+}  // namespace
+
+PrecisionRecall EvaluatePrecisionRecall(std::span<const EvaluatedMatch> matches) {
+  PrecisionRecall pr;
+  std::vector<std::size_t> order(matches.size());
+  pr.curve.resize(matches.size());
+  pr.curve.resize(PrecisionRecallCurve(matches, order, pr.curve));
+  pr.summary = SummarisePrecisionRecall(matches, pr.curve);
+  return pr;
 }
 
 HeadingErrorSummary SummariseHeadingErrors(std::span<double> errors_deg, int frames) {

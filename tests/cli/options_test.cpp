@@ -113,5 +113,25 @@ TEST(OptionTable, HelpListsEveryOptionWithItsValueAndLine) {
     EXPECT_NE(out.find(line), std::string::npos) << line << "\n" << out;
 }
 
+// A list of choices: every occurrence appends its value, in order; a wrong name is refused.
+TEST(OptionTable, ChoiceListAppendsEachOccurrence) {
+  std::vector<Colour> colours;
+  OptionTable table{"test", "[options]", ""};
+  table.ChoiceList("--colour", "colours to compare",
+                   {{"red", Colour::kRed}, {"blue", Colour::kBlue}}, &colours);
+  const Args a({"--colour", "blue", "--colour", "red", "--colour", "blue"});
+  ASSERT_EQ(table.Parse(a.span()), ParseOutcome::kRun);
+  EXPECT_EQ(colours, (std::vector<Colour>{Colour::kBlue, Colour::kRed, Colour::kBlue}));
+  std::vector<Colour> refused;
+  OptionTable other{"test", "[options]", ""};
+  other.ChoiceList("--colour", "colours", {{"red", Colour::kRed}}, &refused);
+  const Args bad({"--colour", "green"});
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(other.Parse(bad.span()), ParseOutcome::kRefused);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("--colour 'green': expected red"),
+            std::string::npos);
+  EXPECT_TRUE(refused.empty());
+}
+
 }  // namespace
 }  // namespace skyloc::cli

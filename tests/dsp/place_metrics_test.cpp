@@ -25,10 +25,9 @@ TEST(PlaceMetrics, HandComputedCurve) {
                                          {0.5f, true, true},
                                          {0.2f, true, false},
                                          {0.3f, false, false}};
-  std::vector<std::size_t> order(m.size());
-  std::vector<PrPoint> curve(m.size());
-  const std::size_t n = PrecisionRecallCurve(m, order, curve);
-  ASSERT_EQ(n, 4u);
+  const PrecisionRecall pr = EvaluatePrecisionRecall(m);
+  const std::vector<PrPoint>& curve = pr.curve;
+  ASSERT_EQ(curve.size(), 4u);
   const double p[4] = {1.0, 0.5, 0.5, 0.6}, r[4] = {0.25, 1.0 / 3, 2.0 / 3, 1.0};
   const float u[4] = {0.1f, 0.2f, 0.3f, 0.5f};
   for (std::size_t i = 0; i < 4; ++i) {
@@ -38,7 +37,7 @@ TEST(PlaceMetrics, HandComputedCurve) {
   }
   EXPECT_EQ(curve[2].false_positives, 2);
   EXPECT_EQ(curve[2].false_negatives, 1);
-  const PrSummary s = SummarisePrecisionRecall(m, std::span<const PrPoint>(curve.data(), n));
+  const PrSummary& s = pr.summary;
   EXPECT_EQ(s.evaluated, 5);
   EXPECT_EQ(s.with_ground_truth, 4);
   EXPECT_EQ(s.correct, 3);
@@ -49,20 +48,19 @@ TEST(PlaceMetrics, HandComputedCurve) {
 
 TEST(PlaceMetrics, PerfectAndHopelessRuns) {
   const std::vector<EvaluatedMatch> perfect = {{0.2f, true, true}, {0.4f, true, true}};
-  std::vector<std::size_t> order(2);
-  std::vector<PrPoint> curve(2);
-  std::size_t n = PrecisionRecallCurve(perfect, order, curve);
-  PrSummary s = SummarisePrecisionRecall(perfect, std::span<const PrPoint>(curve.data(), n));
+  PrSummary s = EvaluatePrecisionRecall(perfect).summary;
   EXPECT_DOUBLE_EQ(s.precision_at_full_recall, 1.0);
   EXPECT_DOUBLE_EQ(s.recall_at_full_precision, 1.0);
   EXPECT_DOUBLE_EQ(s.area_under_curve, 1.0);
   const std::vector<EvaluatedMatch> hopeless = {{0.2f, true, false}, {0.4f, true, false}};
-  n = PrecisionRecallCurve(hopeless, order, curve);
-  s = SummarisePrecisionRecall(hopeless, std::span<const PrPoint>(curve.data(), n));
+  s = EvaluatePrecisionRecall(hopeless).summary;
   EXPECT_DOUBLE_EQ(s.precision_at_full_recall, 0.0);
   EXPECT_DOUBLE_EQ(s.recall_at_full_precision, 0.0);
   EXPECT_DOUBLE_EQ(s.area_under_curve, 0.0);
-  EXPECT_EQ(PrecisionRecallCurve({}, order, curve), 0u);
+  const PrecisionRecall none = EvaluatePrecisionRecall({});
+  EXPECT_TRUE(none.curve.empty());
+  EXPECT_EQ(none.summary.evaluated, 0);
+  EXPECT_DOUBLE_EQ(none.summary.area_under_curve, 0.0);
 }
 
 // A reference run along x at 1 m steps that stops at x = 3 for five frames (3..7).

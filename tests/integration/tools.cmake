@@ -23,7 +23,7 @@ skyloc_expect_output(cli.eval_attitude_dataset COMMAND ${CMAKE_COMMAND} -DCMD=${
   -P ${CMAKE_CURRENT_SOURCE_DIR}/eval_attitude.cmake OUTPUT "all checks passed")
 set_tests_properties(cli.eval_attitude_dataset PROPERTIES TIMEOUT 600)
 add_test(NAME cli.eval_missing_dataset_exits_1 COMMAND ${CMAKE_COMMAND}
-  -DCMD=${skyloc_exe} "-DARGS=eval;--reference;/nonexistent/ref;--query;/nonexistent/q;--out;/tmp/x"
+  -DCMD=${skyloc_exe} "-DARGS=eval;--reference;/nonexistent/ref;--query;/nonexistent/q;--out;${CMAKE_CURRENT_BINARY_DIR}/eval_never_written"
   -DEXPECT_RC=1 -DEXPECT_STDERR=/nonexistent/ref\ does\ not\ exist
   "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
 # The streaming test's datasets are 64x48: a camera file for 640x480 is refused by name.
@@ -40,7 +40,7 @@ set_tests_properties(cli.eval_camera_size_mismatch_exits_1 PROPERTIES
 file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/paper_grid.toml "[descriptor]\ngrid = \"paper\"\n")
 add_test(NAME cli.eval_bands_on_paper_grid_exits_1 COMMAND ${CMAKE_COMMAND}
   -DCMD=${skyloc_exe}
-  "-DARGS=eval;--reference;/nonexistent/ref;--query;/nonexistent/q;--out;/tmp/x;--config;${CMAKE_CURRENT_BINARY_DIR}/paper_grid.toml;--bands;64"
+  "-DARGS=eval;--reference;/nonexistent/ref;--query;/nonexistent/q;--out;${CMAKE_CURRENT_BINARY_DIR}/eval_never_written;--config;${CMAKE_CURRENT_BINARY_DIR}/paper_grid.toml;--bands;64"
   -DEXPECT_RC=1 -DEXPECT_STDERR=grid\ =\ \"paper\"\ has\ 120\ bands
   "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
 add_test(NAME cli.eval_bad_ds_exits_2 COMMAND ${CMAKE_COMMAND}
@@ -87,6 +87,11 @@ add_test(NAME cli.eval_surf1d COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK=${CMAKE_CURRENT_BINARY_DIR}/eval_surf1d "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
   -P ${CMAKE_CURRENT_SOURCE_DIR}/eval_surf1d.cmake)
 
+# One metrics.json schema: eval's and an experiment's files share it (docs/METRICS.md).
+skyloc_expect_output(cli.metrics_schema_shared COMMAND ${CMAKE_COMMAND}
+  -DGEN=$<TARGET_FILE:make_eval_datasets> -DCMD=${skyloc_exe}
+  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/metrics_schema "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"
+  -P ${CMAKE_CURRENT_SOURCE_DIR}/metrics_schema.cmake OUTPUT "all checks passed")
 # The experiments.
 add_test(NAME cli.experiment_writes_outputs COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR} "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}"

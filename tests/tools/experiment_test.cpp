@@ -51,7 +51,8 @@ TEST(Experiment, FabmapWithoutWordsIsAnError) {
   run.trajectory.resize(3);
   ExperimentOptions options;
   MethodScore score;
-  const Status s = ScoreRuns(run, run, RunDescriptor::kFabmap, options, &score);
+  const Status s = ScoreRuns(run, run, ScoredDescriptor::kFabmap, firmware::Matcher::kOpenSeqSlam,
+                             options, &score);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(std::string(s.message()).find("FAB-MAP"), std::string::npos) << s.message();
 }

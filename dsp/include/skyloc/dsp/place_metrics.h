@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <span>
+#include <vector>
 
 namespace skyloc::dsp {
 
@@ -102,14 +103,15 @@ struct MatchTolerance {
 bool MatchIsCorrect(int matched, const TruthInterval& truth, const MatchTolerance& tolerance,
                     std::span<const Position3> reference, const Position3& query);
 
-// Fills `curve` (needs matches.size() points at most) from the strictest threshold to the
-// loosest and returns the number of points written. `order` is scratch of matches.size()
-// indices. Allocates nothing.
-std::size_t PrecisionRecallCurve(std::span<const EvaluatedMatch> matches,
-                                 std::span<std::size_t> order, std::span<PrPoint> curve);
+// The precision-recall curve of the evaluated matches, from the strictest threshold to the
+// loosest, and its summary: the one precision-recall computation of the session's report,
+// `skyloc eval` and the experiments. Offline (after a run): it allocates the curve.
+struct PrecisionRecall {
+  std::vector<PrPoint> curve;
+  PrSummary summary;
+};
 
-PrSummary SummarisePrecisionRecall(std::span<const EvaluatedMatch> matches,
-                                   std::span<const PrPoint> curve);
+PrecisionRecall EvaluatePrecisionRecall(std::span<const EvaluatedMatch> matches);
 
 // ---- Heading error: eval and the heading experiment --------------------------
 
