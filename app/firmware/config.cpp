@@ -306,6 +306,9 @@ const char* SegmentationMethodName(SegmentationMethod method) {
 const char* GridPresetName(GridPreset preset) {
   return NameOf(kGridPresets, preset);
 }
+bool GridPresetFromName(std::string_view name, GridPreset* out) {
+  return ValueOf(kGridPresets, name, out);
+}
 bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out) {
   return ValueOf(kNormalisations, name, out);
 }

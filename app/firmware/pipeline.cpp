@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "firmware/descriptor.h"
 #include "skyloc/drivers/camera_file.h"
 
 namespace skyloc::firmware {
@@ -143,22 +144,8 @@ Status Pipeline::Init(const Config& config) {
   if (const dsp::LensError e = lens_.Init(lens_params); e != dsp::LensError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "lens: %s", dsp::LensErrorMessage(e));
 
-  dsp::SkyDescriptorOptions options;
-  options.bands = config.descriptor.bands;
-  options.grid.rings = config.descriptor.rings;
-  options.grid.longitudes = config.descriptor.longitudes;
-  options.segmentation.fixed_threshold =
-      config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold : -1;
-  options.normalisation = config.descriptor.normalisation;
-  if (config.attitude.kind != AttitudeKind::kNone) {
-    // The cap from the largest expected tilt and what the lens sees (max_theta: half its
-    // field of view, whatever the model).
-    constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-    options.cap.enabled = true;
-    options.cap.elevation_deg =
-        dsp::CapElevationForTilt(config.attitude.max_tilt_deg, 2 * lens_.max_theta() * kRadToDeg);
-    options.cap.taper_deg = config.attitude.cap_taper_deg;
-  }
+  const dsp::SkyDescriptorOptions options =
+      SkyDescriptorOptionsFrom(config, lens_, config.attitude.kind != AttitudeKind::kNone);
   uses_attitude_ = options.cap.enabled;
   if (const dsp::DescriptorError e = descriptor_.Init(lens_, options); !e.ok())
     return Status::Error(
@@ -188,8 +175,8 @@ Status Pipeline::Init(const Config& config) {
   route_settings_ = {};
   route_settings_.descriptor_kind = kDescriptorSkyShAmplitudes;
   route_settings_.bands = static_cast<std::uint32_t>(descriptor_.bands());
-  route_settings_.rings = static_cast<std::uint32_t>(config.descriptor.rings);
-  route_settings_.longitudes = static_cast<std::uint32_t>(config.descriptor.longitudes);
+  route_settings_.rings = static_cast<std::uint32_t>(options.grid.rings);
+  route_settings_.longitudes = static_cast<std::uint32_t>(options.grid.longitudes);
   route_settings_.dim = static_cast<std::uint32_t>(descriptor_.bands());
   route_settings_.normalisation = static_cast<std::uint32_t>(config.descriptor.normalisation);
   route_settings_.lens_hash = LensHash(lens_params);
@@ -339,8 +326,11 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
       return Status::Error(StatusCode::kDataLoss, "frame %llu: horizon strip: %s",
                            static_cast<unsigned long long>(result->frame),
                            dsp::HorizonStripErrorMessage(e));
-    for (std::size_t j = 0; j < strip_.size(); ++j)
-      strip_bytes_[j] = static_cast<std::uint8_t>(std::lround(std::clamp(strip_[j], 0.0f, 255.0f)));
+    if (const dsp::HorizonStripError e = dsp::StripToBytes(strip_.span(), strip_bytes_.span());
+        e != dsp::HorizonStripError::kOk)
+      return Status::Error(StatusCode::kInternal, "frame %llu: horizon strip: %s",
+                           static_cast<unsigned long long>(result->frame),
+                           dsp::HorizonStripErrorMessage(e));
   }
   return Status::Ok();
 }
