@@ -25,7 +25,9 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/eval_descriptor.h"
 #include "firmware/config.h"
+#include "firmware/descriptor.h"
 #include "firmware/pipeline.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
@@ -402,32 +404,22 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
     if (o.fov_deg)
       lp.fov_deg = *o.fov_deg;
     SKYLOC_TRY(drivers::InitLens(lp, source.c_str(), &lens_of_run));
-    // The firmware's descriptor ([descriptor] of --config, else the built-in defaults), as
-    // the robot computes it; --bands has already replaced the bands (Evaluate).
-    options_of_run.bands = o.config.descriptor.bands;
-    options_of_run.grid.rings = o.config.descriptor.rings;
-    options_of_run.grid.longitudes = o.config.descriptor.longitudes;
-    options_of_run.normalisation = o.config.descriptor.normalisation;
-    if (o.attitude_from_dataset) {
-      // The firmware's rule (app/src/pipeline.cpp): the cap from the largest tilt and what
-      // the lens sees.
-      constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-      options_of_run.cap.enabled = true;
-      options_of_run.cap.elevation_deg =
-          dsp::CapElevationForTilt(o.max_tilt_deg.value_or(o.config.attitude.max_tilt_deg),
-                                   2 * lens_of_run.max_theta() * kRadToDeg);
-      options_of_run.cap.taper_deg = o.config.attitude.cap_taper_deg;
-    }
+    // The firmware's descriptor ([descriptor] and [segmentation] of --config, else the
+    // built-in defaults), as the robot computes it; --bands has already replaced the bands
+    // (Evaluate).
+    options_of_run =
+        EvalSkyDescriptorOptions(o.config, lens_of_run, o.attitude_from_dataset, o.max_tilt_deg);
     d.dim = options_of_run.bands;
   } else {
     d.dim = dsp::kVanillaDescriptorSize;
   }
   // The firmware's horizon strip, for the heading of the correctly matched frames.
   dsp::HorizonStrip horizon;
-  if (method == Method::kSky && o.config.heading.enabled()) {
-    if (const dsp::HorizonStripError e = horizon.Init(lens_of_run, o.config.heading.strip);
+  const std::optional<dsp::HorizonStripOptions> strip_options = StripOptionsFrom(o.config);
+  if (method == Method::kSky && strip_options) {
+    if (const dsp::HorizonStripError e = horizon.Init(lens_of_run, *strip_options);
         e == dsp::HorizonStripError::kOk)
-      d.strip_columns = o.config.heading.strip.n_azimuth;
+      d.strip_columns = strip_options->n_azimuth;
     else
       std::fprintf(stderr, "skyloc eval: %s: no heading: %s\n", dir.c_str(),
                    dsp::HorizonStripErrorMessage(e));
@@ -501,9 +493,11 @@ Result<Descriptors> ComputeDescriptors(Method method, const std::string& dir, co
             e != dsp::HorizonStripError::kOk)
           return Status::Error(StatusCode::kDataLoss, "%s: horizon strip: %s",
                                dataset.FramePath(i).c_str(), dsp::HorizonStripErrorMessage(e));
-        for (std::size_t j = 0; j < strip_columns; ++j)
-          d.strips[i * strip_columns + j] =
-              static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
+        if (const dsp::HorizonStripError e = dsp::StripToBytes(
+                strip, std::span<std::uint8_t>(d.strips).subspan(i * strip_columns, strip_columns));
+            e != dsp::HorizonStripError::kOk)
+          return Status::Error(StatusCode::kInternal, "%s: horizon strip: %s",
+                               dataset.FramePath(i).c_str(), dsp::HorizonStripErrorMessage(e));
       }
     } else {
       const dsp::VanillaError ve = dsp::VanillaDescriptor(image.view(), out);
@@ -1334,6 +1328,14 @@ Status Evaluate(EvalOptions o) {
 }
 
 }  // namespace
+
+dsp::SkyDescriptorOptions EvalSkyDescriptorOptions(Config config, const dsp::Lens& lens,
+                                                   bool attitude_from_dataset,
+                                                   std::optional<double> max_tilt_deg) {
+  if (max_tilt_deg)
+    config.attitude.max_tilt_deg = *max_tilt_deg;
+  return SkyDescriptorOptionsFrom(config, lens, attitude_from_dataset);
+}
 
 int RunEval(std::span<char* const> args) {
   EvalOptions options;
