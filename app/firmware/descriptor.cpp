@@ -9,8 +9,7 @@ double LensFieldOfViewDeg(const dsp::Lens& lens) {
 
 dsp::SkyDescriptorOptions SkyDescriptorOptionsFrom(const Config& config, const dsp::Lens& lens,
                                                    bool with_attitude) {
-  DescriptorConfig descriptor = config.descriptor;
-  ResolveDescriptorGrid(&descriptor);  // a configuration built in code may not have been
+  const DescriptorConfig& descriptor = config.descriptor;
   dsp::SkyDescriptorOptions options;
   options.bands = descriptor.bands;
   options.grid.rings = descriptor.rings;

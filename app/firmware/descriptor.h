@@ -17,8 +17,9 @@ namespace skyloc::firmware {
 // model: twice the largest angle from the optical axis it sees.
 double LensFieldOfViewDeg(const dsp::Lens& lens);
 
-// Everything that defines the sky descriptor: [descriptor] bands, grid (resolved from the
-// preset and the bands; custom: rings and longitudes as given) and normalisation,
+// Everything that defines the sky descriptor: [descriptor] bands, rings and longitudes (as
+// ResolveDescriptorGrid left them: a tool that changes the bands or the grid resolves
+// again) and normalisation,
 // [segmentation]'s fixed threshold (method = fixed; Otsu otherwise) and, with_attitude, the
 // gravity-aligned cap: its lower edge from [attitude] max_tilt_deg and the lens's field of
 // view (dsp::CapElevationForTilt), its taper [attitude] cap_taper_deg.

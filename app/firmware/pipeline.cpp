@@ -175,8 +175,8 @@ Status Pipeline::Init(const Config& config) {
   route_settings_ = {};
   route_settings_.descriptor_kind = kDescriptorSkyShAmplitudes;
   route_settings_.bands = static_cast<std::uint32_t>(descriptor_.bands());
-  route_settings_.rings = static_cast<std::uint32_t>(options.grid.rings);
-  route_settings_.longitudes = static_cast<std::uint32_t>(options.grid.longitudes);
+  route_settings_.rings = static_cast<std::uint32_t>(config.descriptor.rings);
+  route_settings_.longitudes = static_cast<std::uint32_t>(config.descriptor.longitudes);
   route_settings_.dim = static_cast<std::uint32_t>(descriptor_.bands());
   route_settings_.normalisation = static_cast<std::uint32_t>(config.descriptor.normalisation);
   route_settings_.lens_hash = LensHash(lens_params);

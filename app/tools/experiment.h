@@ -52,7 +52,8 @@ struct ExperimentOptions {
   // normalisation, [segmentation] and [attitude] cap_taper_deg. The defaults are the
   // robot's descriptor (64 bands, oversampled grid, unit_l2); the published tables were
   // made with 120 bands on the "auto" grid (docs/RESULTS.md gives each table's flags).
-  // [attitude] max_tilt_deg is replaced by each experiment's own largest tilt.
+  // [attitude] max_tilt_deg is replaced by each experiment's own largest tilt. After
+  // changing the bands or the grid, firmware::ResolveDescriptorGrid.
   firmware::Config config = firmware::DefaultConfig();
   // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
   // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its

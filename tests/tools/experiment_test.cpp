@@ -16,7 +16,8 @@ TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
   options.height = 60;
   options.config.descriptor.bands = 16;
   options.config.descriptor.grid = firmware::GridPreset::kAuto;  // the paper's grid
-  options.spacing_m = 5.0;                                       // ~100 frames a lap
+  firmware::ResolveDescriptorGrid(&options.config.descriptor);
+  options.spacing_m = 5.0;  // ~100 frames a lap
   options.max_offset_m = 6.0;
   const int differences[] = {0, 40};
   std::vector<TiltRow> rows;

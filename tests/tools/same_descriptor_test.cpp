@@ -175,6 +175,7 @@ TEST(SameDescriptor, TheSettingsChangeTheBits) {
   variants[0].segmentation.method = firmware::SegmentationMethod::kFixed;
   variants[0].segmentation.threshold = 90;
   variants[1].descriptor.grid = firmware::GridPreset::kAuto;
+  firmware::ResolveDescriptorGrid(&variants[1].descriptor);
   variants[2].descriptor.normalisation = dsp::AmplitudeNormalisation::kNone;
   variants[3].attitude.kind = firmware::AttitudeKind::kSim;
   const auto describe = [&](const firmware::Config& config) {
