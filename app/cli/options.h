@@ -69,13 +69,13 @@ class OptionTable {
   void Choice(const char* name, const char* help,
               std::initializer_list<std::pair<const char*, E>> choices, E* out) {
     AddChoice(name, help, Names(choices),
-              [out, choices](std::size_t i) { *out = std::data(choices)[i].second; });
+              [out, values = Values(choices)](std::size_t i) { *out = values[i]; });
   }
   template <typename E>
   void ChoiceList(const char* name, const char* help,
                   std::initializer_list<std::pair<const char*, E>> choices, std::vector<E>* list) {
     AddChoice(name, help, Names(choices),
-              [list, choices](std::size_t i) { list->push_back(std::data(choices)[i].second); });
+              [list, values = Values(choices)](std::size_t i) { list->push_back(values[i]); });
   }
   // A value the command parses itself (e.g. "X,Y"): `parse` returns false and sets
   // `expected` (what a good value looks like) to refuse it.
@@ -112,6 +112,15 @@ class OptionTable {
     for (const auto& c : choices)
       names.emplace_back(c.first);
     return names;
+  }
+  // The values copied out: an initializer_list's array lives only until the call returns,
+  // and the table parses later.
+  template <typename E>
+  static std::vector<E> Values(std::initializer_list<std::pair<const char*, E>> choices) {
+    std::vector<E> values;
+    for (const auto& c : choices)
+      values.push_back(c.second);
+    return values;
   }
   void AddChoice(const char* name, const char* help, std::vector<std::string> names,
                  std::function<void(std::size_t)> pick);
