@@ -7,10 +7,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/describe.h"
+#include "cli/options.h"
+#include "firmware/descriptor.h"
+#include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/lens.h"
@@ -19,119 +26,114 @@
 namespace skyloc::cli {
 namespace {
 
-constexpr char kUsage[] =
-    "usage: skyloc describe [--camera FILE.toml] [--bands L] [--grid default|oversampled|paper]\n"
-    "                       [--json]\n"
-    "                       [--lens equidistant|equisolid|equirectangular] [--fov DEG]\n"
-    "                       [--centre X,Y] [--radius PX] IMAGE...\n"
-    "\n"
-    "Prints, per image (PNG, PGM, PPM), the Otsu threshold, the sky fraction and the\n"
-    "spherical-harmonic amplitude spectrum a_0..a_(L-1).\n"
-    "\n"
-    "  --camera FILE  camera file (docs/CAMERA_FILE.md). Without one, a square-ish image is\n"
-    "                 an equidistant 185-degree fisheye filling the image circle and a 2:1\n"
-    "                 image an equirectangular panorama\n"
-    "  --bands L      number of bands, 1..512 (default 120)\n"
-    "  --grid G       'default' (the minimal unaliased grid for L bands), 'oversampled' (the\n"
-    "                 firmware's: the unaliased grid for 1.5 L; with --bands 64 the\n"
-    "                 firmware's default descriptor before its normalisation) or 'paper'\n"
-    "                 (2000 points)\n"
-    "  --json         one JSON object per line: file, threshold, sky_fraction, amplitudes\n"
-    "  --lens, --fov, --centre, --radius  override the camera file or the guess\n"
+constexpr char kDescription[] =
+    "Prints, per image (PNG, PGM, PPM), the segmentation threshold, the sky fraction and\n"
+    "the spherical-harmonic amplitude spectrum a_0..a_(L-1), as the robot describes a\n"
+    "frame (firmware::SkyDescriptorOptionsFrom): the descriptor of --config (default: the\n"
+    "built-in one, 64 bands on the oversampled grid, unit_l2), its [segmentation] and,\n"
+    "when [attitude] kind is not none, the gravity-aligned cap as if level. --bands,\n"
+    "--grid and --normalisation replace the configuration's. The paper's descriptor is\n"
+    "--bands 120 --grid auto --normalisation none.\n"
     "\n"
     "Exit status: 0 all images described, 1 some image failed (the others are still\n"
     "described), 2 bad command line.\n";
 
 struct Options {
-  const char* camera = nullptr;
-  int bands = 120;
-  enum class Grid : std::uint8_t { kDefault, kOversampled, kPaper } grid = Grid::kDefault;
+  std::string camera;
+  std::string config_path;
+  DescribeDescriptorFlags descriptor;
   bool json = false;
   std::optional<dsp::LensModel> lens;
   std::optional<double> fov_deg;
   std::optional<double> centre_x, centre_y;
   std::optional<double> radius_px;
-  std::vector<const char*> images;
+  std::vector<std::string> images;
 };
-
-int Usage(std::string_view what, std::string_view value = {}) {
-  return UsageError("describe", what, value);
-}
 
 // Returns kExitOk when parsed, else the exit code (help: kExitOk via `done`).
 int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   *done = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const char* a = args[i];
-    const auto value = [&]() -> const char* { return i + 1 < args.size() ? args[++i] : nullptr; };
-    if (IsHelpFlag(a)) {
-      std::fputs(kUsage, stdout);
-      *done = true;
-      return kExitOk;
+  int bands = 0;
+  firmware::GridPreset grid = firmware::GridPreset::kOversampled;
+  dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kUnitL2;
+  dsp::LensModel lens = dsp::LensModel::kEquidistant;
+  double fov = 0, radius = 0;
+  OptionTable t("describe", "[options] IMAGE...", kDescription);
+  t.Text("--camera", "FILE.toml",
+         "camera file (docs/CAMERA_FILE.md). Without one, a square-ish image is an equidistant "
+         "185-degree fisheye filling the image circle and a 2:1 image an equirectangular "
+         "panorama",
+         &o->camera);
+  t.Text("--config", "FILE.toml",
+         "the firmware configuration whose [descriptor], [segmentation] and [attitude] "
+         "describe the images (default: the built-in defaults)",
+         &o->config_path);
+  t.Int("--bands", "L", "number of bands (default: [descriptor] bands, 64)", 1, dsp::kMaxShBands,
+        &bands);
+  using firmware::GridPreset;
+  using firmware::GridPresetName;
+  t.Choice("--grid",
+           "the sampling grid: oversampled (the firmware's: the unaliased grid for 1.5 L; the "
+           "default), auto (the minimal unaliased grid for L bands) or paper (2000 points)",
+           {{GridPresetName(GridPreset::kOversampled), GridPreset::kOversampled},
+            {GridPresetName(GridPreset::kAuto), GridPreset::kAuto},
+            {GridPresetName(GridPreset::kPaper), GridPreset::kPaper}},
+           &grid);
+  using dsp::AmplitudeNormalisation;
+  using dsp::AmplitudeNormalisationName;
+  t.Choice(
+      "--normalisation",
+      "of the spectrum: unit_l2 (the firmware's default), none (the paper's eq. 3) or "
+      "divide_by_a0",
+      {{AmplitudeNormalisationName(AmplitudeNormalisation::kUnitL2),
+        AmplitudeNormalisation::kUnitL2},
+       {AmplitudeNormalisationName(AmplitudeNormalisation::kNone), AmplitudeNormalisation::kNone},
+       {AmplitudeNormalisationName(AmplitudeNormalisation::kDivideByA0),
+        AmplitudeNormalisation::kDivideByA0}},
+      &normalisation);
+  t.Flag("--json", "one JSON object per line: file, threshold, sky_fraction, amplitudes", &o->json);
+  t.Choice("--lens", "override the lens model (other models need a camera file)",
+           {{"equidistant", dsp::LensModel::kEquidistant},
+            {"equisolid", dsp::LensModel::kEquisolid},
+            {"equirectangular", dsp::LensModel::kEquirectangular}},
+           &lens);
+  t.Number("--fov", "DEG", "override the field of view", {0, 360, true, false}, &fov);
+  const auto centre = [o](const char* text, std::string* expected) {
+    double x = 0, y = 0;
+    char* end = nullptr;
+    if (!ParseFiniteDouble(text, &x, &end) || *end != ',' || !ParseFiniteDouble(end + 1, &y)) {
+      *expected = "X,Y in pixels (e.g. 319.5,239.5)";
+      return false;
     }
-    if (std::strcmp(a, "--json") == 0) {
-      o->json = true;
-    } else if (std::strcmp(a, "--camera") == 0) {
-      if ((o->camera = value()) == nullptr)
-        return Usage("%s needs a camera file (TOML)", a);
-    } else if (std::strcmp(a, "--bands") == 0) {
-      const char* v = value();
-      double bands = 0;
-      if (v == nullptr || !ParseFiniteDouble(v, &bands) || bands != std::floor(bands) ||
-          bands < 1 || bands > dsp::kMaxShBands)
-        return Usage("--bands needs a whole number from 1 to 512, not '%s'", v ? v : "");
-      o->bands = static_cast<int>(bands);
-    } else if (std::strcmp(a, "--grid") == 0) {
-      const char* v = value();
-      if (v != nullptr && std::strcmp(v, "paper") == 0)
-        o->grid = Options::Grid::kPaper;
-      else if (v != nullptr && std::strcmp(v, "oversampled") == 0)
-        o->grid = Options::Grid::kOversampled;
-      else if (v != nullptr && std::strcmp(v, "default") == 0)
-        o->grid = Options::Grid::kDefault;
-      else
-        return Usage("--grid must be 'default', 'oversampled' or 'paper', not '%s'", v ? v : "");
-    } else if (std::strcmp(a, "--lens") == 0) {
-      const char* v = value();
-      dsp::LensModel model;
-      if (v == nullptr || !dsp::ParseLensModel(v, &model) ||
-          model == dsp::LensModel::kKannalaBrandt || model == dsp::LensModel::kOCamCalib ||
-          model == dsp::LensModel::kPinhole)
-        return Usage(
-            "--lens must be equidistant, equisolid or equirectangular (other "
-            "models need a camera file), not '%s'",
-            v ? v : "");
-      o->lens = model;
-    } else if (std::strcmp(a, "--fov") == 0) {
-      const char* v = value();
-      double fov = 0;
-      if (v == nullptr || !ParseFiniteDouble(v, &fov) || !(fov > 0 && fov <= 360))
-        return Usage("--fov needs a field of view in (0, 360] degrees, not '%s'", v ? v : "");
-      o->fov_deg = fov;
-    } else if (std::strcmp(a, "--centre") == 0 || std::strcmp(a, "--center") == 0) {
-      const char* v = value();
-      double x = 0, y = 0;
-      char* end = nullptr;
-      if (v == nullptr || !ParseFiniteDouble(v, &x, &end) || *end != ',' ||
-          !ParseFiniteDouble(end + 1, &y))
-        return Usage("--centre needs X,Y in pixels (e.g. 319.5,239.5), not '%s'", v ? v : "");
-      o->centre_x = x;
-      o->centre_y = y;
-    } else if (std::strcmp(a, "--radius") == 0) {
-      const char* v = value();
-      double r = 0;
-      if (v == nullptr || !ParseFiniteDouble(v, &r) || !(r > 0))
-        return Usage("--radius needs a positive image-circle radius in pixels, not '%s'",
-                     v ? v : "");
-      o->radius_px = r;
-    } else if (a[0] == '-' && a[1] != '\0') {
-      return Usage("unknown option '%s'", a);
-    } else {
-      o->images.push_back(a);
-    }
+    o->centre_x = x;
+    o->centre_y = y;
+    return true;
+  };
+  t.Custom("--centre", "X,Y", "override the image circle's centre (pixels)", centre);
+  t.Custom("--center", "X,Y", "as --centre", centre);
+  t.Number("--radius", "PX", "override the image circle's radius (pixels)", kPositive, &radius);
+  t.Positional("IMAGE", "the images to describe", 0, std::numeric_limits<std::size_t>::max(),
+               &o->images);
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
+    *done = outcome == ParseOutcome::kHelpPrinted;
+    return ExitCode(outcome);
   }
   if (o->images.empty())
-    return Usage("no image given: pass one or more PNG/PGM/PPM files");
+    return t.Refuse("no image given: pass one or more PNG/PGM/PPM files");
+  if (t.Given("--centre") && t.Given("--center"))
+    return t.Refuse("give --centre or --center, not both");
+  if (t.Given("--bands"))
+    o->descriptor.bands = bands;
+  if (t.Given("--grid"))
+    o->descriptor.grid = grid;
+  if (t.Given("--normalisation"))
+    o->descriptor.normalisation = normalisation;
+  if (t.Given("--lens"))
+    o->lens = lens;
+  if (t.Given("--fov"))
+    o->fov_deg = fov;
+  if (t.Given("--radius"))
+    o->radius_px = radius;
   return kExitOk;
 }
 
@@ -145,7 +147,7 @@ Result<dsp::LensParams> LensFor(const Options& o, const dsp::LensParams* camera,
       return Status::Error(StatusCode::kInvalidArgument,
                            "'%s' is %dx%d but camera file '%s' describes %dx%d images: use the "
                            "camera file made for this camera",
-                           image_path, width, height, o.camera, p.width, p.height);
+                           image_path, width, height, o.camera.c_str(), p.width, p.height);
   } else if (Result<dsp::LensParams> guess = drivers::GuessLensForImage(width, height, image_path);
              guess.ok()) {
     p = *guess;
@@ -218,6 +220,26 @@ bool SameLens(const dsp::LensParams& a, const dsp::LensParams& b) {
 
 }  // namespace
 
+firmware::Config DescribeConfig(firmware::Config config, const DescribeDescriptorFlags& flags) {
+  if (flags.bands)
+    config.descriptor.bands = *flags.bands;
+  if (flags.grid)
+    config.descriptor.grid = *flags.grid;
+  if (flags.normalisation)
+    config.descriptor.normalisation = *flags.normalisation;
+  firmware::ResolveDescriptorGrid(&config.descriptor);
+  return config;
+}
+
+Status InitDescribeDescriptor(const firmware::Config& config, const dsp::Lens& lens,
+                              dsp::SkyDescriptor* descriptor) {
+  const dsp::SkyDescriptorOptions options = firmware::SkyDescriptorOptionsFrom(
+      config, lens, config.attitude.kind != firmware::AttitudeKind::kNone);
+  if (const dsp::DescriptorError e = descriptor->Init(lens, options); !e.ok())
+    return firmware::DspStatus(e, "sky descriptor");
+  return Status::Ok();
+}
+
 int RunDescribe(std::span<char* const> args) {
   Options o;
   bool done = false;
@@ -225,27 +247,31 @@ int RunDescribe(std::span<char* const> args) {
     return rc;
 
   std::optional<dsp::LensParams> camera;
-  if (o.camera != nullptr) {
-    Result<dsp::LensParams> loaded = drivers::LoadCameraFile(o.camera);
+  if (!o.camera.empty()) {
+    Result<dsp::LensParams> loaded = drivers::LoadCameraFile(o.camera.c_str());
     if (!loaded.ok()) {
       std::fprintf(stderr, "skyloc describe: %s\n", loaded.status().message());
       return kExitFailure;
     }
     camera = *loaded;
   }
-
-  dsp::SkyDescriptorOptions descriptor_options;
-  descriptor_options.bands = o.bands;
-  if (o.grid == Options::Grid::kPaper)
-    descriptor_options.grid = dsp::PaperShGridConfig();
-  else if (o.grid == Options::Grid::kOversampled)
-    descriptor_options.grid = dsp::OversampledShGridConfig(o.bands);
-  std::vector<float> amplitudes(static_cast<std::size_t>(o.bands));
+  firmware::Config base = firmware::DefaultConfig();
+  if (!o.config_path.empty()) {
+    Result<firmware::Config> loaded = firmware::LoadConfigFile(o.config_path.c_str());
+    if (!loaded.ok()) {
+      std::fprintf(stderr, "skyloc describe: %s\n", loaded.status().message());
+      return kExitFailure;
+    }
+    base = *std::move(loaded);
+  }
+  const firmware::Config config = DescribeConfig(base, o.descriptor);
+  std::vector<float> amplitudes(static_cast<std::size_t>(config.descriptor.bands));
   dsp::SkyDescriptor descriptor;
   std::optional<dsp::LensParams> descriptor_lens;  // what `descriptor` was built for
 
   int failed = 0;
-  for (const char* path : o.images) {
+  for (const std::string& image_path : o.images) {
+    const char* path = image_path.c_str();
     const auto fail = [&](const Status& s) {
       std::fprintf(stderr, "skyloc describe: %s\n", s.message());
       ++failed;
@@ -266,13 +292,14 @@ int RunDescribe(std::span<char* const> args) {
       descriptor_lens.reset();
       dsp::Lens lens;
       if (Status s = drivers::InitLens(
-              *params, o.camera ? o.camera : "--lens/--fov/--centre/--radius", &lens);
+              *params, !o.camera.empty() ? o.camera.c_str() : "--lens/--fov/--centre/--radius",
+              &lens);
           !s.ok()) {
         fail(s.AddContext("'%s'", path));
         continue;
       }
-      if (const dsp::DescriptorError e = descriptor.Init(lens, descriptor_options); !e.ok()) {
-        fail(Status::Error(StatusCode::kInvalidArgument, "'%s': %s", path, e.message));
+      if (Status s = InitDescribeDescriptor(config, lens, &descriptor); !s.ok()) {
+        fail(s.AddContext("'%s'", path));
         continue;
       }
       descriptor_lens = *params;
@@ -280,7 +307,7 @@ int RunDescribe(std::span<char* const> args) {
     dsp::SegmentationResult segmentation;
     if (const dsp::DescriptorError e = descriptor.Compute(image->view(), amplitudes, &segmentation);
         !e.ok()) {
-      fail(Status::Error(StatusCode::kInvalidArgument, "'%s': %s", path, e.message));
+      fail(firmware::DspStatus(e, "'%s'", path));
       continue;
     }
     PrintResult(o, path, segmentation, amplitudes);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "firmware/config.h"
 #include "firmware/pipeline.h"
 #include "skyloc/dsp/localisation_state.h"
@@ -33,9 +34,8 @@ using namespace skyloc::firmware;
 using namespace skyloc::tools;
 namespace {
 
-constexpr const char* kUsage =
-    "usage: skyloc experiment tilt|manoeuvre|ants|speed|heading|surf1d --out DIR [options]\n"
-    "\n"
+constexpr const char* kDescription =
+    "The paper's experiments on simulated runs (docs/RESULTS.md):\n"
     "  tilt       City loop, runs at tilt -30..30 paired alpha1 ~ -alpha2 (differences\n"
     "             0..60): recall at 100 % precision, sky vs vanilla SeqSLAM\n"
     "  manoeuvre  forest (BMX) and repetitive (Disposal) worlds, reference at noon vs a\n"
@@ -50,34 +50,9 @@ constexpr const char* kUsage =
     "             poses, on frames the route filter matches correctly\n"
     "  surf1d     the 1D SURF paper's ROC experiment, turning on the spot in the city\n"
     "             (own options: skyloc experiment surf1d --help)\n"
-    "\n"
-    "options:\n"
-    "  --width W --height H   image size (default 320x240)\n"
-    "  --bands N              SH bands of the sky descriptor (default 120, as the paper)\n"
-    "  --grid G               its sampling grid: auto (the minimal unaliased grid for the\n"
-    "                         bands; default, every published table) or oversampled (the\n"
-    "                         firmware's; --bands 64 --grid oversampled is the firmware's\n"
-    "                         descriptor; docs/SKY_DESCRIPTOR.md, \"Grid\")\n"
-    "  --normalisation N      of the sky descriptor's spectrum: unit_l2 (the firmware's\n"
-    "                         default), none (the paper's eq. 3; the tables measured before\n"
-    "                         2026-11-26) or divide_by_a0\n"
-    "  --spacing M            frame spacing in metres (default 1; ants 0.05)\n"
-    "  --frames N             at most N frames a run (default: whole routes)\n"
-    "  --seed N               procedural world seed (default 1)\n"
-    "  --lateral M            speed: every repeat wanders sideways off the taught line within\n"
-    "                         +-M metres, 0..5 (default 0: on it; skyloc simulate --lateral)\n"
-    "  --data DIR             Seville data folder (default ../shared/data/seville2009)\n"
-    "  --attitude A           the gravity-aligned descriptor's zenith (tilt, manoeuvre,\n"
-    "                         speed): imu (the simulated IMU with noise and bias through\n"
-    "                         the attitude filter; default), truth (the true poses), none,\n"
-    "                         image (estimated from each frame's sky mask, experimental)\n"
-    "  --zenith M             --attitude image's method: skyline (the skyline's mean plane;\n"
-    "                         default) or centroid (the sky's centroid)\n"
-    "  --cap-elevation DEG    the cap's lower edge, 0..80 (default: from the experiment's\n"
-    "                         largest tilt and the 185 degree lens, docs/SKY_DESCRIPTOR.md)\n"
-    "  --vocab VOCAB          tilt, manoeuvre: add FAB-MAP 2.0 on the visible images (the\n"
-    "                         fabmap column) with a vocabulary from `skyloc fabmap-train`,\n"
-    "                         trained on a run of another world (docs/FABMAP.md)\n";
+    "The sky descriptor is the robot's (firmware::SkyDescriptorOptionsFrom: 64 bands on the\n"
+    "oversampled grid, unit_l2) unless --bands, --grid or --normalisation say otherwise; the\n"
+    "published tables used --bands 120 --grid auto.\n";
 
 struct Options {
   std::string name, out, data_dir = "../shared/data/seville2009";
@@ -86,123 +61,96 @@ struct Options {
   bool spacing_given = false;
 };
 
-bool ParseNumber(const char* text, double lo, double hi, double* value) {
-  char* end = nullptr;
-  *value = std::strtod(text, &end);
-  return end != text && *end == '\0' && *value >= lo && *value <= hi;
-}
+constexpr const char* kExperiments[] = {"tilt", "manoeuvre", "ants", "speed", "heading"};
 
-int ParseArgs(std::span<char* const> args, Options* o) {
-  if (args.empty() || args[0][0] == '-') {
-    std::fprintf(stderr,
-                 "skyloc experiment: name the experiment: tilt, manoeuvre, ants, speed, "
-                 "heading or surf1d\n");
-    return kExitUsage;
+// Returns kExitOk when parsed, else the exit code (help: kExitOk via `done`).
+int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
+  *done = false;
+  tools::ExperimentOptions& e = o->experiment;
+  firmware::DescriptorConfig& descriptor = e.config.descriptor;
+  std::vector<std::string> name;
+  OptionTable t("experiment", "tilt|manoeuvre|ants|speed|heading|surf1d --out DIR [options]",
+                kDescription);
+  t.Positional("NAME", "the experiment: tilt, manoeuvre, ants, speed, heading or surf1d", 0, 1,
+               &name);
+  t.Text("--out", "DIR", "the folder the results are written to (required)", &o->out);
+  t.Int("--width", "W", "image width in pixels (default 320)", 16, 4096, &e.width);
+  t.Int("--height", "H", "image height in pixels (default 240)", 16, 4096, &e.height);
+  t.Int("--bands", "N", "SH bands of the sky descriptor (default 64, the robot's; the paper 120)",
+        2, 200, &descriptor.bands);
+  using firmware::GridPreset;
+  using firmware::GridPresetName;
+  t.Choice("--grid",
+           "the sky descriptor's sampling grid: oversampled (the robot's; default), auto (the "
+           "minimal unaliased grid for the bands, every published table) or paper (2000 "
+           "points); docs/SKY_DESCRIPTOR.md, \"Grid\"",
+           {{GridPresetName(GridPreset::kOversampled), GridPreset::kOversampled},
+            {GridPresetName(GridPreset::kAuto), GridPreset::kAuto},
+            {GridPresetName(GridPreset::kPaper), GridPreset::kPaper}},
+           &descriptor.grid);
+  using dsp::AmplitudeNormalisation;
+  using dsp::AmplitudeNormalisationName;
+  t.Choice(
+      "--normalisation",
+      "of the sky descriptor's spectrum: unit_l2 (the robot's; default), none (the "
+      "paper's eq. 3; the tables measured before 2026-11-26) or divide_by_a0",
+      {{AmplitudeNormalisationName(AmplitudeNormalisation::kUnitL2),
+        AmplitudeNormalisation::kUnitL2},
+       {AmplitudeNormalisationName(AmplitudeNormalisation::kNone), AmplitudeNormalisation::kNone},
+       {AmplitudeNormalisationName(AmplitudeNormalisation::kDivideByA0),
+        AmplitudeNormalisation::kDivideByA0}},
+      &descriptor.normalisation);
+  t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
+           &e.spacing_m);
+  t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,
+        &e.max_frames);
+  t.Count("--seed", "N", "procedural world seed (default 1)", &e.world_seed);
+  t.Number("--lateral", "M",
+           "speed: every repeat wanders sideways off the taught line within +-M metres "
+           "(default 0: on it; skyloc simulate --lateral)",
+           {0, 5}, &e.lateral_m);
+  t.Text("--data", "DIR", "Seville data folder (default ../shared/data/seville2009)", &o->data_dir);
+  t.Choice("--attitude",
+           "the gravity-aligned descriptor's zenith (tilt, manoeuvre, speed): imu (the "
+           "simulated IMU with noise and bias through the attitude filter; default), truth "
+           "(the true poses), none, image (estimated from each frame's sky mask, experimental)",
+           {{"none", tools::AttitudeInput::kNone},
+            {"truth", tools::AttitudeInput::kTruth},
+            {"imu", tools::AttitudeInput::kSimulatedImu},
+            {"image", tools::AttitudeInput::kImage}},
+           &e.attitude);
+  t.Choice("--zenith",
+           "--attitude image's method: skyline (the skyline's mean plane; default) or "
+           "centroid (the sky's centroid)",
+           {{"skyline", dsp::ZenithMethod::kSkylinePlane},
+            {"centroid", dsp::ZenithMethod::kSkyCentroid}},
+           &e.zenith.method);
+  t.Number("--cap-elevation", "DEG",
+           "the cap's lower edge (default: from the experiment's largest tilt and the 185 "
+           "degree lens, docs/SKY_DESCRIPTOR.md)",
+           {0, 80}, &e.cap_elevation_deg);
+  t.Text("--vocab", "VOCAB",
+         "tilt, manoeuvre: add FAB-MAP 2.0 on the visible images (the fabmap column) with a "
+         "vocabulary from `skyloc fabmap-train`, trained on a run of another world "
+         "(docs/FABMAP.md)",
+         &o->vocabulary_path);
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
+    *done = outcome == ParseOutcome::kHelpPrinted;
+    return ExitCode(outcome);
   }
-  o->name = args[0];
-  if (o->name != "tilt" && o->name != "manoeuvre" && o->name != "ants" && o->name != "speed" &&
-      o->name != "heading") {
-    std::fprintf(stderr,
-                 "skyloc experiment: unknown experiment '%s' (tilt, manoeuvre, ants, speed, "
-                 "heading, surf1d)\n",
-                 args[0]);
-    return kExitUsage;
-  }
-  for (std::size_t i = 1; i < args.size(); ++i) {
-    const char* flag = args[i];
-    if (i + 1 >= args.size()) {
-      std::fprintf(stderr, "skyloc experiment: %s needs a value (see --help)\n", flag);
-      return kExitUsage;
-    }
-    const char* v = args[++i];
-    double d = 0;
-    auto bad = [&](const char* expected) {
-      std::fprintf(stderr, "skyloc experiment: %s '%s': expected %s\n", flag, v, expected);
-      return kExitUsage;
-    };
-    tools::ExperimentOptions& e = o->experiment;
-    if (std::strcmp(flag, "--out") == 0) {
-      o->out = v;
-    } else if (std::strcmp(flag, "--data") == 0) {
-      o->data_dir = v;
-    } else if (std::strcmp(flag, "--vocab") == 0) {
-      if (o->name != "tilt" && o->name != "manoeuvre") {
-        std::fprintf(stderr, "skyloc experiment %s: --vocab (FAB-MAP) is for tilt and manoeuvre\n",
-                     o->name.c_str());
-        return kExitUsage;
-      }
-      o->vocabulary_path = v;
-    } else if (std::strcmp(flag, "--width") == 0) {
-      if (!ParseNumber(v, 16, 4096, &d) || d != std::floor(d))
-        return bad("pixels within 16..4096");
-      e.width = static_cast<int>(d);
-    } else if (std::strcmp(flag, "--height") == 0) {
-      if (!ParseNumber(v, 16, 4096, &d) || d != std::floor(d))
-        return bad("pixels within 16..4096");
-      e.height = static_cast<int>(d);
-    } else if (std::strcmp(flag, "--bands") == 0) {
-      if (!ParseNumber(v, 2, 200, &d) || d != std::floor(d))
-        return bad("an integer within 2..200");
-      e.bands = static_cast<int>(d);
-    } else if (std::strcmp(flag, "--grid") == 0) {
-      if (std::strcmp(v, "auto") == 0) {
-        e.oversampled_grid = false;
-      } else if (std::strcmp(v, "oversampled") == 0) {
-        e.oversampled_grid = true;
-      } else {
-        return bad("auto or oversampled");
-      }
-    } else if (std::strcmp(flag, "--spacing") == 0) {
-      if (!ParseNumber(v, 0.001, 100, &d))
-        return bad("metres within 0.001..100");
-      e.spacing_m = d;
-      o->spacing_given = true;
-    } else if (std::strcmp(flag, "--frames") == 0) {
-      if (!ParseNumber(v, 20, 1e6, &d) || d != std::floor(d))
-        return bad("an integer of at least 20");
-      e.max_frames = static_cast<int>(d);
-    } else if (std::strcmp(flag, "--attitude") == 0) {
-      if (std::strcmp(v, "none") == 0)
-        e.attitude = tools::AttitudeInput::kNone;
-      else if (std::strcmp(v, "truth") == 0)
-        e.attitude = tools::AttitudeInput::kTruth;
-      else if (std::strcmp(v, "imu") == 0)
-        e.attitude = tools::AttitudeInput::kSimulatedImu;
-      else if (std::strcmp(v, "image") == 0)
-        e.attitude = tools::AttitudeInput::kImage;
-      else
-        return bad("none, truth, imu or image");
-    } else if (std::strcmp(flag, "--zenith") == 0) {
-      if (std::strcmp(v, "skyline") == 0)
-        e.zenith.method = dsp::ZenithMethod::kSkylinePlane;
-      else if (std::strcmp(v, "centroid") == 0)
-        e.zenith.method = dsp::ZenithMethod::kSkyCentroid;
-      else
-        return bad("skyline or centroid");
-    } else if (std::strcmp(flag, "--normalisation") == 0) {
-      if (!NormalisationFromName(v, &e.normalisation))
-        return bad("unit_l2, none or divide_by_a0");
-    } else if (std::strcmp(flag, "--cap-elevation") == 0) {
-      if (!ParseNumber(v, 0, 80, &d))
-        return bad("degrees within 0..80");
-      e.cap.elevation_deg = d;
-    } else if (std::strcmp(flag, "--lateral") == 0) {
-      if (!ParseNumber(v, 0, 5, &d))
-        return bad("metres within 0..5");
-      e.lateral_m = d;
-    } else if (std::strcmp(flag, "--seed") == 0) {
-      if (!ParseNumber(v, 0, 1e15, &d) || d != std::floor(d))
-        return bad("a non-negative integer");
-      e.world_seed = static_cast<std::uint64_t>(d);
-    } else {
-      std::fprintf(stderr, "skyloc experiment: unknown option '%s' (see --help)\n", flag);
-      return kExitUsage;
-    }
-  }
-  if (o->out.empty()) {
-    std::fprintf(stderr, "skyloc experiment: --out DIR is required\n");
-    return kExitUsage;
-  }
+  if (name.empty())
+    return t.Refuse("name the experiment: tilt, manoeuvre, ants, speed, heading or surf1d");
+  o->name = name.front();
+  if (std::find(std::begin(kExperiments), std::end(kExperiments), o->name) ==
+      std::end(kExperiments))
+    return t.Refuse("unknown experiment '" + o->name +
+                    "' (tilt, manoeuvre, ants, speed, heading, surf1d)");
+  if (t.Given("--vocab") && o->name != "tilt" && o->name != "manoeuvre")
+    return t.Refuse("--vocab (FAB-MAP) is for tilt and manoeuvre");
+  if (o->out.empty())
+    return t.Refuse("--out DIR is required");
+  o->spacing_given = t.Given("--spacing");
+  firmware::ResolveDescriptorGrid(&descriptor);
   return kExitOk;
 }
 
@@ -354,10 +302,11 @@ std::string CommonNotes(const tools::ExperimentOptions& e) {
                      : std::string())
           : Format("frames every %.3g m with +-20 %% speed jitter", e.spacing_m);
   return Format(
-             "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands on the %s "
-             "grid, ",
-             e.width, e.height, e.bands,
-             e.oversampled_grid ? "oversampled (the firmware's)" : "minimal unaliased") +
+             "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands on the "
+             "\"%s\" grid, normalisation %s, ",
+             e.width, e.height, e.config.descriptor.bands,
+             firmware::GridPresetName(e.config.descriptor.grid),
+             dsp::AmplitudeNormalisationName(e.config.descriptor.normalisation)) +
          sampling +
          Format(
              ". OpenSeqSLAM: ds %d (unless stated), v %.1f..%.1f, R %d, Rwindow %d, centred "
@@ -426,7 +375,7 @@ int RunHeading(const Options& o, const std::string& command) {
                HeadingCell(all_surf).c_str());
   json += "  ],\n  \"all\": {\"correlation\": " + tools::HeadingSummaryJson(all_correlation) +
           ", \"surf\": " + tools::HeadingSummaryJson(all_surf) + "}\n}\n";
-  const dsp::HorizonStripOptions& strip = o.experiment.strip;
+  const dsp::HorizonStripOptions& strip = o.experiment.config.heading.strip;
   md += Format(
       "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "
       "positive, the firmware's heading_deg). Matches: the route filter (ds %d) on the sky "
@@ -458,14 +407,9 @@ int RunHeading(const Options& o, const std::string& command) {
 int RunExperiment(std::span<char* const> args) {
   if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
     return RunSurf1dExperiment(args);
-  for (char* const a : args) {
-    if (IsHelpFlag(a)) {
-      std::fputs(kUsage, stdout);
-      return kExitOk;
-    }
-  }
   Options o;
-  if (const int rc = ParseArgs(args, &o); rc != kExitOk)
+  bool done = false;
+  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
     return rc;
   std::string command = "skyloc experiment";
   for (char* const a : args)
@@ -598,10 +542,10 @@ int RunExperiment(std::span<char* const> args) {
                    ? "the image alone (dsp::ZenithEstimator: the skyline's mean plane)"
                    : "the image alone (dsp::ZenithEstimator: the sky's centroid)")
             : "the simulated IMU (noise and bias on) through the attitude filter",
-        o.experiment.cap.elevation_deg < 0
+        o.experiment.cap_elevation_deg < 0
             ? "from the experiment's largest tilt (dsp::CapElevationForTilt)"
-            : Format("%.3g degrees", o.experiment.cap.elevation_deg).c_str(),
-        o.experiment.cap.taper_deg);
+            : Format("%.3g degrees", o.experiment.cap_elevation_deg).c_str(),
+        o.experiment.config.attitude.cap_taper_deg);
   }
   if (cap && (o.name == "tilt" || o.name == "manoeuvre")) {
     // The cap's zenith against the true poses, per scored pair of runs.

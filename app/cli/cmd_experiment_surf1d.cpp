@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/options.h"
 #include "tools/output_file.h"
 #include "tools/surf1d_experiment.h"
 #include "tools/svg_plot.h"
@@ -24,30 +25,14 @@ namespace skyloc::cli {
 using namespace skyloc::tools;
 namespace {
 
-constexpr const char* kUsage =
-    "usage: skyloc experiment surf1d --out DIR [options]\n"
-    "\n"
+constexpr const char* kDescription =
     "The 1D SURF paper's classification experiment (Anderson et al. 2012, section 4.1) in\n"
     "the simulated city: the robot turns on the spot at each place taking N images evenly\n"
     "over 360 degrees; every pair at a place is scored by 1D SURF (NN, NN with RANSAC).\n"
     "Forward pinhole camera (the paper's 47.8 degrees): a pair matches when its headings\n"
     "differ by less than 20 degrees. Upward fisheye, 360-degree strip: a pair matches when\n"
     "it is at the same place (the other place's images are the non-matches).\n"
-    "Writes DIR/results.md, DIR/metrics.json and DIR/roc.svg.\n"
-    "\n"
-    "options:\n"
-    "  --images N             images a place (default 88, the paper's)\n"
-    "  --places N             places along the city route (default 2)\n"
-    "  --width W --height H   forward camera size (default 640x480)\n"
-    "  --fisheye-width W --fisheye-height H   upward camera size (default 640x480)\n"
-    "  --pitch DEG            forward camera pitch, nose up positive (default -5)\n"
-    "  --seed N               city seed (default 1)\n";
-
-bool ParseNumber(const char* text, double lo, double hi, double* value) {
-  char* end = nullptr;
-  *value = std::strtod(text, &end);
-  return end != text && *end == '\0' && *value >= lo && *value <= hi;
-}
+    "Writes DIR/results.md, DIR/metrics.json and DIR/roc.svg.\n";
 
 void PrintProgress(const char* what, void* /*context*/) {
   std::fprintf(stderr, "skyloc experiment surf1d: %s\n", what);
@@ -95,67 +80,25 @@ int RunSurf1dExperiment(std::span<char* const> args) {
     command += std::string(" ") + a;
   tools::Surf1dExperimentOptions o;
   std::string out;
-  for (std::size_t i = 1; i < args.size(); ++i) {
-    const char* flag = args[i];
-    if (IsHelpFlag(flag)) {
-      std::fputs(kUsage, stdout);
-      return kExitOk;
-    }
-    if (i + 1 >= args.size()) {
-      std::fprintf(stderr, "skyloc experiment surf1d: %s needs a value (see --help)\n", flag);
-      return kExitUsage;
-    }
-    const char* v = args[++i];
-    double d = 0;
-    auto bad = [&](const char* expected) {
-      std::fprintf(stderr, "skyloc experiment surf1d: %s '%s': expected %s\n", flag, v, expected);
-      return kExitUsage;
-    };
-    auto integer = [&](double lo, double hi, int* value) {
-      if (!ParseNumber(v, lo, hi, &d) || d != std::floor(d))
-        return false;
-      *value = static_cast<int>(d);
-      return true;
-    };
-    if (std::strcmp(flag, "--out") == 0) {
-      out = v;
-    } else if (std::strcmp(flag, "--images") == 0) {
-      if (!integer(8, 1000, &o.images_per_place))
-        return bad("an integer within 8..1000");
-    } else if (std::strcmp(flag, "--places") == 0) {
-      if (!integer(2, 50, &o.places))
-        return bad("an integer within 2..50");
-    } else if (std::strcmp(flag, "--width") == 0) {
-      if (!integer(64, 4096, &o.width))
-        return bad("pixels within 64..4096");
-    } else if (std::strcmp(flag, "--height") == 0) {
-      if (!integer(16, 4096, &o.height))
-        return bad("pixels within 16..4096");
-    } else if (std::strcmp(flag, "--fisheye-width") == 0) {
-      if (!integer(16, 4096, &o.fisheye_width))
-        return bad("pixels within 16..4096");
-    } else if (std::strcmp(flag, "--fisheye-height") == 0) {
-      if (!integer(16, 4096, &o.fisheye_height))
-        return bad("pixels within 16..4096");
-    } else if (std::strcmp(flag, "--pitch") == 0) {
-      if (!ParseNumber(v, -20, 20, &o.pitch_deg))
-        return bad("degrees within -20..20");
-    } else if (std::strcmp(flag, "--seed") == 0) {
-      int seed = 0;
-      if (!integer(0, 1e9, &seed))
-        return bad("an integer within 0..1000000000");
-      o.world_seed = static_cast<std::uint64_t>(seed);
-    } else {
-      std::fprintf(stderr, "skyloc experiment surf1d: unknown option '%s' (see --help)\n", flag);
-      return kExitUsage;
-    }
-  }
-  if (out.empty()) {
-    std::fprintf(stderr,
-                 "skyloc experiment surf1d: --out DIR is required (where to write "
-                 "results.md, metrics.json, roc.svg)\n");
-    return kExitUsage;
-  }
+  std::int64_t seed = 0;
+  OptionTable t("experiment surf1d", "--out DIR [options]", kDescription);
+  t.Text("--out", "DIR", "where to write results.md, metrics.json, roc.svg (required)", &out);
+  t.Int("--images", "N", "images a place (default 88, the paper's)", 8, 1000, &o.images_per_place);
+  t.Int("--places", "N", "places along the city route (default 2)", 2, 50, &o.places);
+  t.Int("--width", "W", "forward camera width (default 640)", 64, 4096, &o.width);
+  t.Int("--height", "H", "forward camera height (default 480)", 16, 4096, &o.height);
+  t.Int("--fisheye-width", "W", "upward camera width (default 640)", 16, 4096, &o.fisheye_width);
+  t.Int("--fisheye-height", "H", "upward camera height (default 480)", 16, 4096, &o.fisheye_height);
+  t.Number("--pitch", "DEG", "forward camera pitch, nose up positive (default -5)", {-20, 20},
+           &o.pitch_deg);
+  t.Int("--seed", "N", "city seed (default 1)", 0, 1000000000, &seed);
+  // args[0] is "surf1d", the experiment's name.
+  if (const ParseOutcome outcome = t.Parse(args.subspan(1)); outcome != ParseOutcome::kRun)
+    return ExitCode(outcome);
+  if (t.Given("--seed"))
+    o.world_seed = static_cast<std::uint64_t>(seed);
+  if (out.empty())
+    return t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)");
   tools::Surf1dCameraResult forward, fisheye;
   if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress, nullptr);
       !s.ok()) {

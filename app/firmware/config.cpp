@@ -149,6 +149,9 @@ const char* CameraKindName(CameraKind kind) {
 const char* GridPresetName(GridPreset preset) {
   return NameOf(kGridPresets, preset);
 }
+bool GridPresetFromName(std::string_view name, GridPreset* out) {
+  return ValueOf(kGridPresets, name, out);
+}
 bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out) {
   return ValueOf(kNormalisations, name, out);
 }

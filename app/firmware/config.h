@@ -26,7 +26,10 @@ enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 
 const char* CameraKindName(CameraKind kind);
+// The grid presets' names: "oversampled", "auto", "paper", "custom" (the config file's,
+// and the command line's --grid, which has no "custom"); false for anything else.
 const char* GridPresetName(GridPreset preset);
+bool GridPresetFromName(std::string_view name, GridPreset* out);
 // dsp::AmplitudeNormalisationName gives the name of a normalisation.
 // "none", "divide_by_a0" or "unit_l2" (the config's names); false for anything else.
 bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out);

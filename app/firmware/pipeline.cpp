@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "firmware/descriptor.h"
 #include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
 
@@ -144,22 +145,8 @@ Status Pipeline::Init(const Config& config) {
   if (const dsp::LensError e = lens_.Init(lens_params); e != dsp::LensError::kOk)
     return Status::Error(StatusCode::kInvalidArgument, "lens: %s", dsp::LensErrorMessage(e));
 
-  dsp::SkyDescriptorOptions options;
-  options.bands = config.descriptor.bands;
-  options.grid.rings = config.descriptor.rings;
-  options.grid.longitudes = config.descriptor.longitudes;
-  options.segmentation.fixed_threshold =
-      config.segmentation.method == SegmentationMethod::kFixed ? config.segmentation.threshold : -1;
-  options.normalisation = config.descriptor.normalisation;
-  if (config.attitude.kind != AttitudeKind::kNone) {
-    // The cap from the largest expected tilt and what the lens sees (max_theta: half its
-    // field of view, whatever the model).
-    constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-    options.cap.enabled = true;
-    options.cap.elevation_deg =
-        dsp::CapElevationForTilt(config.attitude.max_tilt_deg, 2 * lens_.max_theta() * kRadToDeg);
-    options.cap.taper_deg = config.attitude.cap_taper_deg;
-  }
+  const dsp::SkyDescriptorOptions options =
+      SkyDescriptorOptionsFrom(config, lens_, config.attitude.kind != AttitudeKind::kNone);
   uses_attitude_ = options.cap.enabled;
   if (const dsp::DescriptorError e = descriptor_.Init(lens_, options); !e.ok())
     return Status::Error(
@@ -332,8 +319,10 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
         e != dsp::HorizonStripError::kOk)
       return DspStatus(e, "frame %llu: horizon strip",
                        static_cast<unsigned long long>(result->frame));
-    for (std::size_t j = 0; j < strip_.size(); ++j)
-      strip_bytes_[j] = static_cast<std::uint8_t>(std::lround(std::clamp(strip_[j], 0.0f, 255.0f)));
+    if (const dsp::HorizonStripError e = dsp::StripToBytes(strip_.span(), strip_bytes_.span());
+        e != dsp::HorizonStripError::kOk)
+      return DspStatus(e, "frame %llu: horizon strip bytes",
+                       static_cast<unsigned long long>(result->frame));
   }
   return Status::Ok();
 }

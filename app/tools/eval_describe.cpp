@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 
+#include "firmware/descriptor.h"
 #include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
@@ -63,26 +64,6 @@ Status LensOfDataset(const drivers::DatasetCamera& camera, const std::string& di
 
 // The firmware's descriptor ([descriptor] of the configuration, else the built-in
 // defaults), as the robot computes it; --bands has already replaced the bands.
-dsp::SkyDescriptorOptions SkyDescriptorOptionsOf(const DescribeSettings& o,
-                                                 const dsp::Lens& lens_of_run) {
-  dsp::SkyDescriptorOptions options_of_run;
-  options_of_run.bands = o.config.descriptor.bands;
-  options_of_run.grid.rings = o.config.descriptor.rings;
-  options_of_run.grid.longitudes = o.config.descriptor.longitudes;
-  options_of_run.normalisation = o.config.descriptor.normalisation;
-  if (o.attitude_from_dataset) {
-    // The firmware's rule (app/firmware/pipeline.cpp): the cap from the largest tilt and
-    // what the lens sees.
-    constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-    options_of_run.cap.enabled = true;
-    options_of_run.cap.elevation_deg =
-        dsp::CapElevationForTilt(o.max_tilt_deg.value_or(o.config.attitude.max_tilt_deg),
-                                 2 * lens_of_run.max_theta() * kRadToDeg);
-    options_of_run.cap.taper_deg = o.config.attitude.cap_taper_deg;
-  }
-  return options_of_run;
-}
-
 // What describing one frame needs: the engines (one sky descriptor per worker, it holds
 // scratch) and each worker's scratch rows.
 struct Describer {
@@ -130,9 +111,10 @@ Status Describer::Describe(std::size_t i, int worker, RunDescription* d) {
       if (const dsp::HorizonStripError e = horizon.Extract(image.view(), strip);
           e != dsp::HorizonStripError::kOk)
         return DspStatus(e, "%s: horizon strip", dataset->FramePath(i).c_str());
-      for (std::size_t j = 0; j < columns; ++j)
-        d->strips[i * columns + j] =
-            static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
+      if (const dsp::HorizonStripError e = dsp::StripToBytes(
+              strip, std::span<std::uint8_t>(d->strips).subspan(i * columns, columns));
+          e != dsp::HorizonStripError::kOk)
+        return DspStatus(e, "%s: horizon strip bytes", dataset->FramePath(i).c_str());
     }
   } else if (const dsp::VanillaError ve = dsp::VanillaDescriptor(image.view(), out);
              ve != dsp::VanillaError::kOk) {
@@ -178,6 +160,14 @@ Status DescribeFrames(Describer& describer, int workers, const std::string& labe
 
 }  // namespace
 
+dsp::SkyDescriptorOptions EvalSkyDescriptorOptions(const DescribeSettings& settings,
+                                                   const dsp::Lens& lens) {
+  firmware::Config config = settings.config;
+  if (settings.max_tilt_deg)
+    config.attitude.max_tilt_deg = *settings.max_tilt_deg;
+  return firmware::SkyDescriptorOptionsFrom(config, lens, settings.attitude_from_dataset);
+}
+
 Result<RunDescription> DescribeDataset(ScoredDescriptor descriptor, const std::string& dir,
                                        const DescribeSettings& settings) {
   drivers::DatasetCamera camera(dir);
@@ -194,17 +184,18 @@ Result<RunDescription> DescribeDataset(ScoredDescriptor descriptor, const std::s
   const bool sky = descriptor == ScoredDescriptor::kSky;
   if (sky) {
     SKYLOC_TRY(LensOfDataset(camera, dir, settings, &lens_of_run));
-    options_of_run = SkyDescriptorOptionsOf(settings, lens_of_run);
+    options_of_run = EvalSkyDescriptorOptions(settings, lens_of_run);
     d.dim = options_of_run.bands;
   } else {
     d.dim = dsp::kVanillaDescriptorSize;
   }
   // The firmware's horizon strip, for the heading of the correctly matched frames.
-  if (sky && settings.config.heading.enabled()) {
-    if (const dsp::HorizonStripError e =
-            describer.horizon.Init(lens_of_run, settings.config.heading.strip);
+  const std::optional<dsp::HorizonStripOptions> strip_options =
+      firmware::StripOptionsFrom(settings.config);
+  if (sky && strip_options) {
+    if (const dsp::HorizonStripError e = describer.horizon.Init(lens_of_run, *strip_options);
         e == dsp::HorizonStripError::kOk)
-      d.strip_columns = settings.config.heading.strip.n_azimuth;
+      d.strip_columns = strip_options->n_azimuth;
     else
       std::fprintf(stderr, "skyloc eval: %s: no heading: %s\n", dir.c_str(),
                    firmware::DspErrorMessage(e));

@@ -11,6 +11,7 @@
 
 #include "firmware/config.h"
 #include "skyloc/dsp/lens.h"
+#include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/status.h"
 #include "tools/eval_match.h"
 #include "tools/eval_score.h"
@@ -33,6 +34,12 @@ struct DescribeSettings {
   bool floats = true;
   bool bytes = false;
 };
+
+// The sky descriptor eval describes a run's frames with: the firmware's
+// (firmware::SkyDescriptorOptionsFrom) from the settings' configuration, the cap on with
+// attitude_from_dataset, its lower edge from max_tilt_deg when given.
+dsp::SkyDescriptorOptions EvalSkyDescriptorOptions(const DescribeSettings& settings,
+                                                   const dsp::Lens& lens);
 
 // One run's descriptors and, for the sky, its horizon strips as the route stores them.
 struct RunDescription {

@@ -4,8 +4,10 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <utility>
 
+#include "firmware/descriptor.h"
 #include "firmware/dsp_status.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/sky_descriptor.h"
@@ -119,9 +121,8 @@ ZenithError ZenithErrorOf(const std::vector<TrajectoryPoint>& trajectory,
 
 ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_deg) {
   ExperimentOptions o = options;
-  o.cap.enabled = options.attitude != AttitudeInput::kNone;
-  if (o.cap.elevation_deg < 0)
-    o.cap.elevation_deg = dsp::CapElevationForTilt(max_tilt_deg, DefaultSimLens(8, 8).fov_deg);
+  o.cap = options.attitude != AttitudeInput::kNone;
+  o.config.attitude.max_tilt_deg = max_tilt_deg;
   return o;
 }
 
@@ -142,17 +143,16 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   Renderer renderer;
   SKYLOC_TRY(renderer.Init(&world, DefaultSimLens(options.width, options.height)));
   dsp::SkyDescriptor sky;
-  dsp::SkyDescriptorOptions sky_options;
-  sky_options.bands = options.bands;
-  sky_options.grid = options.oversampled_grid ? dsp::OversampledShGridConfig(options.bands)
-                                              : dsp::DefaultShGridConfig(options.bands);
-  sky_options.normalisation = options.normalisation;
+  const dsp::SkyDescriptorOptions sky_options =
+      firmware::SkyDescriptorOptionsFrom(options.config, renderer.lens(), false);
   if (const dsp::DescriptorError e = sky.Init(renderer.lens(), sky_options); !e.ok())
     return Status::Error(StatusCode::kInvalidArgument, "sky descriptor: %s", e.message);
   dsp::SkyDescriptor sky_cap;
-  if (options.cap.enabled) {
-    dsp::SkyDescriptorOptions cap_options = sky_options;
-    cap_options.cap = options.cap;
+  if (options.cap) {
+    dsp::SkyDescriptorOptions cap_options =
+        firmware::SkyDescriptorOptionsFrom(options.config, renderer.lens(), true);
+    if (options.cap_elevation_deg >= 0)
+      cap_options.cap.elevation_deg = options.cap_elevation_deg;
     if (const dsp::DescriptorError e = sky_cap.Init(renderer.lens(), cap_options); !e.ok())
       return Status::Error(StatusCode::kInvalidArgument, "gravity-aligned sky descriptor: %s",
                            e.message);
@@ -162,7 +162,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   }
   // The image's own zenith: from the hemisphere descriptor's samples (the same grid).
   dsp::ZenithEstimator zenith;
-  const bool from_image = options.cap.enabled && options.attitude == AttitudeInput::kImage;
+  const bool from_image = options.cap && options.attitude == AttitudeInput::kImage;
   if (from_image && !zenith.Init(sky.grid(), options.zenith))
     return Status::Error(StatusCode::kInvalidArgument, "zenith estimator: options out of range");
   int no_estimate = 0;
@@ -174,18 +174,22 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   const dsp::MutableImageView visible_view{visible.data(), options.width, options.height, w * 3,
                                            dsp::PixelFormat::kRgb24};
   const std::size_t n = out->trajectory.size();
-  const auto bands = static_cast<std::size_t>(options.bands);
+  const auto bands = static_cast<std::size_t>(sky.bands());
   out->sky.assign(n * bands, 0.0f);
   out->vanilla.assign(n * dsp::kVanillaDescriptorSize, 0.0f);
-  out->sky_cap.assign(options.cap.enabled ? n * bands : 0, 0.0f);
+  out->sky_cap.assign(options.cap ? n * bands : 0, 0.0f);
   dsp::HorizonStrip horizon;
-  if (options.strips) {
-    if (const dsp::HorizonStripError e = horizon.Init(renderer.lens(), options.strip);
+  const std::optional<dsp::HorizonStripOptions> strip_options =
+      options.strips ? firmware::StripOptionsFrom(options.config) : std::nullopt;
+  if (options.strips && !strip_options)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "horizon strips: the configuration's [heading] strip_columns is 0");
+  if (strip_options) {
+    if (const dsp::HorizonStripError e = horizon.Init(renderer.lens(), *strip_options);
         e != dsp::HorizonStripError::kOk)
-      return Status::Error(StatusCode::kInvalidArgument, "horizon strip: %s",
-                           dsp::HorizonStripErrorMessage(e));
+      return firmware::DspStatus(e, "horizon strip");
   }
-  const auto columns = options.strips ? static_cast<std::size_t>(options.strip.n_azimuth) : 0;
+  const auto columns = strip_options ? static_cast<std::size_t>(strip_options->n_azimuth) : 0;
   out->strips.assign(n * columns, 0);
   std::vector<float> strip(columns);
   const Vocabulary* vocabulary = options.vanilla ? options.fabmap_vocabulary : nullptr;
@@ -209,9 +213,11 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
           e != dsp::HorizonStripError::kOk)
         return Status::Error(StatusCode::kInternal, "horizon strip of frame %zu: %s", i,
                              dsp::HorizonStripErrorMessage(e));
-      for (std::size_t j = 0; j < columns; ++j)
-        out->strips[i * columns + j] =
-            static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
+      if (const dsp::HorizonStripError e = dsp::StripToBytes(
+              strip, std::span<std::uint8_t>(out->strips).subspan(i * columns, columns));
+          e != dsp::HorizonStripError::kOk)
+        return Status::Error(StatusCode::kInternal, "horizon strip of frame %zu: %s", i,
+                             dsp::HorizonStripErrorMessage(e));
     }
     if (from_image) {
       const auto t_ns = static_cast<std::int64_t>(out->trajectory[i].time_s * 1e9);
@@ -220,7 +226,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
         ++no_estimate;
       }
     }
-    if (options.cap.enabled) {
+    if (options.cap) {
       if (const dsp::DescriptorError e =
               sky_cap.Compute(uv_view, std::span<float>(out->sky_cap).subspan(i * bands, bands),
                               nullptr, &out->attitude[i]);
@@ -309,7 +315,7 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
                          options, &row.vanilla));
     SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
                          &row.sky_filter));
-    if (options.cap.enabled) {
+    if (options.cap) {
       SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam,
                            options, &row.sky_cap));
       SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter,
@@ -382,7 +388,7 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
                            &row.vanilla));
       SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, o,
                            &row.sky_filter));
-      if (o.cap.enabled) {
+      if (o.cap) {
         SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam, o,
                              &row.sky_cap));
         SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter, o,
@@ -416,11 +422,11 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   ExperimentOptions options = heading_options;
   options.strips = true;
   options.vanilla = false;
-  options.cap.enabled = false;
-  const auto n = static_cast<std::size_t>(options.strip.n_azimuth);
+  options.cap = false;
+  const int columns = options.config.heading.strip.n_azimuth;
+  const auto n = static_cast<std::size_t>(columns);
   dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
-  if (const dsp::HeadingError e = estimator.Init(options.strip.n_azimuth, {});
-      e != dsp::HeadingError::kOk)
+  if (const dsp::HeadingError e = estimator.Init(columns, {}); e != dsp::HeadingError::kOk)
     return firmware::DspStatus(e, "heading");
   std::vector<float> stored(n), test(n);
   rows->clear();
@@ -600,7 +606,7 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
                                  scored, &row.openseqslam));
             SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter,
                                  scored, &row.filter));
-            if (scored.cap.enabled) {
+            if (scored.cap) {
               SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap,
                                    Matcher::kRouteFilter, scored, &row.filter_cap));
             }

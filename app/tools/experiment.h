@@ -48,14 +48,14 @@ const char* AttitudeInputName(AttitudeInput input);
 struct ExperimentOptions {
   int width = 320;
   int height = 240;
-  int bands = 120;  // SH bands of the sky descriptor (the paper: 120)
-  // The sampling grid: false, the minimal unaliased grid for `bands` (DefaultShGridConfig,
-  // what every table in docs/RESULTS.md used); true, OversampledShGridConfig, the firmware's
-  // [descriptor] grid = "oversampled" (with bands = 64: the firmware's descriptor).
-  bool oversampled_grid = false;
-  // The firmware's default ([descriptor] normalisation, app/src/config.h; a test keeps the
-  // two equal). kNone is the paper's eq. 3, what the tables before 2026-11-26 used.
-  dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kUnitL2;
+  // The firmware configuration the sky descriptor is built from, through the firmware's own
+  // factory (firmware::SkyDescriptorOptionsFrom): [descriptor] bands, grid and
+  // normalisation, [segmentation] and [attitude] cap_taper_deg. The defaults are the
+  // robot's descriptor (64 bands, oversampled grid, unit_l2); the published tables were
+  // made with 120 bands on the "auto" grid (docs/RESULTS.md gives each table's flags).
+  // [attitude] max_tilt_deg is replaced by each experiment's own largest tilt. After
+  // changing the bands or the grid, firmware::ResolveDescriptorGrid.
+  firmware::Config config = firmware::DefaultConfig();
   // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
   // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its
   // RunSpec::motion.speed_ratio scales its cruise speed).
@@ -74,16 +74,18 @@ struct ExperimentOptions {
   bool vanilla = true;            // also render the visible image and its descriptor
   int tolerance_frames = 5;
   double max_offset_m = 3.0;  // farther than this from the reference route: no truth
-  // The gravity-aligned descriptor: every run is also described with the cap (cap.enabled
-  // is set from `attitude`). The cap elevation, when cap.elevation_deg < 0, comes from the
-  // experiment's own largest tilt through dsp::CapElevationForTilt (what a user would set).
+  // The gravity-aligned descriptor: every run is also described with the cap (`cap` is set
+  // from `attitude` by the experiments). Its lower edge comes from the experiment's own
+  // largest tilt through the firmware's rule (config.attitude.max_tilt_deg), unless
+  // cap_elevation_deg >= 0 sets it.
   AttitudeInput attitude = AttitudeInput::kSimulatedImu;
-  dsp::GravityCapOptions cap{false, -1, 10};
+  bool cap = false;
+  double cap_elevation_deg = -1;
   dsp::ZenithEstimateOptions zenith;  // AttitudeInput::kImage
   // Horizon strips of every frame's UV image, as the firmware's route stores them (one
-  // byte per column) for the heading (issue 13); false: none (every other experiment).
+  // byte per column) for the heading (issue 13): config's [heading] strip
+  // (firmware::StripOptionsFrom); false: none (every other experiment).
   bool strips = false;
-  dsp::HorizonStripOptions strip;  // the firmware's [heading] defaults
   // FAB-MAP 2.0 (tilt and manoeuvre): the visible image's words over this vocabulary (not
   // owned; trained on runs of another world, docs/FABMAP.md). Null: no FAB-MAP column.
   const Vocabulary* fabmap_vocabulary = nullptr;

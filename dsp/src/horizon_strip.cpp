@@ -1,5 +1,6 @@
 #include "skyloc/dsp/horizon_strip.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -22,6 +23,14 @@ const char* HorizonStripErrorMessage(HorizonStripError error) {
       return "the strip buffer must hold exactly n_azimuth values";
   }
   return "unknown horizon strip error";
+}
+
+HorizonStripError StripToBytes(std::span<const float> strip, std::span<std::uint8_t> bytes) {
+  if (bytes.size() != strip.size())
+    return HorizonStripError::kBadOutputSize;
+  for (std::size_t j = 0; j < strip.size(); ++j)
+    bytes[j] = static_cast<std::uint8_t>(std::lround(std::clamp(strip[j], 0.0f, 255.0f)));
+  return HorizonStripError::kOk;
 }
 
 HorizonStripError HorizonStrip::Init(const Lens& lens, const HorizonStripOptions& options) {

@@ -168,5 +168,31 @@ TEST(HorizonStripTest, ExtractAllocatesNothing) {
   EXPECT_EQ(scope.allocations(), 0u);
 }
 
+// The bytes are the nearest grey level, halves away from zero, clamped to 0..255: written
+// out by hand, not computed the way StripToBytes computes them.
+TEST(StripToBytes, RoundsToNearestAndClamps) {
+  const std::vector<float> strip = {-3.0f,  -0.4f,  0.0f,   0.49f,  0.5f,   1.5f,  2.5f,
+                                    127.4f, 127.6f, 254.5f, 255.0f, 255.4f, 300.0f};
+  const std::vector<std::uint8_t> expected = {0, 0, 0, 0, 1, 2, 3, 127, 128, 255, 255, 255, 255};
+  std::vector<std::uint8_t> bytes(strip.size(), 77);
+  ASSERT_EQ(StripToBytes(strip, bytes), HorizonStripError::kOk);
+  EXPECT_EQ(bytes, expected);
+}
+
+TEST(StripToBytes, RefusesAnOutputOfAnotherLength) {
+  const std::vector<float> strip(8, 10.0f);
+  std::vector<std::uint8_t> bytes(7, 77);
+  EXPECT_EQ(StripToBytes(strip, bytes), HorizonStripError::kBadOutputSize);
+  EXPECT_EQ(bytes, std::vector<std::uint8_t>(7, 77));  // untouched
+}
+
+TEST(StripToBytes, AllocatesNothing) {
+  const std::vector<float> strip(360, 100.25f);
+  std::vector<std::uint8_t> bytes(strip.size());
+  const AllocationScope scope;
+  ASSERT_EQ(StripToBytes(strip, bytes), HorizonStripError::kOk);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
 }  // namespace
 }  // namespace skyloc::dsp

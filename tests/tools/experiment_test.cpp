@@ -14,7 +14,9 @@ TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
   ExperimentOptions options;
   options.width = 80;
   options.height = 60;
-  options.bands = 16;
+  options.config.descriptor.bands = 16;
+  options.config.descriptor.grid = firmware::GridPreset::kAuto;  // the paper's grid
+  firmware::ResolveDescriptorGrid(&options.config.descriptor);
   options.spacing_m = 5.0;  // ~100 frames a lap
   options.max_offset_m = 6.0;
   const int differences[] = {0, 40};

@@ -47,6 +47,10 @@ enum class HorizonStripError : std::uint8_t {
 // A sentence naming the problem and the fix.
 const char* HorizonStripErrorMessage(HorizonStripError error);
 
+// A strip as a route stores it: each column's grey level rounded to the nearest byte,
+// clamped to 0..255. kBadOutputSize when `bytes` is not as long as `strip`. Allocates nothing.
+HorizonStripError StripToBytes(std::span<const float> strip, std::span<std::uint8_t> bytes);
+
 class HorizonStrip {
  public:
   // Projects every (azimuth, band row) through the lens and allocates the tap table. Not
