@@ -50,8 +50,8 @@ const std::vector<float>& DescriptorsOf(const RunDescriptors& run, ScoredDescrip
 Status SequenceMatches(const RunDescriptors& reference, const RunDescriptors& query,
                        ScoredDescriptor descriptor, firmware::Matcher matcher,
                        const ExperimentOptions& options, std::span<dsp::SeqSlamMatch> matches) {
-  const int dim =
-      descriptor == ScoredDescriptor::kVanilla ? dsp::kVanillaDescriptorSize : options.bands;
+  const int dim = descriptor == ScoredDescriptor::kVanilla ? dsp::kVanillaDescriptorSize
+                                                           : options.config.descriptor.bands;
   const std::vector<float>& ref_descriptors = DescriptorsOf(reference, descriptor);
   const std::vector<float>& query_descriptors = DescriptorsOf(query, descriptor);
   if (ref_descriptors.empty() || query_descriptors.empty())

@@ -73,4 +73,3 @@ BENCHMARK(BM_FabMapQuery)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
-#endif
