@@ -98,19 +98,13 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
             {"equirectangular", dsp::LensModel::kEquirectangular}},
            &lens);
   t.Number("--fov", "DEG", "override the field of view", {0, 360, true, false}, &fov);
-  const auto centre = [o](const char* text, std::string* expected) {
-    double x = 0, y = 0;
-    char* end = nullptr;
-    if (!ParseFiniteDouble(text, &x, &end) || *end != ',' || !ParseFiniteDouble(end + 1, &y)) {
-      *expected = "X,Y in pixels (e.g. 319.5,239.5)";
-      return false;
-    }
-    o->centre_x = x;
-    o->centre_y = y;
-    return true;
-  };
-  t.Custom("--centre", "X,Y", "override the image circle's centre (pixels)", centre);
-  t.Custom("--center", "X,Y", "as --centre", centre);
+  // --centre X,Y (or --center): kept as a pair until both are read, then optional.
+  double centre_x = 0, centre_y = 0;
+  const auto finite = [](double, double) { return true; };
+  t.NumberPair("--centre", "X,Y", "override the image circle's centre (pixels)",
+               "X,Y in pixels (e.g. 319.5,239.5)", finite, &centre_x, &centre_y);
+  t.NumberPair("--center", "X,Y", "as --centre", "X,Y in pixels (e.g. 319.5,239.5)", finite,
+               &centre_x, &centre_y);
   t.Number("--radius", "PX", "override the image circle's radius (pixels)", kPositive, &radius);
   t.Positional("IMAGE", "the images to describe", 0, std::numeric_limits<std::size_t>::max(),
                &o->images);
@@ -122,6 +116,10 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     return t.Refuse("no image given: pass one or more PNG/PGM/PPM files");
   if (t.Given("--centre") && t.Given("--center"))
     return t.Refuse("give --centre or --center, not both");
+  if (t.Given("--centre") || t.Given("--center")) {
+    o->centre_x = centre_x;
+    o->centre_y = centre_y;
+  }
   if (t.Given("--bands"))
     o->descriptor.bands = bands;
   if (t.Given("--grid"))

@@ -1,7 +1,5 @@
 #include "cli/commands.h"
 
-#include <cerrno>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -10,15 +8,6 @@
 #include "skyloc/sim/world.h"
 
 namespace skyloc::cli {
-
-int UsageError(const char* command, std::string_view what, std::string_view value) {
-  std::string message(what);
-  if (const std::size_t at = message.find("%s"); at != std::string::npos)
-    message.replace(at, 2, value);
-  std::fprintf(stderr, "skyloc %s: %s\nRun 'skyloc %s --help' for the options.\n", command,
-               message.c_str(), command);
-  return kExitUsage;
-}
 
 void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfig* run) {
   if (which == SimRunOptions::kWorldAndRun) {
@@ -79,22 +68,6 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
               run->lighting = text;
               return true;
             });
-}
-
-bool ParseFiniteDouble(const char* text, double* out, char** end_out) {
-  if (text == nullptr)
-    return false;
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(text, &end);
-  if (end == text || errno != 0 || !std::isfinite(v))
-    return false;
-  if (end_out != nullptr)
-    *end_out = end;
-  else if (*end != '\0')
-    return false;
-  *out = v;
-  return true;
 }
 
 }  // namespace skyloc::cli

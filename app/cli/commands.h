@@ -40,16 +40,6 @@ inline bool IsHelpFlag(const char* arg) {
   return std::strcmp(arg, "--help") == 0 || std::strcmp(arg, "-h") == 0;
 }
 
-// A bad command line found after the option table (cli/options.h) has parsed it, e.g. a
-// value that must match another: "skyloc COMMAND: WHAT" on stderr with WHAT's first %s
-// replaced by `value`, then where the options are described. Returns kExitUsage. The
-// option table itself reports the options it checks (name, range, choices).
-int UsageError(const char* command, std::string_view what, std::string_view value = {});
-
-// A finite number at the start of `text`; with `end_out` the rest is left to the caller
-// (e.g. "X,Y"), without it the whole text must be the number.
-bool ParseFiniteDouble(const char* text, double* out, char** end_out = nullptr);
-
 // Which of a simulated run's options a command takes: the run through a configured world
 // (teach, repeat, record on camera.kind = "sim") or the whole run (`skyloc simulate`).
 enum class SimRunOptions : std::uint8_t { kRun, kWorldAndRun };

@@ -211,7 +211,7 @@ void OptionTable::Custom(const char* name, const char* value, const char* help,
 
 void OptionTable::Positional(const char* value, const char* help, std::size_t min, std::size_t max,
                              std::vector<std::string>* out) {
-  positional_.push_back({value, help, min, max, out});
+  positional_ = PositionalSpec{value, help, min, max, out};
 }
 
 OptionTable::Option* OptionTable::Find(std::string_view name) {
@@ -277,7 +277,7 @@ ParseOutcome OptionTable::Parse(std::span<char* const> args) {
       return ParseOutcome::kRefused;
     }
   }
-  const PositionalSpec* spec = positional_.empty() ? nullptr : &positional_.front();
+  const PositionalSpec* spec = positional_ ? &*positional_ : nullptr;
   const std::size_t min = spec != nullptr ? spec->min : 0;
   const std::size_t max = spec != nullptr ? spec->max : 0;
   if (words.size() > max) {
@@ -299,10 +299,10 @@ void OptionTable::PrintHelp(std::FILE* out) const {
   std::fprintf(out, "usage: skyloc %s %s\n", command_, synopsis_);
   if (description_ != nullptr && *description_ != '\0')
     std::fprintf(out, "\n%s", description_);
-  if (!positional_.empty() || !options_.empty())
+  if (positional_ || !options_.empty())
     std::fprintf(out, "\n");
-  for (const PositionalSpec& p : positional_)
-    std::fprintf(out, "  %-24s %s\n", p.value.c_str(), p.help.c_str());
+  if (positional_)
+    std::fprintf(out, "  %-24s %s\n", positional_->value.c_str(), positional_->help.c_str());
   for (const Option& o : options_) {
     const std::string head = o.value.empty() ? o.name : o.name + " " + o.value;
     if (head.size() <= 24)

@@ -19,6 +19,7 @@
 #include <functional>
 #include <initializer_list>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -143,7 +144,7 @@ class OptionTable {
     std::size_t min = 0, max = 0;
     std::vector<std::string>* out = nullptr;
   };
-  std::vector<PositionalSpec> positional_;
+  std::optional<PositionalSpec> positional_;  // a command takes one kind of word at most
 };
 
 }  // namespace skyloc::cli
