@@ -70,27 +70,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
          &o->config_path);
   t.Int("--bands", "L", "number of bands (default: [descriptor] bands, 64)", 1, dsp::kMaxShBands,
         &bands);
-  using firmware::GridPreset;
-  using firmware::GridPresetName;
-  t.Choice("--grid",
-           "the sampling grid: oversampled (the firmware's: the unaliased grid for 1.5 L; the "
-           "default), auto (the minimal unaliased grid for L bands) or paper (2000 points)",
-           {{GridPresetName(GridPreset::kOversampled), GridPreset::kOversampled},
-            {GridPresetName(GridPreset::kAuto), GridPreset::kAuto},
-            {GridPresetName(GridPreset::kPaper), GridPreset::kPaper}},
-           &grid);
-  using dsp::AmplitudeNormalisation;
-  using dsp::AmplitudeNormalisationName;
-  t.Choice(
-      "--normalisation",
-      "of the spectrum: unit_l2 (the firmware's default), none (the paper's eq. 3) or "
-      "divide_by_a0",
-      {{AmplitudeNormalisationName(AmplitudeNormalisation::kUnitL2),
-        AmplitudeNormalisation::kUnitL2},
-       {AmplitudeNormalisationName(AmplitudeNormalisation::kNone), AmplitudeNormalisation::kNone},
-       {AmplitudeNormalisationName(AmplitudeNormalisation::kDivideByA0),
-        AmplitudeNormalisation::kDivideByA0}},
-      &normalisation);
+  AddDescriptorChoices(&t, &grid, &normalisation);
   t.Flag("--json", "one JSON object per line: file, threshold, sky_fraction, amplitudes", &o->json);
   t.Choice("--lens", "override the lens model (other models need a camera file)",
            {{"equidistant", dsp::LensModel::kEquidistant},

@@ -1,5 +1,5 @@
-// `skyloc experiment NAME --out DIR`: the paper's experiments on simulated runs (issue 5,
-// docs/RESULTS.md). Each writes DIR/results.md (a markdown table and the command that
+// `skyloc experiment NAME --out DIR`: the paper's experiments on simulated runs
+// (docs/RESULTS.md). Each writes DIR/results.md (a markdown table and the command that
 // made it), DIR/metrics.json, precision-recall plots DIR/pr_sky.svg and DIR/pr_vanilla.svg,
 // and frame correspondences DIR/correspondence.svg. The experiments are host evaluation
 // code (skyloc::tools): a build without SKYLOC_HOST_EVAL says they are not in it.
@@ -78,28 +78,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   t.Int("--height", "H", "image height in pixels (default 240)", 16, 4096, &e.height);
   t.Int("--bands", "N", "SH bands of the sky descriptor (default 64, the robot's; the paper 120)",
         2, 200, &descriptor.bands);
-  using firmware::GridPreset;
-  using firmware::GridPresetName;
-  t.Choice("--grid",
-           "the sky descriptor's sampling grid: oversampled (the robot's; default), auto (the "
-           "minimal unaliased grid for the bands, every published table) or paper (2000 "
-           "points); docs/SKY_DESCRIPTOR.md, \"Grid\"",
-           {{GridPresetName(GridPreset::kOversampled), GridPreset::kOversampled},
-            {GridPresetName(GridPreset::kAuto), GridPreset::kAuto},
-            {GridPresetName(GridPreset::kPaper), GridPreset::kPaper}},
-           &descriptor.grid);
-  using dsp::AmplitudeNormalisation;
-  using dsp::AmplitudeNormalisationName;
-  t.Choice(
-      "--normalisation",
-      "of the sky descriptor's spectrum: unit_l2 (the robot's; default), none (the "
-      "paper's eq. 3; the tables measured before 2026-11-26) or divide_by_a0",
-      {{AmplitudeNormalisationName(AmplitudeNormalisation::kUnitL2),
-        AmplitudeNormalisation::kUnitL2},
-       {AmplitudeNormalisationName(AmplitudeNormalisation::kNone), AmplitudeNormalisation::kNone},
-       {AmplitudeNormalisationName(AmplitudeNormalisation::kDivideByA0),
-        AmplitudeNormalisation::kDivideByA0}},
-      &descriptor.normalisation);
+  AddDescriptorChoices(&t, &descriptor.grid, &descriptor.normalisation);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
            &e.spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,
@@ -284,7 +263,7 @@ std::pair<int, int> LocalisedFrames(const tools::MethodScore& m) {
   return {localised, correct};
 }
 
-void PrintProgress(const char* what, void* /*context*/) {
+void PrintProgress(const char* what) {
   std::fprintf(stderr, "skyloc experiment: rendering %s\n", what);
 }
 
@@ -330,8 +309,7 @@ std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
 // `skyloc experiment heading`: its own tables (errors, not precision-recall).
 int RunHeading(const Options& o, const std::string& command) {
   std::vector<tools::HeadingRow> rows;
-  if (Status s = tools::RunHeadingExperiment(o.experiment, &rows, PrintProgress, nullptr);
-      !s.ok()) {
+  if (Status s = tools::RunHeadingExperiment(o.experiment, &rows, PrintProgress); !s.ok()) {
     std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
     return kExitFailure;
   }
@@ -381,7 +359,7 @@ int RunHeading(const Options& o, const std::string& command) {
       "positive, the firmware's heading_deg). Matches: the route filter (ds %d) on the sky "
       "descriptor, correct within %d frames. Strips: %d columns, %d rows over %.3g..%.3g "
       "degrees above the body's horizon, from the UV frame, rounded to bytes as the route "
-      "stores them. Tilt: the query body's z from the zenith. Done when (issue 13): median < "
+      "stores them. Tilt: the query body's z from the zenith. The target: median < "
       "3 degrees and 90th percentile < 10 degrees.\n\n",
       o.experiment.seqslam.sequence_length, o.experiment.tolerance_frames, strip.n_azimuth,
       strip.band_rows, strip.elevation_min_deg, strip.elevation_max_deg);
@@ -454,7 +432,7 @@ int RunExperiment(std::span<char* const> args) {
   std::string header, separator;
   if (o.name == "tilt") {
     const int differences[] = {0, 10, 20, 30, 40, 50, 60};
-    status = tools::RunTiltExperiment(o.experiment, differences, &tilt, PrintProgress, nullptr);
+    status = tools::RunTiltExperiment(o.experiment, differences, &tilt, PrintProgress);
     header = "| tilt difference | reference / query tilt |";
     separator = "|---|---|";
     for (const tools::TiltRow& r : tilt) {
@@ -468,7 +446,7 @@ int RunExperiment(std::span<char* const> args) {
     }
   } else if (o.name == "manoeuvre") {
     const int ds[] = {1, 10, 20};
-    status = tools::RunManoeuvreExperiment(o.experiment, ds, &manoeuvre, PrintProgress, nullptr);
+    status = tools::RunManoeuvreExperiment(o.experiment, ds, &manoeuvre, PrintProgress);
     header = "| world | ds |";
     separator = "|---|---|";
     for (const tools::ManoeuvreRow& r : manoeuvre) {
@@ -481,7 +459,7 @@ int RunExperiment(std::span<char* const> args) {
   } else if (o.name == "speed") {
     o.experiment.sampling = sim::Sampling::kTime;
     const int ds[] = {1, 5, 10, 20};
-    status = tools::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress, nullptr);
+    status = tools::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress);
     methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
     if (!cap)
       methods.resize(kMatcherMethodsWithoutCap);
@@ -510,8 +488,7 @@ int RunExperiment(std::span<char* const> args) {
       o.experiment.spacing_m = 0.05;
     o.experiment.max_offset_m = 0.25;
     const double heights[] = {0.01, 0.1};
-    status =
-        tools::RunAntsExperiment(o.experiment, o.data_dir, heights, &ants, PrintProgress, nullptr);
+    status = tools::RunAntsExperiment(o.experiment, o.data_dir, heights, &ants, PrintProgress);
     header = "| query route | same ant | camera height | frames with truth |";
     separator = "|---|---|---|---|";
     for (const tools::AntsRow& r : ants) {

@@ -34,7 +34,7 @@ constexpr const char* kDescription =
     "it is at the same place (the other place's images are the non-matches).\n"
     "Writes DIR/results.md, DIR/metrics.json and DIR/roc.svg.\n";
 
-void PrintProgress(const char* what, void* /*context*/) {
+void PrintProgress(const char* what) {
   std::fprintf(stderr, "skyloc experiment surf1d: %s\n", what);
 }
 
@@ -100,8 +100,7 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   if (out.empty())
     return t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)");
   tools::Surf1dCameraResult forward, fisheye;
-  if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress, nullptr);
-      !s.ok()) {
+  if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress); !s.ok()) {
     std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());
     return kExitFailure;
   }

@@ -70,4 +70,30 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
             });
 }
 
+void AddDescriptorChoices(OptionTable* t, firmware::GridPreset* grid,
+                          dsp::AmplitudeNormalisation* normalisation) {
+  using firmware::GridPreset;
+  using firmware::GridPresetName;
+  t->Choice("--grid",
+            "the sky descriptor's sampling grid: oversampled (the robot's: the unaliased grid "
+            "for 1.5 x the bands; default), auto (the minimal unaliased grid for the bands, "
+            "every published table) or paper (2000 points); docs/SKY_DESCRIPTOR.md, \"Grid\"",
+            {{GridPresetName(GridPreset::kOversampled), GridPreset::kOversampled},
+             {GridPresetName(GridPreset::kAuto), GridPreset::kAuto},
+             {GridPresetName(GridPreset::kPaper), GridPreset::kPaper}},
+            grid);
+  using dsp::AmplitudeNormalisation;
+  using dsp::AmplitudeNormalisationName;
+  t->Choice(
+      "--normalisation",
+      "of the sky descriptor's spectrum: unit_l2 (the robot's; default), none (the "
+      "paper's eq. 3; the tables measured before 2026-11-26) or divide_by_a0",
+      {{AmplitudeNormalisationName(AmplitudeNormalisation::kUnitL2),
+        AmplitudeNormalisation::kUnitL2},
+       {AmplitudeNormalisationName(AmplitudeNormalisation::kNone), AmplitudeNormalisation::kNone},
+       {AmplitudeNormalisationName(AmplitudeNormalisation::kDivideByA0),
+        AmplitudeNormalisation::kDivideByA0}},
+      normalisation);
+}
+
 }  // namespace skyloc::cli

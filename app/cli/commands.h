@@ -50,6 +50,11 @@ enum class SimRunOptions : std::uint8_t { kRun, kWorldAndRun };
 // --stop-seconds) and --camera-height. Each fills its field of `run`.
 void AddSimRunOptions(OptionTable* table, SimRunOptions which, firmware::SimRunConfig* run);
 
+// The one place the sky descriptor's --grid and --normalisation are declared (describe,
+// experiment): each fills its field when given.
+void AddDescriptorChoices(OptionTable* table, firmware::GridPreset* grid,
+                          dsp::AmplitudeNormalisation* normalisation);
+
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;  // a runtime error (device, file contents)

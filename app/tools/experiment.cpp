@@ -40,20 +40,6 @@ using sim::World;
 using sim::WorldKind;
 using sim::WorldKindName;
 
-const char* AttitudeInputName(AttitudeInput input) {
-  switch (input) {
-    case AttitudeInput::kNone:
-      return "none";
-    case AttitudeInput::kTruth:
-      return "truth";
-    case AttitudeInput::kSimulatedImu:
-      return "imu";
-    case AttitudeInput::kImage:
-      return "image";
-  }
-  return "?";
-}
-
 namespace {
 
 // The zenith the gravity-aligned cap uses at each frame of a run (body frame: the lens's).
@@ -255,16 +241,30 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
 
 namespace {
 
-void Report(ProgressFn progress, void* context, const char* what) {
+// A run of the experiments: its label, its motion's seed and its sky at noon with its own
+// clouds and noise (the lighting's seed).
+RunSpec NoonRun(std::string label, std::uint64_t motion_seed, std::uint64_t lighting_seed) {
+  RunSpec spec;
+  spec.label = std::move(label);
+  spec.motion.seed = motion_seed;
+  LightingPreset("noon", lighting_seed, &spec.lighting);
+  return spec;
+}
+
+// Describes one run, telling the progress callback its label first (runs take seconds).
+Status DescribeReported(const World& world, std::span<const Point2> route, bool closed,
+                        const RunSpec& spec, const ExperimentOptions& options, ProgressFn progress,
+                        RunDescriptors* out) {
   if (progress != nullptr)
-    progress(what, context);
+    progress(spec.label.c_str());
+  return DescribeRun(world, route, closed, spec, options, out);
 }
 
 }  // namespace
 
 Status RunTiltExperiment(const ExperimentOptions& tilt_options,
                          std::span<const int> differences_deg, std::vector<TiltRow>* rows,
-                         ProgressFn progress, void* context) {
+                         ProgressFn progress) {
   // Runs pitch up to 30 degrees either way.
   const ExperimentOptions options = WithCapFor(tilt_options, LargestTiltDeg(30, 0));
   World world;
@@ -276,17 +276,14 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
   auto get = [&](int alpha, bool second, RunDescriptors** run) -> Status {
     const int i = run_index(alpha, second);
     if (!done[static_cast<std::size_t>(i)]) {
-      RunSpec spec;
       char label[64];
       std::snprintf(label, sizeof label, "city tilt %+d%s", alpha, second ? " (second run)" : "");
-      spec.label = label;
-      Report(progress, context, label);
-      spec.motion.tilt_deg = alpha;
-      spec.motion.seed = static_cast<std::uint64_t>(100 + i);
       // The paper's runs: the same place at about the same time of day (3 pm).
-      LightingPreset("noon", static_cast<std::uint64_t>(200 + i), &spec.lighting);
-      SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, spec, options,
-                             &runs[static_cast<std::size_t>(i)]));
+      RunSpec spec =
+          NoonRun(label, static_cast<std::uint64_t>(100 + i), static_cast<std::uint64_t>(200 + i));
+      spec.motion.tilt_deg = alpha;
+      SKYLOC_TRY(DescribeReported(world, world.route, world.route_closed, spec, options, progress,
+                                  &runs[static_cast<std::size_t>(i)]));
       done[static_cast<std::size_t>(i)] = true;
     }
     *run = &runs[static_cast<std::size_t>(i)];
@@ -337,14 +334,12 @@ namespace {
 // and described: a smooth reference at noon, and a query at dawn that weaves +-20 degrees
 // and bumps.
 Status DescribeManoeuvreRuns(WorldKind kind, double bumps_deg, const ExperimentOptions& options,
-                             ProgressFn progress, void* context, RunDescriptors* reference,
+                             ProgressFn progress, RunDescriptors* reference,
                              RunDescriptors* query) {
   World world;
   SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
-  RunSpec reference_spec;
-  reference_spec.label = std::string(WorldKindName(kind)) + " reference (noon, smooth)";
-  reference_spec.motion.seed = 301;
-  LightingPreset("noon", 401, &reference_spec.lighting);
+  const RunSpec reference_spec =
+      NoonRun(std::string(WorldKindName(kind)) + " reference (noon, smooth)", 301, 401);
   RunSpec query_spec;
   query_spec.label = std::string(WorldKindName(kind)) + " query (dawn, zig-zag, bumps)";
   query_spec.motion.seed = 302;
@@ -352,25 +347,23 @@ Status DescribeManoeuvreRuns(WorldKind kind, double bumps_deg, const ExperimentO
   query_spec.motion.zigzag_period_m = 12;
   query_spec.motion.bumps_deg = bumps_deg;
   LightingPreset("dawn", 402, &query_spec.lighting);
-  Report(progress, context, reference_spec.label.c_str());
-  SKYLOC_TRY(
-      DescribeRun(world, world.route, world.route_closed, reference_spec, options, reference));
-  Report(progress, context, query_spec.label.c_str());
-  return DescribeRun(world, world.route, world.route_closed, query_spec, options, query);
+  SKYLOC_TRY(DescribeReported(world, world.route, world.route_closed, reference_spec, options,
+                              progress, reference));
+  return DescribeReported(world, world.route, world.route_closed, query_spec, options, progress,
+                          query);
 }
 
 }  // namespace
 
 Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
                               std::span<const int> ds_values, std::vector<ManoeuvreRow>* rows,
-                              ProgressFn progress, void* context) {
+                              ProgressFn progress) {
   constexpr double kBumpsDeg = 15;
   const ExperimentOptions options = WithCapFor(manoeuvre_options, LargestTiltDeg(0, kBumpsDeg));
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
     RunDescriptors reference, query;
-    SKYLOC_TRY(
-        DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, context, &reference, &query));
+    SKYLOC_TRY(DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, &reference, &query));
     // FAB-MAP matches single images: one score for the world, shown on each ds row.
     MethodScore fabmap;
     if (options.fabmap_vocabulary != nullptr)
@@ -416,7 +409,7 @@ double TiltDeg(const drivers::Pose& pose) {
 }  // namespace
 
 Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vector<HeadingRow>* rows,
-                            ProgressFn progress, void* context) {
+                            ProgressFn progress) {
   constexpr double kBumpsDeg = 15;
   constexpr double kLevelTiltDeg = 10;
   ExperimentOptions options = heading_options;
@@ -432,8 +425,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
     RunDescriptors reference, query;
-    SKYLOC_TRY(
-        DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, context, &reference, &query));
+    SKYLOC_TRY(DescribeManoeuvreRuns(kind, kBumpsDeg, options, progress, &reference, &query));
     HeadingRow row;
     row.world = kind;
     row.query_frames = static_cast<int>(query.trajectory.size());
@@ -480,7 +472,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
 
 Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
                          std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
-                         ProgressFn progress, void* context) {
+                         ProgressFn progress) {
   World world;
   SKYLOC_TRY(LoadSevilleWorld((seville_dir + "/world5000_triangles.csv").c_str(), &world));
   struct Query {
@@ -501,28 +493,20 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
   for (const double height : camera_heights_m) {
     ExperimentOptions o = options;
     o.camera_height_m = height;
-    RunSpec reference_spec;
     char label[96];
     std::snprintf(label, sizeof label, "%s at %.2f m", kAntsReferenceRoute, height);
-    reference_spec.label = label;
-    reference_spec.motion.seed = 501;
-    LightingPreset("noon", 601, &reference_spec.lighting);
     RunDescriptors reference;
-    Report(progress, context, label);
-    SKYLOC_TRY(DescribeRun(world, reference_route, false, reference_spec, o, &reference));
+    SKYLOC_TRY(DescribeReported(world, reference_route, false, NoonRun(label, 501, 601), o,
+                                progress, &reference));
     std::uint64_t k = 0;
     for (const Query& q : kQueries) {
       ++k;
       std::vector<Point2> route;
       SKYLOC_TRY(load(q.name, &route));
-      RunSpec spec;
       std::snprintf(label, sizeof label, "%s at %.2f m", q.name, height);
-      spec.label = label;
-      spec.motion.seed = 510 + k;
-      LightingPreset("noon", 610 + k, &spec.lighting);
       RunDescriptors query;
-      Report(progress, context, label);
-      SKYLOC_TRY(DescribeRun(world, route, false, spec, o, &query));
+      SKYLOC_TRY(DescribeReported(world, route, false, NoonRun(label, 510 + k, 610 + k), o,
+                                  progress, &query));
       AntsRow row;
       row.query = q.name;
       row.same_ant = q.same_ant;
@@ -546,7 +530,7 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
 }
 
 Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<const int> ds_values,
-                          std::vector<SpeedRow>* rows, ProgressFn progress, void* context) {
+                          std::vector<SpeedRow>* rows, ProgressFn progress) {
   constexpr double kBumpsDeg = 15;
   const ExperimentOptions options = WithCapFor(speed_options, LargestTiltDeg(0, kBumpsDeg));
   rows->clear();
@@ -557,14 +541,11 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
     World world;
     SKYLOC_TRY(MakeProceduralWorld(kind, options.world_seed, &world));
     // The taught run: the default profile (a stop at the start and two on the way).
-    RunSpec reference_spec;
-    reference_spec.label = std::string(WorldKindName(kind)) + " taught run (1x, stops)";
-    reference_spec.motion.seed = 501;
-    LightingPreset("noon", 601, &reference_spec.lighting);
     RunDescriptors reference;
-    Report(progress, context, reference_spec.label.c_str());
-    SKYLOC_TRY(
-        DescribeRun(world, world.route, world.route_closed, reference_spec, base, &reference));
+    SKYLOC_TRY(DescribeReported(
+        world, world.route, world.route_closed,
+        NoonRun(std::string(WorldKindName(kind)) + " taught run (1x, stops)", 501, 601), base,
+        progress, &reference));
     std::uint64_t seed = 510;
     for (const double bumps : {0.0, kBumpsDeg}) {
       for (const bool stops : {true, false}) {
@@ -579,19 +560,17 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
             o.speed.stops = 0;
             o.speed.start_stop_s = 0;
           }
-          RunSpec query_spec;
           char label[160];
           std::snprintf(label, sizeof label, "%s repeat %.1fx, %s, %s", WorldKindName(kind), ratio,
                         stops ? "stops" : "no stops", bumps > 0 ? "+-15 deg bumps" : "level");
-          query_spec.label = label;
-          query_spec.motion.seed = seed;  // its stops, speed targets and bumps are its own
+          // Its own stops, speed targets and bumps (the motion's seed), clouds and noise.
+          RunSpec query_spec = NoonRun(label, seed, 600 + seed);
           query_spec.motion.speed_ratio = ratio;
           query_spec.motion.bumps_deg = bumps;
           query_spec.motion.lateral_m = options.lateral_m;
-          LightingPreset("noon", 600 + seed, &query_spec.lighting);  // other clouds and noise
           RunDescriptors query;
-          Report(progress, context, label);
-          SKYLOC_TRY(DescribeRun(world, world.route, world.route_closed, query_spec, o, &query));
+          SKYLOC_TRY(DescribeReported(world, world.route, world.route_closed, query_spec, o,
+                                      progress, &query));
           for (const int ds : ds_values) {
             ExperimentOptions scored = o;
             scored.seqslam.sequence_length = ds;

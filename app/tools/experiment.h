@@ -1,4 +1,4 @@
-// The paper's experiments on simulated runs (issue 5 part 5): render runs through a world,
+// The paper's experiments on simulated runs: render runs through a world,
 // describe every frame twice — SeqSLAM (sky): UV image -> Otsu -> SH amplitude spectrum;
 // SeqSLAM (vanilla): visible image -> grey 64x32 patch-normalised — and score a reference
 // run against a query run with the same SeqSLAM and precision-recall code as `skyloc eval`.
@@ -34,16 +34,14 @@
 
 namespace skyloc::tools {
 
-// Where the gravity-aligned descriptor's zenith comes from (issue 12).
+// Where the gravity-aligned descriptor's zenith comes from.
 enum class AttitudeInput : std::uint8_t {
   kNone,          // no gravity-aligned descriptor
   kTruth,         // the true poses (an upper bound)
   kSimulatedImu,  // the simulated IMU (noise, bias) through the attitude filter: the product
   kImage,         // the image alone (dsp::ZenithEstimator on the frame's sky samples; level
-                  // when it gives no estimate): issue 12 item 3, experimental
+                  // when it gives no estimate): experimental
 };
-
-const char* AttitudeInputName(AttitudeInput input);
 
 struct ExperimentOptions {
   int width = 320;
@@ -83,7 +81,7 @@ struct ExperimentOptions {
   double cap_elevation_deg = -1;
   dsp::ZenithEstimateOptions zenith;  // AttitudeInput::kImage
   // Horizon strips of every frame's UV image, as the firmware's route stores them (one
-  // byte per column) for the heading (issue 13): config's [heading] strip
+  // byte per column) for the heading: config's [heading] strip
   // (firmware::StripOptionsFrom); false: none (every other experiment).
   bool strips = false;
   // FAB-MAP 2.0 (tilt and manoeuvre): the visible image's words over this vocabulary (not
@@ -158,11 +156,10 @@ struct TiltRow {
 };
 
 // Progress: called before each run is rendered (may be null).
-using ProgressFn = void (*)(const char* what, void* context);
+using ProgressFn = void (*)(const char* what);
 
 Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> differences_deg,
-                         std::vector<TiltRow>* rows, ProgressFn progress = nullptr,
-                         void* context = nullptr);
+                         std::vector<TiltRow>* rows, ProgressFn progress = nullptr);
 
 // Manoeuvre (BMX Track and Disposal Site): a smooth reference run at noon against a query
 // run at dawn with zig-zag and bumps; scored at several sequence lengths.
@@ -178,10 +175,9 @@ struct ManoeuvreRow {
 };
 
 Status RunManoeuvreExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
-                              std::vector<ManoeuvreRow>* rows, ProgressFn progress = nullptr,
-                              void* context = nullptr);
+                              std::vector<ManoeuvreRow>* rows, ProgressFn progress = nullptr);
 
-// Heading (issue 13 item 6): the manoeuvre experiment's runs (reference at noon, smooth;
+// Heading: the manoeuvre experiment's runs (reference at noon, smooth;
 // query at dawn with +-20 degree zig-zag yaw and +-15 degree bumps), matched by the route
 // filter (the firmware's matcher) on the sky descriptor; on every query frame matched to
 // the right place, the heading relative to the matched reference frame from the two
@@ -200,7 +196,7 @@ struct HeadingRow {
 };
 
 Status RunHeadingExperiment(const ExperimentOptions& options, std::vector<HeadingRow>* rows,
-                            ProgressFn progress = nullptr, void* context = nullptr);
+                            ProgressFn progress = nullptr);
 
 // Ants (Seville habitat): one ant's route as the reference, other routes of the same ant
 // and of other ants as queries, at each camera height (ant ~0.01 m, small robot ~0.1 m).
@@ -215,7 +211,7 @@ struct AntsRow {
 
 inline constexpr const char* kAntsReferenceRoute = "ant1_route1";
 
-// Speed (issue 11): runs sampled in time at a fixed frame rate. A taught run with stops
+// Speed: runs sampled in time at a fixed frame rate. A taught run with stops
 // against repeat runs at 0.5x, 1x and 2x its speed, with and without stops of their own,
 // level and with +-15 degree bumps, in the forest and city worlds; sky descriptor, both
 // matchers at each ds.
@@ -231,11 +227,10 @@ struct SpeedRow {
 };
 
 Status RunSpeedExperiment(const ExperimentOptions& options, std::span<const int> ds_values,
-                          std::vector<SpeedRow>* rows, ProgressFn progress = nullptr,
-                          void* context = nullptr);
+                          std::vector<SpeedRow>* rows, ProgressFn progress = nullptr);
 
 Status RunAntsExperiment(const ExperimentOptions& options, const std::string& seville_dir,
                          std::span<const double> camera_heights_m, std::vector<AntsRow>* rows,
-                         ProgressFn progress = nullptr, void* context = nullptr);
+                         ProgressFn progress = nullptr);
 
 }  // namespace skyloc::tools

@@ -121,14 +121,14 @@ bool PinholeHorizonRow(const dsp::Lens& lens, const drivers::Pose& pose, double 
 }
 
 Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraResult* forward,
-                           Surf1dCameraResult* fisheye, ProgressFn progress, void* context) {
+                           Surf1dCameraResult* fisheye, ProgressFn progress) {
   const Surf1dExperimentOptions& o = options;
   if (o.images_per_place < 4 || o.places < 1 || o.column_step < 1 || o.band_rows < 1)
     return Status::Error(StatusCode::kInvalidArgument,
                          "surf1d experiment: need at least 4 images a place, 1 place, a column "
                          "step and band rows of at least 1");
   if (progress != nullptr)
-    progress("city world", context);
+    progress("city world");
   World world;
   SKYLOC_TRY(MakeProceduralWorld(WorldKind::kCity, o.world_seed, &world));
   const std::vector<Point2> places = Places(world, o.places);
@@ -179,7 +179,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   double features = 0;
   for (std::size_t k = 0; k < total; ++k) {
     if (progress != nullptr && k % static_cast<std::size_t>(per_place) == 0)
-      progress("forward camera: rendering and extracting", context);
+      progress("forward camera: rendering and extracting");
     drivers::Pose pose = pose_of(k);
     pose.pitch_deg = o.pitch_deg + uniform(jitter);
     pose.roll_deg = uniform(jitter);
@@ -224,7 +224,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   forward->strip_columns = columns;
   forward->mean_features = features / static_cast<double>(total);
   if (progress != nullptr)
-    progress("forward camera: matching pairs", context);
+    progress("forward camera: matching pairs");
   SKYLOC_TRY(ScorePairs(
       images, n, o.match, same_place,
       [&](std::size_t i, std::size_t j) { return heading_gap_deg(i, j) < o.match_below_deg; },
@@ -273,7 +273,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   features = 0;
   for (std::size_t k = 0; k < total; ++k) {
     if (progress != nullptr && k % static_cast<std::size_t>(per_place) == 0)
-      progress("upward fisheye: rendering and extracting", context);
+      progress("upward fisheye: rendering and extracting");
     SKYLOC_TRY(up.Render(pose_of(k), o.lighting, Spectrum::kVisible, k + 1, view_up));
     if (const dsp::HorizonStripError e = horizon.Extract(view_up, strip_up);
         e != dsp::HorizonStripError::kOk)
@@ -291,7 +291,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   fisheye->strip_columns = m;
   fisheye->mean_features = features / static_cast<double>(total);
   if (progress != nullptr)
-    progress("upward fisheye: matching pairs", context);
+    progress("upward fisheye: matching pairs");
   return ScorePairs(
       images, m, o.match, [](std::size_t, std::size_t) { return true; }, same_place, fisheye);
 }

@@ -83,7 +83,6 @@ struct Surf1dCameraResult {
 bool PinholeHorizonRow(const dsp::Lens& lens, const drivers::Pose& pose, double x, double* row);
 
 Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraResult* forward,
-                           Surf1dCameraResult* fisheye, ProgressFn progress = nullptr,
-                           void* context = nullptr);
+                           Surf1dCameraResult* fisheye, ProgressFn progress = nullptr);
 
 }  // namespace skyloc::tools
