@@ -77,110 +77,111 @@ const char* DashAttribute(LineDash dash) {
 
 }  // namespace
 
-std::string PrPlotSvg(std::string_view title, std::span<const PrCurve> curves) {
-  // The plot area; the legend lines go below it.
-  constexpr double kLeft = 70, kTop = 40, kWidth = 460, kHeight = 400, kLegendLine = 22;
-  auto sx = [](double recall) { return kLeft + recall * kWidth; };
-  auto sy = [](double precision) { return kTop + (1.0 - precision) * kHeight; };
-  std::string svg;
-  // 260 px to the right of the plot: room for a legend line's text.
-  AppendSvgStart(&svg, kLeft + kWidth + 260,
-                 kTop + kHeight + 60 + kLegendLine * static_cast<double>(curves.size()));
-  Append(&svg, "<text x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">%s</text>\n",
-         kLeft + kWidth / 2, XmlEscape(title).c_str());
+namespace {
+
+// A plot of the unit square (both axes 0 to 1) with its title above, ticks every 0.2, the
+// axis names and a legend line per curve below it.
+struct UnitSquarePlot {
+  double left = 70, top = 40, width = 400, height = 400;
+  static constexpr double kLegendLine = 22;
+  double X(double v) const { return left + v * width; }
+  double Y(double v) const { return top + (1.0 - v) * height; }
+};
+
+// The plot's frame; `diagonal` draws the chance line y = x (a ROC plot's).
+void AppendUnitSquareFrame(std::string* svg, const UnitSquarePlot& p, std::string_view title,
+                           const char* x_name, const char* y_name, bool diagonal) {
+  Append(svg, "<text x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">%s</text>\n",
+         p.left + p.width / 2, XmlEscape(title).c_str());
   for (int i = 0; i <= 5; ++i) {
     const double v = i / 5.0;
-    Append(&svg,
+    Append(svg,
            "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
-           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n",
-           sx(v), sy(0), sx(v), sy(1), sx(0), sy(v), sx(1), sy(v));
-    Append(&svg,
+           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
            "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.1f</text>\n"
            "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.1f</text>\n",
-           sx(v), sy(0) + 16, v, sx(0) - 6, sy(v) + 4, v);
+           p.X(v), p.Y(0), p.X(v), p.Y(1), p.X(0), p.Y(v), p.X(1), p.Y(v), p.X(v), p.Y(0) + 16, v,
+           p.X(0) - 6, p.Y(v) + 4, v);
   }
-  Append(&svg,
+  if (diagonal) {
+    Append(svg,
+           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\" "
+           "stroke-dasharray=\"4 4\"/>\n",
+           p.X(0), p.Y(0), p.X(1), p.Y(1));
+  }
+  Append(svg,
          "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
          "stroke=\"black\"/>\n",
-         kLeft, kTop, kWidth, kHeight);
-  Append(&svg, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">Recall</text>\n",
-         kLeft + kWidth / 2, kTop + kHeight + 36);
-  Append(&svg,
+         p.left, p.top, p.width, p.height);
+  Append(svg, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%s</text>\n",
+         p.left + p.width / 2, p.top + p.height + 36, x_name);
+  Append(svg,
          "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 "
-         "%.1f)\">Precision</text>\n",
-         kTop + kHeight / 2, kTop + kHeight / 2);
+         "%.1f)\">%s</text>\n",
+         p.top + p.height / 2, p.top + p.height / 2, y_name);
+}
+
+// Curve I's polyline opening (its colour and dash); the caller appends the points and
+// closes it with AppendCurveEnd.
+void AppendCurveStart(std::string* svg, std::size_t i, LineDash dash) {
+  Append(svg, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"2\"%s points=\"",
+         kPalette[i % kPaletteSize], DashAttribute(dash));
+}
+
+// Closes curve I's polyline and writes its legend line below the plot.
+void AppendCurveEnd(std::string* svg, const UnitSquarePlot& p, std::size_t i, LineDash dash,
+                    std::string_view name) {
+  *svg += "\"/>\n";
+  const double legend_y =
+      p.top + p.height + 56 + UnitSquarePlot::kLegendLine * static_cast<double>(i);
+  Append(svg,
+         "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
+         "stroke-width=\"2\"%s/>\n",
+         p.left, legend_y - 4, p.left + 30, legend_y - 4, kPalette[i % kPaletteSize],
+         DashAttribute(dash));
+  Append(svg, "<text x=\"%.1f\" y=\"%.1f\">%s</text>\n", p.left + 38, legend_y,
+         XmlEscape(name).c_str());
+}
+
+// The height of a plot with N legend lines below it.
+double PlotHeight(const UnitSquarePlot& p, std::size_t n) {
+  return p.top + p.height + 60 + UnitSquarePlot::kLegendLine * static_cast<double>(n);
+}
+
+}  // namespace
+
+std::string PrPlotSvg(std::string_view title, std::span<const PrCurve> curves) {
+  UnitSquarePlot plot;
+  plot.width = 460;
+  std::string svg;
+  // 260 px to the right of the plot: room for a legend line's text.
+  AppendSvgStart(&svg, plot.left + plot.width + 260, PlotHeight(plot, curves.size()));
+  AppendUnitSquareFrame(&svg, plot, title, "Recall", "Precision", false);
   for (std::size_t i = 0; i < curves.size(); ++i) {
-    const PrCurve& curve = curves[i];
-    const char* colour = kPalette[i % kPaletteSize];
-    const char* dash = DashAttribute(curve.dash);
-    Append(&svg, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"2\"%s points=\"", colour,
-           dash);
+    AppendCurveStart(&svg, i, curves[i].dash);
     // Steps: along the previous recall at the new precision, then along the new precision,
     // as the area under the curve sums them (docs/SEQSLAM.md).
     double previous_recall = 0.0;
-    for (const dsp::PrPoint& p : curve.points) {
-      Append(&svg, "%.1f,%.1f %.1f,%.1f ", sx(previous_recall), sy(p.precision), sx(p.recall),
-             sy(p.precision));
+    for (const dsp::PrPoint& p : curves[i].points) {
+      Append(&svg, "%.1f,%.1f %.1f,%.1f ", plot.X(previous_recall), plot.Y(p.precision),
+             plot.X(p.recall), plot.Y(p.precision));
       previous_recall = p.recall;
     }
-    svg += "\"/>\n";
-    const double legend_y = kTop + kHeight + 56 + kLegendLine * static_cast<double>(i);
-    Append(&svg,
-           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
-           "stroke-width=\"2\"%s/>\n",
-           kLeft, legend_y - 4, kLeft + 30, legend_y - 4, colour, dash);
-    Append(&svg, "<text x=\"%.1f\" y=\"%.1f\">%s</text>\n", kLeft + 38, legend_y,
-           XmlEscape(curve.name).c_str());
+    AppendCurveEnd(&svg, plot, i, curves[i].dash, curves[i].name);
   }
   return svg + "</svg>\n";
 }
 
 std::string RocPlotSvg(std::string_view title, std::span<const RocCurveLine> curves) {
-  constexpr double kLeft = 70, kTop = 40, kSize = 400, kLegendLine = 22;
-  auto sx = [](double fpr) { return kLeft + fpr * kSize; };
-  auto sy = [](double tpr) { return kTop + (1.0 - tpr) * kSize; };
+  const UnitSquarePlot plot;
   std::string svg;
-  AppendSvgStart(&svg, kLeft + kSize + 320,
-                 kTop + kSize + 60 + kLegendLine * static_cast<double>(curves.size()));
-  Append(&svg, "<text x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">%s</text>\n",
-         kLeft + kSize / 2, XmlEscape(title).c_str());
-  for (int i = 0; i <= 5; ++i) {
-    const double v = i / 5.0;
-    Append(&svg,
-           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
-           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>\n"
-           "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.1f</text>\n"
-           "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.1f</text>\n",
-           sx(v), sy(0), sx(v), sy(1), sx(0), sy(v), sx(1), sy(v), sx(v), sy(0) + 16, v, sx(0) - 6,
-           sy(v) + 4, v);
-  }
-  Append(&svg,
-         "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\" "
-         "stroke-dasharray=\"4 4\"/>\n"
-         "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
-         "stroke=\"black\"/>\n",
-         sx(0), sy(0), sx(1), sy(1), kLeft, kTop, kSize, kSize);
-  Append(&svg, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">False positive rate</text>\n",
-         kLeft + kSize / 2, kTop + kSize + 36);
-  Append(&svg,
-         "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 "
-         "%.1f)\">True positive rate</text>\n",
-         kTop + kSize / 2, kTop + kSize / 2);
+  AppendSvgStart(&svg, plot.left + plot.width + 320, PlotHeight(plot, curves.size()));
+  AppendUnitSquareFrame(&svg, plot, title, "False positive rate", "True positive rate", true);
   for (std::size_t i = 0; i < curves.size(); ++i) {
-    const char* colour = kPalette[i % kPaletteSize];
-    const char* dash = DashAttribute(curves[i].dash);
-    Append(&svg, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"2\"%s points=\"", colour,
-           dash);
+    AppendCurveStart(&svg, i, curves[i].dash);
     for (const dsp::RocPoint& p : curves[i].points)
-      Append(&svg, "%.1f,%.1f ", sx(p.false_positive_rate), sy(p.true_positive_rate));
-    svg += "\"/>\n";
-    const double legend_y = kTop + kSize + 56 + kLegendLine * static_cast<double>(i);
-    Append(&svg,
-           "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
-           "stroke-width=\"2\"%s/>\n",
-           kLeft, legend_y - 4, kLeft + 30, legend_y - 4, colour, dash);
-    Append(&svg, "<text x=\"%.1f\" y=\"%.1f\">%s</text>\n", kLeft + 38, legend_y,
-           XmlEscape(curves[i].name).c_str());
+      Append(&svg, "%.1f,%.1f ", plot.X(p.false_positive_rate), plot.Y(p.true_positive_rate));
+    AppendCurveEnd(&svg, plot, i, curves[i].dash, curves[i].name);
   }
   return svg + "</svg>\n";
 }
