@@ -81,6 +81,27 @@ Config DemoConfig(const char* world, bool quick) {
   return c;
 }
 
+// One of the demo's two simulated runs on the route database at ROUTE_PATH, with a progress
+// line on the terminal in place of JSON lines.
+int RunDemoSession(const Config& config, LoopMode mode, const std::string& route_path,
+                   const char* label, std::uint64_t max_frames, const SimRunConfig& sim,
+                   SessionReport* report) {
+  SessionArgs args;
+  args.mode = mode;
+  args.route_path = route_path;
+  args.json = nullptr;
+  args.label = label;
+  args.simulation_expected = true;
+  args.max_frames = max_frames;
+  args.sim = sim;
+  args.tolerance_m = 2.0;
+  ProgressLine progress(label);
+  args.extra_sink = &progress;
+  const int rc = RunSession(config, args, report);
+  progress.Finish();
+  return rc;
+}
+
 }  // namespace
 
 int RunDemo(std::span<char* const> args) {
@@ -116,18 +137,9 @@ int RunDemo(std::span<char* const> args) {
   std::printf(
       "1. teach: drive the route once at noon, 10 frames a second, standing at the start and "
       "stopping on the way, and record its sky descriptors\n");
-  SessionArgs teach;
-  teach.mode = LoopMode::kTeach;
-  teach.route_path = route_path;
-  teach.json = nullptr;
-  teach.label = "teach";
-  teach.simulation_expected = true;
-  teach.max_frames = quick ? 300 : 1200;
-  ProgressLine teach_progress("teach");
-  teach.extra_sink = &teach_progress;
   SessionReport taught;
-  const int teach_rc = RunSession(config, teach, &taught);
-  teach_progress.Finish();
+  const int teach_rc = RunDemoSession(config, LoopMode::kTeach, route_path, "teach",
+                                      quick ? 300 : 1200, SimRunConfig{}, &taught);
 
   int rc = teach_rc;
   SessionReport repeated;
@@ -135,24 +147,15 @@ int RunDemo(std::span<char* const> args) {
     std::printf(
         "\n2. repeat: drive it again 1.5x faster with its own stops, tilted 10 deg, "
         "zig-zagging +-20 deg, at dawn, with other clouds and noise\n");
-    SessionArgs repeat;
-    repeat.mode = LoopMode::kRepeat;
-    repeat.route_path = route_path;
-    repeat.json = nullptr;
-    repeat.label = "repeat";
-    repeat.simulation_expected = true;
+    SimRunConfig sim;
+    sim.speed_ratio = 1.5;
+    sim.tilt_deg = 10;
+    sim.zigzag_deg = 20;
+    sim.lighting = "dawn";
+    sim.run_seed = 2;
     // Within the stretch the teach run covered (1.5x faster, so fewer frames).
-    repeat.max_frames = quick ? 160 : 700;
-    repeat.sim.speed_ratio = 1.5;
-    repeat.sim.tilt_deg = 10;
-    repeat.sim.zigzag_deg = 20;
-    repeat.sim.lighting = "dawn";
-    repeat.sim.run_seed = 2;
-    repeat.tolerance_m = 2.0;
-    ProgressLine repeat_progress("repeat");
-    repeat.extra_sink = &repeat_progress;
-    rc = RunSession(config, repeat, &repeated);
-    repeat_progress.Finish();
+    rc = RunDemoSession(config, LoopMode::kRepeat, route_path, "repeat", quick ? 160 : 700, sim,
+                        &repeated);
   }
   if (rc == 0) {
     std::printf("\n3. result: %llu route frames taught, %llu frames repeated\n",
