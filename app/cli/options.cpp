@@ -96,32 +96,36 @@ void OptionTable::TextList(const char* name, const char* value, const char* help
        }});
 }
 
+namespace {
+
+// The parser of a whole number in [min, max] clipped to T's range, handing the value to
+// `take`: the one parser of both Int()s and IntList().
+template <typename T, typename Take>
+auto WholeParser(std::int64_t min, std::int64_t max, Take take) {
+  const std::int64_t lo = std::max<std::int64_t>(min, std::numeric_limits<T>::min());
+  const std::int64_t hi = std::min<std::int64_t>(max, std::numeric_limits<T>::max());
+  return [=](const char* text, std::string* expected) {
+    std::int64_t v = 0;
+    if (!ParseWhole(text, &v) || v < lo || v > hi) {
+      *expected = WholeRange(lo, hi);
+      return false;
+    }
+    take(static_cast<T>(v));
+    return true;
+  };
+}
+
+}  // namespace
+
 void OptionTable::Int(const char* name, const char* value, const char* help, std::int64_t min,
                       std::int64_t max, std::int64_t* out) {
-  Add({name, value, help, false, false, [=](const char* text, std::string* expected) {
-         std::int64_t v = 0;
-         if (!ParseWhole(text, &v) || v < min || v > max) {
-           *expected = WholeRange(min, max);
-           return false;
-         }
-         *out = v;
-         return true;
-       }});
+  Add({name, value, help, false, false,
+       WholeParser<std::int64_t>(min, max, [out](std::int64_t v) { *out = v; })});
 }
 
 void OptionTable::Int(const char* name, const char* value, const char* help, std::int64_t min,
                       std::int64_t max, int* out) {
-  const std::int64_t lo = std::max<std::int64_t>(min, std::numeric_limits<int>::min());
-  const std::int64_t hi = std::min<std::int64_t>(max, std::numeric_limits<int>::max());
-  Add({name, value, help, false, false, [=](const char* text, std::string* expected) {
-         std::int64_t v = 0;
-         if (!ParseWhole(text, &v) || v < lo || v > hi) {
-           *expected = WholeRange(lo, hi);
-           return false;
-         }
-         *out = static_cast<int>(v);
-         return true;
-       }});
+  Add({name, value, help, false, false, WholeParser<int>(min, max, [out](int v) { *out = v; })});
 }
 
 void OptionTable::Count(const char* name, const char* value, const char* help, std::uint64_t* out) {
@@ -140,17 +144,8 @@ void OptionTable::Count(const char* name, const char* value, const char* help, s
 
 void OptionTable::IntList(const char* name, const char* value, const char* help, std::int64_t min,
                           std::int64_t max, std::vector<int>* out) {
-  const std::int64_t lo = std::max<std::int64_t>(min, std::numeric_limits<int>::min());
-  const std::int64_t hi = std::min<std::int64_t>(max, std::numeric_limits<int>::max());
-  Add({name, value, help, true, false, [=](const char* text, std::string* expected) {
-         std::int64_t v = 0;
-         if (!ParseWhole(text, &v) || v < lo || v > hi) {
-           *expected = WholeRange(lo, hi);
-           return false;
-         }
-         out->push_back(static_cast<int>(v));
-         return true;
-       }});
+  Add({name, value, help, true, false,
+       WholeParser<int>(min, max, [out](int v) { out->push_back(v); })});
 }
 
 void OptionTable::Number(const char* name, const char* value, const char* help, NumberRange range,
