@@ -121,8 +121,11 @@ Status FabMap2::Init(const ChowLiuTree& tree, const FabMapParams& params) {
   return Status::Ok();
 }
 
-void FabMap2::AddToIndex(std::span<const std::uint32_t> words, std::vector<double>* defaults,
-                         std::vector<std::vector<std::uint32_t>>* inverted) {
+Status FabMap2::AddToIndex(std::span<const std::uint32_t> words, std::vector<double>* defaults,
+                           std::vector<std::vector<std::uint32_t>>* inverted) {
+  if (!initialised_)
+    return Status::Error(StatusCode::kFailedPrecondition, "FAB-MAP: Init() first");
+  SKYLOC_TRY(CheckWordList(words, tree_.words));
   const auto id = static_cast<std::uint32_t>(defaults->size());
   double d = 0;
   for (const std::uint32_t q : words) {
@@ -130,22 +133,15 @@ void FabMap2::AddToIndex(std::span<const std::uint32_t> words, std::vector<doubl
     (*inverted)[q].push_back(id);
   }
   defaults->push_back(d);
+  return Status::Ok();
 }
 
 Status FabMap2::AddTrainingSample(std::span<const std::uint32_t> words) {
-  if (!initialised_)
-    return Status::Error(StatusCode::kFailedPrecondition, "FAB-MAP: Init() first");
-  SKYLOC_TRY(CheckWordList(words, tree_.words));
-  AddToIndex(words, &sample_default_, &sample_index_);
-  return Status::Ok();
+  return AddToIndex(words, &sample_default_, &sample_index_);
 }
 
 Status FabMap2::AddPlace(std::span<const std::uint32_t> words) {
-  if (!initialised_)
-    return Status::Error(StatusCode::kFailedPrecondition, "FAB-MAP: Init() first");
-  SKYLOC_TRY(CheckWordList(words, tree_.words));
-  AddToIndex(words, &place_default_, &place_index_);
-  return Status::Ok();
+  return AddToIndex(words, &place_default_, &place_index_);
 }
 
 // OpenFABMAP's FabMap2::getIndexLikelihoods. Each image starts from its default (every word

@@ -74,9 +74,10 @@ class FabMap2 {
                   double* new_place) const;
 
  private:
-  // The index over one set of images: per-image defaults and word -> images lists.
-  void AddToIndex(std::span<const std::uint32_t> words, std::vector<double>* defaults,
-                  std::vector<std::vector<std::uint32_t>>* inverted);
+  // Adds an image to the index over one set of images: per-image defaults and word ->
+  // images lists (after Init(), words checked against the vocabulary).
+  Status AddToIndex(std::span<const std::uint32_t> words, std::vector<double>* defaults,
+                    std::vector<std::vector<std::uint32_t>>* inverted);
   void IndexLikelihoods(std::span<const std::uint32_t> query, const std::vector<double>& defaults,
                         const std::vector<std::vector<std::uint32_t>>& inverted,
                         std::span<double> out) const;

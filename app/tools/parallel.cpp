@@ -27,6 +27,19 @@ void ParallelFor(int jobs, int tasks, const std::function<void(int task, int wor
     t.join();
 }
 
+namespace {
+
+// A worker's own buffer of N floats, sized on the worker's first task.
+std::vector<float>& WorkerBuffer(std::vector<std::vector<float>>* buffers, int worker,
+                                 std::size_t n) {
+  std::vector<float>& b = (*buffers)[static_cast<std::size_t>(worker)];
+  if (b.empty())
+    b.resize(n);
+  return b;
+}
+
+}  // namespace
+
 void RunBlockedSeqSlam(dsp::BlockedSeqSlam& engine, int jobs,
                        const std::function<void(int)>& progress) {
   const int workers = std::max(1, jobs);
@@ -39,17 +52,13 @@ void RunBlockedSeqSlam(dsp::BlockedSeqSlam& engine, int jobs,
     engine.Begin(b);
     const int columns = engine.ColumnCount();
     ParallelFor(workers, (columns + kGroup - 1) / kGroup, [&](int task, int worker) {
-      std::vector<float>& s = scratch[static_cast<std::size_t>(worker)];
-      if (s.empty())
-        s.resize(engine.ScratchFloats());
-      engine.ComputeColumns(task * kGroup, std::min(columns, (task + 1) * kGroup), s);
+      engine.ComputeColumns(task * kGroup, std::min(columns, (task + 1) * kGroup),
+                            WorkerBuffer(&scratch, worker, engine.ScratchFloats()));
     });
     const int frames = engine.SearchCount();
     ParallelFor(workers, (frames + kFrames - 1) / kFrames, [&](int task, int worker) {
-      std::vector<float>& s = scores[static_cast<std::size_t>(worker)];
-      if (s.empty())
-        s.resize(engine.ScoreFloats());
-      engine.Search(task * kFrames, std::min(frames, (task + 1) * kFrames), s);
+      engine.Search(task * kFrames, std::min(frames, (task + 1) * kFrames),
+                    WorkerBuffer(&scores, worker, engine.ScoreFloats()));
     });
     if (progress)
       progress(std::min(engine.n_query(), (b + 1) * engine.block_columns()));
