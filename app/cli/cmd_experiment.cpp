@@ -382,44 +382,24 @@ int RunHeading(const Options& o, const std::string& command) {
 
 }  // namespace
 
-int RunExperiment(std::span<char* const> args) {
-  if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
-    return RunSurf1dExperiment(args);
-  Options o;
-  bool done = false;
-  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
-    return rc;
-  std::string command = "skyloc experiment";
-  for (char* const a : args)
-    command += std::string(" ") + a;
-  if (o.name == "heading")
-    return RunHeading(o, command);
+namespace {
 
-  std::vector<Row> rows;
-  Status status;
-  // Results live here so the rows can point at them.
+// An experiment's table: its rows (pointing into the results held here), the markdown
+// header, and the methods scored in its columns.
+struct Table {
   std::vector<tools::TiltRow> tilt;
   std::vector<tools::ManoeuvreRow> manoeuvre;
   std::vector<tools::AntsRow> ants;
   std::vector<tools::SpeedRow> speed;
-  const bool cap = o.experiment.attitude != tools::AttitudeInput::kNone;
-  std::vector<MethodName> methods(std::begin(kDescriptorMethods), std::end(kDescriptorMethods));
-  if (!cap || o.name == "ants")
-    methods.resize(kDescriptorMethodsWithoutCap);
-  tools::Vocabulary vocabulary;
-  const bool fabmap = !o.vocabulary_path.empty();
-  if (fabmap) {
-    Result<tools::Vocabulary> v = tools::LoadVocabulary(o.vocabulary_path);
-    if (!v.ok()) {
-      std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), v.status().message());
-      return kExitFailure;
-    }
-    vocabulary = std::move(*v);
-    o.experiment.fabmap_vocabulary = &vocabulary;
-    methods.push_back(kFabmapMethod);
-  }
+  std::vector<Row> rows;
+  std::string header, separator;
+  std::vector<MethodName> methods;
+  bool cap = false;     // the gravity-aligned cap's columns
+  bool fabmap = false;  // FAB-MAP's column
+
   // Tilt and manoeuvre rows: the descriptor methods in use, then FAB-MAP.
-  auto descriptor_scores = [&](const auto& r) {
+  template <typename R>
+  std::vector<const tools::MethodScore*> DescriptorScores(const R& r) const {
     std::vector<const tools::MethodScore*> s = {&r.sky, &r.vanilla, &r.sky_filter};
     if (cap) {
       s.push_back(&r.sky_cap);
@@ -428,88 +408,98 @@ int RunExperiment(std::span<char* const> args) {
     if (fabmap)
       s.push_back(&r.fabmap);
     return s;
-  };
-  std::string header, separator;
-  if (o.name == "tilt") {
-    const int differences[] = {0, 10, 20, 30, 40, 50, 60};
-    status = tools::RunTiltExperiment(o.experiment, differences, &tilt, PrintProgress);
-    header = "| tilt difference | reference / query tilt |";
-    separator = "|---|---|";
-    for (const tools::TiltRow& r : tilt) {
-      rows.push_back({Format("%.0f deg", r.tilt_difference_deg),
-                      Format("| %.0f° | %+.0f° / %+.0f° |", r.tilt_difference_deg,
-                             r.reference_tilt_deg, r.query_tilt_deg),
-                      Format("\"tilt_difference_deg\": %.6f, \"reference_tilt_deg\": %.6f, "
-                             "\"query_tilt_deg\": %.6f, ",
-                             r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
-                      descriptor_scores(r)});
-    }
-  } else if (o.name == "manoeuvre") {
-    const int ds[] = {1, 10, 20};
-    status = tools::RunManoeuvreExperiment(o.experiment, ds, &manoeuvre, PrintProgress);
-    header = "| world | ds |";
-    separator = "|---|---|";
-    for (const tools::ManoeuvreRow& r : manoeuvre) {
-      rows.push_back({Format("%s ds %d", sim::WorldKindName(r.world), r.sequence_length),
-                      Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
-                      Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world),
-                             r.sequence_length),
-                      descriptor_scores(r)});
-    }
-  } else if (o.name == "speed") {
-    o.experiment.sampling = sim::Sampling::kTime;
-    const int ds[] = {1, 5, 10, 20};
-    status = tools::RunSpeedExperiment(o.experiment, ds, &speed, PrintProgress);
-    methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
-    if (!cap)
-      methods.resize(kMatcherMethodsWithoutCap);
-    header =
-        "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
-    separator = "|---|---|---|---|---|---|---|";
-    for (const tools::SpeedRow& r : speed) {
-      const auto [localised, correct] = LocalisedFrames(r.filter);
-      rows.push_back(
-          {Format("%s %.1fx %s %s ds %d", sim::WorldKindName(r.world), r.speed_ratio,
-                  r.stops ? "stops" : "no-stops", r.bumps_deg > 0 ? "bumps" : "level",
-                  r.sequence_length),
-           Format("| %s | %.1fx | %s | %s | %d | %d | %d of %d |", sim::WorldKindName(r.world),
-                  r.speed_ratio, r.stops ? "yes" : "no",
-                  r.bumps_deg > 0 ? Format("±%.0f°", r.bumps_deg).c_str() : "level", r.query_frames,
-                  r.sequence_length, correct, localised),
-           Format("\"world\": \"%s\", \"speed_ratio\": %.6f, \"stops\": %s, \"bumps_deg\": %.6f, "
-                  "\"query_frames\": %d, \"ds\": %d, \"filter_localised\": %d, "
-                  "\"filter_localised_correct\": %d, ",
-                  sim::WorldKindName(r.world), r.speed_ratio, r.stops ? "true" : "false",
-                  r.bumps_deg, r.query_frames, r.sequence_length, localised, correct),
-           {&r.openseqslam, &r.filter, &r.filter_cap}});
-    }
-  } else {
-    if (!o.spacing_given)
-      o.experiment.spacing_m = 0.05;
-    o.experiment.max_offset_m = 0.25;
-    const double heights[] = {0.01, 0.1};
-    status = tools::RunAntsExperiment(o.experiment, o.data_dir, heights, &ants, PrintProgress);
-    header = "| query route | same ant | camera height | frames with truth |";
-    separator = "|---|---|---|---|";
-    for (const tools::AntsRow& r : ants) {
-      rows.push_back({Format("%s %.2f m", r.query.c_str(), r.camera_height_m),
-                      Format("| %s | %s | %.2f m | %.0f %% |", r.query.c_str(),
-                             r.same_ant ? "yes" : "no", r.camera_height_m, 100 * r.truth_fraction),
-                      Format("\"query\": \"%s\", \"same_ant\": %s, \"camera_height_m\": %.6f, "
-                             "\"truth_fraction\": %.6f, ",
-                             r.query.c_str(), r.same_ant ? "true" : "false", r.camera_height_m,
-                             r.truth_fraction),
-                      {&r.sky, &r.vanilla, &r.sky_filter}});
-    }
   }
-  if (!status.ok()) {
-    std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), status.message());
-    return kExitFailure;
+};
+
+Status RunTiltTable(const Options& o, Table* t) {
+  const int differences[] = {0, 10, 20, 30, 40, 50, 60};
+  SKYLOC_TRY(tools::RunTiltExperiment(o.experiment, differences, &t->tilt, PrintProgress));
+  t->header = "| tilt difference | reference / query tilt |";
+  t->separator = "|---|---|";
+  for (const tools::TiltRow& r : t->tilt) {
+    t->rows.push_back({Format("%.0f deg", r.tilt_difference_deg),
+                       Format("| %.0f° | %+.0f° / %+.0f° |", r.tilt_difference_deg,
+                              r.reference_tilt_deg, r.query_tilt_deg),
+                       Format("\"tilt_difference_deg\": %.6f, \"reference_tilt_deg\": %.6f, "
+                              "\"query_tilt_deg\": %.6f, ",
+                              r.tilt_difference_deg, r.reference_tilt_deg, r.query_tilt_deg),
+                       t->DescriptorScores(r)});
   }
-  for (Row& r : rows)
-    r.scores.resize(methods.size());
+  return Status::Ok();
+}
+
+Status RunManoeuvreTable(const Options& o, Table* t) {
+  const int ds[] = {1, 10, 20};
+  SKYLOC_TRY(tools::RunManoeuvreExperiment(o.experiment, ds, &t->manoeuvre, PrintProgress));
+  t->header = "| world | ds |";
+  t->separator = "|---|---|";
+  for (const tools::ManoeuvreRow& r : t->manoeuvre) {
+    t->rows.push_back(
+        {Format("%s ds %d", sim::WorldKindName(r.world), r.sequence_length),
+         Format("| %s | %d |", sim::WorldKindName(r.world), r.sequence_length),
+         Format("\"world\": \"%s\", \"ds\": %d, ", sim::WorldKindName(r.world), r.sequence_length),
+         t->DescriptorScores(r)});
+  }
+  return Status::Ok();
+}
+
+Status RunSpeedTable(Options* o, Table* t) {
+  o->experiment.sampling = sim::Sampling::kTime;
+  const int ds[] = {1, 5, 10, 20};
+  SKYLOC_TRY(tools::RunSpeedExperiment(o->experiment, ds, &t->speed, PrintProgress));
+  t->methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
+  if (!t->cap)
+    t->methods.resize(kMatcherMethodsWithoutCap);
+  t->header =
+      "| world | repeat speed | repeat stops | bumps | frames | ds | filter LOCALISED correct |";
+  t->separator = "|---|---|---|---|---|---|---|";
+  for (const tools::SpeedRow& r : t->speed) {
+    const auto [localised, correct] = LocalisedFrames(r.filter);
+    t->rows.push_back(
+        {Format("%s %.1fx %s %s ds %d", sim::WorldKindName(r.world), r.speed_ratio,
+                r.stops ? "stops" : "no-stops", r.bumps_deg > 0 ? "bumps" : "level",
+                r.sequence_length),
+         Format("| %s | %.1fx | %s | %s | %d | %d | %d of %d |", sim::WorldKindName(r.world),
+                r.speed_ratio, r.stops ? "yes" : "no",
+                r.bumps_deg > 0 ? Format("±%.0f°", r.bumps_deg).c_str() : "level", r.query_frames,
+                r.sequence_length, correct, localised),
+         Format("\"world\": \"%s\", \"speed_ratio\": %.6f, \"stops\": %s, \"bumps_deg\": %.6f, "
+                "\"query_frames\": %d, \"ds\": %d, \"filter_localised\": %d, "
+                "\"filter_localised_correct\": %d, ",
+                sim::WorldKindName(r.world), r.speed_ratio, r.stops ? "true" : "false", r.bumps_deg,
+                r.query_frames, r.sequence_length, localised, correct),
+         {&r.openseqslam, &r.filter, &r.filter_cap}});
+  }
+  return Status::Ok();
+}
+
+Status RunAntsTable(Options* o, Table* t) {
+  if (!o->spacing_given)
+    o->experiment.spacing_m = 0.05;
+  o->experiment.max_offset_m = 0.25;
+  const double heights[] = {0.01, 0.1};
+  SKYLOC_TRY(
+      tools::RunAntsExperiment(o->experiment, o->data_dir, heights, &t->ants, PrintProgress));
+  t->header = "| query route | same ant | camera height | frames with truth |";
+  t->separator = "|---|---|---|---|";
+  for (const tools::AntsRow& r : t->ants) {
+    t->rows.push_back({Format("%s %.2f m", r.query.c_str(), r.camera_height_m),
+                       Format("| %s | %s | %.2f m | %.0f %% |", r.query.c_str(),
+                              r.same_ant ? "yes" : "no", r.camera_height_m, 100 * r.truth_fraction),
+                       Format("\"query\": \"%s\", \"same_ant\": %s, \"camera_height_m\": %.6f, "
+                              "\"truth_fraction\": %.6f, ",
+                              r.query.c_str(), r.same_ant ? "true" : "false", r.camera_height_m,
+                              r.truth_fraction),
+                       {&r.sky, &r.vanilla, &r.sky_filter}});
+  }
+  return Status::Ok();
+}
+
+// The notes under the table: the gravity-aligned cap and its zenith against the truth
+// (the zenith table is also printed), FAB-MAP's vocabulary, the ants' reference route.
+std::string TableNotes(const Options& o, const Table& t, const tools::Vocabulary& vocabulary) {
   std::string notes = CommonNotes(o.experiment);
-  if (cap && o.name != "ants") {
+  if (t.cap && o.name != "ants") {
     notes += Format(
         "Gravity-aligned cap (sky_cap columns): zenith from %s; lower edge %s, taper %.3g "
         "degrees.\n",
@@ -524,7 +514,7 @@ int RunExperiment(std::span<char* const> args) {
             : Format("%.3g degrees", o.experiment.cap_elevation_deg).c_str(),
         o.experiment.config.attitude.cap_taper_deg);
   }
-  if (cap && (o.name == "tilt" || o.name == "manoeuvre")) {
+  if (t.cap && (o.name == "tilt" || o.name == "manoeuvre")) {
     // The cap's zenith against the true poses, per scored pair of runs.
     std::string table =
         "\nThe cap's zenith against the true poses (degrees: mean / p95 / max over the run's "
@@ -538,14 +528,14 @@ int RunExperiment(std::span<char* const> args) {
       table += Format("| %s | %s | %s | %d / %d |\n", label.c_str(), cell(ref).c_str(),
                       cell(query).c_str(), ref.no_estimate, query.no_estimate);
     };
-    for (std::size_t i = 0; i < tilt.size(); ++i)
-      add(rows[i].label, tilt[i].reference_zenith, tilt[i].query_zenith);
-    for (std::size_t i = 0; i < manoeuvre.size(); ++i)
-      add(rows[i].label, manoeuvre[i].reference_zenith, manoeuvre[i].query_zenith);
+    for (std::size_t i = 0; i < t.tilt.size(); ++i)
+      add(t.rows[i].label, t.tilt[i].reference_zenith, t.tilt[i].query_zenith);
+    for (std::size_t i = 0; i < t.manoeuvre.size(); ++i)
+      add(t.rows[i].label, t.manoeuvre[i].reference_zenith, t.manoeuvre[i].query_zenith);
     std::fputs(table.c_str(), stdout);
     notes += table;
   }
-  if (fabmap) {
+  if (t.fabmap) {
     // Format holds 511 characters: the path, of any length, goes in on its own.
     notes += std::string(
                  "\nFAB-MAP 2.0 (fabmap columns, docs/FABMAP.md): each query frame's visible "
@@ -561,12 +551,58 @@ int RunExperiment(std::span<char* const> args) {
   }
   if (o.name == "ants")
     notes += std::string("Reference route ") + tools::kAntsReferenceRoute + ".\n";
-  if (const Status s = WriteOutputs(o, command, header, separator, methods, rows, notes); !s.ok()) {
-    std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), s.message());
-    return kExitFailure;
+  return notes;
+}
+
+int Fail(const Options& o, const Status& s) {
+  std::fprintf(stderr, "skyloc experiment %s: %s\n", o.name.c_str(), s.message());
+  return kExitFailure;
+}
+
+}  // namespace
+
+int RunExperiment(std::span<char* const> args) {
+  if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
+    return RunSurf1dExperiment(args);
+  Options o;
+  bool done = false;
+  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
+    return rc;
+  std::string command = "skyloc experiment";
+  for (char* const a : args)
+    command += std::string(" ") + a;
+  if (o.name == "heading")
+    return RunHeading(o, command);
+
+  Table t;
+  t.cap = o.experiment.attitude != tools::AttitudeInput::kNone;
+  t.methods.assign(std::begin(kDescriptorMethods), std::end(kDescriptorMethods));
+  if (!t.cap || o.name == "ants")
+    t.methods.resize(kDescriptorMethodsWithoutCap);
+  tools::Vocabulary vocabulary;
+  t.fabmap = !o.vocabulary_path.empty();
+  if (t.fabmap) {
+    Result<tools::Vocabulary> v = tools::LoadVocabulary(o.vocabulary_path);
+    if (!v.ok())
+      return Fail(o, v.status());
+    vocabulary = std::move(*v);
+    o.experiment.fabmap_vocabulary = &vocabulary;
+    t.methods.push_back(kFabmapMethod);
   }
+  const Status status = o.name == "tilt"        ? RunTiltTable(o, &t)
+                        : o.name == "manoeuvre" ? RunManoeuvreTable(o, &t)
+                        : o.name == "speed"     ? RunSpeedTable(&o, &t)
+                                                : RunAntsTable(&o, &t);
+  if (!status.ok())
+    return Fail(o, status);
+  for (Row& r : t.rows)
+    r.scores.resize(t.methods.size());
+  const std::string notes = TableNotes(o, t, vocabulary);
+  if (const Status s = WriteOutputs(o, command, t.header, t.separator, t.methods, t.rows, notes);
+      !s.ok())
+    return Fail(o, s);
   std::string files = "results.md, metrics.json, ";
-  for (const MethodName& m : methods)
+  for (const MethodName& m : t.methods)
     files += std::string("pr_") + m.key + ".svg, ";
   std::printf("skyloc experiment %s: wrote %s/: %scorrespondence.svg\n", o.name.c_str(),
               o.out.c_str(), files.c_str());
