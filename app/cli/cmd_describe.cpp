@@ -17,8 +17,8 @@
 #include "cli/describe.h"
 #include "cli/options.h"
 #include "firmware/descriptor.h"
-#include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/sky_descriptor.h"
@@ -214,7 +214,7 @@ Status InitDescribeDescriptor(const firmware::Config& config, const dsp::Lens& l
   const dsp::SkyDescriptorOptions options = firmware::SkyDescriptorOptionsFrom(
       config, lens, config.attitude.kind != firmware::AttitudeKind::kNone);
   if (const dsp::DescriptorError e = descriptor->Init(lens, options); !e.ok())
-    return firmware::DspStatus(e, "sky descriptor");
+    return drivers::DspStatus(e, "sky descriptor");
   return Status::Ok();
 }
 
@@ -285,7 +285,7 @@ int RunDescribe(std::span<char* const> args) {
     dsp::SegmentationResult segmentation;
     if (const dsp::DescriptorError e = descriptor.Compute(image->view(), amplitudes, &segmentation);
         !e.ok()) {
-      fail(firmware::DspStatus(e, "'%s'", path));
+      fail(drivers::DspStatus(e, "'%s'", path));
       continue;
     }
     PrintResult(o, path, segmentation, amplitudes);

@@ -15,8 +15,8 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "firmware/config.h"
-#include "firmware/dsp_status.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/route_filter.h"
 #include "skyloc/dsp/seqslam.h"
@@ -427,7 +427,7 @@ Status Evaluation::AddSurf1dRuns() {
     if (const dsp::SeqSlamError e = dsp::SeqSlamFromDifferences(
             differences, rd.count, qd.count, p, dsp::SeqSlamWindow::kCentred, run.matches);
         e != dsp::SeqSlamError::kOk)
-      return firmware::DspStatus(e, "surf1d openseqslam ds %d", ds);
+      return drivers::DspStatus(e, "surf1d openseqslam ds %d", ds);
     tools::ScoreRun(config(), gt, &run);
     runs.push_back(std::move(run));
   }

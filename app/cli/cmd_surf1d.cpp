@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "cli/commands.h"
-#include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/lens.h"
@@ -101,22 +101,22 @@ Status Extract(const Options& o, const char* path, dsp::Surf1d* surf, View* view
       drivers::InitLens(params, !o.camera.empty() ? o.camera.c_str() : "the guessed lens", &lens));
   dsp::HorizonStrip strip;
   if (const dsp::HorizonStripError e = strip.Init(lens, o.strip); e != dsp::HorizonStripError::kOk)
-    return firmware::DspStatus(e, "%s: horizon strip", path);
+    return drivers::DspStatus(e, "%s: horizon strip", path);
   view->path = path;
   view->strip.assign(static_cast<std::size_t>(strip.n_azimuth()), 0.0f);
   if (const dsp::HorizonStripError e = strip.Extract(image.view(), view->strip);
       e != dsp::HorizonStripError::kOk)
-    return firmware::DspStatus(e, "%s: horizon strip", path);
+    return drivers::DspStatus(e, "%s: horizon strip", path);
   if (surf->n() != strip.n_azimuth()) {
     if (const dsp::Surf1dError e = surf->Init(strip.n_azimuth(), o.surf);
         e != dsp::Surf1dError::kOk)
-      return firmware::DspStatus(e, "1D SURF");
+      return drivers::DspStatus(e, "1D SURF");
   }
   view->features.resize(kMaxFeatures);
   int count = 0;
   if (const dsp::Surf1dError e = surf->Detect(view->strip, view->features, &count);
       e != dsp::Surf1dError::kOk)
-    return firmware::DspStatus(e, "%s: 1D SURF", path);
+    return drivers::DspStatus(e, "%s: 1D SURF", path);
   view->features.resize(static_cast<std::size_t>(count));
   std::printf(
       "%s: %dx%d, strip of %d columns (elevations %.1f..%.1f deg, %.0f %% of taps in "
@@ -221,7 +221,7 @@ int RunSurf1d(std::span<char* const> args) {
     match_error = matcher.Match(a.features, b.features, n, &m);
   if (match_error != dsp::Surf1dError::kOk) {
     std::fprintf(stderr, "skyloc surf1d: %s\n",
-                 firmware::DspStatus(match_error, "1D SURF matching").message());
+                 drivers::DspStatus(match_error, "1D SURF matching").message());
     return kExitFailure;
   }
   std::printf("matches: %d pass the ratio test, score (sum of 1/distance) %.3f\n", m.matches,

@@ -5,10 +5,13 @@
 #include <cstring>
 
 #include "firmware/descriptor.h"
-#include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
+#include "skyloc/drivers/dsp_status.h"
 
 namespace skyloc::firmware {
+
+using drivers::DspStatus;
+
 namespace {
 
 void HashBytes(std::uint64_t* h, const void* data, std::size_t n) {
@@ -143,7 +146,7 @@ std::vector<dsp::LocalisationState> ReplayStateMachine(const Config& config,
 Status Pipeline::Init(const Config& config) {
   SKYLOC_TRY_ASSIGN(const dsp::LensParams lens_params, LensFromConfig(config));
   if (const dsp::LensError e = lens_.Init(lens_params); e != dsp::LensError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "lens: %s", dsp::LensErrorMessage(e));
+    return DspStatus(e, "lens");
 
   const dsp::SkyDescriptorOptions options =
       SkyDescriptorOptionsFrom(config, lens_, config.attitude.kind != AttitudeKind::kNone);

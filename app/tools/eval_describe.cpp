@@ -8,9 +8,9 @@
 #include <mutex>
 
 #include "firmware/descriptor.h"
-#include "firmware/dsp_status.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/drivers/image_file.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/seqslam_batch.h"
@@ -21,7 +21,7 @@
 
 namespace skyloc::tools {
 
-using firmware::DspStatus;
+using drivers::DspStatus;
 
 namespace {
 
@@ -198,7 +198,7 @@ Result<RunDescription> DescribeDataset(ScoredDescriptor descriptor, const std::s
       d.strip_columns = strip_options->n_azimuth;
     else
       std::fprintf(stderr, "skyloc eval: %s: no heading: %s\n", dir.c_str(),
-                   firmware::DspErrorMessage(e));
+                   drivers::DspErrorMessage(e));
   }
   const std::size_t n = camera.dataset().frames.size();
   const auto dim = static_cast<std::size_t>(d.dim);

@@ -7,14 +7,14 @@
 #include <functional>
 #include <optional>
 
-#include "firmware/dsp_status.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/dsp/seqslam_batch.h"
 #include "tools/parallel.h"
 #include "tools/progress.h"
 
 namespace skyloc::tools {
 
-using firmware::DspStatus;
+using drivers::DspStatus;
 using firmware::Matcher;
 
 namespace {

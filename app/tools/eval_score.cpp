@@ -7,13 +7,13 @@
 #include <system_error>
 #include <utility>
 
-#include "firmware/dsp_status.h"
 #include "firmware/pipeline.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/dsp/heading.h"
 
 namespace skyloc::tools {
 
-using firmware::DspStatus;
+using drivers::DspStatus;
 
 namespace {
 

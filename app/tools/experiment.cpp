@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "firmware/descriptor.h"
-#include "firmware/dsp_status.h"
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
@@ -20,6 +20,7 @@
 namespace skyloc::tools {
 
 // The simulator's worlds, renderer and motion, which the experiments drive.
+using drivers::DspStatus;
 using firmware::Matcher;
 using sim::BuildTrajectory;
 using sim::DefaultSimLens;
@@ -173,7 +174,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   if (strip_options) {
     if (const dsp::HorizonStripError e = horizon.Init(renderer.lens(), *strip_options);
         e != dsp::HorizonStripError::kOk)
-      return firmware::DspStatus(e, "horizon strip");
+      return drivers::DspStatus(e, "horizon strip");
   }
   const auto columns = strip_options ? static_cast<std::size_t>(strip_options->n_azimuth) : 0;
   out->strips.assign(n * columns, 0);
@@ -197,13 +198,11 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
       // The firmware's strip: from the same UV frame, rounded to bytes as the route stores it.
       if (const dsp::HorizonStripError e = horizon.Extract(uv_view, strip);
           e != dsp::HorizonStripError::kOk)
-        return Status::Error(StatusCode::kInternal, "horizon strip of frame %zu: %s", i,
-                             dsp::HorizonStripErrorMessage(e));
+        return DspStatus(e, "horizon strip of frame %zu", i);
       if (const dsp::HorizonStripError e = dsp::StripToBytes(
               strip, std::span<std::uint8_t>(out->strips).subspan(i * columns, columns));
           e != dsp::HorizonStripError::kOk)
-        return Status::Error(StatusCode::kInternal, "horizon strip of frame %zu: %s", i,
-                             dsp::HorizonStripErrorMessage(e));
+        return DspStatus(e, "horizon strip of frame %zu", i);
     }
     if (from_image) {
       const auto t_ns = static_cast<std::int64_t>(out->trajectory[i].time_s * 1e9);
@@ -231,8 +230,7 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
             std::span<float>(out->vanilla)
                 .subspan(i * dsp::kVanillaDescriptorSize, dsp::kVanillaDescriptorSize));
         e != dsp::VanillaError::kOk)
-      return Status::Error(StatusCode::kInternal, "vanilla descriptor of frame %zu: %s", i,
-                           dsp::VanillaErrorMessage(e));
+      return DspStatus(e, "vanilla descriptor of frame %zu", i);
   }
   out->mean_sky_fraction = n > 0 ? sky_fraction / static_cast<double>(n) : 0;
   out->zenith_error = ZenithErrorOf(out->trajectory, out->attitude, no_estimate);
@@ -420,7 +418,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   const auto n = static_cast<std::size_t>(columns);
   dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
   if (const dsp::HeadingError e = estimator.Init(columns, {}); e != dsp::HeadingError::kOk)
-    return firmware::DspStatus(e, "heading");
+    return drivers::DspStatus(e, "heading");
   std::vector<float> stored(n), test(n);
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {

@@ -8,6 +8,7 @@
 #include <span>
 #include <tuple>
 
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/sim/world.h"
 
 namespace skyloc::tools {
@@ -23,10 +24,6 @@ using sim::Spectrum;
 using sim::World;
 using sim::WorldKind;
 namespace {
-
-Status Surf1dStatus(const char* what, dsp::Surf1dError e) {
-  return Status::Error(StatusCode::kInvalidArgument, "%s: %s", what, dsp::Surf1dErrorMessage(e));
-}
 
 // Grey value of pixel (x, y) of an RGB24 frame: the channel mean, as the sky segmenter and
 // dsp::HorizonStrip read it.
@@ -54,7 +51,7 @@ Status ScorePairs(const std::vector<ImageFeatures>& images, int n,
   dsp::LandmarkMatcher matcher;
   if (const dsp::Surf1dError e = matcher.Init(static_cast<int>(capacity), o);
       e != dsp::Surf1dError::kOk)
-    return Surf1dStatus("landmark matcher", e);
+    return drivers::DspStatus(e, "landmark matcher");
   out->nn.clear();
   out->ransac.clear();
   out->matched_pairs = out->unmatched_pairs = 0;
@@ -65,7 +62,7 @@ Status ScorePairs(const std::vector<ImageFeatures>& images, int n,
       dsp::LandmarkMatch m;
       if (const dsp::Surf1dError e = matcher.Match(images[i].features, images[j].features, n, &m);
           e != dsp::Surf1dError::kOk)
-        return Surf1dStatus("landmark matcher", e);
+        return drivers::DspStatus(e, "landmark matcher");
       const bool match = matches(i, j);
       (match ? out->matched_pairs : out->unmatched_pairs) += 1;
       out->nn.push_back({m.score, match});
@@ -166,7 +163,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   const int n = columns + 2 * pad;
   dsp::Surf1d surf;
   if (const dsp::Surf1dError e = surf.Init(n, o.surf); e != dsp::Surf1dError::kOk)
-    return Surf1dStatus("1D SURF (forward strip)", e);
+    return drivers::DspStatus(e, "1D SURF (forward strip)");
   std::vector<std::uint8_t> rgb(static_cast<std::size_t>(o.width) *
                                 static_cast<std::size_t>(o.height) * 3);
   const dsp::MutableImageView view{rgb.data(), o.width, o.height,
@@ -209,7 +206,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
     }
     int count = 0;
     if (const dsp::Surf1dError e = surf.Detect(strip, found, &count); e != dsp::Surf1dError::kOk)
-      return Surf1dStatus("1D SURF (forward strip)", e);
+      return drivers::DspStatus(e, "1D SURF (forward strip)");
     for (int f = 0; f < count; ++f) {
       const int x = found[static_cast<std::size_t>(f)].position;
       if (x >= pad && x < pad + columns)
@@ -263,7 +260,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   const int m = horizon.n_azimuth();
   dsp::Surf1d surf_up;
   if (const dsp::Surf1dError e = surf_up.Init(m, o.surf); e != dsp::Surf1dError::kOk)
-    return Surf1dStatus("1D SURF (fisheye strip)", e);
+    return drivers::DspStatus(e, "1D SURF (fisheye strip)");
   std::vector<std::uint8_t> rgb_up(static_cast<std::size_t>(o.fisheye_width) *
                                    static_cast<std::size_t>(o.fisheye_height) * 3);
   const dsp::MutableImageView view_up{rgb_up.data(), o.fisheye_width, o.fisheye_height,
@@ -282,7 +279,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
     int count = 0;
     if (const dsp::Surf1dError e = surf_up.Detect(strip_up, found, &count);
         e != dsp::Surf1dError::kOk)
-      return Surf1dStatus("1D SURF (fisheye strip)", e);
+      return drivers::DspStatus(e, "1D SURF (fisheye strip)");
     images[k].features.assign(found.begin(), found.begin() + count);
     features += count;
   }

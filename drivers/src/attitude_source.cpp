@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "skyloc/drivers/dsp_status.h"
+
 namespace skyloc::drivers {
 
 Status AttitudeSource::Open() {
@@ -58,8 +60,7 @@ Status ImuAttitudeSource::DoOpen() {
   if (imu_ == nullptr)
     return Status::Error(StatusCode::kInvalidArgument, "attitude source: no IMU");
   if (const dsp::AttitudeError e = filter_.Init(config_.filter); e != dsp::AttitudeError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "[attitude] filter: %s",
-                         dsp::AttitudeErrorMessage(e));
+    return DspStatus(e, "[attitude] filter");
   SKYLOC_TRY(batch_.Allocate(config_.batch < 1 ? 1 : config_.batch));
   batch_size_ = batch_next_ = 0;
   last_fed_ns_ = -1;

@@ -12,6 +12,7 @@
 #include <limits>
 #include <string>
 
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/drivers/toml_keys.h"
 #include "skyloc/drivers/toml_text.h"
 
@@ -194,8 +195,7 @@ Status InitLens(const dsp::LensParams& params, const char* source, dsp::Lens* le
   const dsp::LensError e = lens->Init(params);
   if (e == dsp::LensError::kOk)
     return Status::Ok();
-  return Status::Error(StatusCode::kInvalidArgument, "%s: invalid %s lens: %s", source,
-                       dsp::LensModelName(params.model), dsp::LensErrorMessage(e));
+  return DspStatus(e, "%s: invalid %s lens", source, dsp::LensModelName(params.model));
 }
 
 Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* source,

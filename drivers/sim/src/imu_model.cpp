@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/sim/random.h"
 
 namespace skyloc::sim {
@@ -222,8 +223,7 @@ Status EstimateAttitudes(std::span<const TrajectoryPoint> trajectory, const ImuM
   SKYLOC_TRY(SimulateImu(trajectory, imu, &samples));
   dsp::AttitudeFilter f;
   if (const dsp::AttitudeError e = f.Init(filter); e != dsp::AttitudeError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "attitude filter: %s",
-                         dsp::AttitudeErrorMessage(e));
+    return drivers::DspStatus(e, "attitude filter");
   at_frames->assign(trajectory.size(), dsp::Attitude{});
   std::size_t next = 0;
   for (std::size_t i = 0; i < trajectory.size(); ++i) {
@@ -231,8 +231,7 @@ Status EstimateAttitudes(std::span<const TrajectoryPoint> trajectory, const ImuM
     for (; next < samples.size() && samples[next].timestamp_ns <= frame_ns; ++next) {
       const dsp::AttitudeError e = f.Update(samples[next]);
       if (e != dsp::AttitudeError::kOk && e != dsp::AttitudeError::kGap)
-        return Status::Error(StatusCode::kInternal, "attitude filter, IMU sample %zu: %s", next,
-                             dsp::AttitudeErrorMessage(e));
+        return drivers::DspStatus(e, "attitude filter, IMU sample %zu", next);
     }
     (*at_frames)[i] = f.attitude();
   }

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <numbers>
 
+#include "skyloc/drivers/dsp_status.h"
 #include "skyloc/sim/random.h"
 
 namespace skyloc::sim {
@@ -268,8 +269,7 @@ Status Renderer::Init(const World* world, const dsp::LensParams& lens) {
   }
   const dsp::LensError error = lens_.Init(lens);
   if (error != dsp::LensError::kOk)
-    return Status::Error(StatusCode::kInvalidArgument, "renderer: %s",
-                         dsp::LensErrorMessage(error));
+    return drivers::DspStatus(error, "renderer");
   world_ = world;
   width_ = lens.width;
   height_ = lens.height;
