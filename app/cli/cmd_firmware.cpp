@@ -68,6 +68,29 @@ void AddCommonOptions(OptionTable& t, SessionArgs* s) {
           &s->max_frames);
 }
 
+// route info: a teach writing the route now, or the FILE.db.tmp a killed one left.
+void PrintTeachState(const char* path, std::FILE* out) {
+  long pid = 0;
+  if (RouteBeingTaught(path, &pid)) {
+    std::fprintf(out, "%s: being taught now by process %ld\n", path, pid);
+    return;
+  }
+  const RouteTmpReport tmp = InspectRouteTmp(path);
+  if (!tmp.exists)
+    return;
+  if (tmp.loads)
+    std::fprintf(out,
+                 "%s.tmp: left by an interrupted teach: %zu intact frames, never committed; "
+                 "'skyloc route recover %s.tmp' makes it a route of its own; the next teach of "
+                 "%s replaces it\n",
+                 path, tmp.frames, path, path);
+  else
+    std::fprintf(out,
+                 "%s.tmp: left by an interrupted teach: %llu bytes, no intact frame; the next "
+                 "teach of %s replaces it\n",
+                 path, static_cast<unsigned long long>(tmp.bytes), path);
+}
+
 }  // namespace
 
 int RunTeach(std::span<char* const> args) {
@@ -155,6 +178,8 @@ int RunRoute(std::span<char* const> args) {
   }
   if (!s.ok()) {
     std::fprintf(stderr, "skyloc route: %s\n", s.message());
+    if (!recover)
+      PrintTeachState(path, stderr);
     return kExitFailure;
   }
   const RouteDbSettings& st = report.settings;
@@ -194,6 +219,8 @@ int RunRoute(std::span<char* const> args) {
     std::printf("%s: the damaged original was kept as %s.damaged\n", path, path);
   if (recover && !report.committed)
     std::printf("%s: recovered: %zu frames, now committed\n", path, report.frames);
+  if (!recover)
+    PrintTeachState(path, stdout);
   return kExitOk;
 }
 

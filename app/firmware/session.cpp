@@ -441,6 +441,7 @@ Status CreateRoute(Session* s) {
   if (created.code() == StatusCode::kAlreadyExists)
     return Status::Error(created.code(), "%s; pass --force to replace it", created.message());
   SKYLOC_TRY(created);
+  PrintReplacedTmp(s->label, args.route_path.c_str(), s->writer.replaced_tmp());
   if (s->writer.replacing()) {
     std::fprintf(stderr,
                  "%s: replacing route %s when this teach commits; until then the old route "

@@ -95,9 +95,33 @@ void PrintWarning(const char* label, const Status& s) {
     std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
 }
 
+void PrintReplacedTmp(const char* label, const char* route_path, const RouteTmpReport& tmp) {
+  if (!tmp.exists)
+    return;
+  if (tmp.loads)
+    std::fprintf(stderr,
+                 "%s: replacing %s.tmp, left by an interrupted teach (%zu intact frames, never "
+                 "committed)\n",
+                 label, route_path, tmp.frames);
+  else
+    std::fprintf(stderr,
+                 "%s: replacing %s.tmp, left by an interrupted teach (%llu bytes, no intact "
+                 "frame)\n",
+                 label, route_path, static_cast<unsigned long long>(tmp.bytes));
+}
+
 void PrintCommit(const SessionArgs& args, const RouteDbWriter& writer, const Status& committed) {
   const char* label = args.label;
   const auto kept = static_cast<unsigned long long>(writer.frames_durable());
+  if (writer.discarded()) {
+    // Nothing reached the disk: the path is as the teach found it.
+    std::fprintf(
+        stderr, "%s: route %s: no frame committed%s%s%s; %s\n", label, args.route_path.c_str(),
+        committed.ok() ? "" : " (", committed.ok() ? "" : committed.message(),
+        committed.ok() ? "" : ")",
+        writer.replacing() ? "the old route is kept as it was" : "no route file was left behind");
+    return;
+  }
   if (committed.ok()) {
     std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
                  kept);
