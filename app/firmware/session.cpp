@@ -75,9 +75,18 @@ dsp::Position3 GroundPosition(const RouteFrameMeta& meta) {
 void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, double tolerance,
               SessionReport* report) {
   // After the loop: allocation is fine here.
+  if (results.empty() || !results.front().has_pose)
+    return;  // no ground truth
   std::vector<dsp::Position3> reference(route.size());
-  for (std::size_t i = 0; i < route.size(); ++i)
+  bool route_has_poses = false;
+  for (std::size_t i = 0; i < route.size(); ++i) {
     reference[i] = GroundPosition(route.meta(i));
+    route_has_poses = route_has_poses || route.meta(i).pose.has_value();
+  }
+  if (!route_has_poses) {
+    report->route_without_poses = true;
+    return;
+  }
   const dsp::MatchTolerance rule{0, tolerance};
   std::vector<dsp::EvaluatedMatch> matches;
   for (const FrameResult& r : results) {
@@ -87,6 +96,8 @@ void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, do
     dsp::TruthInterval truth;
     dsp::GroundTruthFromPositions(reference, std::span<const dsp::Position3>(&query, 1), tolerance,
                                   std::span<dsp::TruthInterval>(&truth, 1));
+    ++report->frames_with_poses;
+    report->frames_with_truth += truth.has_truth() ? 1u : 0u;
     const bool known_frame =
         r.best_index >= 0 && static_cast<std::uint64_t>(r.best_index) < reference.size();
     const bool correct =

@@ -196,7 +196,22 @@ void PrintSummary(const SessionArgs& args, const SessionReport& r) {
                  r.area_under_curve, r.evaluated_matches, r.correct_matches, args.tolerance_m,
                  static_cast<unsigned long long>(r.localised_correct),
                  static_cast<unsigned long long>(r.localised_frames));
+    // Frames off the route have no truth and count in no score: scores over a few of them
+    // say little, so the coverage is told whenever it is not whole.
+    if (r.frames_with_truth < r.frames_with_poses)
+      std::fprintf(stderr,
+                   "%s: %s: the ground truth covers %llu of %llu frames (the others are "
+                   "farther than %.1f m from every route pose and are not scored)\n",
+                   args.label, 2 * r.frames_with_truth < r.frames_with_poses ? "warning" : "note",
+                   static_cast<unsigned long long>(r.frames_with_truth),
+                   static_cast<unsigned long long>(r.frames_with_poses), args.tolerance_m);
   }
+  if (r.route_without_poses)
+    std::fprintf(stderr,
+                 "%s: no precision/recall: route %s has no poses (taught from a recording "
+                 "without them), so no match can be checked; teach from a run with poses to "
+                 "score repeat\n",
+                 args.label, args.route_path.c_str());
 }
 
 }  // namespace skyloc::firmware

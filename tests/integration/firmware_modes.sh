@@ -252,6 +252,14 @@ if [ ${#RUN[@]} -eq 1 ]; then
   expect_rc 0 "teach from the recording" -- "${RUN[@]}" teach --route "$WORK/again.db" \
     --config "$CONFIG" --dataset "$WORK/taught_run"
   expect_err "${taught:-30} frames committed" "teach from the recording"
+  # That route has no poses (the recording has none): repeat on the simulated camera has
+  # poses for its frames, but none to check a match against; it says so instead of
+  # scoring every match wrong.
+  expect_rc 0 "repeat on a route without poses" -- "${RUN[@]}" repeat --route "$WORK/again.db" \
+    --config "$CONFIG" --frames 40
+  ! grep -q "precision at 100% recall" "$WORK/err" ||
+    fail "repeat on a route without poses printed a precision: $(grep precision "$WORK/err")"
+  expect_err "no precision/recall: route $WORK/again.db has no poses" "repeat on a route without poses"
 fi
 
 if [ $failures -ne 0 ]; then
