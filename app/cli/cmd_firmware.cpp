@@ -165,7 +165,7 @@ int RunRoute(std::span<char* const> args) {
     return ExitCode(o);
   const bool recover = words[0] == "recover";
   if (!recover && words[0] != "info")
-    return t.Refuse("unknown subcommand '" + words[0] + "': expected info or recover");
+    return t.Refuse("unknown route subcommand '" + words[0] + "': expected info or recover");
   if (salvage && !recover)
     return t.Refuse("--salvage is for 'route recover' only");
   const char* path = words[1].c_str();

@@ -102,7 +102,7 @@ expect_rc 0 "route info --help" -- "${RUN[@]}" route info --help
 grep -q "^usage: skyloc route info FILE.db | recover \[--salvage\] FILE.db" "$WORK/out" ||
   fail "route info --help did not print route's help: $(cat "$WORK/out")"
 expect_rc 2 "route bogus" -- "${RUN[@]}" route bogus "$DB"
-expect_err "skyloc route: unknown subcommand 'bogus': expected info or recover" "route bogus"
+expect_err "skyloc route: unknown route subcommand 'bogus': expected info or recover" "route bogus"
 expect_rc 2 "route info --salvage" -- "${RUN[@]}" route info --salvage "$DB"
 expect_err "skyloc route: --salvage is for 'route recover' only" "route info --salvage"
 expect_rc 1 "--config DIR" -- "${RUN[@]}" teach --route "$WORK/dir.db" --config "$WORK" --frames 5
