@@ -528,6 +528,12 @@ Status StartUp(Session* s, SessionReport* report) {
     report->route_frames = s->route.size();
   }
   SKYLOC_TRY(OpenStatusOutput(s));
+  if (!args.record_dir.empty()) {
+    // Before the route: a recording refused now must leave no route file behind.
+    Status recordable = drivers::CheckNewDatasetFolder(args.record_dir);
+    if (!recordable.ok())
+      return recordable.AddContext("--record %s", args.record_dir.c_str());
+  }
   if (args.mode == LoopMode::kTeach)
     SKYLOC_TRY(CreateRoute(s));
   PrintStartup(args, s->config, s->camera->info(), s->writer, s->route.size());

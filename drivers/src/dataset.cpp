@@ -343,6 +343,32 @@ DatasetWriter& DatasetWriter::operator=(DatasetWriter&& other) noexcept {
   return *this;
 }
 
+namespace {
+
+Status RecordingExists(const std::string& csv_path) {
+  return Status::Error(StatusCode::kAlreadyExists,
+                       "%s already exists: choose a new folder (a recording is never "
+                       "overwritten)",
+                       csv_path.c_str());
+}
+
+}  // namespace
+
+Status CheckNewDatasetFolder(const std::string& dir) {
+  std::string d = dir;
+  while (d.size() > 1 && d.back() == '/')
+    d.pop_back();
+  struct stat st {};
+  if (::stat(d.c_str(), &st) != 0)
+    return Status::Ok();  // made by Open
+  if (!S_ISDIR(st.st_mode))
+    return Status::Error(StatusCode::kInvalidArgument, "%s exists and is not a folder", d.c_str());
+  const std::string csv_path = d + "/frames.csv";
+  if (::lstat(csv_path.c_str(), &st) == 0)
+    return RecordingExists(csv_path);
+  return Status::Ok();
+}
+
 Status DatasetWriter::Open(const std::string& dir, Columns columns) {
   if (csv_ != nullptr) {
     return Status::Error(StatusCode::kFailedPrecondition, "dataset writer: %s is already open",
@@ -357,12 +383,8 @@ Status DatasetWriter::Open(const std::string& dir, Columns columns) {
   csv_ = std::fopen(csv_path.c_str(), "wx");
   if (csv_ == nullptr) {
     const int saved = errno;
-    if (saved == EEXIST) {
-      return Status::Error(StatusCode::kAlreadyExists,
-                           "%s already exists: choose a new folder (a recording is never "
-                           "overwritten)",
-                           csv_path.c_str());
-    }
+    if (saved == EEXIST)
+      return RecordingExists(csv_path);
     return Status::FromErrno(saved, "cannot create %s", csv_path.c_str());
   }
   columns_ = columns;

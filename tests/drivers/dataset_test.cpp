@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -214,6 +216,21 @@ TEST(Dataset, FolderWithoutCsvIsListedByName) {
   Result<Dataset> missing = ReadDataset(dir + "/nope");
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
+}
+
+// teach --record checks the folder before it creates the route, without creating anything.
+TEST(Dataset, CheckNewDatasetFolderRefusesAnEarlierRecordingAndCreatesNothing) {
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
+  EXPECT_TRUE(CheckNewDatasetFolder(dir + "/new").ok());
+  EXPECT_NE(::access((dir + "/new").c_str(), F_OK), 0) << "the check created the folder";
+  WriteText(dir + "/frames.csv", "index,file,timestamp_s\n");
+  const Status s = CheckNewDatasetFolder(dir + "/");
+  EXPECT_EQ(s.code(), StatusCode::kAlreadyExists);
+  EXPECT_NE(std::string(s.message()).find("frames.csv already exists"), std::string::npos)
+      << s.message();
+  WriteText(dir + "/file", "x");
+  EXPECT_EQ(CheckNewDatasetFolder(dir + "/file").code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace

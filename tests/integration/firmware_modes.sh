@@ -243,6 +243,11 @@ if [ ${#RUN[@]} -eq 1 ]; then
   expect_rc 1 "record into an earlier recording" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 5
   expect_err "already exists: choose a new folder" "record into an earlier recording"
   expect_rc 2 "record without a folder" -- "${RUN[@]}" record --config "$CONFIG"
+  # teach --record into an earlier recording is refused before the route file is made.
+  expect_rc 1 "teach --record into an earlier recording" -- "${RUN[@]}" teach \
+    --route "$WORK/refused.db" --config "$CONFIG" --frames 5 --record "$REC"
+  expect_err "already exists: choose a new folder" "teach --record into an earlier recording"
+  [ ! -e "$WORK/refused.db" ] || fail "a refused teach --record left $WORK/refused.db behind"
   expect_rc 0 "teach --record" -- "${RUN[@]}" teach --route "$WORK/recorded.db" --config "$CONFIG" \
     --frames 30 --record "$WORK/taught_run"
   taught=$(sed -nE "s|.*recording $WORK/taught_run: ([0-9]+) frames written.*|\1|p" "$WORK/err")
