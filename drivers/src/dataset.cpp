@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "skyloc/drivers/image_file.h"
+#include "skyloc/platform/regular_file.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -22,6 +23,27 @@ constexpr int kPoseColumns = 6;
 bool FileExists(const std::string& path) {
   struct stat st {};
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// A dataset's optional files (frames.csv, camera.toml): present as a regular file (a
+// symlink to one is fine), absent, or refused: anything else there is a mistake to name,
+// not a missing file to silently do without.
+Status CheckOptionalFile(const std::string& path, bool* present) {
+  *present = false;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int saved = errno;
+    if (saved == ENOENT)
+      return Status::Ok();
+    return Status::FromErrno(saved, "cannot check %s", path.c_str());
+  }
+  if (!S_ISREG(st.st_mode))
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "%s is %s, not a regular file: a dataset's frames.csv and camera.toml "
+                         "are regular files (docs/DATASETS.md)",
+                         path.c_str(), FileKindName(st.st_mode));
+  *present = true;
+  return Status::Ok();
 }
 
 bool DirExists(const std::string& path) {
@@ -295,7 +317,9 @@ Result<Dataset> ReadDataset(const std::string& dir) {
                          ds.dir.c_str());
   }
   const std::string csv_path = ds.dir + "/frames.csv";
-  if (FileExists(csv_path)) {
+  bool has_csv = false;
+  SKYLOC_TRY(CheckOptionalFile(csv_path, &has_csv));
+  if (has_csv) {
     SKYLOC_TRY(ReadCsv(csv_path, frames_dir, &ds));
     if (ds.frames.empty()) {
       return Status::Error(StatusCode::kInvalidArgument, "%s: no frames after the header",
@@ -317,7 +341,9 @@ Result<Dataset> ReadDataset(const std::string& dir) {
     }
   }
   const std::string camera = ds.dir + "/camera.toml";
-  if (FileExists(camera))
+  bool has_camera = false;
+  SKYLOC_TRY(CheckOptionalFile(camera, &has_camera));
+  if (has_camera)
     ds.camera_toml = camera;
   return ds;
 }

@@ -233,5 +233,32 @@ TEST(Dataset, CheckNewDatasetFolderRefusesAnEarlierRecordingAndCreatesNothing) {
   EXPECT_EQ(CheckNewDatasetFolder(dir + "/file").code(), StatusCode::kInvalidArgument);
 }
 
+// A FIFO (or anything but a regular file) in place of frames.csv or camera.toml is
+// refused naming it, not taken for a missing file: a missing frames.csv would have the
+// frames listed by name with made-up timestamps, a missing camera.toml the default lens.
+TEST(Dataset, AFifoInPlaceOfFramesCsvOrCameraTomlIsRefused) {
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
+  ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
+  WriteText(dir + "/frames/a.png", "x");
+  ASSERT_EQ(::mkfifo((dir + "/frames.csv").c_str(), 0600), 0);
+  ::alarm(10);  // a hang fails the test instead of blocking ctest
+  Result<Dataset> ds = ReadDataset(dir);
+  ASSERT_FALSE(ds.ok());
+  EXPECT_EQ(ds.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(ds.status().message()).find("frames.csv is a FIFO, not a regular file"),
+            std::string::npos)
+      << ds.status().message();
+
+  ASSERT_EQ(::unlink((dir + "/frames.csv").c_str()), 0);
+  ASSERT_EQ(::mkfifo((dir + "/camera.toml").c_str(), 0600), 0);
+  ds = ReadDataset(dir);
+  ASSERT_FALSE(ds.ok());
+  EXPECT_NE(std::string(ds.status().message()).find("camera.toml is a FIFO, not a regular file"),
+            std::string::npos)
+      << ds.status().message();
+  ::alarm(0);
+}
+
 }  // namespace
 }  // namespace skyloc::drivers
