@@ -537,6 +537,16 @@ Status Evaluate(EvalOptions o) {
   SKYLOC_TRY_ASSIGN(drivers::Dataset ref, drivers::ReadDataset(o.reference));
   SKYLOC_TRY_ASSIGN(drivers::Dataset query, drivers::ReadDataset(o.query));
   SKYLOC_TRY_ASSIGN(GroundTruth gt, MakeGroundTruth(o, ref, query));
+  // A query without truth is scored in nothing: scores over a few of them say little, so
+  // the coverage is told whenever it is not whole (a warning below half).
+  const auto covered = static_cast<std::size_t>(std::count_if(
+      gt.truth.begin(), gt.truth.end(), [](const dsp::TruthInterval& t) { return t.has_truth(); }));
+  if (covered < gt.truth.size())
+    std::fprintf(stderr,
+                 "skyloc eval: %s: the ground truth (%s) covers %zu of %zu query frames; the "
+                 "others are in no score\n",
+                 2 * covered < gt.truth.size() ? "warning" : "note", gt.description.c_str(),
+                 covered, gt.truth.size());
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
   if (ec) {

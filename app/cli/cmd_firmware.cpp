@@ -68,6 +68,29 @@ void AddCommonOptions(OptionTable& t, SessionArgs* s) {
           &s->max_frames);
 }
 
+// route info: a teach writing the route now, or the FILE.db.tmp a killed one left.
+void PrintTeachState(const char* path, std::FILE* out) {
+  long pid = 0;
+  if (RouteBeingTaught(path, &pid)) {
+    std::fprintf(out, "%s: being taught now by process %ld\n", path, pid);
+    return;
+  }
+  const RouteTmpReport tmp = InspectRouteTmp(path);
+  if (!tmp.exists)
+    return;
+  if (tmp.loads)
+    std::fprintf(out,
+                 "%s.tmp: left by an interrupted teach: %zu intact frames, never committed; "
+                 "'skyloc route recover %s.tmp' makes it a route of its own; the next teach of "
+                 "%s replaces it\n",
+                 path, tmp.frames, path, path);
+  else
+    std::fprintf(out,
+                 "%s.tmp: left by an interrupted teach: %llu bytes, no intact frame; the next "
+                 "teach of %s replaces it\n",
+                 path, static_cast<unsigned long long>(tmp.bytes), path);
+}
+
 }  // namespace
 
 int RunTeach(std::span<char* const> args) {
@@ -142,7 +165,7 @@ int RunRoute(std::span<char* const> args) {
     return ExitCode(o);
   const bool recover = words[0] == "recover";
   if (!recover && words[0] != "info")
-    return t.Refuse("unknown subcommand '" + words[0] + "': expected info or recover");
+    return t.Refuse("unknown route subcommand '" + words[0] + "': expected info or recover");
   if (salvage && !recover)
     return t.Refuse("--salvage is for 'route recover' only");
   const char* path = words[1].c_str();
@@ -155,6 +178,8 @@ int RunRoute(std::span<char* const> args) {
   }
   if (!s.ok()) {
     std::fprintf(stderr, "skyloc route: %s\n", s.message());
+    if (!recover)
+      PrintTeachState(path, stderr);
     return kExitFailure;
   }
   const RouteDbSettings& st = report.settings;
@@ -194,6 +219,8 @@ int RunRoute(std::span<char* const> args) {
     std::printf("%s: the damaged original was kept as %s.damaged\n", path, path);
   if (recover && !report.committed)
     std::printf("%s: recovered: %zu frames, now committed\n", path, report.frames);
+  if (!recover)
+    PrintTeachState(path, stdout);
   return kExitOk;
 }
 

@@ -70,6 +70,13 @@ Status TeachUntilPress(const ButtonTeachSetup& setup, const LoopOptions& repeat_
                  static_cast<unsigned long long>(capacity));
   }
   const Status commit = writer.Commit();
+  if (writer.discarded()) {
+    std::fprintf(stderr,
+                 "%s: teach button: no frame reached the disk (%s); the route at %s is "
+                 "unchanged\n",
+                 label, commit.ok() ? "none taught" : commit.message(), setup.route_path);
+    return Status::Ok();
+  }
   if (!writer.committed()) {
     std::fprintf(stderr,
                  "%s: teach button: the new route was NOT committed (%s); the route at %s is "

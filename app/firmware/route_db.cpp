@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iterator>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "skyloc/dsp/spherical_harmonics.h"
 #include "skyloc/platform/bytes.h"
 #include "skyloc/platform/crc32.h"
+#include "skyloc/platform/regular_file.h"
 
 namespace skyloc::firmware {
 
@@ -653,39 +655,10 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
 
 namespace {
 
-const char* FileKind(mode_t mode) {
-  if (S_ISFIFO(mode))
-    return "a FIFO";
-  if (S_ISCHR(mode) || S_ISBLK(mode))
-    return "a device node";
-  if (S_ISDIR(mode))
-    return "a directory";
-  if (S_ISLNK(mode))
-    return "a symbolic link";
-  if (S_ISSOCK(mode))
-    return "a socket";
-  return "not a regular file";
-}
-
 Status NotARegularFile(const char* path, mode_t mode) {
   return Status::Error(StatusCode::kInvalidArgument,
                        "%s is %s, not a route database file: name a regular file", path,
-                       FileKind(mode));
-}
-
-// Opens an existing route file. O_NONBLOCK: opening a FIFO must not wait for a writer;
-// anything but a regular file is refused before it is read.
-Status OpenRegularFile(const char* path, int flags, UniqueFd* out) {
-  UniqueFd fd(::open(path, flags | O_NONBLOCK | O_CLOEXEC));
-  if (!fd.is_valid())
-    return Status::FromErrno(errno, "cannot open %s", path);
-  struct stat st {};
-  if (::fstat(fd.get(), &st) != 0)
-    return Status::FromErrno(errno, "cannot stat %s", path);
-  if (!S_ISREG(st.st_mode))
-    return NotARegularFile(path, st.st_mode);
-  *out = std::move(fd);
-  return Status::Ok();
+                       FileKindName(mode));
 }
 
 Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
@@ -710,7 +683,7 @@ Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
 
 Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
   UniqueFd fd;
-  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, &fd));
+  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, "route database", &fd));
   return ReadAll(path, fd.get(), bytes);
 }
 
@@ -758,7 +731,7 @@ Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoa
 
 Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage) {
   UniqueFd fd;
-  SKYLOC_TRY(OpenRegularFile(path, O_RDWR, &fd));
+  SKYLOC_TRY(OpenRegularFile(path, O_RDWR, "route database", &fd));
   // A running teach holds this lock while it writes: recovering under it would cut the
   // chunk it is appending.
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
@@ -818,6 +791,120 @@ Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage)
 }
 
 // ---------------------------------------------------------------------------------------
+// The route's lock and its FILE.db.tmp
+
+namespace {
+
+// A whole-file OFD lock request of `type` (F_WRLCK, F_UNLCK).
+struct flock WholeFile(short type) {
+  struct flock fl {};
+  fl.l_type = type;
+  fl.l_whence = SEEK_SET;
+  fl.l_start = 0;
+  fl.l_len = 0;
+  return fl;
+}
+
+// The process id the lock's holder wrote into it; 0 when unreadable.
+long HolderPid(int fd) {
+  char text[24] = {};
+  const ssize_t n = ::pread(fd, text, sizeof text - 1, 0);
+  if (n <= 0)
+    return 0;
+  return std::strtol(text, nullptr, 10);
+}
+
+}  // namespace
+
+Status RouteLock::Acquire(const char* route_path) {
+  Release();
+  char lock_path[sizeof path_];
+  if (std::snprintf(lock_path, sizeof lock_path, "%s.lock", route_path) >=
+      static_cast<int>(sizeof lock_path))
+    return Status::Error(StatusCode::kInvalidArgument, "path too long: %s", route_path);
+  // The holder removes the file while it holds the lock; a lock taken on a file that was
+  // removed (or replaced) meanwhile excludes nobody, so it is let go and taken again.
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    UniqueFd fd(::open(lock_path, O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
+    if (!fd.is_valid())
+      return Status::FromErrno(errno, "cannot create the route's lock file %s", lock_path);
+    struct stat opened {};
+    if (::fstat(fd.get(), &opened) != 0)
+      return Status::FromErrno(errno, "cannot stat %s", lock_path);
+    if (!S_ISREG(opened.st_mode))
+      return NotARegularFile(lock_path, opened.st_mode);
+    struct flock fl = WholeFile(F_WRLCK);
+    if (::fcntl(fd.get(), F_OFD_SETLK, &fl) != 0) {
+      const int e = errno;
+      if (e != EAGAIN && e != EACCES)
+        return Status::FromErrno(e, "cannot lock %s", lock_path);
+      const long pid = HolderPid(fd.get());
+      return Status::Error(StatusCode::kUnavailable,
+                           "route %s is being taught by process %ld (it holds %s): wait for that "
+                           "teach to end (SIGINT commits it); two teaches never write one route",
+                           route_path, pid, lock_path);
+    }
+    struct stat now {};
+    if (::lstat(lock_path, &now) != 0 || now.st_ino != opened.st_ino || now.st_dev != opened.st_dev)
+      continue;
+    char pid[24];
+    const int n = std::snprintf(pid, sizeof pid, "%ld\n", static_cast<long>(::getpid()));
+    if (::ftruncate(fd.get(), 0) != 0 ||
+        ::pwrite(fd.get(), pid, static_cast<std::size_t>(n), 0) != n)
+      return Status::FromErrno(errno, "cannot write %s", lock_path);
+    fd_ = std::move(fd);
+    std::snprintf(path_, sizeof path_, "%s", lock_path);
+    return Status::Ok();
+  }
+  return Status::Error(StatusCode::kUnavailable,
+                       "cannot take the lock %s: it is removed and made again as fast as it is "
+                       "taken; is something else teaching %s?",
+                       lock_path, route_path);
+}
+
+void RouteLock::Release() {
+  if (!fd_.is_valid())
+    return;
+  // Removed while still held: whoever opened it meanwhile finds it gone once it gets the
+  // lock, and takes the lock on a new file (Acquire).
+  (void)::unlink(path_);
+  fd_.reset();
+}
+
+bool RouteBeingTaught(const char* route_path, long* pid) {
+  *pid = 0;
+  char lock_path[300];
+  std::snprintf(lock_path, sizeof lock_path, "%s.lock", route_path);
+  UniqueFd fd(::open(lock_path, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC));
+  if (!fd.is_valid())
+    return false;
+  struct flock fl = WholeFile(F_WRLCK);
+  if (::fcntl(fd.get(), F_OFD_GETLK, &fl) != 0 || fl.l_type == F_UNLCK)
+    return false;
+  *pid = HolderPid(fd.get());
+  return true;
+}
+
+RouteTmpReport InspectRouteTmp(const char* route_path) {
+  RouteTmpReport r;
+  char tmp[300];
+  std::snprintf(tmp, sizeof tmp, "%s.tmp", route_path);
+  struct stat st {};
+  if (::lstat(tmp, &st) != 0)
+    return r;
+  r.exists = true;
+  r.bytes = static_cast<std::uint64_t>(st.st_size);
+  std::vector<std::uint8_t> bytes;
+  if (!ReadWholeFile(tmp, &bytes).ok())
+    return r;
+  RouteDbLoadReport parsed;
+  r.loads =
+      ParseRouteDb(bytes, nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &parsed).ok();
+  r.frames = r.loads ? parsed.frames : 0;
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------
 // Writing
 
 RouteDbWriter::~RouteDbWriter() = default;
@@ -832,6 +919,17 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
     return Status::Error(StatusCode::kInvalidArgument, "flush_every %zu is invalid", flush_every);
   if (std::strlen(path) + 5 >= sizeof path_)
     return Status::Error(StatusCode::kInvalidArgument, "path too long: %s", path);
+  // The lock first: what is at the path, and FILE.tmp, are looked at and changed only by
+  // the one teach that holds it.
+  SKYLOC_TRY(lock_.Acquire(path));
+  Status created = CreateLocked(path, settings, flush_every, overwrite);
+  if (!created.ok())
+    lock_.Release();
+  return created;
+}
+
+Status RouteDbWriter::CreateLocked(const char* path, const RouteDbSettings& settings,
+                                   std::size_t flush_every, bool overwrite) {
   // An existing route is replaced only with `overwrite`, and only if it is a regular file:
   // a symlink, device node or FIFO at the path is not ours to replace.
   bool replacing = false;
@@ -841,7 +939,7 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
       return Status::Error(StatusCode::kFailedPrecondition,
                            "%s is %s, not a route database file: teach does not replace it; "
                            "give --route the path of a regular file",
-                           path, FileKind(existing.st_mode));
+                           path, FileKindName(existing.st_mode));
     }
     if (!overwrite) {
       return Status::Error(StatusCode::kAlreadyExists,
@@ -856,6 +954,9 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
 
   char tmp[sizeof write_path_];
   std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  // No teach holds the lock, so a FILE.tmp here was left by one that was killed: say what
+  // it held before it is replaced.
+  replaced_tmp_ = InspectRouteTmp(path);
   // O_NOFOLLOW/O_NONBLOCK + the check below: a symlink or FIFO planted at FILE.tmp is
   // refused, not followed or waited on.
   UniqueFd fd(
@@ -890,6 +991,7 @@ Status RouteDbWriter::Create(const char* path, const RouteDbSettings& settings,
 
   fd_ = std::move(fd);
   committed_ = false;
+  discarded_ = false;
   lost_ = 0;
   std::snprintf(path_, sizeof path_, "%s", path);
   std::snprintf(write_path_, sizeof write_path_, "%s", replacing ? tmp : path);
@@ -971,8 +1073,21 @@ Status RouteDbWriter::Commit() {
   Status flushed = Flush();
   lost_ = pending_;
   pending_ = 0;
+  if (durable_ == 0) {
+    // Nothing taught is on the disk: an empty route would replace the old one, or block
+    // the next teach of a new path. The file this writer made goes (under the lock).
+    const int removed = ::unlink(write_path_);
+    const int e = errno;
+    fd_.reset();
+    lock_.Release();
+    discarded_ = true;
+    if (removed != 0)
+      return Status::FromErrno(e, "cannot remove %s (it holds no frame)", write_path_);
+    return flushed;
+  }
   if (Status c = WriteChunk(kChunkCommit, durable_, 0, 0); !c.ok()) {
     fd_.reset();  // closed uncommitted: `route recover` keeps the durable frames
+    lock_.Release();
     return c;
   }
   committed_ = true;
@@ -985,6 +1100,7 @@ Status RouteDbWriter::Commit() {
     replacing_ = false;
   }
   fd_.reset();
+  lock_.Release();
   return flushed;
 }
 

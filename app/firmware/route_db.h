@@ -245,6 +245,47 @@ Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoa
 // regular file, or if a running teach holds the file's lock.
 Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage = false);
 
+// The lock of the route at `route_path`: an OFD write lock (fcntl F_OFD_SETLK) on
+// FILE.db.lock beside it. A teach takes it before it touches FILE.db or FILE.db.tmp and
+// holds it until it has committed or closed them, so two teaches on one path never both
+// write, and one that is refused has changed nothing. OFD locks belong to an open file
+// description, so two writers in one process exclude each other as two processes do; the
+// kernel drops the lock when its holder dies, so the lock file a killed teach leaves is
+// taken over by the next one. The holder writes its process id into the file (for the
+// refusal's message) and removes the file while it still holds the lock.
+class RouteLock {
+ public:
+  RouteLock() = default;
+  ~RouteLock() { Release(); }
+  RouteLock(const RouteLock&) = delete;
+  RouteLock& operator=(const RouteLock&) = delete;
+
+  // Without waiting: kUnavailable, naming the holder's process, when a teach holds it.
+  Status Acquire(const char* route_path);
+  void Release();
+  bool held() const { return fd_.is_valid(); }
+
+ private:
+  UniqueFd fd_;
+  char path_[264] = {};
+};
+
+// Whether a teach holds the lock of the route at `route_path` now, asked without taking
+// it (F_OFD_GETLK). *pid: the holder's process id as it wrote it, 0 when unknown.
+bool RouteBeingTaught(const char* route_path, long* pid);
+
+// FILE.db.tmp: where `teach --force` writes until its commit renames it over FILE.db. One
+// that exists while no teach holds the route's lock was left by a teach that was killed
+// (its frames were never committed).
+struct RouteTmpReport {
+  bool exists = false;
+  std::uint64_t bytes = 0;
+  bool loads = false;      // its intact chunks parse (as `route recover` would keep them)
+  std::size_t frames = 0;  // intact frames in it
+};
+// Reads FILE.db.tmp of the route at `route_path` (start-up only: a temporary buffer).
+RouteTmpReport InspectRouteTmp(const char* route_path);
+
 // Writes a route database during teach. Append() copies into a chunk buffer allocated by
 // Create(); every `flush_every` frames the chunk is written with one write() and made
 // durable with fdatasync(). Append() allocates nothing.
@@ -255,12 +296,15 @@ class RouteDbWriter {
   RouteDbWriter(const RouteDbWriter&) = delete;
   RouteDbWriter& operator=(const RouteDbWriter&) = delete;
 
-  // Creates `path` atomically (path.tmp, fsync, rename, fsync of the directory). An
-  // existing file is kept and reported unless `overwrite`; with it, the frames go to
-  // path.tmp and Commit() renames that over the old route, so the old route stays whole
-  // until the new one is committed. A path that is a symlink, device node, FIFO or
-  // directory is refused, `overwrite` or not. The open file holds an
-  // exclusive flock() until it is closed, so `route recover` refuses a file being taught.
+  // Takes the route's lock (RouteLock) before it touches any file: another teach of the
+  // same path is refused with kUnavailable, changing nothing. Then creates `path`
+  // atomically (path.tmp, fsync, rename, fsync of the directory). An existing file is kept
+  // and reported unless `overwrite`; with it, the frames go to path.tmp and Commit()
+  // renames that over the old route, so the old route stays whole until the new one is
+  // committed. A path.tmp left by a killed teach is replaced, and replaced_tmp() says what
+  // it held (the caller tells the user). A path that is a symlink, device node, FIFO or
+  // directory is refused, `overwrite` or not. The open file also holds an exclusive
+  // flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
   // `strip`: settings.strip.columns bytes (version 4), empty when that is 0.
@@ -273,8 +317,15 @@ class RouteDbWriter {
   // the frames already on the disk: the error is returned, committed() is true and
   // frames_lost() says how many frames did not fit. When even the commit record cannot
   // be written, committed() is false and `skyloc route recover` keeps frames_durable().
+  // No frame on the disk (stopped before the first, or the disk full before the first
+  // chunk): nothing is committed and the file this writer made is removed, so the path is
+  // as it was: an old route stays, a new path stays free; discarded() is then true and the
+  // error, if any, is why the frames did not reach the disk.
   Status Commit();
   bool committed() const { return committed_; }
+  bool discarded() const { return discarded_; }
+  // What Create() found at path.tmp and replaced (exists: false when there was none).
+  const RouteTmpReport& replaced_tmp() const { return replaced_tmp_; }
   std::uint64_t frames_lost() const { return lost_; }
 
   bool is_open() const { return fd_.is_valid(); }
@@ -289,11 +340,17 @@ class RouteDbWriter {
   Status WriteChunk(std::uint32_t type, std::uint64_t first, std::uint32_t count,
                     std::size_t payload_bytes);
 
+  Status CreateLocked(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
+                      bool overwrite);
+
+  RouteLock lock_;  // before fd_: released after the file is closed
   UniqueFd fd_;
   char path_[256] = {};
   char write_path_[264] = {};
   bool replacing_ = false;
   bool committed_ = false;
+  bool discarded_ = false;
+  RouteTmpReport replaced_tmp_;
   std::uint64_t lost_ = 0;
   RouteDbSettings settings_;
   FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records

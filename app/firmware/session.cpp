@@ -75,9 +75,18 @@ dsp::Position3 GroundPosition(const RouteFrameMeta& meta) {
 void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, double tolerance,
               SessionReport* report) {
   // After the loop: allocation is fine here.
+  if (results.empty() || !results.front().has_pose)
+    return;  // no ground truth
   std::vector<dsp::Position3> reference(route.size());
-  for (std::size_t i = 0; i < route.size(); ++i)
+  bool route_has_poses = false;
+  for (std::size_t i = 0; i < route.size(); ++i) {
     reference[i] = GroundPosition(route.meta(i));
+    route_has_poses = route_has_poses || route.meta(i).pose.has_value();
+  }
+  if (!route_has_poses) {
+    report->route_without_poses = true;
+    return;
+  }
   const dsp::MatchTolerance rule{0, tolerance};
   std::vector<dsp::EvaluatedMatch> matches;
   for (const FrameResult& r : results) {
@@ -87,6 +96,8 @@ void Evaluate(std::span<const FrameResult> results, const RouteFrames& route, do
     dsp::TruthInterval truth;
     dsp::GroundTruthFromPositions(reference, std::span<const dsp::Position3>(&query, 1), tolerance,
                                   std::span<dsp::TruthInterval>(&truth, 1));
+    ++report->frames_with_poses;
+    report->frames_with_truth += truth.has_truth() ? 1u : 0u;
     const bool known_frame =
         r.best_index >= 0 && static_cast<std::uint64_t>(r.best_index) < reference.size();
     const bool correct =
@@ -441,6 +452,7 @@ Status CreateRoute(Session* s) {
   if (created.code() == StatusCode::kAlreadyExists)
     return Status::Error(created.code(), "%s; pass --force to replace it", created.message());
   SKYLOC_TRY(created);
+  PrintReplacedTmp(s->label, args.route_path.c_str(), s->writer.replaced_tmp());
   if (s->writer.replacing()) {
     std::fprintf(stderr,
                  "%s: replacing route %s when this teach commits; until then the old route "
@@ -516,6 +528,12 @@ Status StartUp(Session* s, SessionReport* report) {
     report->route_frames = s->route.size();
   }
   SKYLOC_TRY(OpenStatusOutput(s));
+  if (!args.record_dir.empty()) {
+    // Before the route: a recording refused now must leave no route file behind.
+    Status recordable = drivers::CheckNewDatasetFolder(args.record_dir);
+    if (!recordable.ok())
+      return recordable.AddContext("--record %s", args.record_dir.c_str());
+  }
   if (args.mode == LoopMode::kTeach)
     SKYLOC_TRY(CreateRoute(s));
   PrintStartup(args, s->config, s->camera->info(), s->writer, s->route.size());

@@ -50,6 +50,13 @@ struct SessionReport {
   // Frames shown LOCALISED whose match was correct, of those shown LOCALISED.
   std::uint64_t localised_frames = 0;
   std::uint64_t localised_correct = 0;
+  // The frames had poses but the route has none (taught from a recording without them):
+  // no match can be checked, so there is no precision/recall rather than a false 0.
+  bool route_without_poses = false;
+  // Frames with poses, and those of them on the route (within the tolerance of a route
+  // pose): only those have a ground truth.
+  std::uint64_t frames_with_poses = 0;
+  std::uint64_t frames_with_truth = 0;
 };
 
 // Runs `config` (a file's, the built-in defaults or one built in memory, as the demo's).

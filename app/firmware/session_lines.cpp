@@ -95,9 +95,33 @@ void PrintWarning(const char* label, const Status& s) {
     std::fprintf(stderr, "%s: warning: %s\n", label, s.message());
 }
 
+void PrintReplacedTmp(const char* label, const char* route_path, const RouteTmpReport& tmp) {
+  if (!tmp.exists)
+    return;
+  if (tmp.loads)
+    std::fprintf(stderr,
+                 "%s: replacing %s.tmp, left by an interrupted teach (%zu intact frames, never "
+                 "committed)\n",
+                 label, route_path, tmp.frames);
+  else
+    std::fprintf(stderr,
+                 "%s: replacing %s.tmp, left by an interrupted teach (%llu bytes, no intact "
+                 "frame)\n",
+                 label, route_path, static_cast<unsigned long long>(tmp.bytes));
+}
+
 void PrintCommit(const SessionArgs& args, const RouteDbWriter& writer, const Status& committed) {
   const char* label = args.label;
   const auto kept = static_cast<unsigned long long>(writer.frames_durable());
+  if (writer.discarded()) {
+    // Nothing reached the disk: the path is as the teach found it.
+    std::fprintf(
+        stderr, "%s: route %s: no frame committed%s%s%s; %s\n", label, args.route_path.c_str(),
+        committed.ok() ? "" : " (", committed.ok() ? "" : committed.message(),
+        committed.ok() ? "" : ")",
+        writer.replacing() ? "the old route is kept as it was" : "no route file was left behind");
+    return;
+  }
   if (committed.ok()) {
     std::fprintf(stderr, "%s: route %s: %llu frames committed\n", label, args.route_path.c_str(),
                  kept);
@@ -172,7 +196,22 @@ void PrintSummary(const SessionArgs& args, const SessionReport& r) {
                  r.area_under_curve, r.evaluated_matches, r.correct_matches, args.tolerance_m,
                  static_cast<unsigned long long>(r.localised_correct),
                  static_cast<unsigned long long>(r.localised_frames));
+    // Frames off the route have no truth and count in no score: scores over a few of them
+    // say little, so the coverage is told whenever it is not whole.
+    if (r.frames_with_truth < r.frames_with_poses)
+      std::fprintf(stderr,
+                   "%s: %s: the ground truth covers %llu of %llu frames (the others are "
+                   "farther than %.1f m from every route pose and are not scored)\n",
+                   args.label, 2 * r.frames_with_truth < r.frames_with_poses ? "warning" : "note",
+                   static_cast<unsigned long long>(r.frames_with_truth),
+                   static_cast<unsigned long long>(r.frames_with_poses), args.tolerance_m);
   }
+  if (r.route_without_poses)
+    std::fprintf(stderr,
+                 "%s: no precision/recall: route %s has no poses (taught from a recording "
+                 "without them), so no match can be checked; teach from a run with poses to "
+                 "score repeat\n",
+                 args.label, args.route_path.c_str());
 }
 
 }  // namespace skyloc::firmware

@@ -21,6 +21,9 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
 // "label: warning: MESSAGE" when `s` is an error; nothing when it is ok.
 void PrintWarning(const char* label, const Status& s);
 
+// When a teach replaced a FILE.db.tmp that a killed teach left: what it held.
+void PrintReplacedTmp(const char* label, const char* route_path, const RouteTmpReport& tmp);
+
 // After teach's Commit(): how many frames the route keeps and, when the commit failed,
 // whether they are committed and what to do.
 void PrintCommit(const SessionArgs& args, const RouteDbWriter& writer, const Status& committed);

@@ -1,5 +1,6 @@
 #include "skyloc/drivers/camera_file.h"
 
+#include <fcntl.h>
 #include <toml++/toml.h>
 
 #include <cerrno>
@@ -15,6 +16,7 @@
 #include "skyloc/drivers/dsp_status.h"
 #include "skyloc/drivers/toml_keys.h"
 #include "skyloc/drivers/toml_text.h"
+#include "skyloc/platform/regular_file.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -240,11 +242,15 @@ Result<dsp::LensParams> ParseCameraFile(std::string_view text, const char* sourc
 }
 
 Result<dsp::LensParams> LoadCameraFile(const char* path) {
-  std::FILE* f = std::fopen(path, "rb");
+  // A FIFO or device named as the camera file is refused, not waited on.
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, "camera file", &fd));
+  std::FILE* f = ::fdopen(fd.get(), "rb");
   if (f == nullptr) {
     const int saved = errno;
     return Status::FromErrno(saved, "cannot open camera file '%s'", path);
   }
+  (void)fd.release();  // the FILE owns it now
   std::string text;
   char buffer[4096];
   std::size_t n = 0;

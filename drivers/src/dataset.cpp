@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "skyloc/drivers/image_file.h"
+#include "skyloc/platform/regular_file.h"
 
 namespace skyloc::drivers {
 namespace {
@@ -22,6 +23,27 @@ constexpr int kPoseColumns = 6;
 bool FileExists(const std::string& path) {
   struct stat st {};
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// A dataset's optional files (frames.csv, camera.toml): present as a regular file (a
+// symlink to one is fine), absent, or refused: anything else there is a mistake to name,
+// not a missing file to silently do without.
+Status CheckOptionalFile(const std::string& path, bool* present) {
+  *present = false;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int saved = errno;
+    if (saved == ENOENT)
+      return Status::Ok();
+    return Status::FromErrno(saved, "cannot check %s", path.c_str());
+  }
+  if (!S_ISREG(st.st_mode))
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "%s is %s, not a regular file: a dataset's frames.csv and camera.toml "
+                         "are regular files (docs/DATASETS.md)",
+                         path.c_str(), FileKindName(st.st_mode));
+  *present = true;
+  return Status::Ok();
 }
 
 bool DirExists(const std::string& path) {
@@ -295,7 +317,9 @@ Result<Dataset> ReadDataset(const std::string& dir) {
                          ds.dir.c_str());
   }
   const std::string csv_path = ds.dir + "/frames.csv";
-  if (FileExists(csv_path)) {
+  bool has_csv = false;
+  SKYLOC_TRY(CheckOptionalFile(csv_path, &has_csv));
+  if (has_csv) {
     SKYLOC_TRY(ReadCsv(csv_path, frames_dir, &ds));
     if (ds.frames.empty()) {
       return Status::Error(StatusCode::kInvalidArgument, "%s: no frames after the header",
@@ -317,7 +341,9 @@ Result<Dataset> ReadDataset(const std::string& dir) {
     }
   }
   const std::string camera = ds.dir + "/camera.toml";
-  if (FileExists(camera))
+  bool has_camera = false;
+  SKYLOC_TRY(CheckOptionalFile(camera, &has_camera));
+  if (has_camera)
     ds.camera_toml = camera;
   return ds;
 }
@@ -343,6 +369,32 @@ DatasetWriter& DatasetWriter::operator=(DatasetWriter&& other) noexcept {
   return *this;
 }
 
+namespace {
+
+Status RecordingExists(const std::string& csv_path) {
+  return Status::Error(StatusCode::kAlreadyExists,
+                       "%s already exists: choose a new folder (a recording is never "
+                       "overwritten)",
+                       csv_path.c_str());
+}
+
+}  // namespace
+
+Status CheckNewDatasetFolder(const std::string& dir) {
+  std::string d = dir;
+  while (d.size() > 1 && d.back() == '/')
+    d.pop_back();
+  struct stat st {};
+  if (::stat(d.c_str(), &st) != 0)
+    return Status::Ok();  // made by Open
+  if (!S_ISDIR(st.st_mode))
+    return Status::Error(StatusCode::kInvalidArgument, "%s exists and is not a folder", d.c_str());
+  const std::string csv_path = d + "/frames.csv";
+  if (::lstat(csv_path.c_str(), &st) == 0)
+    return RecordingExists(csv_path);
+  return Status::Ok();
+}
+
 Status DatasetWriter::Open(const std::string& dir, Columns columns) {
   if (csv_ != nullptr) {
     return Status::Error(StatusCode::kFailedPrecondition, "dataset writer: %s is already open",
@@ -357,12 +409,8 @@ Status DatasetWriter::Open(const std::string& dir, Columns columns) {
   csv_ = std::fopen(csv_path.c_str(), "wx");
   if (csv_ == nullptr) {
     const int saved = errno;
-    if (saved == EEXIST) {
-      return Status::Error(StatusCode::kAlreadyExists,
-                           "%s already exists: choose a new folder (a recording is never "
-                           "overwritten)",
-                           csv_path.c_str());
-    }
+    if (saved == EEXIST)
+      return RecordingExists(csv_path);
     return Status::FromErrno(saved, "cannot create %s", csv_path.c_str());
   }
   columns_ = columns;

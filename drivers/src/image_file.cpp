@@ -26,6 +26,8 @@
 #define STBI_WRITE_NO_STDIO
 #include <stb/stb_image_write.h>
 
+#include "skyloc/platform/regular_file.h"
+
 namespace skyloc::drivers {
 namespace {
 
@@ -210,11 +212,15 @@ Result<OwnedImage> OwnedImage::Allocate(int width, int height, dsp::PixelFormat 
 }
 
 Result<OwnedImage> LoadImage(const char* path) {
-  std::FILE* f = std::fopen(path, "rb");
+  // A FIFO or device named as an image is refused, not waited on.
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, "image", &fd));
+  std::FILE* f = ::fdopen(fd.get(), "rb");
   if (f == nullptr) {
     const int saved = errno;
     return Status::FromErrno(saved, "cannot open image '%s'", path);
   }
+  (void)fd.release();  // the FILE owns it now
   const PnmHeader pnm = ReadPnmHeader(f);
   if (pnm.channels != 0) {
     Result<OwnedImage> image = ReadPnm(f, pnm, path);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -214,6 +216,48 @@ TEST(Dataset, FolderWithoutCsvIsListedByName) {
   Result<Dataset> missing = ReadDataset(dir + "/nope");
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
+}
+
+// teach --record checks the folder before it creates the route, without creating anything.
+TEST(Dataset, CheckNewDatasetFolderRefusesAnEarlierRecordingAndCreatesNothing) {
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
+  EXPECT_TRUE(CheckNewDatasetFolder(dir + "/new").ok());
+  EXPECT_NE(::access((dir + "/new").c_str(), F_OK), 0) << "the check created the folder";
+  WriteText(dir + "/frames.csv", "index,file,timestamp_s\n");
+  const Status s = CheckNewDatasetFolder(dir + "/");
+  EXPECT_EQ(s.code(), StatusCode::kAlreadyExists);
+  EXPECT_NE(std::string(s.message()).find("frames.csv already exists"), std::string::npos)
+      << s.message();
+  WriteText(dir + "/file", "x");
+  EXPECT_EQ(CheckNewDatasetFolder(dir + "/file").code(), StatusCode::kInvalidArgument);
+}
+
+// A FIFO (or anything but a regular file) in place of frames.csv or camera.toml is
+// refused naming it, not taken for a missing file: a missing frames.csv would have the
+// frames listed by name with made-up timestamps, a missing camera.toml the default lens.
+TEST(Dataset, AFifoInPlaceOfFramesCsvOrCameraTomlIsRefused) {
+  const ScratchDir scratch("skyloc_dataset_");
+  const std::string& dir = scratch.path();
+  ASSERT_EQ(::system(("mkdir -p " + dir + "/frames").c_str()), 0);
+  WriteText(dir + "/frames/a.png", "x");
+  ASSERT_EQ(::mkfifo((dir + "/frames.csv").c_str(), 0600), 0);
+  ::alarm(10);  // a hang fails the test instead of blocking ctest
+  Result<Dataset> ds = ReadDataset(dir);
+  ASSERT_FALSE(ds.ok());
+  EXPECT_EQ(ds.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(ds.status().message()).find("frames.csv is a FIFO, not a regular file"),
+            std::string::npos)
+      << ds.status().message();
+
+  ASSERT_EQ(::unlink((dir + "/frames.csv").c_str()), 0);
+  ASSERT_EQ(::mkfifo((dir + "/camera.toml").c_str(), 0600), 0);
+  ds = ReadDataset(dir);
+  ASSERT_FALSE(ds.ok());
+  EXPECT_NE(std::string(ds.status().message()).find("camera.toml is a FIFO, not a regular file"),
+            std::string::npos)
+      << ds.status().message();
+  ::alarm(0);
 }
 
 }  // namespace

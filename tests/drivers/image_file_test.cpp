@@ -1,12 +1,15 @@
 #include "skyloc/drivers/image_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <string>
 
+#include "skyloc/drivers/camera_file.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "support/scratch_dir.h"
 
@@ -148,6 +151,30 @@ TEST_F(ImageFileTest, ErrorsNameTheFileAndTheProblem) {
   // The samples that are there are counted (not the whole 4 KiB blocks read so far).
   EXPECT_NE(std::string(s.status().message()).find("2 of 16 samples present"), std::string::npos)
       << s.status().message();
+}
+
+// A FIFO (or any file that is not a regular one) named as an image or a camera file is
+// refused at once, naming it; opening it must not wait for a writer that never comes.
+TEST_F(ImageFileTest, AFifoIsRefusedWithoutWaiting) {
+  const std::string fifo = Path("fifo.png");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  ::alarm(10);  // a hang fails the test instead of blocking ctest
+  auto r = LoadImage(fifo.c_str());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(r.status().message()).find(fifo + " is a FIFO, not a regular file"),
+            std::string::npos)
+      << r.status().message();
+  auto c = LoadCameraFile(fifo.c_str());
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(std::string(c.status().message()).find("is a FIFO, not a regular file"),
+            std::string::npos)
+      << c.status().message();
+  auto d = LoadImage(dir_.c_str());
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(std::string(d.status().message()).find("is a directory"), std::string::npos)
+      << d.status().message();
+  ::alarm(0);
 }
 
 // A PNG larger than skyloc reads is "too large" with the limit, not "not a PNG".

@@ -183,9 +183,21 @@ TEST_F(RouteDbTest, RoundTrip) {
                                 137 * RouteDbRecordBytes(kDim, 0));
 }
 
+// Teach no longer leaves a route without frames (it removes the file), but a file that
+// is one (an older skyloc wrote it) still loads: the header, then the commit record.
 TEST_F(RouteDbTest, EmptyCommittedRouteLoads) {
-  Teach(0, 10, true);
-  EXPECT_TRUE(Parse(Bytes()).ok());
+  Teach(1, 10, true);
+  std::vector<std::uint8_t> bytes = Bytes();
+  bytes.resize(kDataOffset + kRouteDbChunkHeaderBytes);
+  std::uint8_t* commit = bytes.data() + kDataOffset;
+  std::memset(commit, 0, kRouteDbChunkHeaderBytes);
+  const std::uint32_t marker = 0x4B4E4843u, type = 2, payload_crc = Crc32({});
+  std::memcpy(commit, &marker, 4);
+  std::memcpy(commit + 4, &type, 4);
+  std::memcpy(commit + 24, &payload_crc, 4);
+  const std::uint32_t header_crc = Crc32({commit, 28});
+  std::memcpy(commit + 28, &header_crc, 4);
+  EXPECT_TRUE(Parse(bytes).ok());
   EXPECT_EQ(frames_.size(), 0u);
 }
 
@@ -234,6 +246,155 @@ TEST_F(RouteDbTest, ForceKeepsTheOldRouteUntilTheNewOneCommits) {
   ASSERT_TRUE(Parse(Bytes()).ok());
   ExpectFrames(frames_, 7);
   EXPECT_NE(::access((path_ + ".tmp").c_str(), F_OK), 0) << "FILE.tmp left behind";
+}
+
+// Appends frames first..first+n-1 (FrameContent) to an open writer.
+void AppendFrames(RouteDbWriter* w, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    RouteFrameMeta meta;
+    float d[kDim];
+    FrameContent(i, &meta, d);
+    ASSERT_TRUE(w->Append(meta, d).ok());
+  }
+}
+
+// Two teaches on one route, one process (each writer opens the route's lock on its own
+// file description, so the lock excludes within a process as between processes): while a
+// `teach --force` writes FILE.tmp, a second one is refused before it touches FILE.tmp, and
+// the first commits every frame it taught.
+TEST_F(RouteDbTest, ASecondForceTeachIsRefusedBeforeItTouchesAnything) {
+  Teach(25, 10, true);
+  RouteDbWriter first;
+  ASSERT_TRUE(first.Create(path_.c_str(), Settings(), 10, true).ok());
+  AppendFrames(&first, 15);  // one chunk on the disk, five frames pending
+  const std::string tmp = path_ + ".tmp";
+  struct stat before {};
+  ASSERT_EQ(::stat(tmp.c_str(), &before), 0);
+
+  RouteDbWriter second;
+  const Status s = second.Create(path_.c_str(), Settings(), 10, true);
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();
+  EXPECT_NE(std::string(s.message()).find("is being taught"), std::string::npos) << s.message();
+  struct stat after {};
+  ASSERT_EQ(::stat(tmp.c_str(), &after), 0);
+  EXPECT_EQ(after.st_size, before.st_size) << "the refused teach changed FILE.tmp";
+
+  ASSERT_TRUE(first.Commit().ok());
+  const Status loaded = Parse(Bytes());
+  ASSERT_TRUE(loaded.ok()) << loaded.message();
+  ExpectFrames(frames_, 15);
+}
+
+// A plain teach is writing a new route: a `teach --force` on the same path is refused and
+// the plain teach's frames are what the file holds.
+TEST_F(RouteDbTest, AForceTeachIsRefusedWhileAPlainTeachWrites) {
+  RouteDbWriter plain;
+  ASSERT_TRUE(plain.Create(path_.c_str(), Settings(), 10, false).ok());
+  AppendFrames(&plain, 21);
+
+  RouteDbWriter force;
+  const Status s = force.Create(path_.c_str(), Settings(), 10, true);
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();
+  if (s.ok()) {
+    AppendFrames(&force, 3);
+    EXPECT_TRUE(force.Commit().ok());
+  }
+  ASSERT_TRUE(plain.Commit().ok());
+  const Status loaded = Parse(Bytes());
+  ASSERT_TRUE(loaded.ok()) << loaded.message();
+  ExpectFrames(frames_, 21);
+}
+
+// A `teach --force` that commits nothing (stopped before its first frame) keeps the old
+// route, byte for byte, and leaves no FILE.tmp; a new route that gets no frame leaves no
+// file at all (it would only block the next teach).
+TEST_F(RouteDbTest, ATeachThatCommitsNothingLeavesThePathAsItWas) {
+  Teach(25, 10, true);
+  const std::vector<std::uint8_t> old_route = Bytes();
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 10, true).ok());
+    const Status s = w.Commit();
+    EXPECT_TRUE(s.ok()) << s.message();
+    EXPECT_TRUE(w.discarded());
+    EXPECT_FALSE(w.committed());
+  }
+  EXPECT_EQ(Bytes(), old_route);
+  EXPECT_NE(::access((path_ + ".tmp").c_str(), F_OK), 0) << "FILE.tmp left behind";
+
+  const std::string fresh = dir_ + "/fresh.db";
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(fresh.c_str(), Settings(), 10, false).ok());
+    EXPECT_TRUE(w.Commit().ok());
+  }
+  EXPECT_NE(::access(fresh.c_str(), F_OK), 0) << "an empty route file was left behind";
+}
+
+// A full disk before the first chunk of a `teach --force` (RLIMIT_FSIZE in a child): no
+// frame reached the disk, so the old route stays, whole.
+TEST_F(RouteDbTest, DiskFullBeforeTheFirstChunkKeepsTheOldRoute) {
+  if (skyloc::testing::UnderUserModeEmulator())
+    GTEST_SKIP() << "qemu-user spins in a forked child past RLIMIT_FSIZE (support/emulator.h)";
+  Teach(25, 10, true);
+  const std::vector<std::uint8_t> old_route = Bytes();
+  const std::size_t limit = kDataOffset + 100;  // the header fits, no chunk does
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    const rlimit lim{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
+    if (::setrlimit(RLIMIT_FSIZE, &lim) != 0)
+      ::_exit(2);
+    RouteDbWriter w;
+    if (!w.Create(path_.c_str(), Settings(), 10, true).ok())
+      ::_exit(3);
+    for (std::size_t i = 0; i < 10; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      (void)w.Append(meta, d);
+    }
+    const Status s = w.Commit();
+    ::_exit(s.ok() ? 4 : 0);  // the frames did not fit: an error, whatever else happens
+  }
+  int wstatus = 0;
+  ASSERT_EQ(::waitpid(child, &wstatus, 0), child);
+  ASSERT_TRUE(WIFEXITED(wstatus)) << wstatus;
+  EXPECT_EQ(WEXITSTATUS(wstatus), 0);
+  EXPECT_EQ(Bytes(), old_route) << "the old route was replaced by one without frames";
+  EXPECT_NE(::access((path_ + ".tmp").c_str(), F_OK), 0) << "FILE.tmp left behind";
+}
+
+// A FILE.tmp left by a killed `teach --force` is replaced by the next teach, which says
+// what it held (replaced_tmp()); while a teach runs, RouteBeingTaught says so.
+TEST_F(RouteDbTest, AStaleTmpIsReportedWhenReplaced) {
+  Teach(25, 10, true);
+  {
+    RouteDbWriter killed;
+    ASSERT_TRUE(killed.Create(path_.c_str(), Settings(), 10, true).ok());
+    AppendFrames(&killed, 15);
+    long pid = 0;
+    EXPECT_TRUE(RouteBeingTaught(path_.c_str(), &pid));
+    EXPECT_EQ(pid, static_cast<long>(::getpid()));
+  }  // closed without a commit, as a killed teach's file is
+  long pid = 0;
+  EXPECT_FALSE(RouteBeingTaught(path_.c_str(), &pid));
+  const RouteTmpReport stale = InspectRouteTmp(path_.c_str());
+  EXPECT_TRUE(stale.exists);
+  EXPECT_TRUE(stale.loads);
+  EXPECT_EQ(stale.frames, 10u);
+
+  RouteDbWriter next;
+  ASSERT_TRUE(next.Create(path_.c_str(), Settings(), 10, true).ok());
+  EXPECT_TRUE(next.replaced_tmp().exists);
+  EXPECT_EQ(next.replaced_tmp().frames, 10u);
+  AppendFrames(&next, 4);
+  ASSERT_TRUE(next.Commit().ok());
+  ASSERT_TRUE(Parse(Bytes()).ok());
+  ExpectFrames(frames_, 4);
+  EXPECT_FALSE(InspectRouteTmp(path_.c_str()).exists);
+  EXPECT_NE(::access((path_ + ".lock").c_str(), F_OK), 0) << "the lock file was left behind";
 }
 
 // A symlink, FIFO (or device node) at the route path is refused even with --force; it is

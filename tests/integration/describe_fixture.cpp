@@ -10,6 +10,9 @@
 // symmetric) drawn through an equidistant 185-degree fisheye with the circle touching the
 // short side, its exact 90-degree pixel rotation, a different place, a colour 640x480
 // version, an equirectangular panorama and a file that is not an image.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -145,6 +148,10 @@ int main(int argc, char** argv) {
               Save(dir + "/sky_640x480_rgb.png", Draw(640, 480, PixelFormat::kRgb24, false)) &&
               Save(dir + "/panorama.png", Draw(720, 360, PixelFormat::kGrey8, false));
     std::ofstream(dir + "/not_an_image.png") << "this is text, not a PNG\n";
+    // A FIFO where an image is expected: describe must refuse it, not wait on it.
+    const std::string fifo = dir + "/fifo.png";
+    if (::access(fifo.c_str(), F_OK) != 0 && ::mkfifo(fifo.c_str(), 0600) != 0)
+      ok = false;
     return ok ? 0 : 1;
   }
   if (argc == 4 && std::strcmp(argv[1], "bands") == 0) {

@@ -79,3 +79,21 @@ file(READ ${WORK}/out/correspondence.svg svg)
 if(NOT svg MATCHES "vanilla [a-z]+ ds=10" OR NOT svg MATCHES "#1a9e1a")
   message(FATAL_ERROR "correspondence.svg lacks the vanilla ds=10 panel or its green dots")
 endif()
+
+# A ground truth that covers 2 of the 40 query frames still scores, but says so.
+if(MODE STREQUAL "streaming")
+  file(STRINGS ${WORK}/gt.csv gt_lines)
+  list(SUBLIST gt_lines 0 3 gt_partial)
+  list(JOIN gt_partial "\n" gt_partial)
+  file(WRITE ${WORK}/gt_partial.csv "${gt_partial}\n")
+  execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/reference
+                  --query ${WORK}/query --ds 10 --out ${WORK}/out_partial --gt ${WORK}/gt_partial.csv
+                  --streaming --method vanilla ${jobs}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "skyloc eval with a partial ground truth failed (${rc}):\n${out}\n${err}")
+  endif()
+  if(NOT err MATCHES "warning: the ground truth \\([^)]*\\) covers 2 of 40 query frames")
+    message(FATAL_ERROR "eval with a ground truth of 2 of 40 queries did not warn:\n${err}")
+  endif()
+endif()

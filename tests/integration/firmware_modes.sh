@@ -102,7 +102,7 @@ expect_rc 0 "route info --help" -- "${RUN[@]}" route info --help
 grep -q "^usage: skyloc route info FILE.db | recover \[--salvage\] FILE.db" "$WORK/out" ||
   fail "route info --help did not print route's help: $(cat "$WORK/out")"
 expect_rc 2 "route bogus" -- "${RUN[@]}" route bogus "$DB"
-expect_err "skyloc route: unknown subcommand 'bogus': expected info or recover" "route bogus"
+expect_err "skyloc route: unknown route subcommand 'bogus': expected info or recover" "route bogus"
 expect_rc 2 "route info --salvage" -- "${RUN[@]}" route info --salvage "$DB"
 expect_err "skyloc route: --salvage is for 'route recover' only" "route info --salvage"
 expect_rc 1 "--config DIR" -- "${RUN[@]}" teach --route "$WORK/dir.db" --config "$WORK" --frames 5
@@ -243,6 +243,11 @@ if [ ${#RUN[@]} -eq 1 ]; then
   expect_rc 1 "record into an earlier recording" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 5
   expect_err "already exists: choose a new folder" "record into an earlier recording"
   expect_rc 2 "record without a folder" -- "${RUN[@]}" record --config "$CONFIG"
+  # teach --record into an earlier recording is refused before the route file is made.
+  expect_rc 1 "teach --record into an earlier recording" -- "${RUN[@]}" teach \
+    --route "$WORK/refused.db" --config "$CONFIG" --frames 5 --record "$REC"
+  expect_err "already exists: choose a new folder" "teach --record into an earlier recording"
+  [ ! -e "$WORK/refused.db" ] || fail "a refused teach --record left $WORK/refused.db behind"
   expect_rc 0 "teach --record" -- "${RUN[@]}" teach --route "$WORK/recorded.db" --config "$CONFIG" \
     --frames 30 --record "$WORK/taught_run"
   taught=$(sed -nE "s|.*recording $WORK/taught_run: ([0-9]+) frames written.*|\1|p" "$WORK/err")
@@ -252,6 +257,14 @@ if [ ${#RUN[@]} -eq 1 ]; then
   expect_rc 0 "teach from the recording" -- "${RUN[@]}" teach --route "$WORK/again.db" \
     --config "$CONFIG" --dataset "$WORK/taught_run"
   expect_err "${taught:-30} frames committed" "teach from the recording"
+  # That route has no poses (the recording has none): repeat on the simulated camera has
+  # poses for its frames, but none to check a match against; it says so instead of
+  # scoring every match wrong.
+  expect_rc 0 "repeat on a route without poses" -- "${RUN[@]}" repeat --route "$WORK/again.db" \
+    --config "$CONFIG" --frames 40
+  ! grep -q "precision at 100% recall" "$WORK/err" ||
+    fail "repeat on a route without poses printed a precision: $(grep precision "$WORK/err")"
+  expect_err "no precision/recall: route $WORK/again.db has no poses" "repeat on a route without poses"
 fi
 
 if [ $failures -ne 0 ]; then

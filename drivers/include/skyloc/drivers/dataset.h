@@ -64,6 +64,11 @@ Result<Dataset> ReadDataset(const std::string& dir);
 // exists. Errors are kInvalidArgument, "<csv_path>:12: ...". Also what the fuzzer drives.
 Status ParseDatasetCsv(std::string_view text, const std::string& csv_path, Dataset* ds);
 
+// What DatasetWriter::Open would refuse in DIR, found without creating anything: so a
+// command that also writes other files (teach --record: the route) refuses before it
+// makes any of them.
+Status CheckNewDatasetFolder(const std::string& dir);
+
 // Writes a dataset folder frame by frame.
 class DatasetWriter {
  public:
