@@ -8,7 +8,7 @@
 #   ./skyloc.sh run ARGS...       build host and run: skyloc ARGS...
 #   ./skyloc.sh hil [KIND]        only the VM tests (label hil): host (amd64) or aarch64 (arm64)
 #   ./skyloc.sh package [KIND]    Release build, build/skyloc_<version>_<arch>.deb; KIND: host, aarch64, armhf
-#   ./skyloc.sh deps [KIND]       only install the Debian packages KIND needs
+#   ./skyloc.sh deps [KIND]       only install the Debian packages KIND needs (demo: the demo's)
 #   ./skyloc.sh format            clang-format every C++ file in place
 #   ./skyloc.sh fuzz [--time S | --runs N] [TARGET...]
 #                                 run the libFuzzer targets (default: all, 60 s each) on a
@@ -29,14 +29,22 @@ die() {
 }
 
 # ---------------------------------------------------------------------------------------
-# Debian packages, by build kind.
-HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest libgtest-dev
-  libbenchmark-dev libeigen3-dev libtomlplusplus-dev libstb-dev libgpiod-dev gpiod
-  libboost-math-dev
-  libopencv-dev  # host-only evaluation tools: SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md)
-  libcamera-dev
-  clang-14 libclang-rt-14-dev  # clang + libFuzzer: the fuzz targets (tests/fuzz)
-  lintian mmdebstrap)  # ./skyloc.sh package and its test (tests/package): lint, install in a Debian root
+# Debian packages, by purpose; deps() below picks them per build kind.
+# The host build of the skyloc executable, all ./skyloc.sh demo installs: compilers, build
+# tools and what the firmware includes and links. The drivers' libraries are in it because
+# the drivers a build contains are a compile definition of every file (SKYLOC_WITH_*): a
+# demo built without them would make the test's build compile everything again.
+BUILD_PACKAGES=(build-essential cmake ninja-build pkg-config ccache libeigen3-dev
+  libtomlplusplus-dev libstb-dev libgpiod-dev libcamera-dev)
+# The tests and benchmarks: GoogleTest (built from Debian's source with each build's
+# flags), Google Benchmark, and Boost.Math, the spherical-harmonics tests' reference.
+TEST_PACKAGES=(googletest libgtest-dev libbenchmark-dev libboost-math-dev)
+# The lab's tools (app/tools): SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md).
+TOOLS_PACKAGES=(libopencv-dev)
+# clang + libFuzzer: the fuzz targets (tests/fuzz).
+FUZZ_PACKAGES=(clang-14 libclang-rt-14-dev)
+# ./skyloc.sh package and its tests (tests/package): lint, install in a Debian root.
+PACKAGE_PACKAGES=(lintian mmdebstrap)
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
 # initramfs, the kernel headers the out-of-tree test drivers build against (the meta
 # package follows Debian's current kernel ABI; tests/hil/setup.sh installs the exact one
@@ -160,10 +168,15 @@ ensure_sysroot() {
   say "$arch sysroot ready in $((SECONDS - start)) s ($(du -sh "$dir" | cut -f1), $(wc -l <"$dir/skyloc-sysroot/packages") packages)"
 }
 
+# deps demo: the skyloc executable only. Every build kind: all the host build's packages
+# (its tests, tools, fuzz targets and package test), and for host and aarch64 the VM
+# tests', for the ARM kinds the cross compilers and the sysroot.
 deps() {
   local kind=${1:-host}
   mkdir -p "$BUILD_ROOT"
-  install_packages "${HOST_PACKAGES[@]}"
+  install_packages "${BUILD_PACKAGES[@]}"
+  [ "$kind" = demo ] && return 0
+  install_packages "${TEST_PACKAGES[@]}" "${TOOLS_PACKAGES[@]}" "${FUZZ_PACKAGES[@]}" "${PACKAGE_PACKAGES[@]}"
   case "$kind" in
     host | aarch64)
       install_packages "${HIL_PACKAGES[@]}"
@@ -180,19 +193,27 @@ deps() {
       install_packages "${CROSS_PACKAGES_armhf[@]}"
       ensure_sysroot armhf
       ;;
-    *) die "unknown build kind '$kind' (host, asan, tsan, release, aarch64, armhf)" ;;
+    *) die "unknown build kind '$kind' (demo, host, asan, tsan, release, aarch64, armhf)" ;;
   esac
 }
 
 # ---------------------------------------------------------------------------------------
+# configure_and_build KIND [TARGET...]: configure build/KIND and build the targets (all by
+# default). KIND demo is the host build's folder, configured to build what the packages
+# of deps demo allow: it shares build/host with the test run, so nothing is built twice.
 configure_and_build() {
   local kind=${1:-host}
+  shift || true
   local dir="$BUILD_ROOT/$kind"
+  [ "$kind" = demo ] && dir="$BUILD_ROOT/host"
   # The HIL VM cache is shared by the host and aarch64 builds (docs/HIL.md).
   local args=(-G Ninja -S "$ROOT" -B "$dir" -DSKYLOC_HIL_CACHE="$BUILD_ROOT/hil-cache")
   [ "${CI:-}" = "true" ] && args+=(-DSKYLOC_WERROR=ON)
   case "$kind" in
-    host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
+    # Tests and tools ON, not the default left in the cache by a demo: missing libraries
+    # fail the configure instead of leaving tests out.
+    host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSKYLOC_BUILD_TESTS=ON -DSKYLOC_TOOLS=ON) ;;
+    demo) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSKYLOC_BUILD_TESTS=AUTO -DSKYLOC_TOOLS=AUTO) ;;
     release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
     # What goes into the .deb: Release, the firmware only, every driver required.
     package-*)
@@ -207,13 +228,20 @@ configure_and_build() {
         *) die "unknown package kind '${kind#package-}' (host, aarch64, armhf)" ;;
       esac
       ;;
-    asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=address -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
-    tsan) args+=(-DCMAKE_BUILD_TYPE=Debug -DSKYLOC_SANITIZE=thread -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
-    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake"
-      -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
-    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake"
-      -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
-    *) die "unknown build kind '$kind' (host, asan, tsan, release, aarch64, armhf)" ;;
+    # The sanitizer and ARM builds exist to run the tests: line tables (-g1) are all their
+    # reports and backtraces use, and full debug information (-g) made compiling them about
+    # a quarter slower (measured on the heaviest test file: 18 s of CPU against 23 s).
+    asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DSKYLOC_SANITIZE=address
+      -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
+    tsan) args+=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DSKYLOC_SANITIZE=thread
+      -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
+    # No benchmarks in the ARM builds either (nothing runs them there; stage_cost counts
+    # their instructions).
+    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
+      -DSKYLOC_BUILD_BENCHMARKS=OFF -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake" -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
+    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
+      -DSKYLOC_BUILD_BENCHMARKS=OFF -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake" -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
+    *) die "unknown build kind '$kind' (demo, host, asan, tsan, release, aarch64, armhf)" ;;
   esac
   # A build folder configured by hand with another generator cannot be reused: start it afresh.
   if [ -f "$dir/CMakeCache.txt" ] && ! grep -q "^CMAKE_GENERATOR:INTERNAL=Ninja$" "$dir/CMakeCache.txt"; then
@@ -226,8 +254,10 @@ configure_and_build() {
     die "cmake configure failed for $kind"
   }
   grep -E "^-- skyloc:" "$BUILD_ROOT/configure-$kind.log" >&2 || true
-  say "building $kind ($JOBS jobs)"
-  cmake --build "$dir" -j "$JOBS" || die "build failed for $kind"
+  local targets=()
+  [ $# -gt 0 ] && targets=(--target "$@")
+  say "building $kind${targets:+ ($*)} ($JOBS jobs)"
+  cmake --build "$dir" -j "$JOBS" "${targets[@]}" || die "build failed for $kind"
 }
 
 # Runs ctest in a build and records its pass/fail counts for the final summary line.
@@ -282,7 +312,12 @@ cmd_test() {
   # and eval's fork-join (the batch matcher and the descriptors). Not cli.firmware_modes:
   # it expects a recording without drops, and TSan slows the writer below the camera.
   # (The libcamera completion path runs in the VM only: docs/DRIVERS.md.)
-  configure_and_build tsan
+  # Only the programs those tests run are built: SpscQueue in the platform tests,
+  # FrameRecorder in the firmware tests, ParallelFor and BlockedSeqSlamThreads in the tools
+  # tests, and skyloc with make_eval_datasets for cli.eval_*. (A test executable left out
+  # here would be registered as <name>_NOT_BUILT, which the -R filter does not pick.)
+  configure_and_build tsan skyloc_platform_tests skyloc_firmware_tests skyloc_tools_tests \
+    skyloc make_eval_datasets
   run_ctest tsan -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
   configure_and_build aarch64
   # Every aarch64 test, the hil ones included: those boot an arm64 kernel in
@@ -402,9 +437,11 @@ cmd_package() {
   say "built $deb ($(du -h "$deb" | cut -f1)); on the robot: apt install ./$(basename "$deb")"
 }
 
+# Only what the skyloc executable needs: its packages, its target. ./skyloc.sh test later
+# builds the rest in the same folder.
 cmd_demo() {
-  deps host
-  configure_and_build host
+  deps demo
+  configure_and_build demo skyloc
   "$BUILD_ROOT/host/app/skyloc" demo "$@"
 }
 

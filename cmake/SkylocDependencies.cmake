@@ -22,20 +22,39 @@ target_include_directories(skyloc_tomlpp SYSTEM INTERFACE ${SKYLOC_TOMLPP_INCLUD
 target_compile_definitions(skyloc_tomlpp INTERFACE TOML_HEADER_ONLY=1 TOML_EXCEPTIONS=0)
 add_library(skyloc::tomlpp ALIAS skyloc_tomlpp)
 
+# SKYLOC_TOOLS and SKYLOC_BUILD_TESTS are ON, OFF or AUTO (CMakeLists.txt); below, AUTO
+# becomes what this build contains, ON or OFF, by whether its libraries are found. Any
+# other true or false value counts as ON or OFF, as it did when both were plain options.
+foreach(part TOOLS BUILD_TESTS)
+  if(SKYLOC_${part} STREQUAL "AUTO")
+    continue()
+  elseif(SKYLOC_${part})
+    set(SKYLOC_${part} ON)
+  else()
+    set(SKYLOC_${part} OFF)
+  endif()
+endforeach()
+
 # OpenCV (Debian's libopencv-dev) for the lab's tools only: SIFT features and
 # k-means for the FAB-MAP baseline. Never linked into dsp/, drivers/ or the ARM firmware.
-if(SKYLOC_TOOLS)
+if(SKYLOC_TOOLS STREQUAL "OFF")
+  message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): LEFT OUT (SKYLOC_TOOLS=OFF, "
+                 "the default when cross-compiling)")
+else()
   find_package(OpenCV 4 QUIET COMPONENTS core imgproc features2d)
-  if(NOT OpenCV_FOUND)
+  if(OpenCV_FOUND)
+    set(SKYLOC_TOOLS ON)
+    message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): built, OpenCV ${OpenCV_VERSION}")
+  elseif(SKYLOC_TOOLS STREQUAL "AUTO")
+    set(SKYLOC_TOOLS OFF)
+    message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): LEFT OUT "
+                   "(SKYLOC_TOOLS=AUTO and OpenCV 4 was not found: apt-get install libopencv-dev)")
+  else()
     message(FATAL_ERROR "skyloc: SKYLOC_TOOLS is ON but OpenCV 4 (core, imgproc, "
                         "features2d) was not found. Install it with 'apt-get install "
                         "libopencv-dev' (./skyloc.sh deps does), or configure with "
                         "-DSKYLOC_TOOLS=OFF to leave the lab's tools out.")
   endif()
-  message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): built, OpenCV ${OpenCV_VERSION}")
-else()
-  message(STATUS "skyloc: lab tools (eval, simulate, experiments, FAB-MAP): LEFT OUT (SKYLOC_TOOLS=OFF, "
-                 "the default when cross-compiling)")
 endif()
 
 # Drivers. SKYLOC_WITH_<DRIVER> is ON (configure fails when the driver's library is
@@ -105,15 +124,24 @@ foreach(driver V4L2 GPIOD LIBCAMERA)
   endif()
 endforeach()
 
-if(SKYLOC_BUILD_TESTS)
-  # GoogleTest is always built from Debian's source package (/usr/src/googletest), so host,
-  # sanitizer and cross builds link a GoogleTest compiled with their own compiler and flags.
+# GoogleTest is always built from Debian's source package (/usr/src/googletest), so host,
+# sanitizer and cross builds link a GoogleTest compiled with their own compiler and flags.
+if(NOT SKYLOC_BUILD_TESTS STREQUAL "OFF" AND NOT EXISTS /usr/src/googletest/CMakeLists.txt)
+  if(SKYLOC_BUILD_TESTS STREQUAL "AUTO")
+    message(STATUS "skyloc: tests: LEFT OUT (SKYLOC_BUILD_TESTS=AUTO and /usr/src/googletest "
+                   "is missing: apt-get install googletest)")
+    set(SKYLOC_BUILD_TESTS OFF)
+  else()
+    message(FATAL_ERROR "skyloc: /usr/src/googletest is missing. Install it with: "
+                        "apt-get install googletest (or configure with -DSKYLOC_BUILD_TESTS=OFF)")
+  endif()
+endif()
+if(SKYLOC_BUILD_TESTS STREQUAL "OFF")
+  set(SKYLOC_BUILD_TESTS OFF)
+else()
+  set(SKYLOC_BUILD_TESTS ON)
   set(INSTALL_GTEST OFF CACHE BOOL "" FORCE)
   set(BUILD_GMOCK ON CACHE BOOL "" FORCE)
-  if(NOT EXISTS /usr/src/googletest/CMakeLists.txt)
-    message(FATAL_ERROR "skyloc: /usr/src/googletest is missing. Install it with: "
-                        "apt-get install googletest")
-  endif()
   add_subdirectory(/usr/src/googletest ${CMAKE_BINARY_DIR}/_deps/googletest EXCLUDE_FROM_ALL)
   foreach(t gtest gtest_main gmock gmock_main)
     if(TARGET ${t})

@@ -20,10 +20,12 @@ TEST(Config, ShippedFileStatesTheDefaults) {
   ASSERT_TRUE(c.ok()) << c.status().message();
   EXPECT_EQ(c->source, path);
   c->source.clear();
-  // The installed file names a real camera; the built-in defaults simulate one (the only
-  // difference, and teach/repeat warn about it).
+  // The installed file names the robot's camera and GPIO lines; the built-in defaults
+  // simulate both (the only differences, and teach/repeat warn about them).
   EXPECT_EQ(c->camera.kind, CameraKind::kV4l2);
+  EXPECT_EQ(c->status.kind, StatusOutputKind::kGpio);
   c->camera.kind = CameraKind::kSim;
+  c->status.kind = StatusOutputKind::kSim;
   EXPECT_TRUE(*c == DefaultConfig()) << "config/skyloc.toml no longer matches the defaults "
                                         "in config.h";
 }
