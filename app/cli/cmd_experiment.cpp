@@ -356,7 +356,7 @@ int RunHeading(const Options& o, const std::string& command) {
                    "\n```\n\nHeading error (absolute, median / 90th percentile, degrees; frames "
                    "with an estimate of the correctly matched ones):\n\n"
                    "| world | query frames | correctly matched | (b) cross-correlation | "
-                   "(a) 1D SURF + RANSAC | heading_deg: (b), (a) where (b) is uncertain | "
+                   "(a) 1D SURF + RANSAC | heading_deg (the firmware's answer) | "
                    "(b) uncertain: (a) run | (b) tilt <= 10° | (b) tilt > 10° |\n"
                    "|---|---|---|---|---|---|---|---|---|\n";
   std::string json =

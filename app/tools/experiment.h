@@ -192,7 +192,7 @@ struct HeadingRow {
   int query_frames = 0;
   MethodScore match;  // the route filter on the sky descriptor
   // (b) alone, (a) alone (run on every frame here), and the answer the firmware reports
-  // (heading_deg: (b), or (a) where (b) is uncertain; dsp/heading.h).
+  // (heading_deg, dsp/heading.h: (b)'s).
   dsp::HeadingErrorSummary correlation, surf, answer;
   int uncertain_frames = 0;  // where the firmware runs (a): its share of the heading's cost
   // The same frames split by the query's tilt (angle of body z from the zenith) at or

@@ -90,10 +90,6 @@ HeadingError HeadingEstimator::Estimate(std::span<const float> stored, std::span
     out->has_surf = true;
     out->surf_deg = WrapDegrees(-match.heading_offset_deg);
     out->surf_inliers = match.inliers;
-    if (out->uncertain) {
-      out->has_heading = true;
-      out->heading_deg = out->surf_deg;
-    }
   }
   return HeadingError::kOk;
 }

@@ -116,14 +116,14 @@ TEST(StripAlignmentTest, NoiseIsBartlettsStandardDeviation) {
     auto autocorrelation = [n](const std::vector<float>& x) {
       double mean = 0;
       for (float v : x)
-        mean += v;
+        mean += static_cast<double>(v);
       mean /= n;
       std::vector<double> rho(static_cast<std::size_t>(n));
       for (int k = 0; k < n; ++k) {
         double sum = 0;
         for (int j = 0; j < n; ++j)
-          sum += (x[static_cast<std::size_t>(j)] - mean) *
-                 (x[static_cast<std::size_t>((j + k) % n)] - mean);
+          sum += (static_cast<double>(x[static_cast<std::size_t>(j)]) - mean) *
+                 (static_cast<double>(x[static_cast<std::size_t>((j + k) % n)]) - mean);
         rho[static_cast<std::size_t>(k)] = sum;
       }
       const double zero = rho[0];

@@ -14,8 +14,10 @@
 //
 // (the sense of a pose's yaw; a robot that turned left by 25 degrees reads +25).
 //
-// The answer (HeadingEstimate::heading_deg) is (b)'s, unless (b) is uncertain and (a)
-// answers. (b) is uncertain when the best other local maximum of c (the competing turn)
+// The answer (HeadingEstimate::heading_deg) is (b)'s; (a), the second opinion, runs only
+// where (b) is uncertain. (Taking (a)'s heading there made the manoeuvre runs' 90th
+// percentile worse, 2.1 -> 2.7 degrees on the repetitive road: docs/RESULTS.md.) (b) is
+// uncertain when the best other local maximum of c (the competing turn)
 // comes within chance of its peak. The model: the query strip is the stored one turned,
 // times the peak correlation c*, plus a part unrelated to it, sqrt(1 - c*^2) of it; at
 // every shift that part adds to c a chance term of standard deviation sigma
@@ -56,7 +58,7 @@ struct HeadingOptions {
 };
 
 struct HeadingEstimate {
-  // The answer: (b)'s heading, or (a)'s where (b) is uncertain and (a) answered.
+  // The answer: (b)'s heading (has_heading = has_correlation).
   bool has_heading = false;
   double heading_deg = 0;
   bool uncertain = false;        // (b) did not stand out of chance (see above), or was flat
