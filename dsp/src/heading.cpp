@@ -33,8 +33,10 @@ bool CorrelationUncertain(const StripAlignment& alignment) {
   const double sigma = static_cast<double>(alignment.noise);
   const double peak = std::clamp(static_cast<double>(alignment.correlation), 0.0, 1.0);
   const double unrelated = std::sqrt(1.0 - peak * peak);  // the part the turn leaves out
-  return peak - static_cast<double>(alignment.second_peak) <
-         kUncertainSigmas * std::sqrt(2.0) * unrelated * sigma;
+  // A tie within float rounding of c (a periodic skyline turned exactly) is uncertain too.
+  constexpr double kRounding = 1e-6;
+  return peak - static_cast<double>(alignment.second_peak) <=
+         std::max(kUncertainSigmas * std::sqrt(2.0) * unrelated * sigma, kRounding);
 }
 
 HeadingError HeadingEstimator::Init(int columns, const HeadingOptions& options) {

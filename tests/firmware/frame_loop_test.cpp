@@ -224,8 +224,9 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
     // 1D SURF runs only where the correlation is uncertain (dsp/heading.h): on this
     // textured street, a few frames at most; where it answered, it is near the yaw too.
     EXPECT_LE(surf.size(), heading.size() / 2) << yaw;
-    if (!surf.empty())
+    if (!surf.empty()) {
       EXPECT_GE(within(surf, 3.0), 0.8) << yaw;
+    }
   }
 }
 
