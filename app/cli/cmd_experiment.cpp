@@ -314,10 +314,13 @@ int RunHeading(const Options& o, const std::string& command) {
     return kExitFailure;
   }
   // All worlds together: the done-when figure.
-  std::vector<double> pooled_correlation, pooled_surf;
-  int pooled_frames = 0;
+  std::vector<double> pooled_correlation, pooled_surf, pooled_answer;
+  int pooled_frames = 0, pooled_uncertain = 0;
   for (const tools::HeadingRow& r : rows) {
     pooled_frames += r.correlation.frames;
+    pooled_uncertain += r.uncertain_frames;
+    pooled_answer.insert(pooled_answer.end(), r.answer_errors_deg.begin(),
+                         r.answer_errors_deg.end());
     pooled_correlation.insert(pooled_correlation.end(), r.correlation_errors_deg.begin(),
                               r.correlation_errors_deg.end());
     pooled_surf.insert(pooled_surf.end(), r.surf_errors_deg.begin(), r.surf_errors_deg.end());
@@ -325,34 +328,42 @@ int RunHeading(const Options& o, const std::string& command) {
   const dsp::HeadingErrorSummary all_correlation =
       dsp::SummariseHeadingErrors(pooled_correlation, pooled_frames);
   const dsp::HeadingErrorSummary all_surf = dsp::SummariseHeadingErrors(pooled_surf, pooled_frames);
+  const dsp::HeadingErrorSummary all_answer =
+      dsp::SummariseHeadingErrors(pooled_answer, pooled_frames);
   std::string md = "# skyloc experiment heading\n\n```\n" + command +
                    "\n```\n\nHeading error (absolute, median / 90th percentile, degrees; frames "
                    "with an estimate of the correctly matched ones):\n\n"
                    "| world | query frames | correctly matched | (b) cross-correlation | "
-                   "(a) 1D SURF + RANSAC | (b) tilt <= 10° | (b) tilt > 10° |\n"
-                   "|---|---|---|---|---|---|---|\n";
+                   "(a) 1D SURF + RANSAC | heading_deg (the firmware's answer) | "
+                   "(b) uncertain: (a) run | (b) tilt <= 10° | (b) tilt > 10° |\n"
+                   "|---|---|---|---|---|---|---|---|---|\n";
   std::string json =
       tools::MetricsJsonHead("experiment") +
       "  \"experiment\": \"heading\",\n  \"command\": " + tools::JsonString(command) +
       ",\n  \"rows\": [\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const tools::HeadingRow& r = rows[i];
-    md += Format("| %s | %d | %d | %s | %s | %s | %s |\n", sim::WorldKindName(r.world),
-                 r.query_frames, r.match.summary.correct, HeadingCell(r.correlation).c_str(),
-                 HeadingCell(r.surf).c_str(), HeadingCell(r.correlation_level).c_str(),
-                 HeadingCell(r.correlation_tilted).c_str());
+    md +=
+        Format("| %s | %d | %d | %s | %s | %s | %d | %s | %s |\n", sim::WorldKindName(r.world),
+               r.query_frames, r.match.summary.correct, HeadingCell(r.correlation).c_str(),
+               HeadingCell(r.surf).c_str(), HeadingCell(r.answer).c_str(), r.uncertain_frames,
+               HeadingCell(r.correlation_level).c_str(), HeadingCell(r.correlation_tilted).c_str());
     json += Format("    {\"world\": \"%s\", \"query_frames\": %d, \"correct_matches\": %d, ",
                    sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct) +
             "\"correlation\": " + tools::HeadingSummaryJson(r.correlation) +
             ", \"surf\": " + tools::HeadingSummaryJson(r.surf) +
+            ", \"answer\": " + tools::HeadingSummaryJson(r.answer) +
+            Format(", \"uncertain_frames\": %d", r.uncertain_frames) +
             ", \"correlation_level\": " + tools::HeadingSummaryJson(r.correlation_level) +
             ", \"correlation_tilted\": " + tools::HeadingSummaryJson(r.correlation_tilted) + "}" +
             (i + 1 < rows.size() ? ",\n" : "\n");
   }
-  md += Format("| all | | | %s | %s | | |\n", HeadingCell(all_correlation).c_str(),
-               HeadingCell(all_surf).c_str());
+  md += Format("| all | | | %s | %s | %s | %d | | |\n", HeadingCell(all_correlation).c_str(),
+               HeadingCell(all_surf).c_str(), HeadingCell(all_answer).c_str(), pooled_uncertain);
   json += "  ],\n  \"all\": {\"correlation\": " + tools::HeadingSummaryJson(all_correlation) +
-          ", \"surf\": " + tools::HeadingSummaryJson(all_surf) + "}\n}\n";
+          ", \"surf\": " + tools::HeadingSummaryJson(all_surf) +
+          ", \"answer\": " + tools::HeadingSummaryJson(all_answer) +
+          Format(", \"uncertain_frames\": %d", pooled_uncertain) + "}\n}\n";
   const dsp::HorizonStripOptions& strip = o.experiment.config.heading.strip;
   md += Format(
       "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "

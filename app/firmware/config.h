@@ -225,7 +225,8 @@ struct HeadingConfig {
   // strip.n_azimuth: azimuth columns over 360 degrees, 0 (no heading, no strips) or
   // 148..4096 (1D SURF's widest filter needs more than 147). The route stores one byte per
   // column per frame. estimate.surf: the second estimate, 1D SURF + RANSAC on the same
-  // strips (heading_surf_deg); off saves its time (~0.3 ms per frame, docs/BENCHMARKS.md).
+  // strips (heading_surf_deg), run only where the cross-correlation is uncertain
+  // (dsp/heading.h); off never runs it.
   dsp::HorizonStripOptions strip;
   dsp::HeadingOptions estimate;
   bool enabled() const { return strip.n_azimuth > 0; }

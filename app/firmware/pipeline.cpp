@@ -342,8 +342,8 @@ void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
   dsp::HeadingEstimate estimate;
   if (heading_.Estimate(stored_strip_.span(), strip_.span(), &estimate) != dsp::HeadingError::kOk)
     return;  // strips of the configured length by construction (SetRoute)
-  result->has_heading = estimate.has_correlation;
-  result->heading_deg = static_cast<float>(estimate.correlation_deg);
+  result->has_heading = estimate.has_heading;
+  result->heading_deg = static_cast<float>(estimate.heading_deg);
   result->heading_confidence = estimate.confidence;
   result->has_heading_surf = estimate.has_surf;
   result->heading_surf_deg = static_cast<float>(estimate.surf_deg);

@@ -46,7 +46,8 @@ struct FrameResult {
   // horizon strips), dsp/heading.h's convention: the robot's yaw now minus its yaw when
   // the frame was taught, degrees in [-180, 180), counter-clockwise seen from above
   // positive. heading_deg is the strip cross-correlation's, heading_confidence its peak
-  // correlation (0..1); heading_surf_deg is 1D SURF + RANSAC's, with its inlier count.
+  // (0..1); heading_surf_deg is 1D SURF + RANSAC's, with its inlier count, on the frames
+  // where it ran: those whose correlation peak does not stand out of chance (dsp/heading.h).
   bool has_heading = false;
   float heading_deg = 0;
   float heading_confidence = 0;

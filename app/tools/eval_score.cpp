@@ -196,8 +196,12 @@ Result<HeadingErrors> EvaluateHeadings(const dsp::HeadingOptions& options, const
                                        std::span<const dsp::SeqSlamMatch> matches,
                                        const ScoredMatches& scored) {
   const auto n = static_cast<std::size_t>(reference.columns);
+  // (a) on every frame: eval reports each way alone (the firmware runs (a) only where (b)
+  // is uncertain; dsp/heading.h).
+  dsp::HeadingOptions every_frame = options;
+  every_frame.surf_every_frame = true;
   dsp::HeadingEstimator estimator;
-  if (const dsp::HeadingError e = estimator.Init(reference.columns, options);
+  if (const dsp::HeadingError e = estimator.Init(reference.columns, every_frame);
       e != dsp::HeadingError::kOk)
     return DspStatus(e, "[heading]");
   std::vector<float> stored(n), test(n);

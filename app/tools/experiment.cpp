@@ -416,8 +416,12 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   options.cap = false;
   const int columns = options.config.heading.strip.n_azimuth;
   const auto n = static_cast<std::size_t>(columns);
-  dsp::HeadingEstimator estimator;  // the firmware's defaults ([heading])
-  if (const dsp::HeadingError e = estimator.Init(columns, {}); e != dsp::HeadingError::kOk)
+  // The firmware's defaults ([heading]), with (a) on every frame so it is measured alone
+  // too; the answer is the firmware's either way.
+  dsp::HeadingOptions heading;
+  heading.surf_every_frame = true;
+  dsp::HeadingEstimator estimator;
+  if (const dsp::HeadingError e = estimator.Init(columns, heading); e != dsp::HeadingError::kOk)
     return drivers::DspStatus(e, "heading");
   std::vector<float> stored(n), test(n);
   rows->clear();
@@ -429,7 +433,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
     row.query_frames = static_cast<int>(query.trajectory.size());
     SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
                          &row.match));
-    std::vector<double> correlation, surf, level, tilted;  // signed errors, degrees
+    std::vector<double> correlation, surf, answer, level, tilted;  // signed errors, degrees
     int frames = 0, level_frames = 0;
     for (std::size_t q = 0; q < query.trajectory.size(); ++q) {
       if (!row.match.correct[q])
@@ -456,9 +460,14 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
       }
       if (estimate.has_surf)
         surf.push_back(dsp::WrapDegrees(estimate.surf_deg - truth));
+      if (estimate.has_heading)
+        answer.push_back(dsp::WrapDegrees(estimate.heading_deg - truth));
+      row.uncertain_frames += estimate.uncertain ? 1 : 0;
     }
     row.correlation_errors_deg = correlation;
     row.surf_errors_deg = surf;
+    row.answer_errors_deg = answer;
+    row.answer = dsp::SummariseHeadingErrors(answer, frames);
     row.correlation = dsp::SummariseHeadingErrors(correlation, frames);
     row.surf = dsp::SummariseHeadingErrors(surf, frames);
     row.correlation_level = dsp::SummariseHeadingErrors(level, level_frames);

@@ -187,12 +187,15 @@ struct HeadingRow {
   sim::WorldKind world = sim::WorldKind::kForest;
   int query_frames = 0;
   MethodScore match;  // the route filter on the sky descriptor
-  dsp::HeadingErrorSummary correlation, surf;
+  // (b) alone, (a) alone (run on every frame here), and the answer the firmware reports
+  // (heading_deg, dsp/heading.h: (b)'s).
+  dsp::HeadingErrorSummary correlation, surf, answer;
+  int uncertain_frames = 0;  // where the firmware runs (a): its share of the heading's cost
   // The same frames split by the query's tilt (angle of body z from the zenith) at or
   // below / above 10 degrees, correlation only: what the bumps do to the strip.
   dsp::HeadingErrorSummary correlation_level, correlation_tilted;
   // Signed errors (estimate - truth, degrees) of the estimated frames, for pooling worlds.
-  std::vector<double> correlation_errors_deg, surf_errors_deg;
+  std::vector<double> correlation_errors_deg, surf_errors_deg, answer_errors_deg;
 };
 
 Status RunHeadingExperiment(const ExperimentOptions& options, std::vector<HeadingRow>* rows,

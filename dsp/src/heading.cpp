@@ -29,6 +29,16 @@ double WrapDegrees(double degrees) {
   return d - 180.0;
 }
 
+bool CorrelationUncertain(const StripAlignment& alignment) {
+  const double sigma = static_cast<double>(alignment.noise);
+  const double peak = std::clamp(static_cast<double>(alignment.correlation), 0.0, 1.0);
+  const double unrelated = std::sqrt(1.0 - peak * peak);  // the part the turn leaves out
+  // A tie within float rounding of c (a periodic skyline turned exactly) is uncertain too.
+  constexpr double kRounding = 1e-6;
+  return peak - static_cast<double>(alignment.second_peak) <=
+         std::max(kUncertainSigmas * std::sqrt(2.0) * unrelated * sigma, kRounding);
+}
+
 HeadingError HeadingEstimator::Init(int columns, const HeadingOptions& options) {
   columns_ = 0;
   if (columns < 3 || options.max_features < 1 || options.max_features > 4096 ||
@@ -41,6 +51,7 @@ HeadingError HeadingEstimator::Init(int columns, const HeadingOptions& options) 
     stored_features_.assign(static_cast<std::size_t>(options.max_features), {});
     test_features_.assign(static_cast<std::size_t>(options.max_features), {});
   }
+  correlation_.assign(static_cast<std::size_t>(columns), 0.0);
   options_ = options;
   columns_ = columns;
   return HeadingError::kOk;
@@ -54,14 +65,20 @@ HeadingError HeadingEstimator::Estimate(std::span<const float> stored, std::span
     return HeadingError::kSizeMismatch;
   // Both ways measure the query content's turn; the robot turned the other way.
   StripAlignment alignment;
-  if (AlignStrips(stored, test, &alignment) == StripAlignmentError::kOk) {
+  out->uncertain = true;  // a flat strip: nothing to stand out
+  if (AlignStrips(stored, test, &alignment, 5, correlation_) == StripAlignmentError::kOk) {
     out->has_correlation = true;
     out->correlation_deg = WrapDegrees(-alignment.heading_offset_deg);
     out->confidence = std::clamp(alignment.correlation, 0.0f, 1.0f);
     out->runner_up = alignment.runner_up;
+    out->noise = alignment.noise;
+    out->uncertain = CorrelationUncertain(alignment);
+    out->has_heading = true;
+    out->heading_deg = out->correlation_deg;
   }
-  if (!options_.surf)
+  if (!options_.surf || !(out->uncertain || options_.surf_every_frame))
     return HeadingError::kOk;
+  out->surf_ran = true;
   int stored_count = 0, test_count = 0;
   LandmarkMatch match;
   if (surf_.Detect(stored, stored_features_, &stored_count) == Surf1dError::kOk &&

@@ -87,20 +87,20 @@ ShError ShProjector::Init(const ShGrid& grid, int bands) {
   const int longitudes = grid.longitudes();
   const auto ring_count = static_cast<std::size_t>(rings);
 
-  // Legendre values of every ring in double, then stored per m as rings × padded(L - m)
-  // floats with √2 folded in for m > 0.
+  // Legendre values of every ring in double, then laid out per m as rings × padded(L - m)
+  // floats with √2 folded in for m > 0 (the staging table below).
   std::vector<double> legendre(ring_count * LegendreTriangleSize(bands));
   for (std::size_t i = 0; i < ring_count; ++i) {
     const ShRing& r = grid.rings()[i];
     NormalisedLegendre(bands, r.cos_theta, r.sin_theta,
                        std::span(legendre).subspan(i * LegendreTriangleSize(bands)));
   }
-  std::size_t table_size = 0;
+  std::size_t staging_size = 0;
   for (int m = 0; m < bands; ++m)
-    table_size += ring_count * PaddedLength(bands - m);
-  table_.assign(table_size, 0.0f);
+    staging_size += ring_count * PaddedLength(bands - m);
+  std::vector<float> staging(staging_size, 0.0f);
   blocks_.clear();
-  std::size_t m_offset = 0;
+  std::size_t m_offset = 0, table_size = 0;
   for (int m = 0; m < bands; ++m) {
     const std::size_t stride = PaddedLength(bands - m);
     const double scale = m == 0 ? 1.0 : kSqrt2;
@@ -109,7 +109,7 @@ ShError ShProjector::Init(const ShGrid& grid, int bands) {
         // Negligible values become exact zeros: besides not mattering, tiny ones would be
         // float denormals, which cost x86 ~100 cycles per multiply.
         const double v = scale * legendre[i * LegendreTriangleSize(bands) + LegendreIndex(l, m)];
-        table_[m_offset + i * stride + static_cast<std::size_t>(l - m)] =
+        staging[m_offset + i * stride + static_cast<std::size_t>(l - m)] =
             std::fabs(v) < static_cast<double>(kNegligible) ? 0.0f : static_cast<float>(v);
       }
     }
@@ -118,10 +118,9 @@ ShError ShProjector::Init(const ShGrid& grid, int bands) {
       b.m = m;
       b.l_begin = l_begin;
       b.width = bands - l_begin > 8 ? 16 : 8;
-      b.stride = stride;
       const std::size_t column = static_cast<std::size_t>(l_begin - m);
       auto significant = [&](std::size_t i) {
-        const float* row = &table_[m_offset + i * stride + column];
+        const float* row = &staging[m_offset + i * stride + column];
         for (int k = 0; k < b.width; ++k) {
           if (std::fabs(row[k]) >= kNegligible)
             return true;
@@ -136,11 +135,32 @@ ShError ShProjector::Init(const ShGrid& grid, int bands) {
         --end;
       b.first_ring = static_cast<int>(first);
       b.end_ring = static_cast<int>(end);
-      b.table_offset = m_offset + first * stride + column;
+      b.table_offset = m_offset + first * stride + column;  // in staging, until below
+      b.stride = stride;
       blocks_.push_back(b);
+      table_size += (end - first) * static_cast<std::size_t>(b.width);
       l_begin += b.width;
     }
     m_offset += ring_count * stride;
+  }
+  // The projection reads the whole table once a frame, block after block: each block's rows
+  // (its significant rings × its width) stored one after the other, in the order Project
+  // visits the blocks, make that one sequential stream with nothing skipped (the rings of
+  // negligible values are left out), the cheapest read a cache and its prefetcher can
+  // serve. The same values multiply the same sums in the same order: the same coefficients
+  // to the bit.
+  table_.assign(table_size, 0.0f);
+  std::size_t next = 0;
+  for (MBlock& b : blocks_) {
+    const auto width = static_cast<std::size_t>(b.width);
+    for (int i = b.first_ring; i < b.end_ring; ++i) {
+      const float* row =
+          &staging[b.table_offset + static_cast<std::size_t>(i - b.first_ring) * b.stride];
+      std::copy(row, row + width, table_.begin() + static_cast<std::ptrdiff_t>(next));
+      next += width;
+    }
+    b.table_offset = next - static_cast<std::size_t>(b.end_ring - b.first_ring) * width;
+    b.stride = width;
   }
 
   // Which FFT bin holds Σ_j f·e^{-imφ_j}: m mod longitudes, folded into the half spectrum by
@@ -187,10 +207,10 @@ ShError ShProjector::Project(std::span<const float> samples, std::span<float> co
     const float* wc = &cos_sums_[bin_offset + static_cast<std::size_t>(b.first_ring)];
     const float* ws = &sin_sums_[bin_offset + static_cast<std::size_t>(b.first_ring)];
     if (b.width == 16)
-      AccumulateBlock<16>(&table_[b.table_offset], b.stride, ring_span, wc, ws, block_cos,
+      AccumulateBlock<16>(table_.data() + b.table_offset, b.stride, ring_span, wc, ws, block_cos,
                           block_sin);
     else
-      AccumulateBlock<8>(&table_[b.table_offset], b.stride, ring_span, wc, ws, block_cos,
+      AccumulateBlock<8>(table_.data() + b.table_offset, b.stride, ring_span, wc, ws, block_cos,
                          block_sin);
     const int l_end = std::min(b.l_begin + b.width, bands_);
     const float sin_sign = bin_sign_[m];

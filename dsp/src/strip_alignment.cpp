@@ -43,7 +43,8 @@ double Dot(std::span<const float> a, std::span<const float> b) {
 }  // namespace
 
 StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const float> test,
-                                StripAlignment* result, int min_peak_separation) {
+                                StripAlignment* result, int min_peak_separation,
+                                std::span<double> scratch) {
   const std::size_t n = stored.size();
   if (n < 3 || test.size() != n)
     return StripAlignmentError::kSizeMismatch;
@@ -66,11 +67,9 @@ StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const f
     return StripAlignmentError::kFlat;
   const double norm = 1.0 / std::sqrt(var_a * var_b);
 
-  // c(s) for s = 0..n-1, kept only as the three values the parabola needs and the peak;
-  // a second pass finds the runner-up (no buffer: allocation-free for any n). With the
-  // means taken out afterwards, sum_j (a_j - ma)(b_(j+s) - mb) = sum_j a_j b_(j+s) - n ma mb,
-  // each c(s) is a plain dot product in two pieces, with no modulo in the inner loop: this
-  // runs on every matched frame.
+  // With the means taken out afterwards, sum_j (a_j - ma)(b_(j+s) - mb) = sum_j a_j b_(j+s) -
+  // n ma mb, so each c(s) is a plain dot product in two pieces, with no modulo in the inner
+  // loop: this runs on every matched frame.
   const double mean_product = static_cast<double>(n) * mean_a * mean_b;
   auto correlation = [&](std::size_t s) {
     const std::size_t wrap = n - s;
@@ -78,26 +77,40 @@ StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const f
             mean_product) *
            norm;
   };
+  // With n values of scratch, every c(s) is computed once and the runner-up read back;
+  // without, a second pass recomputes them (allocation-free for any n). Same values either
+  // way: c(s) is the same arithmetic each time.
+  const bool keep = scratch.size() >= n;
   std::size_t best = 0;
-  double best_c = -2;
+  double best_c = -2, sum_squares = 0;
   for (std::size_t s = 0; s < n; ++s) {
     const double c = correlation(s);
+    if (keep)
+      scratch[s] = c;
+    sum_squares += c * c;
     if (c > best_c) {
       best_c = c;
       best = s;
     }
   }
+  auto at = [&](std::size_t s) { return keep ? scratch[s] : correlation(s); };
   const std::size_t separation =
       static_cast<std::size_t>(min_peak_separation < 1 ? 1 : min_peak_separation);
-  double runner_up = -1;
+  // The runner-up is any c away from the peak (on a wide peak, its own flank); the second
+  // peak is the best other local maximum, the competing turn. Neighbours are looked at only
+  // for a value that would raise it, so the pass without scratch stays near one pass.
+  double runner_up = -1, second_peak = -1;
   for (std::size_t s = 0; s < n; ++s) {
     const std::size_t d = s > best ? s - best : best - s;
     if (std::min(d, n - d) <= separation)
       continue;
-    runner_up = std::max(runner_up, correlation(s));
+    const double c = at(s);
+    runner_up = std::max(runner_up, c);
+    if (c > second_peak && c >= at((s + n - 1) % n) && c >= at((s + 1) % n))
+      second_peak = c;
   }
-  const double left = correlation((best + n - 1) % n);
-  const double right = correlation((best + 1) % n);
+  const double left = at((best + n - 1) % n);
+  const double right = at((best + 1) % n);
   const double curvature = left - 2 * best_c + right;
   double offset = 0;
   if (curvature < 0)
@@ -114,6 +127,8 @@ StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const f
   result->heading_offset_deg = degrees;
   result->correlation = static_cast<float>(best_c);
   result->runner_up = static_cast<float>(runner_up);
+  result->second_peak = static_cast<float>(second_peak);
+  result->noise = static_cast<float>(std::sqrt(sum_squares / static_cast<double>(n)));
   return StripAlignmentError::kOk;
 }
 

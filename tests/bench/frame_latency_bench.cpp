@@ -26,21 +26,38 @@ using namespace skyloc::firmware;
 
 constexpr int kWidth = 640, kHeight = 480, kFrames = 32, kRouteFrames = 10000;
 
+// What a fixture's pipeline runs, beside the default configuration.
+enum class Variant {
+  kDefault,
+  kAttitude,       // [attitude] on: the gravity cap
+  kMinimalGrid64,  // 64 bands on the minimal 32 x 128 grid, the default before 2026-11-26
+  kBands120,       // 120 bands on their oversampled grid (90 x 512), the paper's band count
+  kNoHeading,      // [heading] off: no strips, no heading
+  kBands120NoHeading,
+};
+
 struct Fixture {
   MonotonicClock clock;
   Pipeline pipeline{clock};
   std::vector<std::vector<std::uint8_t>> images;
   bool ok = false;
 
-  Fixture(bool attitude, bool minimal_grid_64) {
+  explicit Fixture(Variant variant) {
     Config config = DefaultConfig();
     config.capacities.route_frames = kRouteFrames;
-    if (minimal_grid_64) {  // the default before 2026-11-26 (docs/SKY_DESCRIPTOR.md, "Grid")
+    if (variant == Variant::kMinimalGrid64) {  // docs/SKY_DESCRIPTOR.md, "Grid"
       config.descriptor.bands = 64;
       config.descriptor.grid = GridPreset::kAuto;
       ResolveDescriptorGrid(&config.descriptor);
     }
-    if (attitude)
+    if (variant == Variant::kBands120 || variant == Variant::kBands120NoHeading) {
+      config.descriptor.bands = 120;
+      ResolveDescriptorGrid(&config.descriptor);
+    }
+    const bool heading = variant != Variant::kNoHeading && variant != Variant::kBands120NoHeading;
+    if (!heading)
+      config.heading.strip.n_azimuth = 0;
+    if (variant == Variant::kAttitude)
       config.attitude.kind = AttitudeKind::kSim;  // the pipeline's gravity cap
     if (!pipeline.Init(config).ok())
       return;
@@ -81,18 +98,46 @@ struct Fixture {
       if (!route.Append({}, d, strips[static_cast<std::size_t>(i % kFrames)]))
         return;
     }
-    ok = pipeline.SetRoute(route).ok() && pipeline.heading_enabled();
+    ok = pipeline.SetRoute(route).ok() && pipeline.heading_enabled() == heading;
   }
 };
+
+// Each fixture is built on first use only (a 10,000-frame route each).
+Fixture& FixtureFor(Variant variant) {
+  switch (variant) {
+    case Variant::kAttitude: {
+      static Fixture f(variant);
+      return f;
+    }
+    case Variant::kMinimalGrid64: {
+      static Fixture f(variant);
+      return f;
+    }
+    case Variant::kBands120: {
+      static Fixture f(variant);
+      return f;
+    }
+    case Variant::kNoHeading: {
+      static Fixture f(variant);
+      return f;
+    }
+    case Variant::kBands120NoHeading: {
+      static Fixture f(variant);
+      return f;
+    }
+    case Variant::kDefault:
+      break;
+  }
+  static Fixture f(Variant::kDefault);
+  return f;
+}
 
 // attitude: [attitude] on, each frame's attitude from a 200 Hz IMU (the simulated twin of
 // the IIO driver) through the attitude filter, 7 samples a frame at 30 fps, then the
 // descriptor with the gravity cap.
-void FrameToState(benchmark::State& state, bool attitude, bool minimal_grid_64 = false) {
-  static Fixture plain(false, false);
-  static Fixture capped(true, false);
-  static Fixture plain_64(false, true);
-  Fixture& fixture = minimal_grid_64 ? plain_64 : attitude ? capped : plain;
+void FrameToState(benchmark::State& state, Variant variant) {
+  Fixture& fixture = FixtureFor(variant);
+  const bool attitude = variant == Variant::kAttitude;
   if (!fixture.ok) {
     state.SkipWithError("fixture failed");
     return;
@@ -148,20 +193,38 @@ void FrameToState(benchmark::State& state, bool attitude, bool minimal_grid_64 =
       i > 0 ? static_cast<double>(with_heading) / static_cast<double>(i) : 0.0;
 }
 void BM_FrameToState(benchmark::State& state) {
-  FrameToState(state, false);
+  FrameToState(state, Variant::kDefault);
 }
 BENCHMARK(BM_FrameToState)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 void BM_FrameToStateWithAttitude(benchmark::State& state) {
-  FrameToState(state, true);
+  FrameToState(state, Variant::kAttitude);
 }
 BENCHMARK(BM_FrameToStateWithAttitude)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 // The default descriptor before 2026-11-26: 64 bands on the minimal 32 x 128 grid.
 void BM_FrameToStateMinimalGrid64(benchmark::State& state) {
-  FrameToState(state, false, true);
+  FrameToState(state, Variant::kMinimalGrid64);
 }
 BENCHMARK(BM_FrameToStateMinimalGrid64)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+// 120 bands on their oversampled grid (docs/SKY_DESCRIPTOR.md, "Grid"), heading on: the
+// frame a robot that wants the paper's band count pays; compare with BM_FrameToState.
+void BM_FrameToState120(benchmark::State& state) {
+  FrameToState(state, Variant::kBands120);
+}
+BENCHMARK(BM_FrameToState120)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+// [heading] off: the difference to the rows above is the heading's share of the frame.
+void BM_FrameToStateNoHeading(benchmark::State& state) {
+  FrameToState(state, Variant::kNoHeading);
+}
+BENCHMARK(BM_FrameToStateNoHeading)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+void BM_FrameToState120NoHeading(benchmark::State& state) {
+  FrameToState(state, Variant::kBands120NoHeading);
+}
+BENCHMARK(BM_FrameToState120NoHeading)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 // Reference: reading every byte of one frame.
 void BM_ReadFrame(benchmark::State& state) {

@@ -5,7 +5,10 @@
 // stage for R and 2R repetitions and takes the difference: the instructions of R repetitions
 // with the set-up subtracted. Not a benchmark: it measures no time.
 //
-//   stage_cost STAGE REPETITIONS [ROUTE_FRAMES [float32|bfloat16 [IMAGE_DIR]]]
+//   stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [float32|bfloat16 [IMAGE_DIR]]]
+//
+// @BANDS sets [descriptor] bands on the default (oversampled) grid, e.g. frame@120: the
+// descriptor the robot would run with more bands, measured the same way.
 //
 // Stages (the default configuration, config/skyloc.toml, one 640x480 grey frame):
 //   segmentation  the Otsu threshold of the frame (histogram over the lens's visible pixels)
@@ -15,6 +18,7 @@
 //   correlation   the same with surf = false (the cross-correlation only)
 //   filter        one dsp::RouteFilter step against ROUTE_FRAMES rows (the default matcher)
 //   frame         firmware::Pipeline::Localise: descriptor + strip + filter + state + heading
+//   frame_noheading  the same with [heading] off (no strips in the route, no heading)
 //   render        renders the street frames into IMAGE_DIR for the stages above (set-up only)
 // It prints what it ran and a checksum of the results (so no stage can be optimised away).
 #include <chrono>
@@ -132,8 +136,19 @@ std::size_t ScanBytes(int route_frames, int dim, bool bfloat16) {
 int main(int argc, char** argv) {
   if (argc < 3)
     return Fail(
-        "usage: stage_cost STAGE REPETITIONS [ROUTE_FRAMES [float32|bfloat16 [IMAGE_DIR]]]");
-  const std::string stage = argv[1];
+        "usage: stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [float32|bfloat16 "
+        "[IMAGE_DIR]]]");
+  std::string stage = argv[1];
+  int bands = 0;  // 0: the default configuration's
+  if (const std::size_t at = stage.find('@'); at != std::string::npos) {
+    bands = static_cast<int>(std::strtol(stage.c_str() + at + 1, nullptr, 10));
+    stage.resize(at);
+    if (bands < 1)
+      return Fail("STAGE@BANDS: BANDS >= 1");
+  }
+  const bool with_heading = stage != "frame_noheading";
+  if (!with_heading)
+    stage = "frame";
   const long repetitions = std::strtol(argv[2], nullptr, 10);
   const int route_frames = argc > 3 ? static_cast<int>(std::strtol(argv[3], nullptr, 10)) : 10000;
   const bool bfloat16 = argc > 4 && std::strcmp(argv[4], "bfloat16") == 0;
@@ -145,6 +160,12 @@ int main(int argc, char** argv) {
   config.capacities.route_frames = route_frames;
   config.capacities.route_storage =
       bfloat16 ? dsp::ReferenceStorage::kBFloat16 : dsp::ReferenceStorage::kFloat32;
+  if (bands > 0) {
+    config.descriptor.bands = bands;
+    ResolveDescriptorGrid(&config.descriptor);  // the grid for these bands
+  }
+  if (!with_heading)
+    config.heading.strip.n_azimuth = 0;
   const bool heading_stage = stage == "heading" || stage == "correlation" || stage == "strip";
   if (stage == "descriptor" || stage == "segmentation")
     config.heading.strip.n_azimuth = 0;  // Describe() without the strip
@@ -252,7 +273,7 @@ int main(int argc, char** argv) {
       if (!route.Append({}, d, strips[static_cast<std::size_t>(i % kImages)]))
         return Fail("route Append");
     }
-    if (!pipeline.SetRoute(route).ok() || !pipeline.heading_enabled())
+    if (!pipeline.SetRoute(route).ok() || pipeline.heading_enabled() != with_heading)
       return Fail("SetRoute");
     std::uint64_t with_heading = 0;
     for (long r = 0; r < repetitions; ++r) {

@@ -43,8 +43,10 @@ std::vector<float> Shifted(const std::vector<float>& s, int k) {
 
 TEST(Heading, ACircularShiftIsTheHeadingWithinOneSample) {
   constexpr int kN = 360;
+  HeadingOptions both;
+  both.surf_every_frame = true;  // (a) too, though (b) is certain on a pure shift
   HeadingEstimator estimator;
-  ASSERT_EQ(estimator.Init(kN, HeadingOptions{}), HeadingError::kOk);
+  ASSERT_EQ(estimator.Init(kN, both), HeadingError::kOk);
   const std::vector<float> stored = Skyline(kN, 3);
   // Content turned by +k columns (1 degree each): the robot turned by -k degrees,
   // wrapped into [-180, 180): k = 300 -> +60, k = 180 -> -180.
@@ -65,7 +67,7 @@ TEST(Heading, ACircularShiftIsTheHeadingWithinOneSample) {
   }
   // Fewer columns: one sample is 2 degrees.
   HeadingEstimator coarse;
-  ASSERT_EQ(coarse.Init(180, HeadingOptions{}), HeadingError::kOk);
+  ASSERT_EQ(coarse.Init(180, both), HeadingError::kOk);
   const std::vector<float> s180 = Skyline(180, 5);
   HeadingEstimate e;
   ASSERT_EQ(coarse.Estimate(s180, Shifted(s180, 20), &e), HeadingError::kOk);
@@ -90,6 +92,7 @@ TEST(Heading, ErrorsAndNoAllocation) {
   const std::vector<float> stored = Skyline(360, 9), test = Shifted(stored, 45);
   // A RANSAC line with fewer inliers than asked for gives no (a) heading; (b) still answers.
   HeadingOptions strict;
+  strict.surf_every_frame = true;
   strict.min_surf_inliers = 4000;
   HeadingEstimator gated;
   ASSERT_EQ(gated.Init(360, strict), HeadingError::kOk);
@@ -98,10 +101,54 @@ TEST(Heading, ErrorsAndNoAllocation) {
   EXPECT_FALSE(e.has_surf);
   strict.min_surf_inliers = 1;
   EXPECT_EQ(gated.Init(360, strict), HeadingError::kBadOptions);
+  HeadingOptions every_frame;
+  every_frame.surf_every_frame = true;  // (a) too: its path must allocate nothing either
+  HeadingEstimator both;
+  ASSERT_EQ(both.Init(360, every_frame), HeadingError::kOk);
   AllocationScope scope;
-  for (int i = 0; i < 10; ++i)
+  for (int i = 0; i < 10; ++i) {
     (void)estimator.Estimate(stored, test, &e);
+    (void)both.Estimate(stored, test, &e);
+  }
   EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_TRUE(e.surf_ran);
+}
+
+// (a) runs only where (b) is uncertain; the answer stays (b)'s. A pure shift of
+// a textured skyline stands far out of chance: (b) answers alone. Four identical buildings
+// (a period of 90 columns) give four equal peaks: uncertain, so (a) runs.
+TEST(Heading, SurfRunsOnlyWhereTheCorrelationIsUncertain) {
+  constexpr int kN = 360;
+  HeadingEstimator estimator;
+  ASSERT_EQ(estimator.Init(kN, HeadingOptions{}), HeadingError::kOk);
+  const std::vector<float> stored = Skyline(kN, 3);
+  HeadingEstimate e;
+  ASSERT_EQ(estimator.Estimate(stored, Shifted(stored, 37), &e), HeadingError::kOk);
+  EXPECT_FALSE(e.uncertain);
+  EXPECT_FALSE(e.surf_ran);
+  EXPECT_FALSE(e.has_surf);
+  ASSERT_TRUE(e.has_heading);
+  EXPECT_EQ(e.heading_deg, e.correlation_deg);
+  EXPECT_LE(std::fabs(WrapDegrees(e.heading_deg - (-37.0))), 1.0);
+
+  std::vector<float> periodic(kN);
+  const std::vector<float> building = Skyline(90, 11);
+  for (int j = 0; j < kN; ++j)
+    periodic[static_cast<std::size_t>(j)] = building[static_cast<std::size_t>(j % 90)];
+  ASSERT_EQ(estimator.Estimate(periodic, Shifted(periodic, 20), &e), HeadingError::kOk);
+  EXPECT_TRUE(e.uncertain);
+  EXPECT_TRUE(e.surf_ran);
+  ASSERT_TRUE(e.has_heading);
+  EXPECT_EQ(e.heading_deg, e.correlation_deg);  // (a) is the second opinion only
+
+  // surf = false: never (a), whatever (b) says.
+  HeadingOptions no_surf;
+  no_surf.surf = false;
+  ASSERT_EQ(estimator.Init(kN, no_surf), HeadingError::kOk);
+  ASSERT_EQ(estimator.Estimate(periodic, Shifted(periodic, 20), &e), HeadingError::kOk);
+  EXPECT_TRUE(e.uncertain);
+  EXPECT_FALSE(e.surf_ran);
+  EXPECT_EQ(e.heading_deg, e.correlation_deg);
 }
 
 TEST(Heading, WrapDegrees) {

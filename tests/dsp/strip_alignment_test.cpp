@@ -105,6 +105,62 @@ TEST(StripAlignmentTest, RefusesFlatAndMismatchedStrips) {
             std::string::npos);
 }
 
+// noise is chance's standard deviation of c: Bartlett's variance of the cross-correlation
+// of two unrelated series, (1/n) sum_k rho_a(k) rho_b(k), computed here from the strips'
+// own circular autocorrelations (not from c).
+TEST(StripAlignmentTest, NoiseIsBartlettsStandardDeviation) {
+  const int n = 360;
+  for (const unsigned seed : {1u, 4u}) {
+    const std::vector<float> a = Harmonics(n, 0.0, seed, 6.0);
+    const std::vector<float> b = Harmonics(n, 40.0, seed + 1, 3.0);
+    auto autocorrelation = [n](const std::vector<float>& x) {
+      double mean = 0;
+      for (float v : x)
+        mean += static_cast<double>(v);
+      mean /= n;
+      std::vector<double> rho(static_cast<std::size_t>(n));
+      for (int k = 0; k < n; ++k) {
+        double sum = 0;
+        for (int j = 0; j < n; ++j)
+          sum += (static_cast<double>(x[static_cast<std::size_t>(j)]) - mean) *
+                 (static_cast<double>(x[static_cast<std::size_t>((j + k) % n)]) - mean);
+        rho[static_cast<std::size_t>(k)] = sum;
+      }
+      const double zero = rho[0];
+      for (double& r : rho)
+        r /= zero;
+      return rho;
+    };
+    const std::vector<double> rho_a = autocorrelation(a), rho_b = autocorrelation(b);
+    double variance = 0;
+    for (int k = 0; k < n; ++k)
+      variance += rho_a[static_cast<std::size_t>(k)] * rho_b[static_cast<std::size_t>(k)];
+    variance /= n;
+    StripAlignment r;
+    ASSERT_EQ(AlignStrips(a, b, &r), StripAlignmentError::kOk);
+    EXPECT_NEAR(r.noise, std::sqrt(variance), 1e-4 * std::sqrt(variance)) << seed;
+  }
+}
+
+// Scratch only saves the second pass: the same result to the bit.
+TEST(StripAlignmentTest, ScratchGivesTheSameResult) {
+  const int n = 360;
+  std::vector<double> scratch(n);
+  for (const unsigned seed : {2u, 5u, 8u}) {
+    const std::vector<float> a = Harmonics(n, 0.0, seed, 5.0);
+    const std::vector<float> b = Harmonics(n, 33.3, seed, 5.0);
+    StripAlignment plain, kept;
+    ASSERT_EQ(AlignStrips(a, b, &plain), StripAlignmentError::kOk);
+    ASSERT_EQ(AlignStrips(a, b, &kept, 5, scratch), StripAlignmentError::kOk);
+    EXPECT_EQ(plain.shift_columns, kept.shift_columns);
+    EXPECT_EQ(plain.correlation, kept.correlation);
+    EXPECT_EQ(plain.runner_up, kept.runner_up);
+    EXPECT_EQ(plain.second_peak, kept.second_peak);
+    EXPECT_EQ(plain.noise, kept.noise);
+    EXPECT_LE(plain.second_peak, plain.runner_up);
+  }
+}
+
 TEST(StripAlignmentTest, AllocatesNothing) {
   const std::vector<float> a = Harmonics(360, 0.0, 9);
   const std::vector<float> b = Harmonics(360, 20.0, 9);

@@ -175,8 +175,8 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
 
 // The repeat drives the taught street turned by a known yaw: the JSON lines carry
 // heading_deg near that yaw (the robot's yaw now minus when taught, counter-clockwise
-// positive), from both estimators. The reference is the camera's own rotation, not the
-// strip code.
+// positive), and 1D SURF's where it ran. The reference is the camera's own rotation, not
+// the strip code.
 TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
   ClearSignalFlags();
   Pipeline pipeline(kMonotonic);
@@ -221,8 +221,12 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
       return static_cast<double>(n) / static_cast<double>(v.size());
     };
     EXPECT_GE(within(heading, 3.0), 0.9) << yaw;
-    ASSERT_GE(surf.size(), 100u) << yaw;
-    EXPECT_GE(within(surf, 3.0), 0.8) << yaw;
+    // 1D SURF runs only where the correlation is uncertain (dsp/heading.h): on this
+    // textured street, a few frames at most; where it answered, it is near the yaw too.
+    EXPECT_LE(surf.size(), heading.size() / 2) << yaw;
+    if (!surf.empty()) {
+      EXPECT_GE(within(surf, 3.0), 0.8) << yaw;
+    }
   }
 }
 

@@ -41,9 +41,9 @@ bool RealSphericalHarmonics(int bands, double cos_theta, double sin_theta, doubl
 // The fast projection c_lm = Σ_samples w·f·y_lm: a real FFT of every ring (RingFft, eight
 // rings per SIMD pass) gives w_i·Σ_j f_ij·cos(mφ_j) and w_i·Σ_j f_ij·sin(mφ_j); for each m a
 // small product of a precomputed float table √2·P̄_lm(cos θ_i) (rings × l, zero-padded;
-// rings whose values are all below 1e-9 skipped) with those ring sums gives all l at once,
-// accumulated in registers. Cost O(rings·longitudes·log longitudes + rings·L²), against the
-// naive O(samples·L²). On grids with fewer than 2L-1 longitudes the m > longitudes/2 terms
+// rings whose values are all below 1e-9 neither stored nor read) with those ring sums gives all l
+// at once, accumulated in registers. Cost O(rings·longitudes·log longitudes + rings·L²), against
+// the naive O(samples·L²). On grids with fewer than 2L-1 longitudes the m > longitudes/2 terms
 // alias exactly as the naive sum does (FFT bin m mod longitudes, conjugated past Nyquist).
 class ShProjector {
  public:
@@ -71,14 +71,16 @@ class ShProjector {
     int first_ring = 0;  // rings outside [first_ring, end_ring) hold only |P̄| < 1e-9
     int end_ring = 0;
     std::size_t table_offset = 0;  // of P̄(ring first_ring, l_begin) in table_
-    std::size_t stride = 0;        // floats from one ring to the next in this m's table
+    std::size_t stride = 0;        // floats from one ring to the next: the block's width
   };
 
   int bands_ = 0;
   int rings_ = 0;
   int longitudes_ = 0;
-  RingFft fft_;                  // scales ring i by its quadrature weight
-  std::vector<float> table_;     // per m: rings × padded(L - m) values, √2 folded in for m > 0
+  RingFft fft_;  // scales ring i by its quadrature weight
+  // Per block, in blocks_' order: its significant rings × width values, √2 folded in for
+  // m > 0; one sequential read a frame.
+  std::vector<float> table_;
   std::vector<MBlock> blocks_;   // in m order, then l order
   std::vector<int> bin_;         // FFT bin of each m (m mod longitudes, folded)
   std::vector<float> bin_sign_;  // -1 where the fold conjugates (sin terms change sign)

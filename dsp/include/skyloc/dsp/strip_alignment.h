@@ -7,15 +7,24 @@
 //   c(s) = sum_j (a_j - mean a) (b_(j+s mod n) - mean b) / (n std a std b)
 //
 // is the normalised (Pearson) correlation of the stored strip a with the test strip b
-// shifted back by s columns, for every s = 0..n-1 (O(n^2): two passes of 130 k multiply-adds
-// at n = 360, one for the peak and one for the runner-up; allocation-free, so it can run per
-// frame). The best s is refined to a fraction of a column by the parabola through c(s-1), c(s),
-// c(s+1). The test strip's content is then turned by +s columns from the stored one:
-// heading_offset_deg = s * 360 / n, wrapped to [-180, 180), the convention of
-// LandmarkMatch::heading_offset_deg (a robot that turned by +psi about body z sees its scene turned
-// by -psi). The peak's correlation is the confidence (1: identical up to the turn; near 0:
-// unrelated), and the best correlation outside +-min_peak_separation columns of the peak says
-// whether the turn is ambiguous (a periodic skyline).
+// shifted back by s columns, for every s = 0..n-1 (O(n^2): 130 k multiply-adds at n = 360
+// for the peak, and as many again for the runner-up unless the caller lends n doubles of
+// scratch to keep c(s) in; allocation-free either way, so it can run per frame). The best s is
+// refined to a fraction of a column by the parabola through c(s-1), c(s), c(s+1). The test strip's
+// content is then turned by +s columns from the stored one: heading_offset_deg = s * 360 / n,
+// wrapped to [-180, 180), the convention of LandmarkMatch::heading_offset_deg (a robot that turned
+// by +psi about body z sees its scene turned by -psi). The peak's correlation is the confidence (1:
+// identical up to the turn; near 0: unrelated), and the best correlation outside
+// +-min_peak_separation columns of the peak says whether the turn is ambiguous (a periodic
+// skyline).
+//
+// How much of c is chance: for two strips with the periodograms P_a, P_b but no relation,
+// c(s) at any shift has the variance (Bartlett) (1/n) sum_k rho_a(k) rho_b(k), rho the
+// strips' circular autocorrelations; by Parseval that is sum_f P_a P_b / (sum P_a sum P_b),
+// which is exactly (1/n) sum_s c(s)^2 of the pair at hand. So the RMS of c over all shifts
+// (`noise`) is the standard deviation a peak must stand above; smooth strips (few
+// independent columns) have a large one, textured strips a small one. For related strips
+// the peak's own share makes it an overestimate: a cautious one.
 #pragma once
 
 #include <cstdint>
@@ -37,10 +46,14 @@ struct StripAlignment {
   double heading_offset_deg = 0.0;  // the same in degrees, [-180, 180)
   float correlation = 0.0f;         // c at the best whole-column shift, -1..1
   float runner_up = 0.0f;           // best c further than min_peak_separation from it
+  float second_peak = -1.0f;        // best local maximum of c as far away, -1 if none
+  float noise = 0.0f;               // RMS of c over all shifts: chance's standard deviation
 };
 
 // min_peak_separation: columns around the peak that belong to it (its width), >= 1.
+// scratch: n doubles (or empty) to keep c(s) in, which halves the work; same result.
 StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const float> test,
-                                StripAlignment* result, int min_peak_separation = 5);
+                                StripAlignment* result, int min_peak_separation = 5,
+                                std::span<double> scratch = {});
 
 }  // namespace skyloc::dsp
