@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
     }
     if (!pipeline.SetRoute(route).ok() || pipeline.heading_enabled() != with_heading)
       return Fail("SetRoute");
-    std::uint64_t with_heading = 0;
+    std::uint64_t frames_with_heading = 0;
     for (long r = 0; r < repetitions; ++r) {
       drivers::Frame frame;
       frame.image = View(images[static_cast<std::size_t>(r % kImages)]);
@@ -283,11 +283,11 @@ int main(int argc, char** argv) {
       FrameResult result;
       if (!pipeline.Localise(frame, &result).ok())
         return Fail("Localise");
-      with_heading += result.has_heading ? 1 : 0;
+      frames_with_heading += result.has_heading ? 1 : 0;
       checksum += static_cast<double>(result.confidence);
     }
-    std::printf("frames with heading: %llu of %ld\n", static_cast<unsigned long long>(with_heading),
-                repetitions);
+    std::printf("frames with heading: %llu of %ld\n",
+                static_cast<unsigned long long>(frames_with_heading), repetitions);
   } else {
     return Fail("unknown STAGE");
   }
