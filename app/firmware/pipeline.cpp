@@ -28,6 +28,8 @@ void Hash(std::uint64_t* h, const T& v) {
 Result<dsp::LensParams> LensFromConfig(const Config& config) {
   const CameraConfig& cam = config.camera;
   if (!cam.lens_file.empty()) {
+    if (!cam.lens_file_from_dataset)
+      SKYLOC_TRY(CheckPathKey(config, "[camera] lens_file", cam.lens_file, PathKind::kFile));
     Result<dsp::LensParams> p = drivers::LoadCameraFile(cam.lens_file.c_str());
     if (!p.ok()) {
       Status s = p.status();
