@@ -14,6 +14,7 @@ void Accumulate(const LoopSummary& phase, LoopSummary* total) {
   for (int i = 0; i < 3; ++i)
     total->state_frames[i] += phase.state_frames[i];
   total->attitude_missing += phase.attitude_missing;
+  total->frames_without_contrast += phase.frames_without_contrast;
   total->end_of_source = phase.end_of_source;
   total->stopped = phase.stopped;
   total->button_pressed = phase.button_pressed;

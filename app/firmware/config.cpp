@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -80,14 +81,29 @@ bool ValueOf(const EnumName<E> (&names)[N], std::string_view name, E* out) {
   return false;
 }
 
+// What the sections read: each one's keys, and the first key refused as unknown, so that
+// a key written in the wrong section can be told where it belongs.
+struct KeysRead {
+  struct Section {
+    const char* name;
+    std::vector<std::string> keys;
+  };
+  std::vector<Section> sections;
+  std::string unknown_key;  // the first refused key, when it was the first error
+  const char* unknown_in = nullptr;
+  unsigned unknown_line = 0;
+};
+
 // Reads the keys of one [section] through drivers::TomlKeyReader; adds the enums of this
 // file's name tables. The first error of every section lands in `*error`.
 class SectionReader : public drivers::TomlKeyReader {
  public:
   SectionReader(const toml::table* table, const char* section, const std::string& source,
-                Status* error)
+                Status* error, KeysRead* keys)
       : TomlKeyReader(table, section, source.c_str(), drivers::TomlKeyNaming::kSection),
-        error_(error) {}
+        section_(section),
+        error_(error),
+        keys_(keys) {}
   SectionReader(const SectionReader&) = delete;
   SectionReader& operator=(const SectionReader&) = delete;
   ~SectionReader() = default;
@@ -108,13 +124,42 @@ class SectionReader : public drivers::TomlKeyReader {
   // Reports the first key nobody asked for; keeps the first error of all.
   void Finish() {
     const Status s = TomlKeyReader::Finish();
+    if (error_->ok() && !s.ok() && !unknown_key().empty()) {
+      keys_->unknown_key = unknown_key();
+      keys_->unknown_in = section_;
+      keys_->unknown_line = unknown_line();
+    }
     if (error_->ok())
       *error_ = s;
+    keys_->sections.push_back({section_, known_keys()});
   }
 
  private:
+  const char* section_;
   Status* error_;
+  KeysRead* keys_;
 };
+
+// A key refused in one section that another section reads: the error says where it belongs.
+Status WithWhereTheKeyBelongs(const Status& error, const KeysRead& keys,
+                              const std::string& source) {
+  if (keys.unknown_key.empty())
+    return error;
+  std::string belongs;  // "[camera]", "[camera] or [status]", ...
+  for (const KeysRead::Section& s : keys.sections) {
+    bool reads = false;
+    for (const std::string& k : s.keys)
+      reads = reads || k == keys.unknown_key;
+    if (reads && std::string_view(s.name) != keys.unknown_in)
+      belongs += std::string(belongs.empty() ? "" : " or ") + "[" + s.name + "]";
+  }
+  if (belongs.empty())
+    return error;
+  return Status::Error(StatusCode::kInvalidArgument,
+                       "%s:%u: key %s is not known in [%s]; it belongs in %s", source.c_str(),
+                       keys.unknown_line, keys.unknown_key.c_str(), keys.unknown_in,
+                       belongs.c_str());
+}
 }  // namespace
 
 void ResolveDescriptorGrid(DescriptorConfig* d) {
@@ -179,6 +224,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   SKYLOC_TRY_ASSIGN(const toml::table root, drivers::ParseTomlText(text, source.c_str()));
   Config c;
   Status error;
+  KeysRead keys;
 
   constexpr const char* kSections[] = {"camera",     "segmentation", "descriptor", "seqslam",
                                        "capacities", "state",        "status",     "realtime",
@@ -211,11 +257,11 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
   auto section = [&](const char* name) { return root.get_as<toml::table>(name); };
 
   {
-    SectionReader r(section("camera"), "camera", source, &error);
+    SectionReader r(section("camera"), "camera", source, &error, &keys);
     r.Enum("kind", &c.camera.kind, kCameraKinds);
     r.String("device", &c.camera.device, false);
-    r.String("dataset", &c.camera.dataset, true);
-    r.String("lens_file", &c.camera.lens_file, true);
+    r.Path("dataset", &c.camera.dataset);
+    r.Path("lens_file", &c.camera.lens_file);
     SimRunConfig& sim = c.camera.sim;
     r.OneOf("sim_world", &sim.world, {"city", "forest", "repetitive", "street"});
     std::int64_t seed = static_cast<std::int64_t>(sim.seed);
@@ -241,13 +287,13 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   {
-    SectionReader r(section("segmentation"), "segmentation", source, &error);
+    SectionReader r(section("segmentation"), "segmentation", source, &error, &keys);
     r.Enum("method", &c.segmentation.method, kSegmentationMethods);
     r.Int("threshold", &c.segmentation.threshold, 0, 254);
     r.Finish();
   }
   {
-    SectionReader r(section("descriptor"), "descriptor", source, &error);
+    SectionReader r(section("descriptor"), "descriptor", source, &error, &keys);
     r.Int("bands", &c.descriptor.bands, 1, 256);
     r.Enum("grid", &c.descriptor.grid, kGridPresets);
     r.Int("rings", &c.descriptor.rings, 0, 1024);
@@ -270,7 +316,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   {
-    SectionReader r(section("seqslam"), "seqslam", source, &error);
+    SectionReader r(section("seqslam"), "seqslam", source, &error, &keys);
     r.Enum("matcher", &c.seqslam.matcher, kMatchers);
     dsp::RouteFilterParams& filter = c.seqslam.filter;
     dsp::SeqSlamParams& open = c.seqslam.openseqslam;
@@ -291,13 +337,13 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   {
-    SectionReader r(section("capacities"), "capacities", source, &error);
+    SectionReader r(section("capacities"), "capacities", source, &error, &keys);
     r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
     r.Enum("route_storage", &c.capacities.route_storage, kRouteStorages);
     r.Finish();
   }
   {
-    SectionReader r(section("state"), "state", source, &error);
+    SectionReader r(section("state"), "state", source, &error, &keys);
     r.Float("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
     r.Float("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
     r.Float("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
@@ -310,7 +356,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   {
-    SectionReader r(section("status"), "status", source, &error);
+    SectionReader r(section("status"), "status", source, &error, &keys);
     r.Enum("kind", &c.status.kind, kStatusOutputKinds);
     r.String("chip", &c.status.chip, false);
     r.Int("line_lost", &c.status.line_lost, 0, 511);
@@ -343,19 +389,19 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   {
-    SectionReader r(section("realtime"), "realtime", source, &error);
+    SectionReader r(section("realtime"), "realtime", source, &error, &keys);
     r.Int("sched_fifo_priority", &c.realtime.sched_fifo_priority, 0, 99);
     r.Bool("mlockall", &c.realtime.mlockall);
     r.Int("cpu_affinity", &c.realtime.cpu_affinity, -1, 1023);
     r.Finish();
   }
   {
-    SectionReader r(section("route_db"), "route_db", source, &error);
+    SectionReader r(section("route_db"), "route_db", source, &error, &keys);
     r.Int("flush_every", &c.route_db.flush_every, 1, 100000);
     r.Finish();
   }
   {
-    SectionReader r(section("attitude"), "attitude", source, &error);
+    SectionReader r(section("attitude"), "attitude", source, &error, &keys);
     AttitudeConfig& a = c.attitude;
     r.Enum("kind", &a.kind, kAttitudeKinds);
     r.String("device", &a.device, true);
@@ -386,7 +432,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   {
-    SectionReader r(section("heading"), "heading", source, &error);
+    SectionReader r(section("heading"), "heading", source, &error, &keys);
     dsp::HorizonStripOptions& h = c.heading.strip;
     dsp::HeadingOptions& e = c.heading.estimate;
     r.Int("strip_columns", &h.n_azimuth, 0, 4096);
@@ -406,8 +452,28 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
     r.Finish();
   }
   if (!error.ok())
-    return error;
+    return WithWhereTheKeyBelongs(error, keys, source);
   return c;
+}
+
+Status CheckPathKey(const Config& config, const char* key, const std::string& path, PathKind kind) {
+  struct stat st {};
+  const bool found = ::stat(path.c_str(), &st) == 0;
+  const int saved = errno;
+  const char* wrong = nullptr;
+  if (!found)
+    wrong = saved == ENOENT || saved == ENOTDIR ? "not found" : std::strerror(saved);
+  else if (kind == PathKind::kFolder && !S_ISDIR(st.st_mode))
+    wrong = "not a folder";
+  else if (kind == PathKind::kFile && !S_ISREG(st.st_mode))
+    wrong = S_ISDIR(st.st_mode) ? "a folder, not a file" : "not a regular file";
+  if (wrong == nullptr)
+    return Status::Ok();
+  return Status::Error(found ? StatusCode::kInvalidArgument : StatusCode::kNotFound,
+                       "%s: %s = \"%s\": %s; fix the path there (a relative path is relative "
+                       "to the config file's folder)",
+                       config.source.empty() ? "built-in defaults" : config.source.c_str(), key,
+                       path.c_str(), wrong);
 }
 
 Result<Config> LoadConfigFile(const char* path) {
@@ -435,15 +501,6 @@ Result<Config> LoadConfigFile(const char* path) {
   if (!c.ok())
     return c;
   c->source = path;
-  // A relative lens_file is the config file's neighbour, whatever the working directory
-  // (systemd starts skyloc in /).
-  std::string& lens = c->camera.lens_file;
-  if (!lens.empty() && lens[0] != '/') {
-    const std::string dir(path);
-    const std::size_t slash = dir.rfind('/');
-    if (slash != std::string::npos)
-      lens = dir.substr(0, slash + 1) + lens;
-  }
   return c;
 }
 

@@ -71,9 +71,9 @@ struct SimRunConfig {
 struct CameraConfig {
   CameraKind kind = CameraKind::kSim;
   std::string device = "/dev/video0";  // v4l2: path or "driver:card"; libcamera: camera id
-  std::string dataset;                 // kind = dataset: the dataset folder
-  std::string
-      lens_file;  // camera/lens TOML (relative: to the config file); empty: 185° equidistant
+  // The path keys: read relative to the config file's folder (TomlKeyReader::Path).
+  std::string dataset;    // kind = dataset: the dataset folder
+  std::string lens_file;  // camera/lens TOML; empty: 185° equidistant
   // Not a key: lens_file is a replayed dataset's own camera.toml (set by the session).
   bool lens_file_from_dataset = false;
   // kind = sim: the world and how a run through it is sampled (the sim_* keys); the
@@ -266,5 +266,11 @@ void ResolveDescriptorGrid(DescriptorConfig* descriptor);
 Result<Config> ParseConfig(std::string_view text, std::string_view source_name);
 // Reads and parses a file. A missing file is kNotFound naming the path.
 Result<Config> LoadConfigFile(const char* path);
+
+// Whether a path key's ("[camera] dataset") file or folder is there and of its kind; else
+// one error naming the config file, the key and its path, what is wrong (not found, not a
+// folder, not a file) and the fix.
+enum class PathKind : std::uint8_t { kFile, kFolder };
+Status CheckPathKey(const Config& config, const char* key, const std::string& path, PathKind kind);
 
 }  // namespace skyloc::firmware

@@ -312,6 +312,8 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     latency.Record(pipeline.stages().total, done - t1);
     ++s.state_frames[static_cast<int>(result.state)];
     ++s.frames;
+    if (!result.sky_contrast)
+      ++s.frames_without_contrast;
     if (sink != nullptr)
       sink->OnFrame(options.mode, result, route != nullptr ? route->frames_appended() : 0);
   }

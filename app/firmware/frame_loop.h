@@ -109,6 +109,8 @@ struct LoopSummary {
   // [attitude]: frames described as if level because the source had no attitude for them
   // (none yet, stale, or the IMU gone); each outage is warned about once on stderr.
   std::uint64_t attitude_missing = 0;
+  // Frames described without sky contrast (lens cap, saturated sensor, fog): never matched.
+  std::uint64_t frames_without_contrast = 0;
   bool button_pressed = false;  // LoopOptions::button accepted a press: the loop ended there
 };
 

@@ -31,6 +31,8 @@ void Hash(std::uint64_t* h, const T& v) {
 Result<dsp::LensParams> LensFromConfig(const Config& config) {
   const CameraConfig& cam = config.camera;
   if (!cam.lens_file.empty()) {
+    if (!cam.lens_file_from_dataset)
+      SKYLOC_TRY(CheckPathKey(config, "[camera] lens_file", cam.lens_file, PathKind::kFile));
     Result<dsp::LensParams> p = drivers::LoadCameraFile(cam.lens_file.c_str());
     if (!p.ok()) {
       Status s = p.status();
@@ -315,6 +317,7 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
   }
   result->threshold = segmentation.threshold;
   result->sky_fraction = static_cast<float>(segmentation.sky_fraction);
+  result->sky_contrast = segmentation.sky_contrast;
   if (!strip_.empty()) {
     // Read through the body frame as the lens sees it: a tilted robot's band moves up on
     // one side and down on the other (docs/RESULTS.md, "Heading").
@@ -359,7 +362,7 @@ Status Pipeline::Localise(const drivers::Frame& frame, FrameResult* result,
     result->pose = *frame.pose;
   SKYLOC_TRY(Describe(frame.image, result, attitude));
   dsp::SeqSlamMatch match;
-  {
+  if (result->sky_contrast) {
     StageTimer timer(latency_, stages_.seqslam, *clock_);
     if (const dsp::SeqSlamError e = matcher_ == Matcher::kRouteFilter
                                         ? filter_.Step(amplitudes_.span(), &match)

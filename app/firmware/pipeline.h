@@ -33,6 +33,10 @@ struct FrameResult {
   Nanoseconds timestamp{0};
   int threshold = 0;  // the segmentation threshold
   float sky_fraction = 0;
+  // The frame split into sky and ground (dsp::SegmentationResult::sky_contrast). A frame
+  // without (lens cap, saturated sensor, fog) shows no place: repeat does not match it,
+  // and it counts as a frame without a match, so it cannot raise the state.
+  bool sky_contrast = true;
   bool matched = false;  // SeqSLAM had ds frames and a trajectory fitted the route
   std::int64_t best_index = -1;
   float score = 0;
@@ -127,7 +131,9 @@ class Pipeline final : private RouteSink {
   // What the route database records about the strip (columns 0: none).
   const RouteDbStrip& strip_settings() const { return route_settings_.strip; }
 
-  // Describe + SeqSLAM step + state machine. Allocates nothing.
+  // Describe + SeqSLAM step + state machine. Allocates nothing. A frame without sky
+  // contrast skips the matcher (as a dropped frame would) and is shown to the state
+  // machine as unmatched.
   Status Localise(const drivers::Frame& frame, FrameResult* result,
                   const dsp::Attitude* attitude = nullptr);
   // Forgets the query history (a gap in the frames) and the localisation state.

@@ -246,6 +246,9 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
   if (!args.dataset.empty() || config.camera.kind == CameraKind::kDataset) {
     auto camera = std::make_unique<drivers::DatasetCamera>(
         args.dataset.empty() ? config.camera.dataset : args.dataset);
+    if (args.dataset.empty())
+      SKYLOC_TRY(
+          CheckPathKey(config, "[camera] dataset", config.camera.dataset, PathKind::kFolder));
     SKYLOC_TRY(camera->Open());
     source->frames = camera->dataset().frames.size();
     source->camera_file = camera->dataset().camera_toml;

@@ -187,6 +187,11 @@ void PrintSummary(const SessionArgs& args, const SessionReport& r) {
                static_cast<unsigned long long>(r.loop.state_frames[2]),
                static_cast<unsigned long long>(r.loop.capture_errors),
                r.loop.stopped ? ", stopped by signal" : "");
+  if (r.loop.frames_without_contrast > 0)
+    std::fprintf(stderr,
+                 "%s: %llu frames showed no sky (no contrast between sky and ground: lens cap "
+                 "on, sensor saturated or fogged?); they were not matched\n",
+                 args.label, static_cast<unsigned long long>(r.loop.frames_without_contrast));
   if (r.evaluated) {
     std::fprintf(stderr,
                  "%s: precision at 100%% recall %.3f, recall at 100%% precision %.3f, AUC %.3f "

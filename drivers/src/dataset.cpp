@@ -307,6 +307,12 @@ Result<Dataset> ReadDataset(const std::string& dir) {
   while (ds.dir.size() > 1 && ds.dir.back() == '/')
     ds.dir.pop_back();
   if (!DirExists(ds.dir)) {
+    struct stat st {};
+    if (::stat(ds.dir.c_str(), &st) == 0)
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "dataset %s is not a folder (a dataset is a folder holding frames/ "
+                           "and frames.csv, docs/DATASETS.md)",
+                           ds.dir.c_str());
     return Status::Error(StatusCode::kNotFound, "dataset folder %s does not exist", ds.dir.c_str());
   }
   const std::string frames_dir = ds.dir + "/frames";

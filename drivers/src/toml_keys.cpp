@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <string_view>
 
 namespace skyloc::drivers {
 namespace {
@@ -183,6 +184,21 @@ void TomlKeyReader::String(const char* key, std::string* out, bool allow_empty) 
   *out = value->get();
 }
 
+void TomlKeyReader::Path(const char* key, std::string* out) {
+  const toml::node* node = Find(key);
+  if (node == nullptr)
+    return;
+  std::string value = *out;
+  String(key, &value, true);
+  if (!error_.ok())
+    return;
+  const std::string_view source(source_);
+  const std::size_t slash = source.rfind('/');
+  if (!value.empty() && value[0] != '/' && slash != std::string_view::npos)
+    value.insert(0, source.substr(0, slash + 1));
+  *out = value;
+}
+
 void TomlKeyReader::Choice(const char* key, std::span<const char* const> names,
                            std::size_t* index) {
   const toml::node* node = Find(key);
@@ -245,6 +261,8 @@ Status TomlKeyReader::Finish() {
     }
     const std::string key(k.str());
     const unsigned line = static_cast<unsigned>(node.source().begin.line);
+    unknown_key_ = key;
+    unknown_line_ = line;
     if (naming_ == TomlKeyNaming::kSection)
       error_ = Status::Error(StatusCode::kInvalidArgument,
                              "%s:%u: key %s is not known in [%s]: check its spelling and "

@@ -148,14 +148,16 @@ SegmentationError SkySegmenter::Threshold(const ImageView& image, SegmentationRe
     histogram_[v] = partial_[v] + partial_[256 + v] + partial_[512 + v] + partial_[768 + v];
     total += histogram_[v];
   }
+  // Whether the frame shows sky at all is the frame's own property: judged on Otsu's split
+  // also when a fixed threshold draws the line between sky and ground.
+  const OtsuResult split = OtsuThreshold(histogram_);
+  const bool fixed = options_.fixed_threshold >= 0;
   SegmentationResult r;
-  if (options_.fixed_threshold >= 0) {
-    r.threshold = options_.fixed_threshold;
-  } else {
-    const OtsuResult otsu = OtsuThreshold(histogram_);
-    r.threshold = otsu.threshold;
-    r.separability = otsu.separability;
-  }
+  r.sky_contrast = SeparatesSkyFromGround(split);
+  r.threshold = !r.sky_contrast ? kNoSkyThreshold
+                : fixed         ? options_.fixed_threshold
+                                : split.threshold;
+  r.separability = fixed ? 0.0 : split.separability;
   std::uint64_t sky = 0;
   for (std::size_t v = static_cast<std::size_t>(r.threshold) + 1; v < 256; ++v)
     sky += histogram_[v];

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace skyloc::dsp {
@@ -100,6 +102,74 @@ TEST(Otsu, BimodalNoisyImageSegmentsAbove99Percent) {
   for (auto [v, is_sky] : pixels)
     correct += ((v > t) == is_sky) ? 1 : 0;
   EXPECT_GT(static_cast<double>(correct) / static_cast<double>(pixels.size()), 0.99);
+}
+
+}  // namespace
+}  // namespace skyloc::dsp
+
+namespace skyloc::dsp {
+namespace {
+
+// The histogram of `pixels` draws: with probability `sky` a pixel is N(sky_level, sigma),
+// else N(ground_level, sigma), rounded and clipped to 0..255 as a sensor does.
+Histogram256 TwoLevels(double ground_level, double sky_level, double sky, double sigma,
+                       std::uint32_t seed, int pixels = 40000) {
+  std::mt19937 rng(seed);
+  std::bernoulli_distribution is_sky(sky);
+  std::normal_distribution<double> noise(0.0, sigma);
+  Histogram256 h{};
+  for (int i = 0; i < pixels; ++i) {
+    const double level = is_sky(rng) ? sky_level : ground_level;
+    const long v = std::lround(level + (sigma > 0 ? noise(rng) : 0.0));
+    ++h[static_cast<std::size_t>(v < 0 ? 0 : v > 255 ? 255 : v)];
+  }
+  return h;
+}
+
+// Otsu splits any histogram; only two classes of pixels are sky and ground. One level and
+// its noise anywhere in the range (clipped at black or white too, with up to the 10
+// levels of noise otsu.h allows for), or an even spread of levels (shading), is one class.
+TEST(Otsu, OneLevelAndItsNoiseIsNotSkyAndGround) {
+  for (const double level : {0.0, 1.0, 3.0, 60.0, 128.0, 250.0, 255.0}) {
+    for (const double sigma : {0.0, 0.3, 0.5, 1.0, 2.0, 3.0, 5.0, 8.0}) {
+      const Histogram256 h = TwoLevels(level, level, 0.0, sigma, 5);
+      EXPECT_FALSE(SeparatesSkyFromGround(OtsuThreshold(h))) << level << " +- " << sigma;
+    }
+  }
+  // Unclipped, any noise at all.
+  for (const double sigma : {20.0, 40.0}) {
+    const Histogram256 h = TwoLevels(128, 128, 0.0, sigma, 5);
+    EXPECT_FALSE(SeparatesSkyFromGround(OtsuThreshold(h))) << "128 +- " << sigma;
+  }
+  for (const int width : {2, 10, 40, 120, 256}) {
+    Histogram256 even{};
+    for (int v = 0; v < width; ++v)
+      even[static_cast<std::size_t>(v)] = 100;
+    EXPECT_FALSE(SeparatesSkyFromGround(OtsuThreshold(even))) << "0.." << width - 1;
+  }
+  EXPECT_FALSE(SeparatesSkyFromGround(OtsuThreshold(Histogram256{})));
+}
+
+// Two levels whose noise leaves them apart (6 sigma, at least 16 levels) are sky and
+// ground, whatever the share of sky between a tenth and nine tenths.
+TEST(Otsu, TwoLevelsWellApartAreSkyAndGround) {
+  for (const double sky : {0.1, 0.3, 0.5, 0.7, 0.9}) {
+    for (const double sigma : {0.0, 1.0, 2.0, 5.0, 15.0}) {
+      const double ground_level = 40;
+      const double sky_level = ground_level + std::max(16.0, 6.0 * sigma);
+      const Histogram256 h = TwoLevels(ground_level, sky_level, sky, sigma, 6);
+      const OtsuResult otsu = OtsuThreshold(h);
+      EXPECT_TRUE(SeparatesSkyFromGround(otsu)) << sky << ", sigma " << sigma;
+    }
+  }
+  // The class means are those of the two spikes.
+  Histogram256 spikes{};
+  spikes[30] = 500;
+  spikes[200] = 700;
+  const OtsuResult r = OtsuThreshold(spikes);
+  EXPECT_DOUBLE_EQ(r.low_mean, 30.0);
+  EXPECT_DOUBLE_EQ(r.high_mean, 200.0);
+  EXPECT_NEAR(r.within_sigma, std::sqrt(1.0 / 12.0), 1e-9);
 }
 
 }  // namespace

@@ -213,11 +213,15 @@ TEST(SampleLut, DirectThresholdingEqualsSamplingTheMaskInEveryFormat) {
   ShGrid grid;
   ASSERT_EQ(grid.Init(DefaultShGridConfig(48)), ShError::kOk);
   // Noisy bytes, so many pixels sit near the threshold; each format reads them differently.
+  // Bands of 960 bytes (a row of RGB, 3 of grey) alternate between a dark and a bright
+  // class, so every format sees sky and ground (a frame of one class would have none,
+  // dsp::SeparatesSkyFromGround).
   std::vector<std::uint8_t> bytes(320 * 240 * 3);
   std::uint32_t state = 12345;
-  for (auto& b : bytes) {
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
     state = state * 1664525u + 1013904223u;
-    b = static_cast<std::uint8_t>(state >> 24);
+    const std::uint32_t noise = (state >> 24) * 81u / 256u;  // 0..80
+    bytes[i] = static_cast<std::uint8_t>((i / 960) % 2 == 0 ? 20u + noise : 140u + noise);
   }
   const ImageView images[] = {{bytes.data(), 320, 240, 320 * 3, PixelFormat::kRgb24},
                               {bytes.data(), 320, 240, 320 * 3, PixelFormat::kBgr24},

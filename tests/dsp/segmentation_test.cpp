@@ -108,6 +108,67 @@ TEST(SkySegmenter, BimodalImageSegmentsAbove99PercentAndOutsideIsGround) {
   EXPECT_GT(r.separability, 0.8);
 }
 
+// One grey level plus sensor noise over the whole frame, clipped to 0..255: what a blind
+// camera sees (lens cap: black; saturated sensor: white; fog or a grey card: grey).
+std::vector<std::uint8_t> BlindFrame(double level, double noise_sigma, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_sigma > 0 ? noise_sigma : 1.0);
+  std::vector<std::uint8_t> grey(kSize * kSize);
+  for (std::uint8_t& v : grey) {
+    const double x = level + (noise_sigma > 0 ? noise(rng) : 0.0);
+    v = static_cast<std::uint8_t>(std::clamp(std::lround(x), 0L, 255L));
+  }
+  return grey;
+}
+
+TEST(SkySegmenter, ABlindFrameHasNoSkyAndANormalFrameHas) {
+  const Lens lens = FisheyeLens();
+  SkySegmenter seg;
+  ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
+  std::vector<std::uint8_t> mask(kSize * kSize, 77);
+  const MutableImageView mask_view{mask.data(), kSize, kSize, kSize, PixelFormat::kGrey8};
+  struct Blind {
+    const char* what;
+    double level, noise;
+  };
+  for (const Blind& b :
+       {Blind{"uniform grey", 128, 0}, Blind{"all black", 0, 0}, Blind{"all white", 255, 0},
+        Blind{"lens cap, noise 1", 0, 1}, Blind{"lens cap, noise 3", 0, 3},
+        Blind{"lens cap, noise 8", 0, 8}, Blind{"saturated, noise 2", 255, 2},
+        Blind{"grey, noise 2", 128, 2}, Blind{"grey, noise 20", 128, 20}}) {
+    SCOPED_TRACE(b.what);
+    const std::vector<std::uint8_t> grey = BlindFrame(b.level, b.noise, 11);
+    SegmentationResult r;
+    ASSERT_EQ(seg.Segment(GreyView(grey), mask_view, &r), SegmentationError::kOk);
+    EXPECT_FALSE(r.sky_contrast);
+    // Not all sky, and not half sky either: no sky at all, the mask all ground.
+    EXPECT_EQ(r.threshold, kNoSkyThreshold);
+    EXPECT_EQ(r.sky_fraction, 0.0);
+    EXPECT_EQ(std::count(mask.begin(), mask.end(), kMaskSky), 0);
+  }
+  // Sky N(200, 15) over ground N(50, 15): the frame as it was, with contrast.
+  const std::vector<std::uint8_t> grey = BimodalFrame(lens, 3);
+  SegmentationResult r;
+  ASSERT_EQ(seg.Segment(GreyView(grey), mask_view, &r), SegmentationError::kOk);
+  EXPECT_TRUE(r.sky_contrast);
+  EXPECT_EQ(r.threshold, OtsuThreshold(seg.histogram()).threshold);
+  EXPECT_GT(r.sky_fraction, 0.2);
+  EXPECT_LT(r.sky_fraction, 0.8);
+
+  // A fixed threshold does not make a blind frame sky either.
+  SkySegmenter fixed;
+  SegmentationOptions options;
+  options.fixed_threshold = 128;
+  ASSERT_EQ(fixed.Init(lens, options), SegmentationError::kOk);
+  const std::vector<std::uint8_t> white = BlindFrame(255, 0, 1);
+  ASSERT_EQ(fixed.Threshold(GreyView(white), &r), SegmentationError::kOk);
+  EXPECT_FALSE(r.sky_contrast);
+  EXPECT_EQ(r.sky_fraction, 0.0);
+  ASSERT_EQ(fixed.Threshold(GreyView(grey), &r), SegmentationError::kOk);
+  EXPECT_TRUE(r.sky_contrast);
+  EXPECT_EQ(r.threshold, 128);
+}
+
 TEST(SkySegmenter, ColourFormatsUseTheChannelMeanAndYuyvTheLuma) {
   const Lens lens = FisheyeLens();
   SkySegmenter seg;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "firmware/pipeline.h"
+#include "firmware/session.h"
 #include "skyloc/dsp/sh_grid.h"
 #include "support/scratch_dir.h"
 
@@ -273,6 +274,31 @@ TEST(Config, AKeyInTheWrongSectionIsNamedWithItsSection) {
       << c.status().message();
 }
 
+// A known key in the wrong section says where it belongs; a misspelt one lists the keys.
+TEST(Config, AMisplacedKeyIsToldWhereItBelongs) {
+  struct Case {
+    const char* text;
+    const char* message;
+  };
+  for (const Case& k :
+       {Case{"[status]\nfps = 10\n",
+             "robot.toml:2: key fps is not known in [status]; it "
+             "belongs in [camera]"},
+        Case{"[camera]\nwidth = 64\nbands = 16\n",
+             "robot.toml:3: key bands is not known in [camera]; it belongs in [descriptor]"},
+        Case{"[segmentation]\ndevice = \"x\"\n",
+             "robot.toml:2: key device is not known in [segmentation]; it belongs in [camera] "
+             "or [attitude]"},
+        Case{"[camera]\nfpss = 10\n",
+             "robot.toml:2: key fpss is not known in [camera]: check its spelling and "
+             "section (known: "}}) {
+    Result<Config> c = ParseConfig(k.text, "robot.toml");
+    ASSERT_FALSE(c.ok()) << k.text;
+    EXPECT_NE(std::string(c.status().message()).find(k.message), std::string::npos)
+        << c.status().message();
+  }
+}
+
 // lens_file is relative to the config file (systemd runs skyloc in /), and a missing one
 // is named with the config file and key.
 TEST(Config, LensFileIsRelativeToTheConfigFile) {
@@ -285,8 +311,63 @@ TEST(Config, LensFileIsRelativeToTheConfigFile) {
   Result<dsp::LensParams> lens = LensFromConfig(*c);
   ASSERT_FALSE(lens.ok());
   const std::string m = lens.status().message();
-  EXPECT_NE(m.find("[camera] lens_file in " + path), std::string::npos) << m;
+  EXPECT_NE(m.find(path + ": [camera] lens_file = \"" + dir.path() +
+                   "/lens.toml\": not found; fix the path"),
+            std::string::npos)
+      << m;
   EXPECT_NE(m.find(dir.path() + "/lens.toml"), std::string::npos) << m;
+}
+
+// Every path key is relative to the config file's folder, not the working directory
+// (systemd runs skyloc in /), and a dataset that cannot be used is named with the config
+// file, the key and its path, and the fix.
+TEST(Config, EveryPathKeyIsRelativeToTheConfigFile) {
+  skyloc::testing::ScratchDir dir("skyloc_config_");
+  const std::string path = dir.path() + "/robot.toml";
+  std::ofstream(path) << "[camera]\nkind = \"dataset\"\ndataset = \"runs/monday\"\n"
+                         "lens_file = \"lens.toml\"\n";
+  Result<Config> c = LoadConfigFile(path.c_str());
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(c->camera.dataset, dir.path() + "/runs/monday");
+  EXPECT_EQ(c->camera.lens_file, dir.path() + "/lens.toml");
+  // Absolute paths stay as written.
+  std::ofstream(path) << "[camera]\nkind = \"dataset\"\ndataset = \"/data/monday\"\n";
+  c = LoadConfigFile(path.c_str());
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_EQ(c->camera.dataset, "/data/monday");
+}
+
+TEST(Config, AMissingDatasetIsNamedByItsKey) {
+  skyloc::testing::ScratchDir dir("skyloc_config_");
+  const std::string path = dir.path() + "/robot.toml";
+  std::ofstream(path) << "[camera]\nkind = \"dataset\"\ndataset = \"monday\"\n";
+  std::ofstream(dir.path() + "/a_file") << "not a dataset\n";
+  for (const char* dataset : {"monday", "a_file"}) {
+    std::ofstream(path) << "[camera]\nkind = \"dataset\"\ndataset = \"" << dataset << "\"\n";
+    Result<Config> c = LoadConfigFile(path.c_str());
+    ASSERT_TRUE(c.ok()) << c.status().message();
+    SessionArgs args;
+    args.mode = LoopMode::kTeach;
+    args.route_path = dir.path() + "/route.db";
+    args.json = nullptr;
+    args.label = "teach";
+    SessionReport report;
+    ::testing::internal::CaptureStderr();
+    const int rc = RunSession(*c, args, &report);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 1);
+    const std::string folder = dir.path() + "/" + dataset;
+    EXPECT_NE(err.find("teach: " + path + ": [camera] dataset = \"" + folder + "\": "),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find(std::string(dataset) == "monday" ? "\": not found; " : "\": not a folder; "),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("; fix the path there (a relative path is relative to the config file's "
+                       "folder)"),
+              std::string::npos)
+        << err;
+  }
 }
 
 // A dataset's own camera.toml for another frame size is named as that file, not as

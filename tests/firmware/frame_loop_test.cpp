@@ -135,6 +135,79 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   EXPECT_FALSE(status.is_showing());
 }
 
+// A blind camera: every frame one grey level plus the sensor's noise, clipped to 0..255
+// (lens cap on: black; sensor saturated: white; fog or a cap that lets light through:
+// grey). Noise from a hash of the frame and pixel, so every frame differs as a real
+// sensor's do.
+class BlindSource final : public drivers::FrameSource {
+ public:
+  BlindSource(int level, double noise_levels) : level_(level), noise_(noise_levels) {}
+  Status Render(std::uint64_t index, dsp::MutableImageView out,
+                std::optional<drivers::Pose>*) override {
+    for (int y = 0; y < out.height; ++y) {
+      std::uint8_t* row = out.Row(y);
+      for (int x = 0; x < out.width; ++x) {
+        std::uint64_t h = (index * 1000003u + static_cast<std::uint64_t>(y) * 4099u +
+                           static_cast<std::uint64_t>(x)) *
+                          0x9e3779b97f4a7c15ull;
+        h ^= h >> 29;
+        // A triangular draw in -1..1 (two uniforms), scaled to about the noise's sigma.
+        const double u = static_cast<double>(h & 0xffff) / 65535.0 +
+                         static_cast<double>((h >> 16) & 0xffff) / 65535.0 - 1.0;
+        const double v = level_ + u * noise_ * 2.45;
+        row[x] = static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : std::lround(v));
+      }
+    }
+    return Status::Ok();
+  }
+
+ private:
+  int level_;
+  double noise_;
+};
+
+// A blind camera (lens cap, saturated sensor, uniform grey) against a taught 40-frame
+// route never shows LOCALISED, however long it stares: its frames carry no sky shape,
+// so whatever route frame they resemble most is not a place.
+TEST(FrameLoop, ABlindCameraNeverLocalises) {
+  struct Blind {
+    const char* what;
+    int level;
+    double noise;
+  };
+  for (const Blind& blind : {Blind{"lens cap, no noise", 0, 0.0}, Blind{"lens cap", 0, 2.0},
+                             Blind{"saturated", 255, 0.0}, Blind{"saturated, noisy", 255, 2.0},
+                             Blind{"uniform grey", 128, 0.0}, Blind{"noisy grey", 128, 2.0},
+                             Blind{"noisy grey, high gain", 128, 8.0}}) {
+    SCOPED_TRACE(blind.what);
+    ClearSignalFlags();
+    Pipeline pipeline(kMonotonic);
+    ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
+    RouteFrames route;
+    Teach(pipeline, 40, &route);
+    ASSERT_EQ(route.size(), 40u);
+    ASSERT_TRUE(pipeline.SetRoute(route).ok());
+
+    BlindSource source(blind.level, blind.noise);
+    drivers::SimulatedCameraConfig config;
+    config.width = 64;
+    config.height = 64;
+    config.frame_count = 500;
+    ManualClock clock;
+    drivers::SimulatedCamera camera(config, &source, &clock);
+    ASSERT_TRUE(camera.Open().ok());
+    ASSERT_TRUE(camera.Start().ok());
+    TrackingSink sink;
+    LoopOptions options;
+    LoopSummary summary;
+    ASSERT_TRUE(RunFrameLoop(camera, nullptr, pipeline, nullptr, &sink, options, &summary).ok());
+    EXPECT_EQ(summary.frames, 500u);
+    EXPECT_EQ(sink.localised, 0u);
+    EXPECT_EQ(summary.state_frames[static_cast<int>(dsp::LocalisationState::kLocalised)], 0u);
+    EXPECT_EQ(summary.frames_without_contrast, 500u);
+  }
+}
+
 TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   ASSERT_TRUE(AllocationCounterActive());
   ClearSignalFlags();

@@ -40,6 +40,10 @@ class TomlKeyReader {
   void Numbers(const char* key, std::size_t count, double* out);
   void Bool(const char* key, bool* out);
   void String(const char* key, std::string* out, bool allow_empty);
+  // A file or folder (empty: unset). A relative path is relative to the folder of the file
+  // being read (`source`), not the working directory (systemd starts skyloc in /): the
+  // one rule for every path key.
+  void Path(const char* key, std::string* out);
   // One of `names`; `*index` is the chosen one's position (its value on entry names the
   // default in the message).
   void Choice(const char* key, std::span<const char* const> names, std::size_t* index);
@@ -54,6 +58,11 @@ class TomlKeyReader {
   // Refuses the first key nobody asked for; returns the first error of all.
   Status Finish();
   const Status& status() const { return error_; }
+  // The keys asked for so far (each once or more).
+  const std::vector<std::string>& known_keys() const { return known_; }
+  // The key Finish() refused and its line; empty when it refused none.
+  const std::string& unknown_key() const { return unknown_key_; }
+  unsigned unknown_line() const { return unknown_line_; }
   bool ok() const { return error_.ok(); }
 
  private:
@@ -67,6 +76,8 @@ class TomlKeyReader {
   const char* source_;
   TomlKeyNaming naming_;
   std::vector<std::string> known_;
+  std::string unknown_key_;
+  unsigned unknown_line_ = 0;
   Status error_;
 };
 

@@ -37,10 +37,18 @@ struct SegmentationOptions {
   int histogram_step = 1;
 };
 
+// A frame whose pixels do not split into two classes (sky and ground) shows no sky: lens
+// cap on, a saturated sensor, fog, a uniform grey. Its threshold is then kNoSkyThreshold,
+// so the mask is all ground and the sky fraction 0, and `sky_contrast` says so; what it
+// describes is no place (the firmware does not match it).
+inline constexpr int kNoSkyThreshold = 255;
+
 struct SegmentationResult {
   int threshold = 0;
   // Otsu's between-class / total variance (0..1); 0 with a fixed threshold.
   double separability = 0.0;
+  // The pixels split into sky and ground (dsp::SeparatesSkyFromGround, otsu.h).
+  bool sky_contrast = false;
   // Sky pixels / pixels inside the image circle (from the histogram).
   double sky_fraction = 0.0;
   std::uint32_t circle_pixels = 0;  // pixels the histogram counted
