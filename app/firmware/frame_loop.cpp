@@ -46,11 +46,19 @@ void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t r
                       dsp::LocalisationStateName(r.state), heading, heading_confidence, surf,
                       r.has_heading_surf ? r.heading_surf_inliers : 0, latency_us);
   }
-  if (n > 0 &&
-      std::fwrite(line, 1, static_cast<std::size_t>(n), out_) != static_cast<std::size_t>(n))
-    failed_ = true;
+  if (n > 0)
+    Write(line, static_cast<std::size_t>(n));
+  if (devices_ != nullptr && r.timestamp >= devices_due_) {
+    Write(line, devices_->FormatJson(t, line, sizeof line));
+    devices_due_ = r.timestamp + std::chrono::seconds(1);
+  }
   // One line per frame must reach a pipe reader promptly.
   if (std::fflush(out_) != 0)
+    failed_ = true;
+}
+
+void JsonLinesSink::Write(const char* line, std::size_t n) {
+  if (n > 0 && std::fwrite(line, 1, n, out_) != n)
     failed_ = true;
 }
 
@@ -167,6 +175,8 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
       std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
                    static_cast<unsigned long long>(s.frames));
       latency.Print(stderr);
+      if (options.devices != nullptr)
+        options.devices->Print(stderr);
     }
     if (options.button != nullptr && status != nullptr) {
       for (;;) {

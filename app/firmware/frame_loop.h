@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "firmware/button.h"
+#include "firmware/device_report.h"
 #include "firmware/frame_recorder.h"
 #include "firmware/pipeline.h"
 #include "firmware/route_db.h"
@@ -38,16 +39,26 @@ class FrameSink {
 //            "sky_fraction":0.41,"latency_us":650}
 // best_index is null until SeqSLAM has ds frames; the heading fields are null without a
 // match or when the route has no horizon strips (FrameResult says what they mean).
+// With a DeviceReport, the devices' counters follow the first frame and then the first
+// frame of every second of the frames' time, as one record of their own
+// (DeviceReport::FormatJson: {"devices":{"timestamp":...,"camera":{...},...}}).
 // Formatted into a fixed buffer.
 class JsonLinesSink final : public FrameSink {
  public:
   explicit JsonLinesSink(std::FILE* out) : out_(out) {}
   void OnFrame(LoopMode mode, const FrameResult& result, std::uint64_t route_frames) override;
   bool write_failed() const { return failed_; }
+  // The devices whose counters go into the stream once a second (null: none). They must
+  // outlive the sink's use.
+  void set_devices(const DeviceReport* devices) { devices_ = devices; }
 
  private:
+  void Write(const char* line, std::size_t n);
+
   std::FILE* out_;
   bool failed_ = false;
+  const DeviceReport* devices_ = nullptr;
+  Nanoseconds devices_due_ = Nanoseconds::min();  // frame time of the next devices record
 };
 
 // Fans one frame out to two sinks (JSON and a progress line, say).
@@ -92,6 +103,8 @@ struct LoopOptions {
   // Teach: the status lines show that a route is being taught (see kTeachingPeriod),
   // where a plain teach leaves them in the safe state.
   bool show_teaching = false;
+  // SIGUSR1 prints their counters' table after the latency table; null: no table.
+  const DeviceReport* devices = nullptr;
 };
 
 // While teaching with show_teaching, the SEARCHING indicator is shown for the first half
@@ -123,8 +136,8 @@ struct LoopSummary {
 // pacing) the loop wakes at the lines' next change (StatusOutput::NextChange, and the
 // teaching indicator's half periods) and applies it, so a blink faster than the frames
 // does not alias and a flash shorter than the gap between two frames still shows. A
-// wake-up is a Capture() with the time left to the edge as its time-out (the camera's
-// counters count it as an error); the capture time-out still runs from the first call.
+// wake-up is a Capture() with the time left to the edge as its time-out (a time-out is
+// not a camera error, CameraCounters); the capture time-out still runs from the first call.
 // A fatal error (the camera gone for good, the route database unwritable) is returned;
 // the caller then flushes what it has and drives the status lines to the safe state.
 // `attitude` (may be null) gives each frame's roll and pitch when the pipeline uses them.

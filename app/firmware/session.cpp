@@ -359,6 +359,7 @@ struct Session {
   ResultRecorder results;
   bool evaluate = false;  // results are kept for the evaluation at the end
   JsonLinesSink json;
+  DeviceReport devices;  // every device's counters: SIGUSR1, the exit, the JSON lines
   std::unique_ptr<TeeSink> outer, sink;
   FrameRecorder recorder;  // --record
   LoopOptions loop;
@@ -540,6 +541,11 @@ Status StartUp(Session* s, SessionReport* report) {
   if (args.mode == LoopMode::kTeach)
     SKYLOC_TRY(CreateRoute(s));
   PrintStartup(args, s->config, s->camera->info(), s->writer, s->route.size());
+  s->devices.camera = s->camera;
+  s->devices.imu = s->attitude.imu.get();
+  s->devices.status = s->status.get();
+  s->json.set_devices(&s->devices);
+  s->loop.devices = &s->devices;
   SKYLOC_TRY(ConnectSinks(s));
   ApplyRealtimeConfig(*s);
   if (!args.record_dir.empty())
@@ -626,6 +632,7 @@ Status ShutDown(Session* s, const Status& loop_status, SessionReport* report) {
     s->attitude.source->Close();
   }
   s->pipeline.latency().Print(stderr);
+  s->devices.Print(stderr);
   if (s->json.write_failed())
     std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", s->label);
   if (s->evaluate) {

@@ -64,7 +64,7 @@ Status ImuAttitudeSource::DoOpen() {
   SKYLOC_TRY(batch_.Allocate(config_.batch < 1 ? 1 : config_.batch));
   batch_size_ = batch_next_ = 0;
   last_fed_ns_ = -1;
-  gone_ = ended_ = false;
+  ended_ = false;
   SKYLOC_TRY(imu_->Open());
   if (Status s = imu_->Start(); !s.ok()) {
     imu_->Close();
@@ -75,8 +75,6 @@ Status ImuAttitudeSource::DoOpen() {
 }
 
 Result<dsp::Attitude> ImuAttitudeSource::DoAt(const Frame& frame) {
-  if (gone_)
-    return Status::Error(StatusCode::kUnavailable, "IMU %s is gone", name_);
   const std::int64_t t = frame.timestamp.count();
   // Feed every sample at or before the frame's time; a later one waits in the batch for
   // the next frame. Reads never wait: the samples up to a captured frame's time are in.
@@ -93,9 +91,11 @@ Result<dsp::Attitude> ImuAttitudeSource::DoAt(const Frame& frame) {
           ended_ = true;  // a finite source ran out: its last estimate goes stale
           break;
         }
-        gone_ = code == StatusCode::kUnavailable;
-        // The device's message already names it.
-        return Status::Error(gone_ ? StatusCode::kUnavailable : StatusCode::kNotFound, "%s",
+        // Gone (kUnavailable): the device reopens itself (ImuDevice) and later frames
+        // read again; the filter restarts from the first sample after the gap. The
+        // device's message already names it.
+        const bool gone = code == StatusCode::kUnavailable;
+        return Status::Error(gone ? StatusCode::kUnavailable : StatusCode::kNotFound, "%s",
                              n.status().message());
       }
       batch_size_ = *n;

@@ -41,11 +41,11 @@ Result<Frame> Camera::Capture(Nanoseconds timeout) {
                          info_.name, CameraStateName(state_));
   }
   Result<Frame> frame = DoCapture(timeout);
-  if (frame.ok()) {
+  if (frame.ok())
     ++counters_.frames;
-  } else {
+  else if (frame.status().code() != StatusCode::kDeadlineExceeded &&
+           frame.status().code() != StatusCode::kOutOfRange)
     ++counters_.errors;
-  }
   return frame;
 }
 

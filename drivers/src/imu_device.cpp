@@ -159,6 +159,7 @@ Status ImuDevice::Open() {
   }
   rotation_ = *rotation;
   SKYLOC_TRY(DoOpen());
+  recovery_ = StreamRecovery(recovery_config_);
   state_ = State::kOpen;
   return Status::Ok();
 }
@@ -168,8 +169,50 @@ Status ImuDevice::Start() {
     return Status::Error(StatusCode::kFailedPrecondition, "imu %s: Start() while %s", info_.name,
                          ImuStateName(state_));
   }
-  SKYLOC_TRY(DoStart());
+  // Stopped during an outage, the device is closed: Read() goes on reopening it.
+  if (recovery_.state() == StreamRecovery::State::kStreaming) {
+    SKYLOC_TRY(DoStart());
+    recovery_.Started(clock_->Now());
+  }
   state_ = State::kStreaming;
+  return Status::Ok();
+}
+
+void ImuDevice::Lost() {
+  DoStop();
+  DoClose();
+  recovery_.DeviceLost(clock_->Now());
+  last_reopen_error_ = Status::Ok();
+  ++counters_.outages;
+}
+
+Status ImuDevice::Reopen() {
+  const Nanoseconds now = clock_->Now();
+  if (recovery_.state() == StreamRecovery::State::kFailed) {
+    return Status::Error(StatusCode::kUnavailable,
+                         "imu %s: gone; gave up after %u failed reopens (last: %s): check its "
+                         "wiring, then restart skyloc",
+                         info_.name, recovery_.consecutive_failures(),
+                         last_reopen_error_.message());
+  }
+  if (!recovery_.ReopenDue(now)) {
+    return Status::Error(
+        StatusCode::kUnavailable, "imu %s: gone; next reopen attempt in %lld ms (last attempt: %s)",
+        info_.name, static_cast<long long>((recovery_.next_attempt() - now).count() / 1'000'000),
+        recovery_.consecutive_failures() == 0 ? "none yet" : last_reopen_error_.message());
+  }
+  Status s = DoOpen();
+  if (s.ok())
+    s = DoStart();
+  if (!s.ok()) {
+    DoClose();
+    recovery_.ReopenFailed(now);
+    last_reopen_error_ = s;
+    return Status::Error(StatusCode::kUnavailable, "imu %s: gone; reopen %u failed: %s", info_.name,
+                         recovery_.consecutive_failures(), s.message());
+  }
+  recovery_.ReopenSucceeded(now);
+  ++counters_.reopens;
   return Status::Ok();
 }
 
@@ -185,9 +228,19 @@ Result<std::size_t> ImuDevice::Read(std::span<dsp::ImuSample> out, Nanoseconds t
                          "imu %s: Read() into an empty span (give room for one sample at least)",
                          info_.name);
   }
+  if (recovery_.state() != StreamRecovery::State::kStreaming) {
+    if (Status reopened = Reopen(); !reopened.ok()) {
+      ++counters_.errors;
+      return reopened;
+    }
+  }
   Result<std::size_t> n = DoRead(out, timeout < Nanoseconds(0) ? Nanoseconds(0) : timeout);
   if (!n.ok()) {
-    ++counters_.errors;
+    const StatusCode code = n.status().code();
+    if (code != StatusCode::kDeadlineExceeded && code != StatusCode::kOutOfRange)
+      ++counters_.errors;
+    if (code == StatusCode::kUnavailable)
+      Lost();
     return n;
   }
   if (*n == 0 || *n > out.size()) {
@@ -212,7 +265,8 @@ Result<std::size_t> ImuDevice::Read(std::span<dsp::ImuSample> out, Nanoseconds t
 void ImuDevice::Stop() {
   if (state_ != State::kStreaming)
     return;
-  DoStop();
+  if (recovery_.state() == StreamRecovery::State::kStreaming)
+    DoStop();  // else the outage closed it
   state_ = State::kOpen;
 }
 

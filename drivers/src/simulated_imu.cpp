@@ -7,7 +7,10 @@ namespace skyloc::drivers {
 SimulatedImu::SimulatedImu(const SimulatedImuConfig& config,
                            std::span<const dsp::ImuSample> samples, const Clock* clock,
                            const ImuMounting& mounting)
-    : ImuDevice(mounting), config_(config), samples_(samples), clock_(clock) {
+    : ImuDevice(mounting, clock, config.recovery),
+      config_(config),
+      samples_(samples),
+      clock_(clock) {
   std::snprintf(info_.name, sizeof(info_.name), "%s", config.name != nullptr ? config.name : "sim");
   info_.sample_rate_hz = config.sample_rate_hz;
   info_.has_gyro = config.has_gyro;
@@ -52,8 +55,14 @@ Status SimulatedImu::DoOpen() {
                            static_cast<long long>(samples_[i - 1].timestamp_ns));
     }
   }
-  next_ = 0;
-  vanished_ = false;
+  if (vanished_) {
+    return Status::Error(StatusCode::kUnavailable,
+                         "imu %s: device not present (simulated unplug at sample %llu)", info_.name,
+                         static_cast<unsigned long long>(next_));
+  }
+  if (!resume_)
+    next_ = 0;
+  resume_ = false;
   for (std::size_t i = 0; i < fault_count_; ++i)
     faults_[i].fired = false;
   return Status::Ok();
@@ -90,6 +99,7 @@ Result<std::size_t> SimulatedImu::DoRead(std::span<dsp::ImuSample> out, Nanoseco
       switch (scheduled->fault.kind) {
         case ImuFault::Kind::kVanish:
           vanished_ = true;
+          resume_ = true;
           continue;
         case ImuFault::Kind::kStall:
           stalls_left_ = scheduled->fault.count;
@@ -120,9 +130,8 @@ Result<std::size_t> SimulatedImu::DoRead(std::span<dsp::ImuSample> out, Nanoseco
     return n;
   if (vanished_) {
     return Status::Error(StatusCode::kUnavailable,
-                         "imu %s: device gone after %llu samples (simulated); Close() and Open() "
-                         "it again",
-                         info_.name, static_cast<unsigned long long>(next_));
+                         "imu %s: device gone after %llu samples (simulated unplug)", info_.name,
+                         static_cast<unsigned long long>(next_));
   }
   if (stalls_left_ > 0) {
     --stalls_left_;

@@ -23,11 +23,18 @@ Status StatusOutput::Open() {
   return Status::Ok();
 }
 
+Status StatusOutput::Counted(Status s) {
+  ++counters_.writes;
+  if (!s.ok())
+    ++counters_.failures;
+  return s;
+}
+
 Status StatusOutput::Apply(Nanoseconds now) {
   const StatusLines lines = pattern_.Levels(state_, confidence_, now);
   if (lines == levels_)
     return Status::Ok();
-  SKYLOC_TRY(DoWrite(lines, now));
+  SKYLOC_TRY(Counted(DoWrite(lines, now)));
   levels_ = lines;
   return Status::Ok();
 }
@@ -58,7 +65,7 @@ Status StatusOutput::SafeState() {
   if (!open_)
     return Status::Ok();
   // Whatever the lines are believed to show: a failed write may have left them anywhere.
-  SKYLOC_TRY(DoSafeState());
+  SKYLOC_TRY(Counted(DoSafeState()));
   levels_ = pattern_.Safe();
   return Status::Ok();
 }

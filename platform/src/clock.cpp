@@ -11,4 +11,9 @@ Nanoseconds MonotonicClock::Now() const {
   return Nanoseconds{static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec};
 }
 
+const Clock& SystemMonotonicClock() {
+  static const MonotonicClock clock;
+  return clock;
+}
+
 }  // namespace skyloc

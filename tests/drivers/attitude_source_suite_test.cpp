@@ -16,6 +16,7 @@
 #include "skyloc/drivers/iio_imu.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/platform/alloc_counter.h"
+#include "skyloc/platform/clock.h"
 #include "test_env.h"
 
 namespace skyloc::drivers {
@@ -263,6 +264,56 @@ TEST(ImuAttitudeSource, AnImuThatStopsGoesStaleAndAGoneImuIsUnavailable) {
     EXPECT_EQ(source.At(f).status().code(), StatusCode::kUnavailable);
     EXPECT_EQ(source.counters().unavailable, 2u);
   }
+}
+
+// An IMU unplugged mid-run and plugged back heals by itself, on the V4L2 camera's backoff
+// (StreamRecovery's defaults: 100, 200, 400, 800 ms between attempts), and the frames get
+// their attitude (so the gravity-aligned cap) back. All on a ManualClock: the simulated IMU
+// is paced by it and the frames are stamped with it.
+TEST(ImuAttitudeSource, AnUnpluggedImuReopensWithTheCameraBackoffAndTheAttitudeReturns) {
+  const std::array<double, 3> up = dsp::UpFromRollPitch(kRollDeg, kPitchDeg);
+  std::vector<dsp::ImuSample> samples(static_cast<std::size_t>(kSamples));
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    samples[i].timestamp_ns = static_cast<std::int64_t>(i) * kSamplePeriodNs;
+    for (std::size_t k = 0; k < 3; ++k)
+      samples[i].accel_mps2[k] = static_cast<float>(dsp::kStandardGravity * up[k]);
+  }
+  ManualClock clock(std::chrono::seconds(100));
+  const std::int64_t t0 = clock.Now().count();
+  SimulatedImu imu({}, samples, &clock);
+  // Sample 400 is due 2 s after the start: the IMU is unplugged there.
+  ASSERT_TRUE(imu.InjectFault({ImuFault::Kind::kVanish, 400, 1}).ok());
+  ImuAttitudeSource source(&imu, {});
+  ASSERT_TRUE(source.Open().ok());
+  // The device is lost at the frame of 2.0 s; attempts at 2.1, 2.3 and 2.7 s find it still
+  // unplugged (plugged back at 3.0 s), the one at 3.5 s reopens it. The frame at 3.5 s
+  // has only the first sample after the gap, on which the filter restarts.
+  constexpr std::int64_t kLost = 2'000'000'000, kReplug = 3'000'000'000, kReopen = 3'500'000'000;
+  std::int64_t first_back = -1;
+  for (std::int64_t t = 0; t <= 6'000'000'000; t += 100'000'000) {
+    if (t == kReplug)
+      imu.ClearFaults();
+    clock.Set(Nanoseconds(t0 + t));
+    Frame f;
+    f.timestamp = clock.Now();
+    f.sequence = static_cast<std::uint64_t>(t / 100'000'000);
+    Result<dsp::Attitude> a = source.At(f);
+    if (t < kLost || (first_back >= 0 && t > first_back)) {
+      ASSERT_TRUE(a.ok()) << t << ": " << a.status().message();
+      EXPECT_NEAR(a->roll_deg, kRollDeg, 0.5) << t;
+      EXPECT_NEAR(a->pitch_deg, kPitchDeg, 0.5) << t;
+    } else if (t < kReopen) {
+      EXPECT_EQ(a.status().code(), StatusCode::kUnavailable) << t << ": " << a.status().message();
+      EXPECT_EQ(imu.counters().reopens, 0u) << t;
+    } else if (a.ok() && first_back < 0) {
+      first_back = t;
+    }
+  }
+  EXPECT_GE(first_back, kReopen);
+  EXPECT_LE(first_back, kReopen + 100'000'000);
+  EXPECT_EQ(imu.counters().outages, 1u);
+  EXPECT_EQ(imu.counters().reopens, 1u);
+  EXPECT_EQ(source.counters().unavailable, 15u);  // 2.0 .. 3.4 s
 }
 
 }  // namespace

@@ -329,13 +329,92 @@ TEST(SimulatedImu, FaultsVanishStallDrop) {
   EXPECT_EQ(*n, 4u);  // 8..11
   EXPECT_EQ(imu.Read(buf, milliseconds(0)).status().code(), StatusCode::kUnavailable);
   EXPECT_EQ(imu.Read(buf, milliseconds(0)).status().code(), StatusCode::kUnavailable);
-  EXPECT_EQ(imu.counters().errors, 4u);
+  EXPECT_EQ(imu.counters().errors, 2u);  // the two kUnavailable; stalls are time-outs
+  EXPECT_EQ(imu.counters().outages, 1u);
   imu.Close();
-  ASSERT_TRUE(imu.Open().ok());  // faults fire again after a reopen
+  // Still unplugged: Open() fails as the IIO driver's does, until the device is back.
+  EXPECT_EQ(imu.Open().code(), StatusCode::kUnavailable);
+  imu.ClearFaults();
+  ASSERT_TRUE(imu.Open().ok());
   ASSERT_TRUE(imu.Start().ok());
   n = imu.Read(buf, milliseconds(0));
   ASSERT_TRUE(n.ok());
-  EXPECT_EQ(*n, 5u);
+  EXPECT_EQ(*n, 8u);  // 12..19: a replugged device goes on where it was
+  EXPECT_EQ(buf[0].accel_mps2[0], 12.0f);
+  // A plain Close() and Open() replays from the start, where the drop fires again.
+  imu.Close();
+  ASSERT_TRUE(imu.InjectFault({ImuFault::Kind::kDrop, 2, 3}).ok());
+  ASSERT_TRUE(imu.Open().ok());
+  ASSERT_TRUE(imu.Start().ok());
+  n = imu.Read(buf, milliseconds(0));
+  ASSERT_TRUE(n.ok());
+  EXPECT_EQ(*n, 17u);
+}
+
+// The IIO driver's time is its Clock: under a ManualClock, polled samples are stamped with
+// the clock's time, ticks the reader missed are counted as dropped, and a device that goes
+// away is reopened on the backoff schedule of the V4L2 camera (StreamRecovery's defaults:
+// 100 ms, then 200 ms, ...), all without waiting.
+TEST(IioImu, PollingTimingOutagesAndReopensFollowTheClock) {
+  const skyloc::testing::ScratchDir scratch("imu_iio_clock_");
+  FakeIioDevice fake(scratch.path(), FakeIioDevice::Options{"fake_imu", 2, false, true});
+  IioImuConfig c;
+  std::snprintf(c.device, sizeof c.device, "fake_imu");
+  std::snprintf(c.sysfs_root, sizeof c.sysfs_root, "%s", fake.sysfs_root().c_str());
+  std::snprintf(c.dev_root, sizeof c.dev_root, "%s", fake.dev_root().c_str());
+  c.sample_rate_hz = 100.0;  // a tick every 10 ms
+  c.mode = IioImuConfig::Mode::kPolling;
+  ManualClock clock(std::chrono::seconds(1000));
+  IioImu imu(c, &clock);
+  ASSERT_TRUE(imu.Open().ok());
+  ASSERT_TRUE(imu.Start().ok());
+  std::array<dsp::ImuSample, 4> buf{};
+  const std::int64_t t0 = 1'000'000'000'000;
+  Result<std::size_t> n = imu.Read(buf, milliseconds(0));  // the first tick is due at Start()
+  ASSERT_TRUE(n.ok()) << n.status().message();
+  EXPECT_EQ(buf[0].timestamp_ns, t0);
+  // The next tick is 10 ms away, and the clock has not moved: nothing yet.
+  EXPECT_EQ(imu.Read(buf, milliseconds(0)).status().code(), StatusCode::kDeadlineExceeded);
+  clock.Advance(milliseconds(10));
+  n = imu.Read(buf, milliseconds(0));
+  ASSERT_TRUE(n.ok()) << n.status().message();
+  EXPECT_EQ(buf[0].timestamp_ns, t0 + 10'000'000);
+  clock.Advance(milliseconds(40));  // three ticks pass unread
+  n = imu.Read(buf, milliseconds(0));
+  ASSERT_TRUE(n.ok());
+  EXPECT_EQ(buf[0].timestamp_ns, t0 + 50'000'000);
+  EXPECT_EQ(imu.counters().dropped, 3u);
+  EXPECT_EQ(imu.counters().samples, 3u);
+
+  // Unplugged: found at the next read, closed, counted; the first reopen is due 100 ms later.
+  fake.Vanish();
+  clock.Advance(milliseconds(10));
+  Status s = imu.Read(buf, milliseconds(0)).status();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();
+  EXPECT_EQ(imu.counters().outages, 1u);
+  EXPECT_EQ(imu.recovery().state(), StreamRecovery::State::kBackingOff);
+  EXPECT_EQ(imu.recovery().next_attempt(), Nanoseconds(t0 + 160'000'000));
+  clock.Advance(milliseconds(99));
+  EXPECT_EQ(imu.Read(buf, milliseconds(0)).status().code(), StatusCode::kUnavailable);
+  EXPECT_EQ(imu.recovery().consecutive_failures(), 0u) << "no attempt before the backoff";
+  clock.Advance(milliseconds(1));  // due: the attempt fails (still gone), the next in 200 ms
+  s = imu.Read(buf, milliseconds(0)).status();
+  EXPECT_EQ(s.code(), StatusCode::kUnavailable);
+  EXPECT_NE(std::string(s.message()).find("reopen 1 failed"), std::string::npos) << s.message();
+  EXPECT_EQ(imu.recovery().next_attempt(), Nanoseconds(t0 + 360'000'000));
+
+  // Plugged back: the next attempt on schedule reopens it and samples flow again.
+  fake.Revive();
+  clock.Advance(milliseconds(199));
+  EXPECT_EQ(imu.Read(buf, milliseconds(0)).status().code(), StatusCode::kUnavailable);
+  EXPECT_EQ(imu.counters().reopens, 0u);
+  clock.Advance(milliseconds(1));
+  n = imu.Read(buf, milliseconds(0));
+  ASSERT_TRUE(n.ok()) << n.status().message();
+  EXPECT_EQ(buf[0].timestamp_ns, t0 + 360'000'000);
+  EXPECT_EQ(imu.counters().reopens, 1u);
+  EXPECT_EQ(imu.counters().outages, 1u);
+  EXPECT_EQ(imu.recovery().state(), StreamRecovery::State::kStreaming);
 }
 
 TEST(SimulatedImu, RefusesSamplesOutOfOrder) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -519,6 +520,65 @@ TEST(JsonLines, RepeatAndTeachLines) {
                "\"sky_fraction\":0.5000,\"latency_us\":812}\n");
 }
 
+// Every device's counters, as the devices keep them, in one record after the first frame
+// and then after the first frame of each second of the frames' time; a device not there
+// is null.
+TEST(JsonLines, DeviceCountersOnceASecond) {
+  ManualClock clock(std::chrono::seconds(5));
+  sim::FilmedStreet filmed(Repeat(0));
+  drivers::Camera& camera = filmed.camera;
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Start().ok());
+  for (int i = 0; i < 3; ++i)
+    ASSERT_TRUE(camera.Capture(std::chrono::milliseconds(100)).ok());
+  drivers::SimulatedStatusOutput status({}, &clock);
+  ASSERT_TRUE(status.Open().ok());
+  ASSERT_TRUE(status.Show(dsp::LocalisationState::kSearching, 0.5f, clock.Now()).ok());
+  std::vector<dsp::ImuSample> samples(4);
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    samples[i].timestamp_ns = static_cast<std::int64_t>(i + 1) * 5'000'000;
+  drivers::SimulatedImu imu({}, samples);
+  ASSERT_TRUE(imu.Open().ok());
+  ASSERT_TRUE(imu.Start().ok());
+  std::array<dsp::ImuSample, 8> read{};
+  ASSERT_TRUE(imu.Read(read, Nanoseconds(0)).ok());
+
+  char buffer[4096] = {};
+  std::FILE* f = fmemopen(buffer, sizeof buffer - 1, "w");
+  ASSERT_NE(f, nullptr);
+  JsonLinesSink sink(f);
+  DeviceReport devices;
+  devices.camera = &camera;
+  devices.status = &status;
+  sink.set_devices(&devices);
+  FrameResult r;
+  r.frame = 1;
+  for (const int ms : {400, 900, 1399, 1400, 2300, 2500}) {
+    r.timestamp = std::chrono::milliseconds(ms);
+    sink.OnFrame(LoopMode::kRecord, r, 0);
+    if (ms == 1400)
+      devices.imu = &imu;
+  }
+  std::fclose(f);
+  EXPECT_STREQ(buffer,
+               "{\"frame\":1,\"timestamp\":0.400000,\"latency_us\":0}\n"
+               "{\"devices\":{\"timestamp\":0.400000,\"camera\":{\"frames\":3,\"dropped\":0,"
+               "\"restarts\":0,\"errors\":0},\"imu\":null,\"status\":{\"writes\":1,"
+               "\"failures\":0}}}\n"
+               "{\"frame\":1,\"timestamp\":0.900000,\"latency_us\":0}\n"
+               "{\"frame\":1,\"timestamp\":1.399000,\"latency_us\":0}\n"
+               "{\"frame\":1,\"timestamp\":1.400000,\"latency_us\":0}\n"
+               "{\"devices\":{\"timestamp\":1.400000,\"camera\":{\"frames\":3,\"dropped\":0,"
+               "\"restarts\":0,\"errors\":0},\"imu\":null,\"status\":{\"writes\":1,"
+               "\"failures\":0}}}\n"
+               "{\"frame\":1,\"timestamp\":2.300000,\"latency_us\":0}\n"
+               "{\"frame\":1,\"timestamp\":2.500000,\"latency_us\":0}\n"
+               "{\"devices\":{\"timestamp\":2.500000,\"camera\":{\"frames\":3,\"dropped\":0,"
+               "\"restarts\":0,\"errors\":0},\"imu\":{\"samples\":4,\"dropped\":0,"
+               "\"errors\":0,\"outages\":0,\"reopens\":0},\"status\":{\"writes\":1,"
+               "\"failures\":0}}}\n");
+}
+
 }  // namespace
 }  // namespace skyloc::firmware
 
@@ -895,6 +955,8 @@ TEST_F(FrameLoopBlink, AtTwoFramesASecondTheLostFlashStillShows) {
   EXPECT_TRUE(HasChange(milliseconds(2100), false)) << "the LOST flash did not end at 2.1 s";
   EXPECT_TRUE(HistoryIs(Expected(clock_.Now())));
   EXPECT_GT(camera_->timeouts(), 0u);
+  EXPECT_EQ(camera_->counters().errors, 0u) << "waking for the blink is not a camera error";
+  EXPECT_EQ(camera_->counters().frames, 12u);
 }
 
 // 30 fps over a localised stretch: every edge of every state shown, at its exact time,

@@ -22,6 +22,10 @@ expect_rc() {  # expect_rc WANT DESCRIPTION -- command...
   local rc=$?
   [ "$rc" -eq "$want" ] || fail "$what: exit $rc, expected $want; stderr: $(cat "$WORK/err")"
 }
+# The JSON lines of frames (the stream also carries a devices record once a second).
+frame_lines() {
+  grep -c '^{"frame":' "$1"
+}
 expect_err() {  # expect_err PATTERN DESCRIPTION
   grep -q -- "$1" "$WORK/err" || fail "$2: stderr lacks '$1': $(cat "$WORK/err")"
 }
@@ -29,7 +33,8 @@ expect_err() {  # expect_err PATTERN DESCRIPTION
 DB=$WORK/route.db
 # 1. teach a bounded run, then inspect it.
 expect_rc 0 "teach" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 150
-[ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "teach printed $(wc -l <"$WORK/out") JSON lines, expected 150"
+[ "$(frame_lines "$WORK/out")" -eq 150 ] || fail "teach printed $(frame_lines "$WORK/out") JSON lines, expected 150"
+grep -q '^{"devices":{"timestamp":' "$WORK/out" || fail "teach: no devices record in the JSON lines"
 grep -q '"route_frames":150' "$WORK/out" || fail "teach JSON lacks route_frames 150"
 expect_err "150 frames committed" "teach summary"
 # one start-up line names the camera, the status output and the route; a simulated camera
@@ -47,10 +52,10 @@ expect_err "already exists: not replacing a taught route; pass --force to replac
 
 # 3. repeat the same street: one JSON line per frame with every key; it localises.
 expect_rc 0 "repeat" -- "${RUN[@]}" repeat --route "$DB" --config "$CONFIG" --frames 150
-[ "$(wc -l <"$WORK/out")" -eq 150 ] || fail "repeat printed $(wc -l <"$WORK/out") lines"
+[ "$(frame_lines "$WORK/out")" -eq 150 ] || fail "repeat printed $(frame_lines "$WORK/out") lines"
 for key in frame timestamp best_index uniqueness confidence state heading_deg heading_confidence \
   heading_surf_deg heading_surf_inliers latency_us; do
-  [ "$(grep -c "\"$key\":" "$WORK/out")" -eq 150 ] || fail "repeat: key $key missing on some lines"
+  [ "$(grep '^{"frame":' "$WORK/out" | grep -c "\"$key\":")" -eq 150 ] || fail "repeat: key $key missing on some lines"
 done
 grep -q '"state":"LOCALISED"' "$WORK/out" || fail "repeat never localised"
 # The same street, the same way round: matched frames carry a heading near 0.
@@ -119,7 +124,7 @@ rc=$?
 grep -q "stopped by signal" "$WORK/term.err" || fail "teach did not report the signal"
 "${RUN[@]}" route info "$WORK/term.db" >"$WORK/out" 2>&1 || fail "route info after SIGTERM: $(cat "$WORK/out")"
 grep -q "committed" "$WORK/out" && ! grep -q "NOT committed" "$WORK/out" || fail "SIGTERM teach not committed: $(cat "$WORK/out")"
-lines=$(wc -l <"$WORK/term.out")
+lines=$(frame_lines "$WORK/term.out")
 grep -q "$lines frames in" "$WORK/out" || fail "SIGTERM teach printed $lines lines but $(cat "$WORK/out")"
 
 # 7. SIGUSR1 prints the latency table and the run goes on.
@@ -132,6 +137,8 @@ kill -0 $pid 2>/dev/null || fail "repeat died on SIGUSR1"
 kill -TERM $pid
 wait $pid || fail "repeat after SIGTERM exited non-zero"
 [ "$(grep -c p99_us "$WORK/usr1.err")" -ge 2 ] || fail "SIGUSR1 table missing: $(cat "$WORK/usr1.err")"
+# The device counters' table follows the latency table, on SIGUSR1 and at exit.
+[ "$(grep -c '^camera ' "$WORK/usr1.err")" -ge 2 ] || fail "SIGUSR1 device table missing: $(cat "$WORK/usr1.err")"
 grep -q "latency after [0-9]* frames (SIGUSR1" "$WORK/usr1.err" || fail "SIGUSR1 table has no label: $(cat "$WORK/usr1.err")"
 
 # 8. kill -9 during teach: the file is refused as interrupted, recovered, then usable.
@@ -170,7 +177,7 @@ if make_dataset "$WORK/ref" 60 96 96 && make_dataset "$WORK/qry" 60 96 96 --run 
   expect_rc 0 "teach from a dataset" -- "${RUN[@]}" teach --route "$WORK/ds.db" --config "$CONFIG" --dataset "$WORK/ref"
   expect_err "60 frames committed" "teach from a dataset"
   expect_rc 0 "replay" -- "${RUN[@]}" replay "$WORK/qry" --route "$WORK/ds.db" --config "$CONFIG" --pace fast
-  [ "$(wc -l <"$WORK/out")" -eq 60 ] || fail "replay printed $(wc -l <"$WORK/out") lines"
+  [ "$(frame_lines "$WORK/out")" -eq 60 ] || fail "replay printed $(frame_lines "$WORK/out") lines"
   if [ "$with_poses" = 1 ]; then expect_err "precision at 100% recall" "replay evaluation"; fi
   expect_rc 1 "replay of a missing dataset" -- "${RUN[@]}" replay "$WORK/nothing" --route "$WORK/ds.db"
   expect_err "nothing" "replay of a missing dataset"
@@ -226,7 +233,7 @@ grep -q "30 frames in 3 chunks, committed" "$WORK/out" || fail "full-disk route:
 if [ ${#RUN[@]} -eq 1 ]; then
   REC=$WORK/recording
   expect_rc 0 "record" -- "${RUN[@]}" record "$REC" --config "$CONFIG" --frames 40
-  [ "$(wc -l <"$WORK/out")" -eq 40 ] || fail "record printed $(wc -l <"$WORK/out") JSON lines, expected 40"
+  [ "$(frame_lines "$WORK/out")" -eq 40 ] || fail "record printed $(frame_lines "$WORK/out") JSON lines, expected 40"
   expect_err "recording into $REC" "record start-up line"
   # The writer may fall behind the 200 fps camera on a loaded machine and drop frames
   # (counted, and tested exactly in frame_recorder_test); every frame is one or the other,

@@ -21,17 +21,14 @@ namespace {
 
 constexpr char kAxisNames[3] = {'x', 'y', 'z'};
 
-Nanoseconds MonotonicNow() {
+// A real sleep of `d` (the clock may be a test's, which does not move by itself).
+void SleepFor(Nanoseconds d) {
+  if (d <= Nanoseconds(0))
+    return;
   timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return Nanoseconds(static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec);
-}
-
-void SleepUntil(Nanoseconds t) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(t.count() / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(t.count() % 1'000'000'000);
-  while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  ts.tv_sec = static_cast<time_t>(d.count() / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(d.count() % 1'000'000'000);
+  while (::nanosleep(&ts, &ts) == -1 && errno == EINTR) {
   }
 }
 
@@ -190,7 +187,8 @@ std::int64_t IioScanValue(const IioScanType& type, const std::uint8_t* p) {
   return static_cast<std::int64_t>(raw);
 }
 
-IioImu::IioImu(const IioImuConfig& config) : ImuDevice(config.mounting), config_(config) {
+IioImu::IioImu(const IioImuConfig& config, const Clock* clock)
+    : ImuDevice(config.mounting, clock, config.recovery), config_(config) {
   config_.device[sizeof(config_.device) - 1] = '\0';
   config_.gyro_device[sizeof(config_.gyro_device) - 1] = '\0';
   config_.trigger[sizeof(config_.trigger) - 1] = '\0';
@@ -667,7 +665,7 @@ Status IioImu::DoStart() {
     }
     buffer_enabled_ = true;
   } else {
-    next_tick_ = MonotonicNow();
+    next_tick_ = clock().Now();
   }
   return Status::Ok();
 }
@@ -678,12 +676,12 @@ Status IioImu::Gone(int saved_errno, const char* what) {
   if (StatusCodeFromErrno(saved_errno) != StatusCode::kUnavailable) {
     return Status::FromErrno(ENODEV,
                              "imu %s: %s: %s, so the IMU is gone (unplugged, driver unbound or "
-                             "crashed); Close() and Open() it once it is back",
+                             "crashed); reopening it when it is back",
                              info_.name, what, std::strerror(saved_errno));
   }
   return Status::FromErrno(saved_errno,
                            "imu %s: %s: the IMU is gone (unplugged, driver unbound or "
-                           "crashed); Close() and Open() it once it is back",
+                           "crashed); reopening it when it is back",
                            info_.name, what);
 }
 
@@ -734,15 +732,16 @@ std::size_t IioImu::DecodeScans(const std::uint8_t* data, std::size_t scans,
 }
 
 Result<std::size_t> IioImu::ReadBuffer(std::span<dsp::ImuSample> out, Nanoseconds timeout) {
-  const Nanoseconds deadline = MonotonicNow() + timeout;
+  const Nanoseconds deadline = clock().Now() + timeout;
   const std::size_t want = std::min(out.size(), kScansPerRead);
+  bool waited_out = false;
   for (;;) {
     const std::size_t room = want * scan_bytes_ - carry_;
     const ssize_t r = ::read(node_fd_.get(), scan_buffer_.data() + carry_, room);
     if (r > 0) {
       const std::size_t total = carry_ + static_cast<std::size_t>(r);
       const std::size_t scans = total / scan_bytes_;
-      const std::size_t n = DecodeScans(scan_buffer_.data(), scans, out, MonotonicNow());
+      const std::size_t n = DecodeScans(scan_buffer_.data(), scans, out, clock().Now());
       carry_ = total - scans * scan_bytes_;
       if (carry_ > 0)
         std::memmove(scan_buffer_.data(), scan_buffer_.data() + scans * scan_bytes_, carry_);
@@ -760,8 +759,8 @@ Result<std::size_t> IioImu::ReadBuffer(std::span<dsp::ImuSample> out, Nanosecond
         return Gone(saved, node_);
       return Status::FromErrno(saved, "imu %s: reading %s", info_.name, node_);
     }
-    const Nanoseconds remaining = deadline - MonotonicNow();
-    if (remaining <= Nanoseconds(0)) {
+    const Nanoseconds remaining = deadline - clock().Now();
+    if (remaining <= Nanoseconds(0) || waited_out) {
       return Status::Error(StatusCode::kDeadlineExceeded,
                            "imu %s: no sample from %s within %lld ms (is the trigger running? "
                            "%s)",
@@ -775,7 +774,9 @@ Result<std::size_t> IioImu::ReadBuffer(std::span<dsp::ImuSample> out, Nanosecond
       return Status::FromErrno(e, "imu %s: poll on %s", info_.name, node_);
     }
     // Ready, timed out or hung up: the next read() says which (an unregistered IIO device
-    // does not wake poll(); its read() fails with ENODEV).
+    // does not wake poll(); its read() fails with ENODEV). A poll that ran its whole time
+    // ends the wait after that read, whatever the clock says (a ManualClock stands still).
+    waited_out = p == 0;
   }
 }
 
@@ -786,16 +787,17 @@ Result<std::size_t> IioImu::ReadPolled(std::span<dsp::ImuSample> out, Nanosecond
     const int saved = errno;
     return Gone(saved, name_path);
   }
-  Nanoseconds now = MonotonicNow();
+  Nanoseconds now = clock().Now();
   if (next_tick_ > now) {
     if (next_tick_ > now + timeout) {
-      SleepUntil(now + timeout);
+      SleepFor(timeout);
       return Status::Error(StatusCode::kDeadlineExceeded,
                            "imu %s: next polled sample is due after the %lld ms timeout",
                            info_.name, static_cast<long long>(timeout.count() / 1'000'000));
     }
-    SleepUntil(next_tick_);
-    now = MonotonicNow();
+    SleepFor(next_tick_ - now);
+    // At the tick at least: a ManualClock does not move while the driver sleeps.
+    now = std::max(clock().Now(), next_tick_);
   }
   dsp::ImuSample s;
   for (Axis* axes : {accel_, gyro_}) {
@@ -825,7 +827,7 @@ Result<std::size_t> IioImu::ReadPolled(std::span<dsp::ImuSample> out, Nanosecond
       (axes == accel_ ? s.accel_mps2 : s.gyro_radps)[static_cast<std::size_t>(i)] = v;
     }
   }
-  s.timestamp_ns = MonotonicNow().count();
+  s.timestamp_ns = std::max(clock().Now(), now).count();
   // Ticks that passed while nobody was reading are lost, not made up.
   const std::int64_t late = (now - next_tick_).count();
   const std::int64_t period = period_.count();
@@ -842,8 +844,7 @@ Result<std::size_t> IioImu::ReadPolled(std::span<dsp::ImuSample> out, Nanosecond
 Result<std::size_t> IioImu::DoRead(std::span<dsp::ImuSample> out, Nanoseconds timeout) {
   if (gone_) {
     return Status::Error(StatusCode::kUnavailable,
-                         "imu %s: the IMU is gone; Close() and Open() it once it is back",
-                         info_.name);
+                         "imu %s: the IMU is gone; reopening it when it is back", info_.name);
   }
   return buffered_ ? ReadBuffer(out, timeout) : ReadPolled(out, timeout);
 }

@@ -12,6 +12,7 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -43,7 +44,8 @@ Status FromLibcamera(int ret, const char* camera, const char* what) {
 
 }  // namespace
 
-LibcameraCamera::LibcameraCamera(const LibcameraCameraConfig& config) : config_(config) {
+LibcameraCamera::LibcameraCamera(const LibcameraCameraConfig& config, const Clock* clock)
+    : config_(config), clock_(clock != nullptr ? clock : &SystemMonotonicClock()) {
   config_.camera_id[sizeof(config_.camera_id) - 1] = '\0';
   std::snprintf(info_.name, sizeof(info_.name), "libcamera:%.53s",
                 config_.camera_id[0] != '\0' ? config_.camera_id : "first");
@@ -231,7 +233,7 @@ Status LibcameraCamera::DoStart() {
   if (const int ret = camera_->start(&controls); ret < 0)
     return FromLibcamera(ret, info_.name, "start");
   started_ = true;
-  last_progress_ = MonotonicClock().Now();
+  last_progress_ = clock_->Now();
   held_ = nullptr;
   // libcamera numbers frames afresh after start(): continue our numbering.
   have_sequence_ = false;
@@ -260,7 +262,7 @@ Status LibcameraCamera::Lost(const char* why) {
 }
 
 Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
-  const MonotonicClock clock;
+  const Clock& clock = *clock_;
   if (lost_)
     return Lost(lost_why_);
   if (disconnected_.load(std::memory_order_acquire))
@@ -296,7 +298,8 @@ Result<Frame> LibcameraCamera::DoCapture(Nanoseconds timeout) {
       (void)!::read(completed_fd_.get(), &count, sizeof(count));
       continue;
     }
-    const Nanoseconds now = clock.Now();
+    // poll() waited until `wake`: at `wake` at least (a ManualClock stands still).
+    const Nanoseconds now = std::max(clock.Now(), wake);
     if (now >= stall_at) {
       char why[64];
       std::snprintf(why, sizeof why, "no frame for %lld ms",

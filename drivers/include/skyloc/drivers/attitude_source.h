@@ -11,8 +11,10 @@
 //
 // At() never blocks for long and allocates nothing. A source with nothing for a frame
 // (none yet, or only samples older than the stale limit) returns kNotFound; a source
-// that is gone (the IMU unplugged) returns kUnavailable. Either way the caller describes
-// the frame as if level and counts it; it never drops the frame.
+// that is gone (the IMU unplugged) returns kUnavailable until the IMU has reopened itself
+// (ImuDevice, with the camera's backoff) and its samples reach the frames' time again.
+// Either way the caller describes the frame as if level and counts it; it never drops the
+// frame, and the gravity-aligned cap is back with the first frame that has an attitude.
 #pragma once
 
 #include <cstdint>
@@ -101,7 +103,6 @@ class ImuAttitudeSource final : public AttitudeSource {
   std::size_t batch_size_ = 0;  // samples in batch_
   std::size_t batch_next_ = 0;  // the first not yet fed to the filter
   std::int64_t last_fed_ns_ = -1;
-  bool gone_ = false;
   bool ended_ = false;  // a finite source (the simulated IMU) has no more samples
 };
 

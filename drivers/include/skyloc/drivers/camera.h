@@ -44,13 +44,17 @@ struct CameraInfo {
   dsp::PixelFormat format = dsp::PixelFormat::kGrey8;
 };
 
-// Health counters every camera keeps, for the tests and a debugger to read; the firmware
-// does not print them (its frame loop counts capture errors itself).
+// Health counters every camera keeps (the simulated twin too); the session prints them
+// with the other devices' (firmware/device_report.h).
 struct CameraCounters {
   std::uint64_t frames = 0;    // frames delivered by Capture()
   std::uint64_t dropped = 0;   // gaps in the sequence numbers
   std::uint64_t restarts = 0;  // times the device was closed and reopened after a fault
-  std::uint64_t errors = 0;    // Capture() calls that returned an error
+  // Capture() calls that returned an error other than a time-out or the end of a finite
+  // source. A time-out is not one: how long to wait is the caller's choice (the frame loop
+  // wakes early to move the status lines' blink, and counts a frame that did not come in
+  // time itself, LoopSummary).
+  std::uint64_t errors = 0;
 };
 
 class Camera {

@@ -14,7 +14,12 @@
 //
 // Timestamps are CLOCK_MONOTONIC: the driver writes "monotonic" to current_timestamp_clock
 // and uses the buffer's timestamp channel when both exist; otherwise a sample is stamped
-// with the time it was read (a batch spaced one period apart, ending now).
+// with the driver's Clock when it was read (a batch spaced one period apart, ending now).
+// The Clock (SystemMonotonicClock() unless one is given) also times Read()'s timeout, the
+// polling ticks and the reopens after an outage (ImuDevice), so a test drives them all
+// with a ManualClock. Waits are real (poll(), a sleep until the next polling tick): under a
+// ManualClock a test moves the clock before it reads, and a wait that runs out ends the
+// Read() whatever the clock says.
 //
 // The sysfs and /dev roots are configurable so tests run the driver over a fake tree in a
 // scratch folder, with a FIFO standing in for the character device (tests/drivers).
@@ -67,6 +72,7 @@ struct IioImuConfig {
   char sysfs_root[192] = "/sys/bus/iio/devices";
   char dev_root[192] = "/dev";
   ImuMounting mounting;
+  StreamRecoveryConfig recovery;  // reopening after an outage (ImuDevice), as the camera's
 };
 
 class IioImu final : public ImuDevice {
@@ -74,7 +80,8 @@ class IioImu final : public ImuDevice {
   static constexpr std::size_t kMaxScanElements = 32;
   static constexpr std::size_t kScansPerRead = 64;
 
-  explicit IioImu(const IioImuConfig& config);
+  // `clock` (nullptr: SystemMonotonicClock()) must outlive the driver.
+  explicit IioImu(const IioImuConfig& config, const Clock* clock = nullptr);
   ~IioImu() override { Close(); }
 
   bool buffered() const { return buffered_; }

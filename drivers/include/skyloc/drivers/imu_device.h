@@ -7,6 +7,13 @@
 //
 // Buffers are allocated in Open()/Start(); Read() allocates nothing.
 //
+// Healing: when a Read() finds the device gone (kUnavailable: unplugged, driver unbound,
+// the simulated twin's kVanish), the device is closed and an outage counted; later Read()
+// calls reopen it (DoOpen, DoStart) with the V4L2 camera's backoff (StreamRecovery:
+// 100 ms, doubling up to 2 s, on the device's Clock) and return kUnavailable until a
+// reopen succeeds, which counts a reopen; samples then flow again with no call from the
+// caller. Read() does not wait for a reopen: while the device is away it returns at once.
+//
 // Mounting: the IMU's axes need not be the body's. ImuMounting is the IMU-to-body
 // rotation, body = R * imu with R = Rz(yaw) * Ry(pitch) * Rx(roll), angles in degrees,
 // applied roll first: the same convention as the camera's mount angles (dsp/lens.h).
@@ -20,6 +27,7 @@
 #include <cstdint>
 #include <span>
 
+#include "skyloc/drivers/stream_recovery.h"
 #include "skyloc/dsp/imu.h"
 #include "skyloc/platform/clock.h"
 #include "skyloc/platform/status.h"
@@ -50,12 +58,18 @@ struct ImuInfo {
                               // or "sysfs polling: <why the buffer is not used>"
 };
 
-// Health counters every IMU keeps; the pipeline reports them at exit.
+// Health counters every IMU keeps (the simulated twin too); the session prints them with
+// the other devices' (firmware/device_report.h).
 struct ImuCounters {
   std::uint64_t samples = 0;  // samples delivered by Read()
   std::uint64_t dropped = 0;  // samples lost (gaps in the timestamps, kernel FIFO overruns,
                               // polling ticks missed because Read() was called late)
-  std::uint64_t errors = 0;   // Read() calls that returned an error (timeouts included)
+  // Read() calls that returned an error other than a time-out or the end of a finite
+  // source (as CameraCounters: how long to wait is the caller's choice, and the attitude
+  // source asks for what is there).
+  std::uint64_t errors = 0;
+  std::uint64_t outages = 0;  // times the device was found gone and closed
+  std::uint64_t reopens = 0;  // times it was reopened after an outage and streamed again
 };
 
 class ImuDevice {
@@ -76,9 +90,9 @@ class ImuDevice {
   // Waits up to `timeout` for at least one sample and writes every sample available, up to
   // out.size(), in the body frame, oldest first; returns how many. Timestamps strictly
   // increase (CLOCK_MONOTONIC for real devices). kDeadlineExceeded when none came in time;
-  // kUnavailable when the device is gone (the errno is saved; Close() and Open() once it
-  // is back); kInvalidArgument for an empty `out`. End of a finite source (the simulated
-  // IMU's samples) is kOutOfRange.
+  // kUnavailable when the device is gone (the errno is saved) and until it is reopened
+  // (see Healing above); kInvalidArgument for an empty `out`. End of a finite source (the
+  // simulated IMU's samples) is kOutOfRange.
   Result<std::size_t> Read(std::span<dsp::ImuSample> out, Nanoseconds timeout);
   void Stop();
   void Close();
@@ -86,9 +100,18 @@ class ImuDevice {
   State state() const { return state_; }
   const ImuInfo& info() const { return info_; }
   const ImuCounters& counters() const { return counters_; }
+  // The reopen schedule after an outage (kStreaming while the device is there).
+  const StreamRecovery& recovery() const { return recovery_; }
 
  protected:
-  explicit ImuDevice(const ImuMounting& mounting = {}) : mounting_(mounting) {}
+  // `clock` (nullptr: SystemMonotonicClock()) times the reopens; it must outlive the device.
+  explicit ImuDevice(const ImuMounting& mounting = {}, const Clock* clock = nullptr,
+                     const StreamRecoveryConfig& recovery = {})
+      : mounting_(mounting),
+        clock_(clock != nullptr ? clock : &SystemMonotonicClock()),
+        recovery_config_(recovery),
+        recovery_(recovery) {}
+  const Clock& clock() const { return *clock_; }
   ImuInfo info_;
   ImuCounters counters_;
 
@@ -100,7 +123,16 @@ class ImuDevice {
   virtual void DoStop() = 0;
   virtual void DoClose() = 0;
 
+  // The device was found gone: closed, the first reopen scheduled.
+  void Lost();
+  // Reopens the device when the backoff allows; kUnavailable (naming the IMU) until then.
+  Status Reopen();
+
   ImuMounting mounting_;
+  const Clock* clock_;
+  StreamRecoveryConfig recovery_config_;
+  StreamRecovery recovery_;
+  Status last_reopen_error_;
   std::array<double, 9> rotation_{1, 0, 0, 0, 1, 0, 0, 0, 1};
   State state_ = State::kClosed;
 };

@@ -36,6 +36,7 @@
 
 #include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/mapped_buffer.h"
+#include "skyloc/platform/clock.h"
 #include "skyloc/platform/spsc_queue.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/platform/unique_fd.h"
@@ -66,7 +67,9 @@ class LibcameraCamera final : public Camera {
  public:
   static constexpr std::size_t kMaxRequests = 8;
 
-  explicit LibcameraCamera(const LibcameraCameraConfig& config);
+  // `clock` (nullptr: SystemMonotonicClock()) times Capture()'s timeout and the stall; it
+  // must outlive the camera. Frames carry libcamera's own CLOCK_MONOTONIC timestamps.
+  explicit LibcameraCamera(const LibcameraCameraConfig& config, const Clock* clock = nullptr);
   ~LibcameraCamera() override;
 
   // Completed requests that did not fit the queue (cannot happen while the queue holds
@@ -90,6 +93,7 @@ class LibcameraCamera final : public Camera {
   Status Lost(const char* why);
 
   LibcameraCameraConfig config_;
+  const Clock* clock_;
   std::unique_ptr<libcamera::CameraManager> manager_;
   std::shared_ptr<libcamera::Camera> camera_;
   std::unique_ptr<libcamera::CameraConfiguration> configuration_;

@@ -3,13 +3,17 @@
 // scripted faults reported through the same Status codes and ImuCounters as the IIO driver:
 //
 //   fault      what Read() does                                             counters
-//   kVanish    delivers samples up to `at_sample`, then returns kUnavailable   errors
-//              on every call (the device is gone) until Close() and Open()
+//   kVanish    delivers samples up to `at_sample`, then the device is gone:    errors,
+//              Read() returns kUnavailable and Open() fails (so ImuDevice's     outages
+//              reopens fail and back off, as the IIO driver's do) until
+//              ClearFaults() plugs it back; it then resumes at `at_sample`
 //   kStall     `count` calls return kDeadlineExceeded, then samples resume     errors
 //   kDrop      samples `at_sample .. at_sample+count-1` are skipped            dropped += count
 //
-// Each fault fires once per Open(). Read() never blocks (like SimulatedCamera): with no
-// sample due it returns kDeadlineExceeded at once, so tests of timing take no wall time.
+// Stalls and drops fire once per Open(). Open() replays from the first sample, except
+// after a vanish (a replugged device goes on from where it was). Read() never blocks (like
+// SimulatedCamera): with no sample due it returns kDeadlineExceeded at once, so tests of
+// timing take no wall time.
 //
 // Pacing: without a clock every remaining sample is available at once, with the samples'
 // own timestamps. With a clock, sample i is due at t0 + (ts_i - ts_0), where t0 is the
@@ -40,21 +44,27 @@ struct SimulatedImuConfig {
   const char* name = "sim:imu";
   double sample_rate_hz = 200.0;  // reported in info(); the samples' timestamps set the pace
   bool has_gyro = true;
+  StreamRecoveryConfig recovery;  // reopening after a vanish, timed by the clock
 };
 
 class SimulatedImu final : public ImuDevice {
  public:
   static constexpr std::size_t kMaxFaults = 16;
 
-  // `samples` (timestamps strictly increasing; IMU frame) and `clock` (nullptr: unpaced)
-  // must outlive the device. Nothing here can fail: Open() checks the samples.
+  // `samples` (timestamps strictly increasing; IMU frame) and `clock` (nullptr: unpaced,
+  // and reopens timed by SystemMonotonicClock()) must outlive the device. Nothing here can
+  // fail: Open() checks the samples.
   SimulatedImu(const SimulatedImuConfig& config, std::span<const dsp::ImuSample> samples,
                const Clock* clock = nullptr, const ImuMounting& mounting = {});
   ~SimulatedImu() override { Close(); }
 
   // Schedules a fault. kResourceExhausted once kMaxFaults are scheduled.
   Status InjectFault(const ImuFault& fault);
-  void ClearFaults() { fault_count_ = 0; }
+  // Removes every fault; a vanished device is plugged back (its next Open() succeeds).
+  void ClearFaults() {
+    fault_count_ = 0;
+    vanished_ = false;
+  }
 
  private:
   Status DoOpen() override;
@@ -77,7 +87,8 @@ class SimulatedImu final : public ImuDevice {
 
   std::size_t next_ = 0;  // next sample to deliver
   std::uint32_t stalls_left_ = 0;
-  bool vanished_ = false;
+  bool vanished_ = false;      // gone until ClearFaults()
+  bool resume_ = false;        // the next Open() goes on from next_ (after a vanish)
   Nanoseconds start_{0};       // when samples_[0] would have been due (paced)
   Nanoseconds last_stamp_{0};  // of the last sample delivered (paced)
 };

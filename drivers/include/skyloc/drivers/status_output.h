@@ -27,6 +27,13 @@
 
 namespace skyloc::drivers {
 
+// Health counters every status output keeps (the simulated twin too); the session prints
+// them with the other devices' (firmware/device_report.h).
+struct StatusOutputCounters {
+  std::uint64_t writes = 0;    // level changes and safe states driven onto the lines
+  std::uint64_t failures = 0;  // of those, the ones the device refused
+};
+
 class StatusOutput {
  public:
   // What NextChange() returns when the lines stay as they are until something new is
@@ -53,6 +60,8 @@ class StatusOutput {
   // The safe state, then the lines released. Harmless when closed.
   void Close();
 
+  // Who the lines are ("GPIO chip gpiochip0", "simulated status output").
+  const char* name() const { return name_; }
   bool is_open() const { return open_; }
   // Showing a state (not the safe state, not closed).
   bool is_showing() const { return showing_; }
@@ -60,6 +69,7 @@ class StatusOutput {
   std::size_t line_count() const { return pattern_.line_count(); }
   // The levels last written (the safe state when closed).
   const StatusLines& levels() const { return levels_; }
+  const StatusOutputCounters& counters() const { return counters_; }
 
   // The optional teach button on the same chip (GpioStatusOutput, SimulatedStatusOutput):
   // whether one is configured and open, and its next edge without blocking
@@ -70,7 +80,6 @@ class StatusOutput {
  protected:
   // `name` starts every error message ("GPIO chip gpiochip0", "simulated status output").
   StatusOutput(StatusLineMode mode, const char* name);
-  const char* name() const { return name_; }
   void SetName(const char* name);
 
  private:
@@ -88,8 +97,12 @@ class StatusOutput {
 
   Status Apply(Nanoseconds now);
 
+  // Counts one write of the lines and, when `s` is an error, one failure; returns `s`.
+  Status Counted(Status s);
+
   StatusPattern pattern_;
   StatusLines levels_;
+  StatusOutputCounters counters_;
   bool open_ = false;
   bool showing_ = false;
   LocalisationState state_ = LocalisationState::kLost;

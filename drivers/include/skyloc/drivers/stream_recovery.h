@@ -1,7 +1,8 @@
-// The decisions a streaming camera driver makes when its device misbehaves, kept apart
-// from the ioctls so a unit test can drive them with made-up times and errnos (the
-// V4L2 driver feeds it real ones). In the manner of PX4's sensor drivers: a small state
-// machine with a consecutive-failure counter.
+// The decisions a streaming device's driver makes when its device misbehaves, kept apart
+// from the system calls so a unit test can drive them with made-up times and errnos: the
+// one backoff policy of the V4L2 camera and of every IMU (ImuDevice reopens any IMU with
+// it, imu_device.h). In the manner of PX4's sensor drivers: a small state machine with a
+// consecutive-failure counter.
 //
 //   kStreaming --device lost (ENODEV, EIO, ...) or stalled--> kBackingOff
 //   kBackingOff --ReopenDue()--> driver closes & reopens --ok--> kStreaming (restart counted)
@@ -9,7 +10,9 @@
 //   kBackingOff --max_failures consecutive failed reopens--> kFailed (Capture reports it)
 //
 // A stream is stalled when no frame arrived for `stall_timeout` while frames were
-// expected (time since streaming started or since the last frame).
+// expected (time since streaming started or since the last frame); the camera uses it.
+// An IMU does not: its samples going stale is the attitude source's business, and only
+// a device that is gone (ENODEV, the file vanished) is closed and reopened.
 #pragma once
 
 #include <cstdint>

@@ -1,7 +1,9 @@
-// Time behind an injectable interface: the pipeline, its latency counters and the simulated
-// drivers (camera, IMU, status output) take a Clock, so tests drive time by hand. The real
-// devices (V4L2, libcamera, the IIO IMU) stamp their samples with CLOCK_MONOTONIC themselves,
-// the time MonotonicClock reads, so their timestamps and the pipeline's agree.
+// Time behind an injectable interface: the pipeline, its latency counters, the simulated
+// drivers (camera, IMU, status output) and the real ones (the V4L2 camera through its
+// V4l2Io, libcamera, the IIO IMU) take a Clock, so tests drive time by hand. A real
+// driver given no clock reads SystemMonotonicClock(); the kernel's own timestamps (V4L2
+// buffers, libcamera's metadata, an IIO buffer's timestamp channel) are CLOCK_MONOTONIC,
+// the time MonotonicClock reads, so the devices' timestamps and the pipeline's agree.
 #pragma once
 
 #include <chrono>
@@ -23,6 +25,9 @@ class MonotonicClock final : public Clock {
  public:
   Nanoseconds Now() const override;
 };
+
+// The process's MonotonicClock, for a driver constructed without a clock.
+const Clock& SystemMonotonicClock();
 
 // A clock that moves only when told to (tests, replay at simulated pace).
 class ManualClock final : public Clock {
