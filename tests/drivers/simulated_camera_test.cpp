@@ -93,7 +93,9 @@ TEST_F(SimulatedCameraTest, StallTimesOutThenResumes) {
     EXPECT_EQ(f.status().code(), StatusCode::kDeadlineExceeded);
   }
   EXPECT_EQ(NextSequence(), 1u);  // nothing lost, only late
-  EXPECT_EQ(camera_.counters().errors, 2u);
+  // A wait that ends before a frame is not an error of the camera: the caller chose the
+  // timeout (the frame loop wakes to blink the status line), and it tells a stall itself.
+  EXPECT_EQ(camera_.counters().errors, 0u);
   EXPECT_EQ(camera_.counters().restarts, 0u);
 }
 
