@@ -123,7 +123,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   if (o->run.world == "seville") {  // an ant's run unless told otherwise
     const firmware::SimRunConfig ant = firmware::SimulateDefaults(/*seville=*/true);
     if (!t.Given("--speed"))
-      o->run.speed_mps = ant.speed_mps;
+      o->run.speed.cruise_mps = ant.speed.cruise_mps;
     if (!t.Given("--camera-height"))
       o->run.camera_height_m = ant.camera_height_m;
   }

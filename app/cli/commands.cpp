@@ -30,19 +30,19 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
   if (which == SimRunOptions::kWorldAndRun) {
     constexpr NumberRange kFraction{0, 1, false, true};
     t->Number("--speed", "M/S", "mean cruise speed (default 1; seville 0.5)", {0, 100, true},
-              &run->speed_mps);
+              &run->speed.cruise_mps);
     t->Number("--speed-band", "F", "cruise speed varies within (1 +- F) (default 0.3)", kFraction,
-              &run->speed_band);
+              &run->speed.band);
     t->Number("--accel", "A", "acceleration and braking, m/s^2 (default 0.5)", {0, 100, true},
-              &run->accel_mps2);
+              &run->speed.accel_mps2);
     t->Number("--start-stop", "S", "seconds standing before the start (default 2)", {0, 3600},
-              &run->start_stop_s);
-    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000, &run->stops);
+              &run->speed.start_stop_s);
+    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000, &run->speed.stops);
     t->NumberPair(
         "--stop-seconds", "MIN,MAX", "each stop's length, seconds (default 2,6)",
         "MIN,MAX seconds with 0 <= MIN <= MAX <= 3600",
-        [](double lo, double hi) { return lo >= 0 && lo <= hi && hi <= 3600; }, &run->stop_min_s,
-        &run->stop_max_s);
+        [](double lo, double hi) { return lo >= 0 && lo <= hi && hi <= 3600; },
+        &run->speed.stop_min_s, &run->speed.stop_max_s);
     t->Number("--spacing", "M",
               "distance sampling instead: a frame every M metres on average (seville: 0.05); "
               "not with the time-sampling options",

@@ -219,236 +219,255 @@ Config DefaultConfig() {
   return c;
 }
 
-Result<Config> ParseConfig(std::string_view text, std::string_view source_name) {
-  const std::string source(source_name);
-  SKYLOC_TRY_ASSIGN(const toml::table root, drivers::ParseTomlText(text, source.c_str()));
-  Config c;
-  Status error;
-  KeysRead keys;
+namespace {
 
-  constexpr const char* kSections[] = {"camera",     "segmentation", "descriptor", "seqslam",
-                                       "capacities", "state",        "status",     "realtime",
-                                       "route_db",   "attitude",     "heading"};
+// [camera]
+void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Enum("kind", &c.camera.kind, kCameraKinds);
+  r.String("device", &c.camera.device, false);
+  r.Path("dataset", &c.camera.dataset);
+  r.Path("lens_file", &c.camera.lens_file);
+  SimRunConfig& sim = c.camera.sim;
+  r.OneOf("sim_world", &sim.world, {"city", "forest", "repetitive", "street"});
+  std::int64_t seed = static_cast<std::int64_t>(sim.seed);
+  r.Int64("sim_seed", &seed, 0, INT64_MAX);
+  sim.seed = static_cast<std::uint64_t>(seed);
+  r.Enum("sim_sampling", &sim.sampling, kSimSamplings);
+  r.Double("sim_speed_mps", &sim.speed.cruise_mps, 0.01, 100.0);
+  r.Double("sim_speed_band", &sim.speed.band, 0.0, 0.99);
+  r.Double("sim_accel_mps2", &sim.speed.accel_mps2, 0.01, 100.0);
+  r.Double("sim_start_stop_s", &sim.speed.start_stop_s, 0.0, 3600.0);
+  r.Int("sim_stops", &sim.speed.stops, 0, 1000);
+  r.Double("sim_stop_min_s", &sim.speed.stop_min_s, 0.0, 3600.0);
+  r.Double("sim_stop_max_s", &sim.speed.stop_max_s, 0.0, 3600.0);
+  if (r.ok() && sim.speed.stop_min_s > sim.speed.stop_max_s)
+    r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
+  r.Int("width", &c.camera.width, 16, 8192);
+  r.Int("height", &c.camera.height, 16, 8192);
+  r.Double("fps", &c.camera.fps, 0.1, 1000.0);
+  r.Int("frame_timeout_ms", &c.camera.frame_timeout_ms, 1, 60000);
+  r.Int("reconnect_timeout_ms", &c.camera.reconnect_timeout_ms, 0, 600000);
+  if (r.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())
+    r.Invalid("dataset", "must name the dataset folder when kind = \"dataset\"");
+}
+
+// [segmentation]
+void ReadSegmentationSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Enum("method", &c.segmentation.method, kSegmentationMethods);
+  r.Int("threshold", &c.segmentation.threshold, 0, 254);
+}
+
+// [descriptor]
+void ReadDescriptorSection(SectionReader& r, const toml::table* table, Config& c) {
+  r.Int("bands", &c.descriptor.bands, 1, 256);
+  r.Enum("grid", &c.descriptor.grid, kGridPresets);
+  r.Int("rings", &c.descriptor.rings, 0, 1024);
+  r.Int("longitudes", &c.descriptor.longitudes, 0, 4096);
+  r.Enum("normalisation", &c.descriptor.normalisation, kNormalisations);
+  if (r.ok() && c.descriptor.grid == GridPreset::kCustom) {
+    if (c.descriptor.rings < 1)
+      r.Invalid("rings", "must be 1..1024 when grid = \"custom\"");
+    else if (c.descriptor.longitudes < 4)
+      r.Invalid("longitudes", "must be 4..4096 when grid = \"custom\"");
+  } else if (r.ok() && (c.descriptor.rings != 0 || c.descriptor.longitudes != 0)) {
+    r.Invalid(c.descriptor.rings != 0 ? "rings" : "longitudes",
+              "is only used with grid = \"custom\"; remove it or set grid = \"custom\"");
+  }
+  const toml::table* t = table;
+  if (r.ok() && c.descriptor.grid == GridPreset::kPaper && t != nullptr && t->contains("bands") &&
+      c.descriptor.bands != 120)
+    r.Invalid("bands", "must be 120 (or left out) with grid = \"paper\"");
+  ResolveDescriptorGrid(&c.descriptor);
+}
+
+// [seqslam]
+void ReadSeqslamSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Enum("matcher", &c.seqslam.matcher, kMatchers);
+  dsp::RouteFilterParams& filter = c.seqslam.filter;
+  dsp::SeqSlamParams& open = c.seqslam.openseqslam;
+  int ds = c.seqslam.ds(), rwindow = c.seqslam.rwindow();
+  r.Int("ds", &ds, 1, 100);
+  c.seqslam.set_ds(ds);
+  r.Int("max_advance", &filter.max_advance, 1, 64);
+  r.Float("keyframe_noise_factor", &filter.keyframe_noise_factor, 0.0, 100.0);
+  r.Float("vmin", &open.v_min, 0.1, 10.0);
+  r.Float("vmax", &open.v_max, 0.1, 10.0);
+  r.Float("vstep", &open.v_step, 0.01, 10.0);
+  r.Int("rwindow", &rwindow, 0, 1000);
+  filter.uniqueness_window = rwindow;
+  open.uniqueness_window = rwindow;
+  r.Int("contrast_r", &open.contrast_window, 0, 1000);
+  if (r.ok() && open.v_max < open.v_min)
+    r.Invalid("vmax", "must not be smaller than vmin");
+}
+
+// [capacities]
+void ReadCapacitiesSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
+  r.Enum("route_storage", &c.capacities.route_storage, kRouteStorages);
+}
+
+// [state]
+void ReadStateSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Float("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
+  r.Float("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
+  r.Float("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
+  r.Int("confirm_frames", &c.state.confirm_frames, 1, 1000);
+  r.Int("drop_frames", &c.state.drop_frames, 1, 1000);
+  r.Int("lost_frames", &c.state.lost_frames, 1, 10000);
+  r.Double("index_tolerance", &c.state.index_tolerance, 0.0, 10000.0);
+  if (r.ok() && c.state.stay_confidence > c.state.enter_confidence)
+    r.Invalid("stay_confidence", "must not be above enter_confidence (hysteresis)");
+}
+
+// [status]
+void ReadStatusSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Enum("kind", &c.status.kind, kStatusOutputKinds);
+  r.String("chip", &c.status.chip, false);
+  r.Int("line_lost", &c.status.line_lost, 0, 511);
+  r.Int("line_searching", &c.status.line_searching, 0, 511);
+  r.Int("line_localised", &c.status.line_localised, 0, 511);
+  r.Enum("encoding", &c.status.encoding, kStatusLineModes);
+  r.Bool("active_low", &c.status.active_low);
+  r.Int("button_line", &c.status.button_line, -1, 511);
+  r.Bool("button_active_low", &c.status.button_active_low);
+  r.Int("button_debounce_ms", &c.status.button_debounce_ms, 0, 1000);
+  if (r.ok() && c.status.encoding == drivers::StatusLineMode::kLinePerState) {
+    if (c.status.line_localised == c.status.line_lost ||
+        c.status.line_localised == c.status.line_searching)
+      r.Invalid("line_localised", "must differ from line_lost and line_searching");
+    else if (c.status.line_searching == c.status.line_lost)
+      r.Invalid("line_searching", "must differ from line_lost");
+  }
+  // The button is an input: it cannot share a pin with a lit indicator.
+  const StatusConfig& st = c.status;
+  const bool per_state = st.encoding == drivers::StatusLineMode::kLinePerState;
+  if (r.ok() && st.button_line >= 0 &&
+      (st.button_line == st.line_localised ||
+       (per_state && (st.button_line == st.line_lost || st.button_line == st.line_searching))))
+    r.Invalid("button_line",
+              per_state ? "must differ from line_lost, line_searching and line_localised "
+                          "(-1: no button)"
+                        : "must differ from line_localised, the blinking line (-1: no button)");
+  if (r.ok() && st.button_line >= 0 && st.kind == StatusOutputKind::kNone)
+    r.Invalid("button_line", "needs kind = \"gpio\" (the button is read on its chip), or -1");
+}
+
+// [realtime]
+void ReadRealtimeSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Int("sched_fifo_priority", &c.realtime.sched_fifo_priority, 0, 99);
+  r.Bool("mlockall", &c.realtime.mlockall);
+  r.Int("cpu_affinity", &c.realtime.cpu_affinity, -1, 1023);
+}
+
+// [route_db]
+void ReadRouteDbSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  r.Int("flush_every", &c.route_db.flush_every, 1, 100000);
+}
+
+// [attitude]
+void ReadAttitudeSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  AttitudeConfig& a = c.attitude;
+  r.Enum("kind", &a.kind, kAttitudeKinds);
+  r.String("device", &a.device, true);
+  r.String("gyro_device", &a.gyro_device, true);
+  r.String("trigger", &a.trigger, true);
+  r.Double("rate_hz", &a.rate_hz, 1.0, 10000.0);
+  r.Double("mount_roll_deg", &a.mount_roll_deg, -180.0, 180.0);
+  r.Double("mount_pitch_deg", &a.mount_pitch_deg, -180.0, 180.0);
+  r.Double("mount_yaw_deg", &a.mount_yaw_deg, -180.0, 180.0);
+  r.Double("max_tilt_deg", &a.max_tilt_deg, 0.0, 75.0);
+  r.Double("cap_taper_deg", &a.cap_taper_deg, 0.0, 30.0);
+  r.Double("filter_kp", &a.filter_kp, 0.0, 100.0);
+  r.Double("filter_ki", &a.filter_ki, 0.0, 100.0);
+  r.Double("accel_gate_mps2", &a.accel_gate_mps2, 0.0, 100.0);
+  r.Int("stale_ms", &a.stale_ms, 1, 60000);
+  if (r.ok() && a.kind == AttitudeKind::kIio && a.device.empty())
+    r.Invalid("device",
+              "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
+              "name, e.g. \"bmi160\")");
+  if (r.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
+    r.Invalid("kind",
+              "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "
+              "it needs [camera] kind = \"dataset\"");
+  if (r.ok() && a.kind == AttitudeKind::kSim && c.camera.kind != CameraKind::kSim)
+    r.Invalid("kind",
+              "\"sim\" simulates the IMU of the simulated camera's run: it needs "
+              "[camera] kind = \"sim\"");
+}
+
+// [heading]
+void ReadHeadingSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
+  dsp::HorizonStripOptions& h = c.heading.strip;
+  dsp::HeadingOptions& e = c.heading.estimate;
+  r.Int("strip_columns", &h.n_azimuth, 0, 4096);
+  r.Int("band_rows", &h.band_rows, 1, 256);
+  r.Double("elevation_min_deg", &h.elevation_min_deg, -90.0, 90.0);
+  r.Double("elevation_max_deg", &h.elevation_max_deg, -90.0, 90.0);
+  r.Bool("surf", &e.surf);
+  r.Float("surf_threshold", &e.features.threshold, 0.0, 255.0);
+  r.Int("surf_max_features", &e.max_features, 1, 4096);
+  r.Int("surf_min_inliers", &e.min_surf_inliers, 2, 4096);
+  if (r.ok() && h.n_azimuth != 0 && h.n_azimuth < 148)
+    r.Invalid("strip_columns",
+              "must be 0 (no heading) or at least 148: 1D SURF's widest filter spans 147 "
+              "columns");
+  if (r.ok() && h.elevation_min_deg > h.elevation_max_deg)
+    r.Invalid("elevation_min_deg", "must not be above elevation_max_deg");
+}
+
+// The sections in the order they are read ([attitude] checks [camera]'s kind).
+struct ConfigSection {
+  const char* name;
+  void (*read)(SectionReader& r, const toml::table* table, Config& c);
+};
+constexpr ConfigSection kConfigSections[] = {
+    {"camera", ReadCameraSection},         {"segmentation", ReadSegmentationSection},
+    {"descriptor", ReadDescriptorSection}, {"seqslam", ReadSeqslamSection},
+    {"capacities", ReadCapacitiesSection}, {"state", ReadStateSection},
+    {"status", ReadStatusSection},         {"realtime", ReadRealtimeSection},
+    {"route_db", ReadRouteDbSection},      {"attitude", ReadAttitudeSection},
+    {"heading", ReadHeadingSection}};
+
+// Every top-level item must be a known [section].
+Status CheckSections(const toml::table& root, const std::string& source) {
   for (auto&& [k, node] : root) {
+    const std::string name(k.str());
     if (!node.is_table()) {
       // A key above every [section] header (or a section written as a key).
-      const std::string key(k.str());
       return Status::Error(StatusCode::kInvalidArgument,
                            "%s:%u: key %s is not known at the top level: every key belongs in "
                            "a [section] (see config/skyloc.toml for where %s goes)",
-                           source.c_str(), node.source().begin.line, key.c_str(), key.c_str());
-    }
-    bool known = false;
-    for (const char* s : kSections)
-      known = known || k.str() == s;
-    const std::string name(k.str());
-    if (!known) {
-      return Status::Error(StatusCode::kInvalidArgument,
-                           "%s:%u: [%s] is not a known section (known: camera, segmentation, "
-                           "descriptor, seqslam, capacities, state, status, realtime, route_db, "
-                           "attitude, heading)",
-                           source.c_str(), node.source().begin.line, name.c_str());
-    }
-    if (!node.is_table()) {
-      return Status::Error(StatusCode::kInvalidArgument, "%s:%u: %s must be a table [%s]",
                            source.c_str(), node.source().begin.line, name.c_str(), name.c_str());
     }
+    bool known = false;
+    std::string names;
+    for (const ConfigSection& s : kConfigSections) {
+      known = known || name == s.name;
+      names += std::string(names.empty() ? "" : ", ") + s.name;
+    }
+    if (!known) {
+      return Status::Error(StatusCode::kInvalidArgument,
+                           "%s:%u: [%s] is not a known section (known: %s)", source.c_str(),
+                           node.source().begin.line, name.c_str(), names.c_str());
+    }
   }
-  auto section = [&](const char* name) { return root.get_as<toml::table>(name); };
+  return Status::Ok();
+}
 
-  {
-    SectionReader r(section("camera"), "camera", source, &error, &keys);
-    r.Enum("kind", &c.camera.kind, kCameraKinds);
-    r.String("device", &c.camera.device, false);
-    r.Path("dataset", &c.camera.dataset);
-    r.Path("lens_file", &c.camera.lens_file);
-    SimRunConfig& sim = c.camera.sim;
-    r.OneOf("sim_world", &sim.world, {"city", "forest", "repetitive", "street"});
-    std::int64_t seed = static_cast<std::int64_t>(sim.seed);
-    r.Int64("sim_seed", &seed, 0, INT64_MAX);
-    sim.seed = static_cast<std::uint64_t>(seed);
-    r.Enum("sim_sampling", &sim.sampling, kSimSamplings);
-    r.Double("sim_speed_mps", &sim.speed_mps, 0.01, 100.0);
-    r.Double("sim_speed_band", &sim.speed_band, 0.0, 0.99);
-    r.Double("sim_accel_mps2", &sim.accel_mps2, 0.01, 100.0);
-    r.Double("sim_start_stop_s", &sim.start_stop_s, 0.0, 3600.0);
-    r.Int("sim_stops", &sim.stops, 0, 1000);
-    r.Double("sim_stop_min_s", &sim.stop_min_s, 0.0, 3600.0);
-    r.Double("sim_stop_max_s", &sim.stop_max_s, 0.0, 3600.0);
-    if (r.ok() && sim.stop_min_s > sim.stop_max_s)
-      r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
-    r.Int("width", &c.camera.width, 16, 8192);
-    r.Int("height", &c.camera.height, 16, 8192);
-    r.Double("fps", &c.camera.fps, 0.1, 1000.0);
-    r.Int("frame_timeout_ms", &c.camera.frame_timeout_ms, 1, 60000);
-    r.Int("reconnect_timeout_ms", &c.camera.reconnect_timeout_ms, 0, 600000);
-    if (r.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())
-      r.Invalid("dataset", "must name the dataset folder when kind = \"dataset\"");
-    r.Finish();
-  }
-  {
-    SectionReader r(section("segmentation"), "segmentation", source, &error, &keys);
-    r.Enum("method", &c.segmentation.method, kSegmentationMethods);
-    r.Int("threshold", &c.segmentation.threshold, 0, 254);
-    r.Finish();
-  }
-  {
-    SectionReader r(section("descriptor"), "descriptor", source, &error, &keys);
-    r.Int("bands", &c.descriptor.bands, 1, 256);
-    r.Enum("grid", &c.descriptor.grid, kGridPresets);
-    r.Int("rings", &c.descriptor.rings, 0, 1024);
-    r.Int("longitudes", &c.descriptor.longitudes, 0, 4096);
-    r.Enum("normalisation", &c.descriptor.normalisation, kNormalisations);
-    if (r.ok() && c.descriptor.grid == GridPreset::kCustom) {
-      if (c.descriptor.rings < 1)
-        r.Invalid("rings", "must be 1..1024 when grid = \"custom\"");
-      else if (c.descriptor.longitudes < 4)
-        r.Invalid("longitudes", "must be 4..4096 when grid = \"custom\"");
-    } else if (r.ok() && (c.descriptor.rings != 0 || c.descriptor.longitudes != 0)) {
-      r.Invalid(c.descriptor.rings != 0 ? "rings" : "longitudes",
-                "is only used with grid = \"custom\"; remove it or set grid = \"custom\"");
-    }
-    const toml::table* t = section("descriptor");
-    if (r.ok() && c.descriptor.grid == GridPreset::kPaper && t != nullptr && t->contains("bands") &&
-        c.descriptor.bands != 120)
-      r.Invalid("bands", "must be 120 (or left out) with grid = \"paper\"");
-    ResolveDescriptorGrid(&c.descriptor);
-    r.Finish();
-  }
-  {
-    SectionReader r(section("seqslam"), "seqslam", source, &error, &keys);
-    r.Enum("matcher", &c.seqslam.matcher, kMatchers);
-    dsp::RouteFilterParams& filter = c.seqslam.filter;
-    dsp::SeqSlamParams& open = c.seqslam.openseqslam;
-    int ds = c.seqslam.ds(), rwindow = c.seqslam.rwindow();
-    r.Int("ds", &ds, 1, 100);
-    c.seqslam.set_ds(ds);
-    r.Int("max_advance", &filter.max_advance, 1, 64);
-    r.Float("keyframe_noise_factor", &filter.keyframe_noise_factor, 0.0, 100.0);
-    r.Float("vmin", &open.v_min, 0.1, 10.0);
-    r.Float("vmax", &open.v_max, 0.1, 10.0);
-    r.Float("vstep", &open.v_step, 0.01, 10.0);
-    r.Int("rwindow", &rwindow, 0, 1000);
-    filter.uniqueness_window = rwindow;
-    open.uniqueness_window = rwindow;
-    r.Int("contrast_r", &open.contrast_window, 0, 1000);
-    if (r.ok() && open.v_max < open.v_min)
-      r.Invalid("vmax", "must not be smaller than vmin");
-    r.Finish();
-  }
-  {
-    SectionReader r(section("capacities"), "capacities", source, &error, &keys);
-    r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
-    r.Enum("route_storage", &c.capacities.route_storage, kRouteStorages);
-    r.Finish();
-  }
-  {
-    SectionReader r(section("state"), "state", source, &error, &keys);
-    r.Float("enter_confidence", &c.state.enter_confidence, 0.0, 1.0);
-    r.Float("stay_confidence", &c.state.stay_confidence, 0.0, 1.0);
-    r.Float("max_uniqueness", &c.state.max_uniqueness, 0.0, 1.0);
-    r.Int("confirm_frames", &c.state.confirm_frames, 1, 1000);
-    r.Int("drop_frames", &c.state.drop_frames, 1, 1000);
-    r.Int("lost_frames", &c.state.lost_frames, 1, 10000);
-    r.Double("index_tolerance", &c.state.index_tolerance, 0.0, 10000.0);
-    if (r.ok() && c.state.stay_confidence > c.state.enter_confidence)
-      r.Invalid("stay_confidence", "must not be above enter_confidence (hysteresis)");
-    r.Finish();
-  }
-  {
-    SectionReader r(section("status"), "status", source, &error, &keys);
-    r.Enum("kind", &c.status.kind, kStatusOutputKinds);
-    r.String("chip", &c.status.chip, false);
-    r.Int("line_lost", &c.status.line_lost, 0, 511);
-    r.Int("line_searching", &c.status.line_searching, 0, 511);
-    r.Int("line_localised", &c.status.line_localised, 0, 511);
-    r.Enum("encoding", &c.status.encoding, kStatusLineModes);
-    r.Bool("active_low", &c.status.active_low);
-    r.Int("button_line", &c.status.button_line, -1, 511);
-    r.Bool("button_active_low", &c.status.button_active_low);
-    r.Int("button_debounce_ms", &c.status.button_debounce_ms, 0, 1000);
-    if (r.ok() && c.status.encoding == drivers::StatusLineMode::kLinePerState) {
-      if (c.status.line_localised == c.status.line_lost ||
-          c.status.line_localised == c.status.line_searching)
-        r.Invalid("line_localised", "must differ from line_lost and line_searching");
-      else if (c.status.line_searching == c.status.line_lost)
-        r.Invalid("line_searching", "must differ from line_lost");
-    }
-    // The button is an input: it cannot share a pin with a lit indicator.
-    const StatusConfig& st = c.status;
-    const bool per_state = st.encoding == drivers::StatusLineMode::kLinePerState;
-    if (r.ok() && st.button_line >= 0 &&
-        (st.button_line == st.line_localised ||
-         (per_state && (st.button_line == st.line_lost || st.button_line == st.line_searching))))
-      r.Invalid("button_line",
-                per_state ? "must differ from line_lost, line_searching and line_localised "
-                            "(-1: no button)"
-                          : "must differ from line_localised, the blinking line (-1: no button)");
-    if (r.ok() && st.button_line >= 0 && st.kind == StatusOutputKind::kNone)
-      r.Invalid("button_line", "needs kind = \"gpio\" (the button is read on its chip), or -1");
-    r.Finish();
-  }
-  {
-    SectionReader r(section("realtime"), "realtime", source, &error, &keys);
-    r.Int("sched_fifo_priority", &c.realtime.sched_fifo_priority, 0, 99);
-    r.Bool("mlockall", &c.realtime.mlockall);
-    r.Int("cpu_affinity", &c.realtime.cpu_affinity, -1, 1023);
-    r.Finish();
-  }
-  {
-    SectionReader r(section("route_db"), "route_db", source, &error, &keys);
-    r.Int("flush_every", &c.route_db.flush_every, 1, 100000);
-    r.Finish();
-  }
-  {
-    SectionReader r(section("attitude"), "attitude", source, &error, &keys);
-    AttitudeConfig& a = c.attitude;
-    r.Enum("kind", &a.kind, kAttitudeKinds);
-    r.String("device", &a.device, true);
-    r.String("gyro_device", &a.gyro_device, true);
-    r.String("trigger", &a.trigger, true);
-    r.Double("rate_hz", &a.rate_hz, 1.0, 10000.0);
-    r.Double("mount_roll_deg", &a.mount_roll_deg, -180.0, 180.0);
-    r.Double("mount_pitch_deg", &a.mount_pitch_deg, -180.0, 180.0);
-    r.Double("mount_yaw_deg", &a.mount_yaw_deg, -180.0, 180.0);
-    r.Double("max_tilt_deg", &a.max_tilt_deg, 0.0, 75.0);
-    r.Double("cap_taper_deg", &a.cap_taper_deg, 0.0, 30.0);
-    r.Double("filter_kp", &a.filter_kp, 0.0, 100.0);
-    r.Double("filter_ki", &a.filter_ki, 0.0, 100.0);
-    r.Double("accel_gate_mps2", &a.accel_gate_mps2, 0.0, 100.0);
-    r.Int("stale_ms", &a.stale_ms, 1, 60000);
-    if (r.ok() && a.kind == AttitudeKind::kIio && a.device.empty())
-      r.Invalid("device",
-                "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
-                "name, e.g. \"bmi160\")");
-    if (r.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
-      r.Invalid("kind",
-                "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "
-                "it needs [camera] kind = \"dataset\"");
-    if (r.ok() && a.kind == AttitudeKind::kSim && c.camera.kind != CameraKind::kSim)
-      r.Invalid("kind",
-                "\"sim\" simulates the IMU of the simulated camera's run: it needs "
-                "[camera] kind = \"sim\"");
-    r.Finish();
-  }
-  {
-    SectionReader r(section("heading"), "heading", source, &error, &keys);
-    dsp::HorizonStripOptions& h = c.heading.strip;
-    dsp::HeadingOptions& e = c.heading.estimate;
-    r.Int("strip_columns", &h.n_azimuth, 0, 4096);
-    r.Int("band_rows", &h.band_rows, 1, 256);
-    r.Double("elevation_min_deg", &h.elevation_min_deg, -90.0, 90.0);
-    r.Double("elevation_max_deg", &h.elevation_max_deg, -90.0, 90.0);
-    r.Bool("surf", &e.surf);
-    r.Float("surf_threshold", &e.features.threshold, 0.0, 255.0);
-    r.Int("surf_max_features", &e.max_features, 1, 4096);
-    r.Int("surf_min_inliers", &e.min_surf_inliers, 2, 4096);
-    if (r.ok() && h.n_azimuth != 0 && h.n_azimuth < 148)
-      r.Invalid("strip_columns",
-                "must be 0 (no heading) or at least 148: 1D SURF's widest filter spans 147 "
-                "columns");
-    if (r.ok() && h.elevation_min_deg > h.elevation_max_deg)
-      r.Invalid("elevation_min_deg", "must not be above elevation_max_deg");
+}  // namespace
+
+Result<Config> ParseConfig(std::string_view text, std::string_view source_name) {
+  const std::string source(source_name);
+  SKYLOC_TRY_ASSIGN(const toml::table root, drivers::ParseTomlText(text, source.c_str()));
+  SKYLOC_TRY(CheckSections(root, source));
+  Config c;
+  Status error;
+  KeysRead keys;
+  for (const ConfigSection& s : kConfigSections) {
+    const toml::table* table = root.get_as<toml::table>(s.name);
+    SectionReader r(table, s.name, source, &error, &keys);
+    s.read(r, table, c);
     r.Finish();
   }
   if (!error.ok())

@@ -16,6 +16,7 @@
 #include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/spherical_harmonics.h"
 #include "skyloc/platform/status.h"
+#include "skyloc/sim/motion.h"
 
 namespace skyloc::firmware {
 
@@ -50,14 +51,8 @@ struct SimRunConfig {
   SimSampling sampling = SimSampling::kDistance;
   double spacing_m = 1.0;     // kDistance: mean distance between frames
   double speed_jitter = 0.2;  // kDistance: speed varies within (1 +- jitter)
-  double speed_mps = 1.0;     // kTime: sim::SpeedProfile's fields
-  double speed_band = 0.3;
-  double accel_mps2 = 0.5;
-  double start_stop_s = 2.0;
-  int stops = 2;
-  double stop_min_s = 2.0;
-  double stop_max_s = 6.0;
-  double speed_ratio = 1.0;  // kTime: scales the cruise speed (a faster repeat run)
+  sim::SpeedProfile speed;    // kTime: the cruise speed, its band, and the stops
+  double speed_ratio = 1.0;   // kTime: scales the cruise speed (a faster repeat run)
   double camera_height_m = 1.0;
   double tilt_deg = 0;            // constant pitch, nose up positive (the paper's alpha)
   double zigzag_deg = 0;          // yaw weave amplitude

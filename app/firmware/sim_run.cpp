@@ -6,7 +6,7 @@ SimRunConfig SimulateDefaults(bool seville) {
   SimRunConfig run;
   run.sampling = SimSampling::kTime;
   if (seville) {
-    run.speed_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
+    run.speed.cruise_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
     run.camera_height_m = 0.01;
   }
   return run;
@@ -19,13 +19,7 @@ SimRunConfig ConfiguredSimRun(const SimRunConfig& configured, const SimRunConfig
   run.sampling = configured.sampling;
   run.spacing_m = configured.spacing_m;
   run.speed_jitter = configured.speed_jitter;
-  run.speed_mps = configured.speed_mps;
-  run.speed_band = configured.speed_band;
-  run.accel_mps2 = configured.accel_mps2;
-  run.start_stop_s = configured.start_stop_s;
-  run.stops = configured.stops;
-  run.stop_min_s = configured.stop_min_s;
-  run.stop_max_s = configured.stop_max_s;
+  run.speed = configured.speed;
   return run;
 }
 
@@ -35,13 +29,7 @@ sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps) {
       run.sampling == SimSampling::kTime ? sim::Sampling::kTime : sim::Sampling::kDistance;
   motion.frame_spacing_m = run.spacing_m;
   motion.speed_jitter = run.speed_jitter;
-  motion.speed.cruise_mps = run.speed_mps;
-  motion.speed.band = run.speed_band;
-  motion.speed.accel_mps2 = run.accel_mps2;
-  motion.speed.start_stop_s = run.start_stop_s;
-  motion.speed.stops = run.stops;
-  motion.speed.stop_min_s = run.stop_min_s;
-  motion.speed.stop_max_s = run.stop_max_s;
+  motion.speed = run.speed;
   motion.speed_ratio = run.speed_ratio;
   motion.fps = fps;
   motion.height_m = run.camera_height_m;

@@ -60,13 +60,13 @@ TEST(SimRunOptions, SimulateFillsTheWorldAndTheSampling) {
   ASSERT_EQ(t.Parse(a.span()), ParseOutcome::kRun);
   EXPECT_EQ(run.world, "repetitive");
   EXPECT_EQ(run.seed, 4u);
-  EXPECT_EQ(run.speed_mps, 2.5);
-  EXPECT_EQ(run.speed_band, 0.1);
-  EXPECT_EQ(run.accel_mps2, 1.5);
-  EXPECT_EQ(run.start_stop_s, 0.0);
-  EXPECT_EQ(run.stops, 3);
-  EXPECT_EQ(run.stop_min_s, 1.0);
-  EXPECT_EQ(run.stop_max_s, 4.0);
+  EXPECT_EQ(run.speed.cruise_mps, 2.5);
+  EXPECT_EQ(run.speed.band, 0.1);
+  EXPECT_EQ(run.speed.accel_mps2, 1.5);
+  EXPECT_EQ(run.speed.start_stop_s, 0.0);
+  EXPECT_EQ(run.speed.stops, 3);
+  EXPECT_EQ(run.speed.stop_min_s, 1.0);
+  EXPECT_EQ(run.speed.stop_max_s, 4.0);
   EXPECT_EQ(run.camera_height_m, 0.5);
 
   firmware::SimRunConfig distance;

@@ -17,13 +17,13 @@ SimRunConfig EveryFieldSet() {
   r.sampling = SimSampling::kTime;
   r.spacing_m = 0.5;
   r.speed_jitter = 0.1;
-  r.speed_mps = 2.5;
-  r.speed_band = 0.2;
-  r.accel_mps2 = 0.75;
-  r.start_stop_s = 3;
-  r.stops = 4;
-  r.stop_min_s = 1;
-  r.stop_max_s = 5;
+  r.speed.cruise_mps = 2.5;
+  r.speed.band = 0.2;
+  r.speed.accel_mps2 = 0.75;
+  r.speed.start_stop_s = 3;
+  r.speed.stops = 4;
+  r.speed.stop_min_s = 1;
+  r.speed.stop_max_s = 5;
   r.speed_ratio = 1.5;
   r.camera_height_m = 2;
   r.tilt_deg = 10;
@@ -85,9 +85,9 @@ TEST(SimRun, DefaultsAreTheSimulatorsDefaults) {
 
 TEST(SimRun, SimulateStartsInTimeAndSevilleIsAnAnt) {
   EXPECT_EQ(SimulateDefaults(false).sampling, SimSampling::kTime);
-  EXPECT_EQ(SimulateDefaults(false).speed_mps, 1.0);
+  EXPECT_EQ(SimulateDefaults(false).speed.cruise_mps, 1.0);
   EXPECT_EQ(SimulateDefaults(false).camera_height_m, 1.0);
-  EXPECT_EQ(SimulateDefaults(true).speed_mps, 0.5);
+  EXPECT_EQ(SimulateDefaults(true).speed.cruise_mps, 0.5);
   EXPECT_EQ(SimulateDefaults(true).camera_height_m, 0.01);
 }
 
@@ -105,8 +105,8 @@ TEST(SimRun, ConfiguredRunTakesTheWorldFromTheConfigAndTheRunFromTheFlags) {
   EXPECT_EQ(run.world, "forest");
   EXPECT_EQ(run.seed, 7u);
   EXPECT_EQ(run.sampling, SimSampling::kTime);
-  EXPECT_EQ(run.speed_mps, 2.5);
-  EXPECT_EQ(run.stops, 4);
+  EXPECT_EQ(run.speed.cruise_mps, 2.5);
+  EXPECT_EQ(run.speed.stops, 4);
   EXPECT_EQ(run.run_seed, 3u);
   EXPECT_EQ(run.tilt_deg, -5.0);
   EXPECT_EQ(run.zigzag_deg, 0.0);
@@ -137,13 +137,13 @@ TEST(SimRun, ConfigKeysFillTheRun) {
   EXPECT_EQ(s.world, "forest");
   EXPECT_EQ(s.seed, 5u);
   EXPECT_EQ(s.sampling, SimSampling::kTime);
-  EXPECT_EQ(s.speed_mps, 2.0);
-  EXPECT_EQ(s.speed_band, 0.1);
-  EXPECT_EQ(s.accel_mps2, 1.5);
-  EXPECT_EQ(s.start_stop_s, 0.0);
-  EXPECT_EQ(s.stops, 3);
-  EXPECT_EQ(s.stop_min_s, 1.0);
-  EXPECT_EQ(s.stop_max_s, 2.0);
+  EXPECT_EQ(s.speed.cruise_mps, 2.0);
+  EXPECT_EQ(s.speed.band, 0.1);
+  EXPECT_EQ(s.speed.accel_mps2, 1.5);
+  EXPECT_EQ(s.speed.start_stop_s, 0.0);
+  EXPECT_EQ(s.speed.stops, 3);
+  EXPECT_EQ(s.speed.stop_min_s, 1.0);
+  EXPECT_EQ(s.speed.stop_max_s, 2.0);
   EXPECT_EQ(DefaultConfig().camera.sim, SimRunConfig{});
 }
 

@@ -36,6 +36,8 @@ struct SpeedProfile {
   int stops = 2;               // further stops, at random places along the route
   double stop_min_s = 2.0;     // each stop lasts a random time within min..max
   double stop_max_s = 6.0;
+
+  bool operator==(const SpeedProfile&) const = default;
 };
 
 struct MotionConfig {
