@@ -299,6 +299,18 @@ class ImuCompliance : public ::testing::TestWithParam<ImuCase> {
     return m;
   }
 
+  // Takes the streaming device away and reads until Read() fails (samples read before it
+  // went may still be delivered first): that read's status.
+  Status VanishAndReadUntilFailure() {
+    const std::string why = under_->Vanish();
+    EXPECT_TRUE(why.empty()) << why;
+    std::array<dsp::ImuSample, 16> buf{};
+    Result<std::size_t> r = imu().Read(buf, milliseconds(300));
+    for (int i = 0; i < 1000 && r.ok(); ++i)
+      r = imu().Read(buf, milliseconds(300));
+    return r.status();
+  }
+
   std::unique_ptr<ImuUnderTest> under_;
 };
 
@@ -463,18 +475,13 @@ TEST_P(ImuCompliance, VanishedDeviceIsUnavailableThenReopens) {
   ASSERT_OK(imu().Open());
   ASSERT_OK(imu().Start());
   ReadSamples(5);
-  const std::string why = under_->Vanish();
-  ASSERT_TRUE(why.empty()) << why;
+  const Status gone = VanishAndReadUntilFailure();
+  EXPECT_EQ(gone.code(), StatusCode::kUnavailable) << gone.message();
+  EXPECT_NE(std::string(gone.message()).find(imu().info().name), std::string::npos)
+      << "the message names the IMU: " << gone.message();
+  std::printf("  vanished: %s\n", gone.message());
   std::array<dsp::ImuSample, 16> buf{};
-  Result<std::size_t> r = imu().Read(buf, milliseconds(300));
-  // Samples read before the device went may still be delivered first.
-  for (int i = 0; i < 1000 && r.ok(); ++i)
-    r = imu().Read(buf, milliseconds(300));
-  EXPECT_EQ(r.status().code(), StatusCode::kUnavailable) << r.status().message();
-  EXPECT_NE(std::string(r.status().message()).find(imu().info().name), std::string::npos)
-      << "the message names the IMU: " << r.status().message();
-  std::printf("  vanished: %s\n", r.status().message());
-  r = imu().Read(buf, milliseconds(10));
+  Result<std::size_t> r = imu().Read(buf, milliseconds(10));
   EXPECT_EQ(r.status().code(), StatusCode::kUnavailable) << "stays gone: " << r.status().message();
   imu().Close();
 
@@ -492,13 +499,10 @@ TEST_P(ImuCompliance, AGoneDeviceReopensItselfOnceItIsBack) {
   ASSERT_OK(imu().Open());
   ASSERT_OK(imu().Start());
   ReadSamples(5);
-  const std::string why = under_->Vanish();
-  ASSERT_TRUE(why.empty()) << why;
+  const Status gone = VanishAndReadUntilFailure();
+  ASSERT_EQ(gone.code(), StatusCode::kUnavailable) << gone.message();
   std::array<dsp::ImuSample, 16> buf{};
-  Result<std::size_t> r = imu().Read(buf, milliseconds(300));
-  for (int i = 0; i < 1000 && r.ok(); ++i)
-    r = imu().Read(buf, milliseconds(300));
-  ASSERT_EQ(r.status().code(), StatusCode::kUnavailable) << r.status().message();
+  Result<std::size_t> r = gone;
   EXPECT_EQ(imu().counters().outages, 1u);
   EXPECT_EQ(imu().counters().reopens, 0u);
   const std::string back = under_->Revive();
