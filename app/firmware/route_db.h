@@ -255,6 +255,8 @@ Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage 
 // refusal's message) and removes the file while it still holds the lock.
 class RouteLock {
  public:
+  static constexpr std::size_t kPathCapacity = 264;  // FILE.db.lock, its terminator included
+
   RouteLock() = default;
   ~RouteLock() { Release(); }
   RouteLock(const RouteLock&) = delete;
@@ -267,7 +269,7 @@ class RouteLock {
 
  private:
   UniqueFd fd_;
-  char path_[264] = {};
+  char path_[kPathCapacity] = {};
 };
 
 // Whether a teach holds the lock of the route at `route_path` now, asked without taking
