@@ -218,6 +218,9 @@ const BadCase kBadCases[] = {
     {"[attitude]\nkind = \"dataset\"\n", "[attitude] kind"},
     {"[camera]\nkind = \"dataset\"\ndataset = \"d\"\n[attitude]\nkind = \"sim\"\n",
      "[attitude] kind", ":5:"},
+    // The simulated IMU on a distance-sampled run reads the speed's steps as tilt.
+    {"[camera]\nkind = \"sim\"\nsim_sampling = \"distance\"\n[attitude]\nkind = \"sim\"\n",
+     "[attitude] kind \"sim\" needs [camera] sim_sampling = \"time\"", ":5:"},
     {"[attitude]\nmax_tilt_deg = 80\n", "[attitude] max_tilt_deg"},
     {"[attitude]\ncap_taper_deg = -1\n", "[attitude] cap_taper_deg"},
     {"[attitude]\nrate_hz = 0\n", "[attitude] rate_hz"},
