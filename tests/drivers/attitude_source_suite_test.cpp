@@ -267,9 +267,9 @@ TEST(ImuAttitudeSource, AnImuThatStopsGoesStaleAndAGoneImuIsUnavailable) {
 }
 
 // An IMU unplugged mid-run and plugged back heals by itself, on the V4L2 camera's backoff
-// (StreamRecovery's defaults: 100, 200, 400, 800 ms between attempts), and the frames get
-// their attitude (so the gravity-aligned cap) back. All on a ManualClock: the simulated IMU
-// is paced by it and the frames are stamped with it.
+// capped at 500 ms (ImuRecoveryConfig: 100, 200, 400, 500 ms between attempts), and the
+// frames get their attitude (so the gravity-aligned cap) back. All on a ManualClock: the
+// simulated IMU is paced by it and the frames are stamped with it.
 TEST(ImuAttitudeSource, AnUnpluggedImuReopensWithTheCameraBackoffAndTheAttitudeReturns) {
   const std::array<double, 3> up = dsp::UpFromRollPitch(kRollDeg, kPitchDeg);
   std::vector<dsp::ImuSample> samples(static_cast<std::size_t>(kSamples));
@@ -286,9 +286,9 @@ TEST(ImuAttitudeSource, AnUnpluggedImuReopensWithTheCameraBackoffAndTheAttitudeR
   ImuAttitudeSource source(&imu, {});
   ASSERT_TRUE(source.Open().ok());
   // The device is lost at the frame of 2.0 s; attempts at 2.1, 2.3 and 2.7 s find it still
-  // unplugged (plugged back at 3.0 s), the one at 3.5 s reopens it. The frame at 3.5 s
+  // unplugged (plugged back at 3.0 s), the one at 3.2 s reopens it. The frame at 3.2 s
   // has only the first sample after the gap, on which the filter restarts.
-  constexpr std::int64_t kLost = 2'000'000'000, kReplug = 3'000'000'000, kReopen = 3'500'000'000;
+  constexpr std::int64_t kLost = 2'000'000'000, kReplug = 3'000'000'000, kReopen = 3'200'000'000;
   std::int64_t first_back = -1;
   for (std::int64_t t = 0; t <= 6'000'000'000; t += 100'000'000) {
     if (t == kReplug)
@@ -313,7 +313,7 @@ TEST(ImuAttitudeSource, AnUnpluggedImuReopensWithTheCameraBackoffAndTheAttitudeR
   EXPECT_LE(first_back, kReopen + 100'000'000);
   EXPECT_EQ(imu.counters().outages, 1u);
   EXPECT_EQ(imu.counters().reopens, 1u);
-  EXPECT_EQ(source.counters().unavailable, 15u);  // 2.0 .. 3.4 s
+  EXPECT_EQ(source.counters().unavailable, 12u);  // 2.0 .. 3.1 s
 }
 
 }  // namespace

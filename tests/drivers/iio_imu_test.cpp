@@ -417,6 +417,44 @@ TEST(IioImu, PollingTimingOutagesAndReopensFollowTheClock) {
   EXPECT_EQ(imu.recovery().state(), StreamRecovery::State::kStreaming);
 }
 
+// However long the IMU was gone, it is back in use within a second of its return (frames are
+// described as if level until then): the reopen attempts never drift further apart than
+// that. Read every 10 ms, as a 100 fps frame loop asks for the attitude.
+TEST(IioImu, AnImuBackAfterAnyOutageIsReopenedWithinASecond) {
+  for (const int outage_ms : {2000, 2900, 10'000, 60'000}) {
+    SCOPED_TRACE(outage_ms);
+    const skyloc::testing::ScratchDir scratch("imu_iio_back_");
+    FakeIioDevice fake(scratch.path(), FakeIioDevice::Options{"fake_imu", 2, false, true});
+    IioImuConfig c;
+    std::snprintf(c.device, sizeof c.device, "fake_imu");
+    std::snprintf(c.sysfs_root, sizeof c.sysfs_root, "%s", fake.sysfs_root().c_str());
+    std::snprintf(c.dev_root, sizeof c.dev_root, "%s", fake.dev_root().c_str());
+    c.sample_rate_hz = 100.0;
+    c.mode = IioImuConfig::Mode::kPolling;
+    ManualClock clock(std::chrono::seconds(1000));
+    IioImu imu(c, &clock);
+    ASSERT_TRUE(imu.Open().ok());
+    ASSERT_TRUE(imu.Start().ok());
+    std::array<dsp::ImuSample, 4> buf{};
+    ASSERT_TRUE(imu.Read(buf, milliseconds(0)).ok());
+
+    fake.Vanish();
+    for (int t = 0; t < outage_ms; t += 10) {
+      clock.Advance(milliseconds(10));
+      ASSERT_FALSE(imu.Read(buf, milliseconds(0)).ok());
+    }
+    ASSERT_EQ(imu.counters().outages, 1u);
+    fake.Revive();
+    int back_after_ms = 0;
+    while (!imu.Read(buf, milliseconds(0)).ok() && back_after_ms <= 5000) {
+      clock.Advance(milliseconds(10));
+      back_after_ms += 10;
+    }
+    EXPECT_LE(back_after_ms, 1000);
+    EXPECT_EQ(imu.counters().reopens, 1u);
+  }
+}
+
 TEST(SimulatedImu, RefusesSamplesOutOfOrder) {
   std::vector<dsp::ImuSample> samples = Ramp(3);
   samples[2].timestamp_ns = samples[1].timestamp_ns;

@@ -507,7 +507,7 @@ TEST_P(ImuCompliance, AGoneDeviceReopensItselfOnceItIsBack) {
   EXPECT_EQ(imu().counters().reopens, 0u);
   const std::string back = under_->Revive();
   ASSERT_TRUE(back.empty()) << back;
-  // The attempts come at most backoff_max (2 s) apart: 40 reads 100 ms apart see one.
+  // The attempts come at most backoff_max (500 ms) apart: 40 reads 100 ms apart see one.
   for (int i = 0; i < 40; ++i) {
     under_->Wait(milliseconds(100));
     under_->Produce(static_cast<int>(buf.size()));

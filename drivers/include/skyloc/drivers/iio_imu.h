@@ -72,7 +72,8 @@ struct IioImuConfig {
   char sysfs_root[192] = "/sys/bus/iio/devices";
   char dev_root[192] = "/dev";
   ImuMounting mounting;
-  StreamRecoveryConfig recovery;  // reopening after an outage (ImuDevice), as the camera's
+  // Reopening after an outage (ImuDevice).
+  StreamRecoveryConfig recovery = ImuRecoveryConfig();
 };
 
 class IioImu final : public ImuDevice {

@@ -10,7 +10,8 @@
 // Healing: when a Read() finds the device gone (kUnavailable: unplugged, driver unbound,
 // the simulated twin's kVanish), the device is closed and an outage counted; later Read()
 // calls reopen it (DoOpen, DoStart) with the V4L2 camera's backoff (StreamRecovery:
-// 100 ms, doubling up to 2 s, on the device's Clock) and return kUnavailable until a
+// 100 ms, doubling, on the device's Clock), capped at 500 ms (ImuRecoveryConfig) where the
+// camera's is 2 s, and return kUnavailable until a
 // reopen succeeds, which counts a reopen; samples then flow again with no call from the
 // caller. Read() does not wait for a reopen: while the device is away it returns at once.
 //
@@ -23,6 +24,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -33,6 +35,17 @@
 #include "skyloc/platform/status.h"
 
 namespace skyloc::drivers {
+
+// An IMU's reopen schedule after an outage: the camera's, with the attempts at most
+// 500 ms apart instead of 2 s. Frames are described as if level while the IMU is away, so
+// it must be back in use within a second of its return however long it was gone; an
+// attempt is a scan of a few sysfs names, cheap enough twice a second for as long as it
+// takes.
+inline StreamRecoveryConfig ImuRecoveryConfig() {
+  StreamRecoveryConfig c;
+  c.backoff_max = std::chrono::milliseconds(500);
+  return c;
+}
 
 struct ImuMounting {
   double roll_deg = 0.0;
@@ -106,7 +119,7 @@ class ImuDevice {
  protected:
   // `clock` (nullptr: SystemMonotonicClock()) times the reopens; it must outlive the device.
   explicit ImuDevice(const ImuMounting& mounting = {}, const Clock* clock = nullptr,
-                     const StreamRecoveryConfig& recovery = {})
+                     const StreamRecoveryConfig& recovery = ImuRecoveryConfig())
       : mounting_(mounting),
         clock_(clock != nullptr ? clock : &SystemMonotonicClock()),
         recovery_config_(recovery),

@@ -44,7 +44,8 @@ struct SimulatedImuConfig {
   const char* name = "sim:imu";
   double sample_rate_hz = 200.0;  // reported in info(); the samples' timestamps set the pace
   bool has_gyro = true;
-  StreamRecoveryConfig recovery;  // reopening after a vanish, timed by the clock
+  // Reopening after a vanish, timed by the clock.
+  StreamRecoveryConfig recovery = ImuRecoveryConfig();
 };
 
 class SimulatedImu final : public ImuDevice {
