@@ -386,6 +386,16 @@ void ReadAttitudeSection(SectionReader& r, const toml::table* /*table*/, Config&
     r.Invalid("device",
               "must name the IMU when kind = \"iio\" (/dev/iio:deviceN or its IIO "
               "name, e.g. \"bmi160\")");
+  // A real IMU's samples carry CLOCK_MONOTONIC, as a live camera's frames do; a simulated
+  // or recorded run stamps its frames with the run's own time (from 0, or the recording's),
+  // which no sample would ever be at: the cap would never turn on.
+  if (r.ok() && a.kind == AttitudeKind::kIio &&
+      (c.camera.kind == CameraKind::kSim || c.camera.kind == CameraKind::kDataset))
+    r.Invalid("kind",
+              "\"iio\" needs a live camera ([camera] kind = \"v4l2\" or \"libcamera\"): a "
+              "simulated or recorded run stamps its frames with the run's own time, not the "
+              "IMU's CLOCK_MONOTONIC (kind = \"sim\" simulates the run's IMU, \"dataset\" "
+              "reads a dataset's roll and pitch)");
   if (r.ok() && a.kind == AttitudeKind::kDataset && c.camera.kind != CameraKind::kDataset)
     r.Invalid("kind",
               "\"dataset\" reads the replayed dataset's roll_deg,pitch_deg columns: "

@@ -221,6 +221,12 @@ const BadCase kBadCases[] = {
     // The simulated IMU on a distance-sampled run reads the speed's steps as tilt.
     {"[camera]\nkind = \"sim\"\nsim_sampling = \"distance\"\n[attitude]\nkind = \"sim\"\n",
      "[attitude] kind \"sim\" needs [camera] sim_sampling = \"time\"", ":5:"},
+    // A real IMU stamps its samples with CLOCK_MONOTONIC, a simulated or recorded run its
+    // frames with the run's own time: no sample would ever be at a frame's time.
+    {"[camera]\nkind = \"sim\"\n[attitude]\nkind = \"iio\"\ndevice = \"bmi160\"\n",
+     "[attitude] kind \"iio\" needs a live camera", ":4:"},
+    {"[camera]\nkind = \"dataset\"\ndataset = \"d\"\n[attitude]\nkind = \"iio\"\ndevice = \"x\"\n",
+     "[attitude] kind \"iio\" needs a live camera", ":5:"},
     {"[attitude]\nmax_tilt_deg = 80\n", "[attitude] max_tilt_deg"},
     {"[attitude]\ncap_taper_deg = -1\n", "[attitude] cap_taper_deg"},
     {"[attitude]\nrate_hz = 0\n", "[attitude] rate_hz"},
