@@ -388,7 +388,8 @@ void ReadAttitudeSection(SectionReader& r, const toml::table* /*table*/, Config&
               "name, e.g. \"bmi160\")");
   // A real IMU's samples carry CLOCK_MONOTONIC, as a live camera's frames do; a simulated
   // or recorded run stamps its frames with the run's own time (from 0, or the recording's),
-  // which no sample would ever be at: the cap would never turn on.
+  // which has nothing in common with it: a frame would get no sample (the cap off for
+  // good) or samples of another moment.
   if (r.ok() && a.kind == AttitudeKind::kIio &&
       (c.camera.kind == CameraKind::kSim || c.camera.kind == CameraKind::kDataset))
     r.Invalid("kind",
