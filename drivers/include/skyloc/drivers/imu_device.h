@@ -11,9 +11,9 @@
 // the simulated twin's kVanish), the device is closed and an outage counted; later Read()
 // calls reopen it (DoOpen, DoStart) with the V4L2 camera's backoff (StreamRecovery:
 // 100 ms, doubling, on the device's Clock), capped at 500 ms (ImuRecoveryConfig) where the
-// camera's is 2 s, and return kUnavailable until a
-// reopen succeeds, which counts a reopen; samples then flow again with no call from the
-// caller. Read() does not wait for a reopen: while the device is away it returns at once.
+// camera's is 2 s, and return kUnavailable until a reopen succeeds, which counts a reopen;
+// samples then flow again with no call from the caller. Read() does not wait for a
+// reopen: while the device is away it returns at once.
 //
 // Mounting: the IMU's axes need not be the body's. ImuMounting is the IMU-to-body
 // rotation, body = R * imu with R = Rz(yaw) * Ry(pitch) * Rx(roll), angles in degrees,
