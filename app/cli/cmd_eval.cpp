@@ -98,8 +98,8 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
   t->ChoiceList("--matcher",
                 "the matcher (repeat to compare; default: filter, the firmware's route filter; "
                 "docs/SEQSLAM.md)",
-                {{firmware::MatcherName(Matcher::kRouteFilter), Matcher::kRouteFilter},
-                 {firmware::MatcherName(Matcher::kOpenSeqSlam), Matcher::kOpenSeqSlam}},
+                {{firmware::NameOf(Matcher::kRouteFilter), Matcher::kRouteFilter},
+                 {firmware::NameOf(Matcher::kOpenSeqSlam), Matcher::kOpenSeqSlam}},
                 &o->matchers);
   t->IntList("--ds", "N", "sequence length in frames (repeat; default: 1 10 20)", 1,
              dsp::kMaxSequenceLength, &o->ds_list);
@@ -346,7 +346,7 @@ Status Evaluation::AddMatcherRuns(ScoredDescriptor method, const RunDescription&
       EvalRun run;
       run.descriptor = method;
       run.matcher = matcher;
-      run.matcher_name = firmware::MatcherName(matcher);
+      run.matcher_name = firmware::NameOf(matcher);
       run.ds = ds;
       run.matches.assign(static_cast<std::size_t>(qd.count), dsp::SeqSlamMatch{});
       const std::string progress = tools::Format("%s %s ds %d", tools::ScoredDescriptorName(method),
@@ -419,7 +419,7 @@ Status Evaluation::AddSurf1dRuns() {
     EvalRun run;
     run.descriptor = ScoredDescriptor::kSurf1d;
     run.matcher = Matcher::kOpenSeqSlam;
-    run.matcher_name = firmware::MatcherName(Matcher::kOpenSeqSlam);
+    run.matcher_name = firmware::NameOf(Matcher::kOpenSeqSlam);
     run.ds = ds;
     run.matches.resize(n_query);
     dsp::SeqSlamParams p;
