@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 
 #include "skyloc/sim/renderer.h"
@@ -70,8 +71,8 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
             });
 }
 
-void AddDescriptorChoices(OptionTable* t, firmware::GridPreset* grid,
-                          dsp::AmplitudeNormalisation* normalisation) {
+template <typename Grid, typename Normalisation>
+void AddDescriptorChoices(OptionTable* t, Grid* grid, Normalisation* normalisation) {
   using firmware::GridPreset;
   t->Choice("--grid",
             "the sky descriptor's sampling grid: oversampled (the robot's: the unaliased grid "
@@ -94,5 +95,9 @@ void AddDescriptorChoices(OptionTable* t, firmware::GridPreset* grid,
         AmplitudeNormalisation::kDivideByA0}},
       normalisation);
 }
+template void AddDescriptorChoices(OptionTable*, firmware::GridPreset*,
+                                   dsp::AmplitudeNormalisation*);
+template void AddDescriptorChoices(OptionTable*, std::optional<firmware::GridPreset>*,
+                                   std::optional<dsp::AmplitudeNormalisation>*);
 
 }  // namespace skyloc::cli
