@@ -64,7 +64,7 @@ constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNon
 constexpr EnumName<dsp::ReferenceStorage> kRouteStorages[] = {
     {"float32", dsp::ReferenceStorage::kFloat32}, {"bfloat16", dsp::ReferenceStorage::kBFloat16}};
 
-// Every table above, found by its enum's type (NameOf).
+// Every table above, found by its enum's type (NameOf, SectionReader::Enum).
 template <typename E, std::size_t N>
 constexpr std::span<const EnumName<E>> Names(const EnumName<E> (&names)[N]) {
   return names;
