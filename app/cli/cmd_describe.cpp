@@ -53,11 +53,6 @@ struct Options {
 // Returns kExitOk when parsed, else the exit code (help: kExitOk via `done`).
 int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   *done = false;
-  int bands = 0;
-  firmware::GridPreset grid = firmware::GridPreset::kOversampled;
-  dsp::AmplitudeNormalisation normalisation = dsp::AmplitudeNormalisation::kUnitL2;
-  dsp::LensModel lens = dsp::LensModel::kEquidistant;
-  double fov = 0, radius = 0;
   OptionTable t("describe", "[options] IMAGE...", kDescription);
   t.Text("--camera", "FILE.toml",
          "camera file (docs/CAMERA_FILE.md). Without one, a square-ish image is an equidistant "
@@ -69,15 +64,15 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
          "describe the images (default: the built-in defaults)",
          &o->config_path);
   t.Int("--bands", "L", "number of bands (default: [descriptor] bands, 64)", 1, dsp::kMaxShBands,
-        &bands);
-  AddDescriptorChoices(&t, &grid, &normalisation);
+        &o->descriptor.bands);
+  AddDescriptorChoices(&t, &o->descriptor.grid, &o->descriptor.normalisation);
   t.Flag("--json", "one JSON object per line: file, threshold, sky_fraction, amplitudes", &o->json);
   t.Choice("--lens", "override the lens model (other models need a camera file)",
            {{"equidistant", dsp::LensModel::kEquidistant},
             {"equisolid", dsp::LensModel::kEquisolid},
             {"equirectangular", dsp::LensModel::kEquirectangular}},
-           &lens);
-  t.Number("--fov", "DEG", "override the field of view", {0, 360, true, false}, &fov);
+           &o->lens);
+  t.Number("--fov", "DEG", "override the field of view", {0, 360, true, false}, &o->fov_deg);
   // --centre X,Y (or --center): kept as a pair until both are read, then optional.
   double centre_x = 0, centre_y = 0;
   const auto finite = [](double, double) { return true; };
@@ -85,7 +80,8 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
                "X,Y in pixels (e.g. 319.5,239.5)", finite, &centre_x, &centre_y);
   t.NumberPair("--center", "X,Y", "as --centre", "X,Y in pixels (e.g. 319.5,239.5)", finite,
                &centre_x, &centre_y);
-  t.Number("--radius", "PX", "override the image circle's radius (pixels)", kPositive, &radius);
+  t.Number("--radius", "PX", "override the image circle's radius (pixels)", kPositive,
+           &o->radius_px);
   t.Positional("IMAGE", "the images to describe", 0, std::numeric_limits<std::size_t>::max(),
                &o->images);
   if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
@@ -100,18 +96,6 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     o->centre_x = centre_x;
     o->centre_y = centre_y;
   }
-  if (t.Given("--bands"))
-    o->descriptor.bands = bands;
-  if (t.Given("--grid"))
-    o->descriptor.grid = grid;
-  if (t.Given("--normalisation"))
-    o->descriptor.normalisation = normalisation;
-  if (t.Given("--lens"))
-    o->lens = lens;
-  if (t.Given("--fov"))
-    o->fov_deg = fov;
-  if (t.Given("--radius"))
-    o->radius_px = radius;
   return kExitOk;
 }
 

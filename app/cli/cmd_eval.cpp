@@ -78,8 +78,7 @@ struct EvalOptions {
   tools::DescribeSettings describe;  // its config is --config FILE, then the flags above
 };
 
-void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyframe_noise,
-                int* bands, double* fov, double* max_tilt) {
+void AddOptions(OptionTable* t, EvalOptions* o) {
   const auto name = [](ScoredDescriptor d) { return tools::ScoredDescriptorName(d); };
   t->Text("--reference", "DIR", "the reference run (the taught route)", &o->reference);
   t->Text("--query", "DIR", "the query run (the repeat)", &o->query);
@@ -98,8 +97,8 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
   t->ChoiceList("--matcher",
                 "the matcher (repeat to compare; default: filter, the firmware's route filter; "
                 "docs/SEQSLAM.md)",
-                {{firmware::MatcherName(Matcher::kRouteFilter), Matcher::kRouteFilter},
-                 {firmware::MatcherName(Matcher::kOpenSeqSlam), Matcher::kOpenSeqSlam}},
+                {{firmware::NameOf(Matcher::kRouteFilter), Matcher::kRouteFilter},
+                 {firmware::NameOf(Matcher::kOpenSeqSlam), Matcher::kOpenSeqSlam}},
                 &o->matchers);
   t->IntList("--ds", "N", "sequence length in frames (repeat; default: 1 10 20)", 1,
              dsp::kMaxSequenceLength, &o->ds_list);
@@ -112,11 +111,11 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
           "openseqslam)",
           &o->streaming);
   t->Int("--max-advance", "K", "filter: route rows per frame at most (default 8)", 1,
-         dsp::kMaxAdvance, max_advance);
+         dsp::kMaxAdvance, &o->max_advance);
   t->Number("--keyframe-noise", "F",
             "filter: keyframe merge threshold x noise floor (default 2; 0 keeps every "
             "reference frame)",
-            {0, 100}, keyframe_noise);
+            {0, 100}, &o->keyframe_noise_factor);
   t->Text("--config", "FILE",
           "the firmware configuration whose [state], [seqslam] and [descriptor] the runs use "
           "(default: the built-in ones)",
@@ -147,11 +146,12 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
               o->describe.lens = model;
               return true;
             });
-  t->Number("--fov", "DEG", "sky: override the field of view, degrees", {0, 360, true, false}, fov);
+  t->Number("--fov", "DEG", "sky: override the field of view, degrees", {0, 360, true, false},
+            &o->describe.fov_deg);
   t->Int("--bands", "N",
          "sky: spherical-harmonic bands on the configuration's grid (default: [descriptor] "
          "bands, 64)",
-         1, 512, bands);
+         1, 512, &o->bands);
   t->Int("--jobs", "N",
          "threads for the descriptors and the batch matcher (default: all "
          "cores); the results do not depend on it",
@@ -167,31 +167,19 @@ void AddOptions(OptionTable* t, EvalOptions* o, int* max_advance, double* keyfra
   t->Number("--max-tilt", "DEG",
             "with --attitude dataset: the largest tilt the cap must survive (default: "
             "[attitude] max_tilt_deg of --config)",
-            {0, 80}, max_tilt);
+            {0, 80}, &o->describe.max_tilt_deg);
 }
 
 // Parses and checks the command line; kRun or the outcome to exit with.
 ParseOutcome ParseArgs(std::span<char* const> args, EvalOptions* o) {
   OptionTable t("eval", "--reference DIR --query DIR --out DIR [options]", kDescription);
-  int max_advance = 0, bands = 0;
-  double keyframe_noise = 0, fov = 0, max_tilt = 0;
-  AddOptions(&t, o, &max_advance, &keyframe_noise, &bands, &fov, &max_tilt);
+  AddOptions(&t, o);
   if (const ParseOutcome p = t.Parse(args); p != ParseOutcome::kRun)
     return p;
   const auto refuse = [&t](const char* what) {
     t.Refuse(what);
     return ParseOutcome::kRefused;
   };
-  if (t.Given("--max-advance"))
-    o->max_advance = max_advance;
-  if (t.Given("--keyframe-noise"))
-    o->keyframe_noise_factor = keyframe_noise;
-  if (t.Given("--bands"))
-    o->bands = bands;
-  if (t.Given("--fov"))
-    o->describe.fov_deg = fov;
-  if (t.Given("--max-tilt"))
-    o->describe.max_tilt_deg = max_tilt;
   if (o->reference.empty() || o->query.empty() || o->out.empty())
     return refuse("--reference, --query and --out are required");
   if (o->batch && o->streaming)
@@ -346,7 +334,7 @@ Status Evaluation::AddMatcherRuns(ScoredDescriptor method, const RunDescription&
       EvalRun run;
       run.descriptor = method;
       run.matcher = matcher;
-      run.matcher_name = firmware::MatcherName(matcher);
+      run.matcher_name = firmware::NameOf(matcher);
       run.ds = ds;
       run.matches.assign(static_cast<std::size_t>(qd.count), dsp::SeqSlamMatch{});
       const std::string progress = tools::Format("%s %s ds %d", tools::ScoredDescriptorName(method),
@@ -419,7 +407,7 @@ Status Evaluation::AddSurf1dRuns() {
     EvalRun run;
     run.descriptor = ScoredDescriptor::kSurf1d;
     run.matcher = Matcher::kOpenSeqSlam;
-    run.matcher_name = firmware::MatcherName(Matcher::kOpenSeqSlam);
+    run.matcher_name = firmware::NameOf(Matcher::kOpenSeqSlam);
     run.ds = ds;
     run.matches.resize(n_query);
     dsp::SeqSlamParams p;

@@ -284,7 +284,7 @@ std::string CommonNotes(const tools::ExperimentOptions& e) {
              "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands on the "
              "\"%s\" grid, normalisation %s, ",
              e.width, e.height, e.config.descriptor.bands,
-             firmware::GridPresetName(e.config.descriptor.grid),
+             firmware::NameOf(e.config.descriptor.grid),
              dsp::AmplitudeNormalisationName(e.config.descriptor.normalisation)) +
          sampling +
          Format(

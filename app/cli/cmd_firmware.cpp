@@ -52,15 +52,6 @@ int RunWithConfigFile(const SessionArgs& s) {
   return RunSession(config, s) == 0 ? kExitOk : kExitFailure;
 }
 
-// teach and repeat: parses with `t` (its options bound to `s`) and runs the session.
-int ParseAndRun(OptionTable& t, std::span<char* const> args, const SessionArgs& s) {
-  if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
-    return ExitCode(o);
-  if (s.route_path.empty())
-    return t.Refuse("--route FILE.db is required");
-  return RunWithConfigFile(s);
-}
-
 void AddCommonOptions(OptionTable& t, SessionArgs* s) {
   t.Text("--config", "FILE", "the configuration file (default: the built-in defaults)",
          &s->config_path);
@@ -91,32 +82,39 @@ void PrintTeachState(const char* path, std::FILE* out) {
                  path, static_cast<unsigned long long>(tmp.bytes), path);
 }
 
+// teach and repeat: one table over a route; teach also takes a dataset to teach from and
+// may replace the route.
+int RunOnRoute(std::span<char* const> args, LoopMode mode) {
+  const bool teach = mode == LoopMode::kTeach;
+  SessionArgs s;
+  s.mode = mode;
+  s.label = teach ? "skyloc teach" : "skyloc repeat";
+  OptionTable t(teach ? "teach" : "repeat", "--route FILE.db [options]",
+                teach ? kTeachDescription : kRepeatDescription);
+  t.Text("--route", "FILE.db", teach ? "the route database to write" : "the taught route database",
+         &s.route_path);
+  AddCommonOptions(t, &s);
+  if (teach) {
+    t.Text("--dataset", "DIR", "teach from this recorded dataset folder", &s.dataset);
+    t.Flag("--force", "replace an existing route database", &s.force);
+  }
+  t.Text("--record", "DIR", "also write every frame into this dataset folder", &s.record_dir);
+  AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
+  if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
+    return ExitCode(o);
+  if (s.route_path.empty())
+    return t.Refuse("--route FILE.db is required");
+  return RunWithConfigFile(s);
+}
+
 }  // namespace
 
 int RunTeach(std::span<char* const> args) {
-  SessionArgs s;
-  s.mode = LoopMode::kTeach;
-  s.label = "skyloc teach";
-  OptionTable t("teach", "--route FILE.db [options]", kTeachDescription);
-  t.Text("--route", "FILE.db", "the route database to write", &s.route_path);
-  AddCommonOptions(t, &s);
-  t.Text("--dataset", "DIR", "teach from this recorded dataset folder", &s.dataset);
-  t.Flag("--force", "replace an existing route database", &s.force);
-  t.Text("--record", "DIR", "also write every frame into this dataset folder", &s.record_dir);
-  AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
-  return ParseAndRun(t, args, s);
+  return RunOnRoute(args, LoopMode::kTeach);
 }
 
 int RunRepeat(std::span<char* const> args) {
-  SessionArgs s;
-  s.mode = LoopMode::kRepeat;
-  s.label = "skyloc repeat";
-  OptionTable t("repeat", "--route FILE.db [options]", kRepeatDescription);
-  t.Text("--route", "FILE.db", "the taught route database", &s.route_path);
-  AddCommonOptions(t, &s);
-  t.Text("--record", "DIR", "also write every frame into this dataset folder", &s.record_dir);
-  AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
-  return ParseAndRun(t, args, s);
+  return RunOnRoute(args, LoopMode::kRepeat);
 }
 
 int RunRecord(std::span<char* const> args) {

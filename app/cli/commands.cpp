@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 
 #include "skyloc/sim/renderer.h"
@@ -70,17 +71,16 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
             });
 }
 
-void AddDescriptorChoices(OptionTable* t, firmware::GridPreset* grid,
-                          dsp::AmplitudeNormalisation* normalisation) {
+template <typename Grid, typename Normalisation>
+void AddDescriptorChoices(OptionTable* t, Grid* grid, Normalisation* normalisation) {
   using firmware::GridPreset;
-  using firmware::GridPresetName;
   t->Choice("--grid",
             "the sky descriptor's sampling grid: oversampled (the robot's: the unaliased grid "
             "for 1.5 x the bands; default), auto (the minimal unaliased grid for the bands, "
             "every published table) or paper (2000 points); docs/SKY_DESCRIPTOR.md, \"Grid\"",
-            {{GridPresetName(GridPreset::kOversampled), GridPreset::kOversampled},
-             {GridPresetName(GridPreset::kAuto), GridPreset::kAuto},
-             {GridPresetName(GridPreset::kPaper), GridPreset::kPaper}},
+            {{firmware::NameOf(GridPreset::kOversampled), GridPreset::kOversampled},
+             {firmware::NameOf(GridPreset::kAuto), GridPreset::kAuto},
+             {firmware::NameOf(GridPreset::kPaper), GridPreset::kPaper}},
             grid);
   using dsp::AmplitudeNormalisation;
   using dsp::AmplitudeNormalisationName;
@@ -95,5 +95,9 @@ void AddDescriptorChoices(OptionTable* t, firmware::GridPreset* grid,
         AmplitudeNormalisation::kDivideByA0}},
       normalisation);
 }
+template void AddDescriptorChoices(OptionTable*, firmware::GridPreset*,
+                                   dsp::AmplitudeNormalisation*);
+template void AddDescriptorChoices(OptionTable*, std::optional<firmware::GridPreset>*,
+                                   std::optional<dsp::AmplitudeNormalisation>*);
 
 }  // namespace skyloc::cli

@@ -51,9 +51,10 @@ enum class SimRunOptions : std::uint8_t { kRun, kWorldAndRun };
 void AddSimRunOptions(OptionTable* table, SimRunOptions which, firmware::SimRunConfig* run);
 
 // The one place the sky descriptor's --grid and --normalisation are declared (describe,
-// experiment): each fills its field when given.
-void AddDescriptorChoices(OptionTable* table, firmware::GridPreset* grid,
-                          dsp::AmplitudeNormalisation* normalisation);
+// experiment): each fills its field when given. For a firmware::GridPreset and a
+// dsp::AmplitudeNormalisation, or std::optional of both (describe's flags).
+template <typename Grid, typename Normalisation>
+void AddDescriptorChoices(OptionTable* table, Grid* grid, Normalisation* normalisation);
 
 // Exit codes shared by every command.
 inline constexpr int kExitOk = 0;

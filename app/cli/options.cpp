@@ -128,6 +128,11 @@ void OptionTable::Int(const char* name, const char* value, const char* help, std
   Add({name, value, help, false, false, WholeParser<int>(min, max, [out](int v) { *out = v; })});
 }
 
+void OptionTable::Int(const char* name, const char* value, const char* help, std::int64_t min,
+                      std::int64_t max, std::optional<int>* out) {
+  Add({name, value, help, false, false, WholeParser<int>(min, max, [out](int v) { *out = v; })});
+}
+
 void OptionTable::Count(const char* name, const char* value, const char* help, std::uint64_t* out) {
   Add({name, value, help, false, false, [out](const char* text, std::string* expected) {
          std::uint64_t v = 0;
@@ -150,13 +155,24 @@ void OptionTable::IntList(const char* name, const char* value, const char* help,
 
 void OptionTable::Number(const char* name, const char* value, const char* help, NumberRange range,
                          double* out) {
-  Add({name, value, help, false, false, [=](const char* text, std::string* expected) {
+  AddNumber(name, value, help, range, [out](double v) { *out = v; });
+}
+
+void OptionTable::Number(const char* name, const char* value, const char* help, NumberRange range,
+                         std::optional<double>* out) {
+  AddNumber(name, value, help, range, [out](double v) { *out = v; });
+}
+
+void OptionTable::AddNumber(const char* name, const char* value, const char* help,
+                            NumberRange range, std::function<void(double)> store) {
+  Add({name, value, help, false, false,
+       [range, store = std::move(store)](const char* text, std::string* expected) {
          double v = 0;
          if (!ParseReal(text, &v) || !InRange(v, range)) {
            *expected = RealRange(range);
            return false;
          }
-         *out = v;
+         store(v);
          return true;
        }});
 }

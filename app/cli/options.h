@@ -23,6 +23,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -43,6 +44,16 @@ struct NumberRange {
 // (0, inf): a length, a rate, a tolerance.
 inline constexpr NumberRange kPositive{0, std::numeric_limits<double>::infinity(), true, false};
 
+// The value type of an option's destination: E itself, or E inside a std::optional.
+template <typename Out>
+struct ChoiceOf {
+  using type = Out;
+};
+template <typename E>
+struct ChoiceOf<std::optional<E>> {
+  using type = E;
+};
+
 class OptionTable {
  public:
   // `synopsis` follows "usage: skyloc COMMAND "; `description` is the prose under it.
@@ -55,9 +66,12 @@ class OptionTable {
   // Repeatable text: each occurrence appends one.
   void TextList(const char* name, const char* value, const char* help,
                 std::vector<std::string>* out);
-  // A whole number in [min, max].
+  // A whole number in [min, max]. Here and below, an option bound to a std::optional holds
+  // a value only when it was given (a setting that replaces another only then).
   void Int(const char* name, const char* value, const char* help, std::int64_t min,
            std::int64_t max, int* out);
+  void Int(const char* name, const char* value, const char* help, std::int64_t min,
+           std::int64_t max, std::optional<int>* out);
   void Int(const char* name, const char* value, const char* help, std::int64_t min,
            std::int64_t max, std::int64_t* out);
   // A whole number >= 0 (a count, a seed).
@@ -68,15 +82,18 @@ class OptionTable {
   // A finite real number in `range`.
   void Number(const char* name, const char* value, const char* help, NumberRange range,
               double* out);
+  void Number(const char* name, const char* value, const char* help, NumberRange range,
+              std::optional<double>* out);
   // Two finite numbers "A,B" (a range, a direction) that `accept` takes; `expected`
   // tells what a good value looks like when it does not.
   void NumberPair(const char* name, const char* value, const char* help, const char* expected,
                   std::function<bool(double a, double b)> accept, double* a, double* b);
   // One of the named values; `repeat` appends each occurrence to `list` instead.
   // The values are copied: an initializer_list's array lives only as long as the call.
-  template <typename E>
+  template <typename Out, typename E = typename ChoiceOf<Out>::type>
   void Choice(const char* name, const char* help,
-              std::initializer_list<std::pair<const char*, E>> choices, E* out) {
+              std::initializer_list<std::pair<const char*, std::type_identity_t<E>>> choices,
+              Out* out) {
     AddChoice(name, help, Names(choices), false,
               [out, values = Values(choices)](std::size_t i) { *out = values[i]; });
   }
@@ -131,6 +148,8 @@ class OptionTable {
   }
   void AddChoice(const char* name, const char* help, std::vector<std::string> names,
                  bool repeatable, std::function<void(std::size_t)> pick);
+  void AddNumber(const char* name, const char* value, const char* help, NumberRange range,
+                 std::function<void(double)> store);
   void Add(Option option);
   Option* Find(std::string_view name);
   const Option* Find(std::string_view name) const;

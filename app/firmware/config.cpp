@@ -9,7 +9,9 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <span>
 #include <sstream>
+#include <tuple>
 #include <vector>
 
 #include "skyloc/drivers/status_pattern.h"
@@ -62,24 +64,16 @@ constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNon
 constexpr EnumName<dsp::ReferenceStorage> kRouteStorages[] = {
     {"float32", dsp::ReferenceStorage::kFloat32}, {"bfloat16", dsp::ReferenceStorage::kBFloat16}};
 
+// Every table above, found by its enum's type (NameOf, SectionReader::Enum).
 template <typename E, std::size_t N>
-const char* NameOf(const EnumName<E> (&names)[N], E value) {
-  for (const auto& n : names)
-    if (n.value == value)
-      return n.name;
-  return "?";
+constexpr std::span<const EnumName<E>> Names(const EnumName<E> (&names)[N]) {
+  return names;
 }
-
-template <typename E, std::size_t N>
-bool ValueOf(const EnumName<E> (&names)[N], std::string_view name, E* out) {
-  for (const auto& n : names) {
-    if (name == n.name) {
-      *out = n.value;
-      return true;
-    }
-  }
-  return false;
-}
+constexpr std::tuple kNameTables{Names(kCameraKinds),         Names(kSimSamplings),
+                                 Names(kSegmentationMethods), Names(kGridPresets),
+                                 Names(kNormalisations),      Names(kStatusOutputKinds),
+                                 Names(kStatusLineModes),     Names(kMatchers),
+                                 Names(kAttitudeKinds),       Names(kRouteStorages)};
 
 // What the sections read: each one's keys, and the first key refused as unknown, so that
 // a key written in the wrong section can be told where it belongs.
@@ -108,17 +102,19 @@ class SectionReader : public drivers::TomlKeyReader {
   SectionReader& operator=(const SectionReader&) = delete;
   ~SectionReader() = default;
 
-  template <typename E, std::size_t N>
-  void Enum(const char* key, E* out, const EnumName<E> (&names)[N]) {
+  // An enum's key: one of the names of its table.
+  template <typename E>
+  void Enum(const char* key, E* out) {
+    const std::span<const EnumName<E>> names = std::get<std::span<const EnumName<E>>>(kNameTables);
     std::vector<const char*> list;
-    std::size_t index = N;
-    for (std::size_t i = 0; i < N; ++i) {
+    std::size_t index = names.size();
+    for (std::size_t i = 0; i < names.size(); ++i) {
       list.push_back(names[i].name);
       if (names[i].value == *out)
         index = i;
     }
     Choice(key, list, &index);
-    if (index < N)
+    if (index < names.size())
       *out = names[index].value;
   }
   // Reports the first key nobody asked for; keeps the first error of all.
@@ -188,30 +184,18 @@ void ResolveDescriptorGrid(DescriptorConfig* d) {
   }
 }
 
-const char* CameraKindName(CameraKind kind) {
-  return NameOf(kCameraKinds, kind);
+template <typename E>
+const char* NameOf(E value) {
+  for (const EnumName<E>& n : std::get<std::span<const EnumName<E>>>(kNameTables))
+    if (n.value == value)
+      return n.name;
+  return "?";
 }
-const char* GridPresetName(GridPreset preset) {
-  return NameOf(kGridPresets, preset);
-}
-bool GridPresetFromName(std::string_view name, GridPreset* out) {
-  return ValueOf(kGridPresets, name, out);
-}
-bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out) {
-  return ValueOf(kNormalisations, name, out);
-}
-const char* StatusOutputKindName(StatusOutputKind kind) {
-  return NameOf(kStatusOutputKinds, kind);
-}
-const char* AttitudeKindName(AttitudeKind kind) {
-  return NameOf(kAttitudeKinds, kind);
-}
-const char* MatcherName(Matcher matcher) {
-  return NameOf(kMatchers, matcher);
-}
-bool ParseMatcher(std::string_view name, Matcher* out) {
-  return ValueOf(kMatchers, name, out);
-}
+template const char* NameOf(CameraKind);
+template const char* NameOf(GridPreset);
+template const char* NameOf(StatusOutputKind);
+template const char* NameOf(AttitudeKind);
+template const char* NameOf(Matcher);
 
 Config DefaultConfig() {
   Config c;
@@ -223,7 +207,7 @@ namespace {
 
 // [camera]
 void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
-  r.Enum("kind", &c.camera.kind, kCameraKinds);
+  r.Enum("kind", &c.camera.kind);
   r.String("device", &c.camera.device, false);
   r.Path("dataset", &c.camera.dataset);
   r.Path("lens_file", &c.camera.lens_file);
@@ -232,7 +216,7 @@ void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c
   std::int64_t seed = static_cast<std::int64_t>(sim.seed);
   r.Int64("sim_seed", &seed, 0, INT64_MAX);
   sim.seed = static_cast<std::uint64_t>(seed);
-  r.Enum("sim_sampling", &sim.sampling, kSimSamplings);
+  r.Enum("sim_sampling", &sim.sampling);
   r.Double("sim_speed_mps", &sim.speed.cruise_mps, 0.01, 100.0);
   r.Double("sim_speed_band", &sim.speed.band, 0.0, 0.99);
   r.Double("sim_accel_mps2", &sim.speed.accel_mps2, 0.01, 100.0);
@@ -253,17 +237,17 @@ void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c
 
 // [segmentation]
 void ReadSegmentationSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
-  r.Enum("method", &c.segmentation.method, kSegmentationMethods);
+  r.Enum("method", &c.segmentation.method);
   r.Int("threshold", &c.segmentation.threshold, 0, 254);
 }
 
 // [descriptor]
 void ReadDescriptorSection(SectionReader& r, const toml::table* table, Config& c) {
   r.Int("bands", &c.descriptor.bands, 1, 256);
-  r.Enum("grid", &c.descriptor.grid, kGridPresets);
+  r.Enum("grid", &c.descriptor.grid);
   r.Int("rings", &c.descriptor.rings, 0, 1024);
   r.Int("longitudes", &c.descriptor.longitudes, 0, 4096);
-  r.Enum("normalisation", &c.descriptor.normalisation, kNormalisations);
+  r.Enum("normalisation", &c.descriptor.normalisation);
   if (r.ok() && c.descriptor.grid == GridPreset::kCustom) {
     if (c.descriptor.rings < 1)
       r.Invalid("rings", "must be 1..1024 when grid = \"custom\"");
@@ -282,7 +266,7 @@ void ReadDescriptorSection(SectionReader& r, const toml::table* table, Config& c
 
 // [seqslam]
 void ReadSeqslamSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
-  r.Enum("matcher", &c.seqslam.matcher, kMatchers);
+  r.Enum("matcher", &c.seqslam.matcher);
   dsp::RouteFilterParams& filter = c.seqslam.filter;
   dsp::SeqSlamParams& open = c.seqslam.openseqslam;
   int ds = c.seqslam.ds(), rwindow = c.seqslam.rwindow();
@@ -304,7 +288,7 @@ void ReadSeqslamSection(SectionReader& r, const toml::table* /*table*/, Config& 
 // [capacities]
 void ReadCapacitiesSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
   r.Int("route_frames", &c.capacities.route_frames, 1, 1000000);
-  r.Enum("route_storage", &c.capacities.route_storage, kRouteStorages);
+  r.Enum("route_storage", &c.capacities.route_storage);
 }
 
 // [state]
@@ -322,12 +306,12 @@ void ReadStateSection(SectionReader& r, const toml::table* /*table*/, Config& c)
 
 // [status]
 void ReadStatusSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
-  r.Enum("kind", &c.status.kind, kStatusOutputKinds);
+  r.Enum("kind", &c.status.kind);
   r.String("chip", &c.status.chip, false);
   r.Int("line_lost", &c.status.line_lost, 0, 511);
   r.Int("line_searching", &c.status.line_searching, 0, 511);
   r.Int("line_localised", &c.status.line_localised, 0, 511);
-  r.Enum("encoding", &c.status.encoding, kStatusLineModes);
+  r.Enum("encoding", &c.status.encoding);
   r.Bool("active_low", &c.status.active_low);
   r.Int("button_line", &c.status.button_line, -1, 511);
   r.Bool("button_active_low", &c.status.button_active_low);
@@ -368,7 +352,7 @@ void ReadRouteDbSection(SectionReader& r, const toml::table* /*table*/, Config& 
 // [attitude]
 void ReadAttitudeSection(SectionReader& r, const toml::table* /*table*/, Config& c) {
   AttitudeConfig& a = c.attitude;
-  r.Enum("kind", &a.kind, kAttitudeKinds);
+  r.Enum("kind", &a.kind);
   r.String("device", &a.device, true);
   r.String("gyro_device", &a.gyro_device, true);
   r.String("trigger", &a.trigger, true);

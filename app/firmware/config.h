@@ -26,16 +26,11 @@ enum class GridPreset : std::uint8_t { kOversampled, kAuto, kPaper, kCustom };
 enum class StatusOutputKind : std::uint8_t { kNone, kSim, kGpio };
 enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 
-const char* CameraKindName(CameraKind kind);
-// The grid presets' names: "oversampled", "auto", "paper", "custom" (the config file's,
-// and the command line's --grid, which has no "custom"); false for anything else.
-const char* GridPresetName(GridPreset preset);
-bool GridPresetFromName(std::string_view name, GridPreset* out);
-// dsp::AmplitudeNormalisationName gives the name of a normalisation.
-// "none", "divide_by_a0" or "unit_l2" (the config's names); false for anything else.
-bool NormalisationFromName(std::string_view name, dsp::AmplitudeNormalisation* out);
-const char* StatusOutputKindName(StatusOutputKind kind);
-const char* AttitudeKindName(AttitudeKind kind);
+// The one spelling of a configuration enum's value: the config file's, the command line's
+// (--grid, which has no "custom"; --matcher) and the reports'; "?" for a value outside the
+// enum. For CameraKind, GridPreset, StatusOutputKind, AttitudeKind and Matcher.
+template <typename E>
+const char* NameOf(E value);
 
 // How a simulated run samples its route: a frame every spacing_m metres on average, or a
 // frame every 1/fps seconds along a speed profile with stops (docs/SIMULATOR.md).
@@ -115,10 +110,8 @@ enum class Matcher : std::uint8_t {
   kOpenSeqSlam,  // dsp/seqslam.h streaming engine: OpenSeqSLAM's enhancement and search
 };
 
-// "filter" or "openseqslam": the one spelling of [seqslam] matcher, `skyloc eval --matcher`
-// and the experiments' files. ParseMatcher is false for any other name.
-const char* MatcherName(Matcher matcher);
-bool ParseMatcher(std::string_view name, Matcher* out);
+// NameOf(matcher): "filter" or "openseqslam", the spelling of [seqslam] matcher, `skyloc
+// eval --matcher` and the experiments' files.
 
 // The two matchers' own parameter structs. The keys: ds and rwindow set both
 // (sequence_length, uniqueness_window); max_advance and keyframe_noise_factor are the

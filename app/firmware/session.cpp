@@ -192,7 +192,7 @@ Status MakeAttitudeSource(const Config& config, const CameraSource& camera, Atti
     }
   }
   if (Status s = out->source->Open(); !s.ok()) {
-    return s.AddContext("[attitude] kind = \"%s\"%s%s%s", AttitudeKindName(a.kind),
+    return s.AddContext("[attitude] kind = \"%s\"%s%s%s", NameOf(a.kind),
                         a.kind == AttitudeKind::kIio ? ", device = \"" : "",
                         a.kind == AttitudeKind::kIio ? a.device.c_str() : "",
                         a.kind == AttitudeKind::kIio ? "\"" : "");
@@ -293,7 +293,7 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
                        "[camera] kind = \"%s\": this skyloc was built without that driver (its "
                        "development package was missing at build time); use \"sim\" or "
                        "\"dataset\", or rebuild",
-                       CameraKindName(config.camera.kind));
+                       NameOf(config.camera.kind));
 }
 
 Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config,
@@ -438,8 +438,7 @@ Status OpenStatusOutput(Session* s) {
   SKYLOC_TRY_ASSIGN(s->status, MakeStatusOutput(s->config, &s->clock));
   if (s->status) {
     if (Status open = s->status->Open(); !open.ok()) {
-      return open.AddContext("[status] kind = \"%s\", chip = \"%s\"",
-                             StatusOutputKindName(s->config.status.kind),
+      return open.AddContext("[status] kind = \"%s\", chip = \"%s\"", NameOf(s->config.status.kind),
                              s->config.status.chip.c_str());
     }
   }

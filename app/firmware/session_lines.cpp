@@ -22,11 +22,11 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
                   cam.sim.world.c_str(), static_cast<unsigned long long>(cam.sim.seed), format,
                   info.width, info.height, cam.fps);
   } else {
-    std::snprintf(
-        camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", CameraKindName(cam.kind),
-        cam.kind == CameraKind::kLibcamera && cam.device == "/dev/video0" ? "(the first camera)"
-                                                                          : cam.device.c_str(),
-        format, info.width, info.height, cam.fps);
+    std::snprintf(camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", NameOf(cam.kind),
+                  cam.kind == CameraKind::kLibcamera && cam.device == "/dev/video0"
+                      ? "(the first camera)"
+                      : cam.device.c_str(),
+                  format, info.width, info.height, cam.fps);
   }
   char status[200];
   switch (config.status.kind) {

@@ -135,7 +135,7 @@ Status MatchRows(const DescriptorRows& reference, const DescriptorRows& query,
   if (e != dsp::SeqSlamError::kOk) {
     const int ds = settings.matcher == Matcher::kRouteFilter ? settings.filter.sequence_length
                                                              : settings.openseqslam.sequence_length;
-    return DspStatus(e, "%s ds %d", firmware::MatcherName(settings.matcher), ds);
+    return DspStatus(e, "%s ds %d", firmware::NameOf(settings.matcher), ds);
   }
   return Status::Ok();
 }

@@ -97,7 +97,7 @@ Result<HeadingErrors> EvaluateHeadings(const dsp::HeadingOptions& options, const
 struct EvalRun {
   ScoredDescriptor descriptor = ScoredDescriptor::kVanilla;
   firmware::Matcher matcher = firmware::Matcher::kRouteFilter;
-  std::string matcher_name;  // MatcherName(matcher), "fabmap2" or surf1d's "single"
+  std::string matcher_name;  // firmware::NameOf(matcher), "fabmap2" or surf1d's "single"
   int ds = 0;
   std::vector<dsp::SeqSlamMatch> matches;      // per query frame
   std::vector<dsp::LocalisationState> states;  // per query frame: the state machine replayed

@@ -106,6 +106,13 @@ ZenithError ZenithErrorOf(const std::vector<TrajectoryPoint>& trajectory,
   return e;
 }
 
+// The options scored at sequence length ds (the matchers' ds).
+ExperimentOptions AtSequenceLength(const ExperimentOptions& options, int ds) {
+  ExperimentOptions o = options;
+  o.seqslam.sequence_length = ds;
+  return o;
+}
+
 ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_deg) {
   ExperimentOptions o = options;
   o.cap = options.attitude != AttitudeInput::kNone;
@@ -237,6 +244,22 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   return Status::Ok();
 }
 
+Status ScoreCompared(const RunDescriptors& reference, const RunDescriptors& query,
+                     const ExperimentOptions& options, ComparedScores* out) {
+  SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, options,
+                       &out->sky));
+  SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam, options,
+                       &out->vanilla));
+  SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
+                       &out->sky_filter));
+  if (!options.cap)
+    return Status::Ok();
+  SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam, options,
+                       &out->sky_cap));
+  return ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter, options,
+                   &out->sky_cap_filter);
+}
+
 namespace {
 
 // A run of the experiments: its label, its motion's seed and its sky at noon with its own
@@ -304,18 +327,7 @@ Status RunTiltExperiment(const ExperimentOptions& tilt_options,
     row.tilt_difference_deg = difference;
     row.reference_tilt_deg = alpha1;
     row.query_tilt_deg = alpha2;
-    SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, options,
-                         &row.sky));
-    SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam,
-                         options, &row.vanilla));
-    SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
-                         &row.sky_filter));
-    if (options.cap) {
-      SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam,
-                           options, &row.sky_cap));
-      SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter,
-                           options, &row.sky_cap_filter));
-    }
+    SKYLOC_TRY(ScoreCompared(*reference, *query, options, &row));
     if (options.fabmap_vocabulary != nullptr)
       SKYLOC_TRY(ScoreRuns(*reference, *query, ScoredDescriptor::kFabmap, Matcher::kOpenSeqSlam,
                            options, &row.fabmap));
@@ -368,23 +380,10 @@ Status RunManoeuvreExperiment(const ExperimentOptions& manoeuvre_options,
       SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kFabmap, Matcher::kOpenSeqSlam,
                            options, &fabmap));
     for (const int ds : ds_values) {
-      ExperimentOptions o = options;
-      o.seqslam.sequence_length = ds;
       ManoeuvreRow row;
       row.world = kind;
       row.sequence_length = ds;
-      SKYLOC_TRY(
-          ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, o, &row.sky));
-      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam, o,
-                           &row.vanilla));
-      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, o,
-                           &row.sky_filter));
-      if (o.cap) {
-        SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kOpenSeqSlam, o,
-                             &row.sky_cap));
-        SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSkyCap, Matcher::kRouteFilter, o,
-                             &row.sky_cap_filter));
-      }
+      SKYLOC_TRY(ScoreCompared(reference, query, AtSequenceLength(options, ds), &row));
       row.fabmap = fabmap;
       row.reference_zenith = reference.zenith_error;
       row.query_zenith = query.zenith_error;
@@ -518,12 +517,7 @@ Status RunAntsExperiment(const ExperimentOptions& options, const std::string& se
       row.query = q.name;
       row.same_ant = q.same_ant;
       row.camera_height_m = height;
-      SKYLOC_TRY(
-          ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kOpenSeqSlam, o, &row.sky));
-      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kVanilla, Matcher::kOpenSeqSlam, o,
-                           &row.vanilla));
-      SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, o,
-                           &row.sky_filter));
+      SKYLOC_TRY(ScoreCompared(reference, query, o, &row));
       const auto with_truth =
           std::count_if(row.sky.truth.begin(), row.sky.truth.end(),
                         [](const dsp::TruthInterval& t) { return t.has_truth(); });
@@ -579,8 +573,7 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
           SKYLOC_TRY(DescribeReported(world, world.route, world.route_closed, query_spec, o,
                                       progress, &query));
           for (const int ds : ds_values) {
-            ExperimentOptions scored = o;
-            scored.seqslam.sequence_length = ds;
+            const ExperimentOptions scored = AtSequenceLength(o, ds);
             SpeedRow row;
             row.world = kind;
             row.speed_ratio = ratio;

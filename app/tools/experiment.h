@@ -139,18 +139,27 @@ Status ScoreRuns(const RunDescriptors& reference, const RunDescriptors& query,
                  ScoredDescriptor descriptor, firmware::Matcher matcher,
                  const ExperimentOptions& options, MethodScore* out);
 
+// What the tilt, manoeuvre and ants experiments compare on a pair of runs: sky and vanilla
+// with OpenSeqSLAM (the paper's comparison), the sky descriptor with the route filter (the
+// firmware's matcher), and the gravity-aligned cap with both (options.cap only).
+struct ComparedScores {
+  MethodScore sky, vanilla;
+  MethodScore sky_filter;
+  MethodScore sky_cap, sky_cap_filter;
+};
+
+Status ScoreCompared(const RunDescriptors& reference, const RunDescriptors& query,
+                     const ExperimentOptions& options, ComparedScores* out);
+
 // ---- The experiments -------------------------------------------------------------------
 
 // Tilt (the paper's City experiment): runs at alpha = -30..30 (and a second 0), paired
 // alpha1 ~ -alpha2 so the tilt differences are 0, 10, ..., 60 degrees.
-struct TiltRow {
+// The cap's scores are there when options.attitude != kNone.
+struct TiltRow : ComparedScores {
   double tilt_difference_deg = 0;
   double reference_tilt_deg = 0;
   double query_tilt_deg = 0;
-  MethodScore sky, vanilla;
-  MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
-  // The gravity-aligned cap (options.attitude != kNone): OpenSeqSLAM and the route filter.
-  MethodScore sky_cap, sky_cap_filter;
   MethodScore fabmap;                          // options.fabmap_vocabulary set
   ZenithError reference_zenith, query_zenith;  // the cap's zenith against the truth
 };
@@ -163,12 +172,9 @@ Status RunTiltExperiment(const ExperimentOptions& options, std::span<const int> 
 
 // Manoeuvre (BMX Track and Disposal Site): a smooth reference run at noon against a query
 // run at dawn with zig-zag and bumps; scored at several sequence lengths.
-struct ManoeuvreRow {
+struct ManoeuvreRow : ComparedScores {  // the cap's scores as TiltRow
   sim::WorldKind world = sim::WorldKind::kForest;
   int sequence_length = 10;
-  MethodScore sky, vanilla;
-  MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
-  MethodScore sky_cap, sky_cap_filter;  // the gravity-aligned cap, as TiltRow
   // FAB-MAP 2.0 (options.fabmap_vocabulary set): single images, the same on every ds row.
   MethodScore fabmap;
   ZenithError reference_zenith, query_zenith;
@@ -203,13 +209,12 @@ Status RunHeadingExperiment(const ExperimentOptions& options, std::vector<Headin
 
 // Ants (Seville habitat): one ant's route as the reference, other routes of the same ant
 // and of other ants as queries, at each camera height (ant ~0.01 m, small robot ~0.1 m).
-struct AntsRow {
+// The cap's scores only with options.cap, which `skyloc experiment ants` leaves off.
+struct AntsRow : ComparedScores {
   std::string query;  // route name, e.g. "ant1_route2"
   bool same_ant = false;
   double camera_height_m = 0;
   double truth_fraction = 0;  // query frames within max_offset_m of the reference route
-  MethodScore sky, vanilla;
-  MethodScore sky_filter;  // the sky descriptor with the route filter (the firmware's matcher)
 };
 
 inline constexpr const char* kAntsReferenceRoute = "ant1_route1";

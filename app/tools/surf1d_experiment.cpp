@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "skyloc/drivers/dsp_status.h"
+#include "skyloc/drivers/image_file.h"
 #include "skyloc/sim/world.h"
 
 namespace skyloc::tools {
@@ -27,11 +28,9 @@ namespace {
 
 // Grey value of pixel (x, y) of an RGB24 frame: the channel mean, as the sky segmenter and
 // dsp::HorizonStrip read it.
-double Grey(const std::vector<std::uint8_t>& rgb, int width, int x, int y) {
-  const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-                         static_cast<std::size_t>(x)) *
-                        3;
-  return (rgb[i] + rgb[i + 1] + rgb[i + 2]) / 3;  // integers, as HorizonStrip
+double Grey(const dsp::ImageView& rgb, int x, int y) {
+  const std::uint8_t* p = rgb.Row(y) + static_cast<std::size_t>(x) * 3;
+  return (p[0] + p[1] + p[2]) / 3;  // integers, as HorizonStrip
 }
 
 // The features of one image, in strip columns.
@@ -164,10 +163,9 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   dsp::Surf1d surf;
   if (const dsp::Surf1dError e = surf.Init(n, o.surf); e != dsp::Surf1dError::kOk)
     return drivers::DspStatus(e, "1D SURF (forward strip)");
-  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(o.width) *
-                                static_cast<std::size_t>(o.height) * 3);
-  const dsp::MutableImageView view{rgb.data(), o.width, o.height,
-                                   static_cast<std::size_t>(o.width) * 3, dsp::PixelFormat::kRgb24};
+  SKYLOC_TRY_ASSIGN(drivers::OwnedImage frame,
+                    drivers::OwnedImage::Allocate(o.width, o.height, dsp::PixelFormat::kRgb24));
+  const dsp::MutableImageView view = frame.mutable_view();
   std::mt19937_64 jitter(o.world_seed * 7919u + 13u);
   std::uniform_real_distribution<double> uniform(-o.attitude_jitter_deg, o.attitude_jitter_deg);
   std::vector<float> strip(static_cast<std::size_t>(n));
@@ -194,7 +192,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
       double sum = 0;
       int taps = 0;
       for (int r = std::max(top, 0); r < std::min(top + o.band_rows, o.height); ++r, ++taps)
-        sum += Grey(rgb, o.width, column, r);
+        sum += Grey(view, column, r);
       strip[static_cast<std::size_t>(pad + s)] = static_cast<float>(sum / std::max(taps, 1));
     }
     // The padding: a ramp from the last column back round to the first.
@@ -261,11 +259,10 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   dsp::Surf1d surf_up;
   if (const dsp::Surf1dError e = surf_up.Init(m, o.surf); e != dsp::Surf1dError::kOk)
     return drivers::DspStatus(e, "1D SURF (fisheye strip)");
-  std::vector<std::uint8_t> rgb_up(static_cast<std::size_t>(o.fisheye_width) *
-                                   static_cast<std::size_t>(o.fisheye_height) * 3);
-  const dsp::MutableImageView view_up{rgb_up.data(), o.fisheye_width, o.fisheye_height,
-                                      static_cast<std::size_t>(o.fisheye_width) * 3,
-                                      dsp::PixelFormat::kRgb24};
+  SKYLOC_TRY_ASSIGN(
+      drivers::OwnedImage frame_up,
+      drivers::OwnedImage::Allocate(o.fisheye_width, o.fisheye_height, dsp::PixelFormat::kRgb24));
+  const dsp::MutableImageView view_up = frame_up.mutable_view();
   std::vector<float> strip_up(static_cast<std::size_t>(m));
   features = 0;
   for (std::size_t k = 0; k < total; ++k) {

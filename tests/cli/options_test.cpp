@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,40 @@ TEST(OptionTable, ChoiceListAppendsEachOccurrence) {
   EXPECT_NE(testing::internal::GetCapturedStderr().find("--colour 'green': expected red"),
             std::string::npos);
   EXPECT_TRUE(refused.empty());
+}
+
+// An option bound to a std::optional: empty unless given, the value when given, and a
+// refused value leaves it empty (a setting that replaces the configuration's only when given).
+TEST(OptionTable, OptionalDestinationsHoldAValueOnlyWhenGiven) {
+  struct Optionals {
+    std::optional<int> ds;
+    std::optional<double> tilt;
+    std::optional<Colour> colour;
+    OptionTable table{"test", "[options]", ""};
+    Optionals() {
+      table.Int("--ds", "N", "sequence length", 1, 1000, &ds);
+      table.Number("--tilt", "DEG", "pitch", {-90, 90}, &tilt);
+      table.Choice("--colour", "the colour", {{"red", Colour::kRed}, {"blue", Colour::kBlue}},
+                   &colour);
+    }
+  };
+  Optionals none;
+  ASSERT_EQ(none.table.Parse(Args({}).span()), ParseOutcome::kRun);
+  EXPECT_FALSE(none.ds.has_value());
+  EXPECT_FALSE(none.tilt.has_value());
+  EXPECT_FALSE(none.colour.has_value());
+  Optionals all;
+  const Args a({"--ds", "20", "--tilt", "-12.5", "--colour", "red"});
+  ASSERT_EQ(all.table.Parse(a.span()), ParseOutcome::kRun);
+  EXPECT_EQ(all.ds, 20);
+  EXPECT_EQ(all.tilt, -12.5);
+  EXPECT_EQ(all.colour, Colour::kRed);
+  Optionals refused;
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(refused.table.Parse(Args({"--tilt", "91"}).span()), ParseOutcome::kRefused);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("--tilt '91': expected a number in"),
+            std::string::npos);
+  EXPECT_FALSE(refused.tilt.has_value());
 }
 
 }  // namespace
