@@ -3,11 +3,13 @@
 #include <sys/stat.h>
 #include <toml++/toml.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -115,6 +117,57 @@ class SectionReader : public drivers::TomlKeyReader {
  private:
   Status* error_;
 };
+
+// [output] kinds = ["stdout", "socket", "dds"]: any of them, each once (an empty list:
+// nothing but the status lines).
+void ReadOutputKinds(const toml::table* t, SectionReader* r, OutputConfig* o) {
+  if (t == nullptr || !r->Has("kinds"))
+    return;
+  const toml::array* kinds = t->get("kinds")->as_array();
+  if (kinds == nullptr) {
+    r->Invalid("kinds",
+               "must be a list of \"stdout\", \"socket\", \"dds\" (e.g. kinds = "
+               "[\"stdout\", \"socket\"])");
+    return;
+  }
+  o->to_stdout = o->to_socket = o->to_dds = false;
+  for (const toml::node& kind : *kinds) {
+    const std::optional<std::string_view> name = kind.value<std::string_view>();
+    bool* flag = !name               ? nullptr
+                 : *name == "stdout" ? &o->to_stdout
+                 : *name == "socket" ? &o->to_socket
+                 : *name == "dds"    ? &o->to_dds
+                                     : nullptr;
+    if (flag == nullptr) {
+      r->Invalid("kinds", "lists something that is not \"stdout\", \"socket\" or \"dds\"");
+      return;
+    }
+    if (*flag) {
+      r->Invalid("kinds", "lists an output twice");
+      return;
+    }
+    *flag = true;
+  }
+}
+
+void ParseOutput(const toml::table* t, const std::string& source, OutputConfig* o, Status* error) {
+  SectionReader r(t, "output", source, error);
+  ReadOutputKinds(t, &r, o);
+  r.String("socket_path", &o->socket_path, false);
+  r.Int("socket_max_readers", &o->socket_max_readers, 1, 64);
+  r.String("ros_topic", &o->ros_topic, false);
+  r.Int("ros_domain_id", &o->ros_domain_id, 0, 232);
+  r.String("frame_id", &o->frame_id, true);
+  if (r.ok() && (o->socket_path[0] != '/' || o->socket_path.size() > 107))
+    r.Invalid("socket_path", "must be an absolute path of at most 107 characters");
+  if (r.ok() && o->ros_topic[0] != '/')
+    r.Invalid("ros_topic", "must be an absolute ROS 2 topic name (\"/skyloc/localisation\")");
+  for (const char c : o->ros_topic)
+    if (r.ok() && !(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/'))
+      r.Invalid("ros_topic", "may hold letters, digits, '_' and '/' only (a ROS 2 name)");
+  r.Finish();
+}
+
 }  // namespace
 
 void ResolveDescriptorGrid(DescriptorConfig* d) {
@@ -182,7 +235,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
 
   constexpr const char* kSections[] = {"camera",     "segmentation", "descriptor", "seqslam",
                                        "capacities", "state",        "status",     "realtime",
-                                       "route_db",   "attitude",     "heading"};
+                                       "route_db",   "attitude",     "heading",    "output"};
   for (auto&& [k, node] : root) {
     if (!node.is_table()) {
       // A key above every [section] header (or a section written as a key).
@@ -200,7 +253,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
       return Status::Error(StatusCode::kInvalidArgument,
                            "%s:%u: [%s] is not a known section (known: camera, segmentation, "
                            "descriptor, seqslam, capacities, state, status, realtime, route_db, "
-                           "attitude, heading)",
+                           "attitude, heading, output)",
                            source.c_str(), node.source().begin.line, name.c_str());
     }
     if (!node.is_table()) {
@@ -405,6 +458,7 @@ Result<Config> ParseConfig(std::string_view text, std::string_view source_name) 
       r.Invalid("elevation_min_deg", "must not be above elevation_max_deg");
     r.Finish();
   }
+  ParseOutput(section("output"), source, &c.output, &error);
   if (!error.ok())
     return error;
   return c;
