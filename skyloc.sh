@@ -35,6 +35,7 @@ HOST_PACKAGES=(build-essential cmake ninja-build pkg-config ccache googletest li
   libboost-math-dev
   libopencv-dev  # host-only evaluation tools: SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md)
   libcamera-dev
+  cyclonedds-dev cyclonedds-tools  # [output] dds: Cyclone DDS and its IDL compiler idlc
   clang-14 libclang-rt-14-dev  # clang + libFuzzer: the fuzz targets (tests/fuzz)
   lintian mmdebstrap)  # ./skyloc.sh package and its test (tests/package): lint, install in a Debian root
 # The HIL tests (tests/hil, CTest label hil): QEMU system emulators, what packs the VM's
