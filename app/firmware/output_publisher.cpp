@@ -114,17 +114,20 @@ OutputPublisher::~OutputPublisher() {
 }
 
 Status OutputPublisher::Start(std::span<drivers::LocalisationOutput* const> outputs,
-                              const RouteFrames* route, std::size_t route_capacity, bool lossless) {
+                              const RouteFrames* route, std::size_t route_capacity,
+                              PublishMode mode) {
   if (running())
     return Status::Error(StatusCode::kFailedPrecondition, "the output publisher is running");
   outputs_ = outputs;
   route_ = route;
-  lossless_ = lossless;
+  mode_ = mode;
   SKYLOC_TRY(progress_.Allocate(route_capacity));
   queue_ = std::make_unique<Queue>();
   building_ = std::make_unique<drivers::LocalisationMessage>();
   popped_ = std::make_unique<drivers::LocalisationMessage>();
-  thread_ = std::thread([this] { PublishLoop(); });
+  running_ = true;
+  if (mode_ != PublishMode::kInline)
+    thread_ = std::thread([this] { PublishLoop(); });
   return Status::Ok();
 }
 
@@ -140,8 +143,13 @@ void OutputPublisher::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t
     distance = progress_.DistanceTo(r.matched ? r.best_index : -1);
   }
   BuildLocalisationMessage(mode, r, route_frames, distance, building_.get());
+  if (mode_ == PublishMode::kInline) {
+    for (drivers::LocalisationOutput* output : outputs_)
+      output->Publish(*building_);
+    return;
+  }
   while (!queue_->TryPush(*building_)) {
-    if (!lossless_) {
+    if (mode_ == PublishMode::kDropWhenFull) {
       queue_dropped_.fetch_add(1, std::memory_order_relaxed);
       return;
     }
@@ -179,7 +187,10 @@ void OutputPublisher::PublishLoop() {
 }
 
 void OutputPublisher::Stop() {
-  if (!running())
+  if (!running_)
+    return;
+  running_ = false;
+  if (!thread_.joinable())
     return;
   queued_.release();
   thread_.join();

@@ -1,9 +1,13 @@
-// Each frame's localisation to the configured outputs ([output], docs/OUTPUTS.md), off the
-// frame loop: OnFrame() builds the frame's message once (its fields and its JSON line,
-// FormatJsonLine) and queues it by value on a fixed lock-free queue; a publisher thread
-// hands it to every output. A full queue drops the frame for every output and counts it
-// (a live run never waits for a reader), except in a lossless run (a recording replayed:
-// no camera to keep up with, and its output is the point), which waits for room.
+// Each frame's localisation to the configured outputs ([output], docs/OUTPUTS.md).
+// OnFrame() builds the frame's message once (its fields and its JSON line,
+// FormatJsonLine); then, by PublishMode:
+//   kDropWhenFull (a live camera): queued by value on a fixed lock-free queue, which a
+//     publisher thread empties into every output, off the frame loop; a full queue drops
+//     the frame for every output and counts it: the camera does not wait for a reader.
+//   kWaitWhenFull: the same, but the frame loop waits for room (no frame is lost).
+//   kInline (a recording or the simulator: no deadline, and every line is wanted): handed
+//     to the outputs on the frame loop's own thread; no thread at all, which is also what
+//     lets these runs work under qemu-user (tests/support/emulator.h).
 #pragma once
 
 #include <atomic>
@@ -65,6 +69,8 @@ struct OutputPublisherCounters {
   std::uint64_t queue_dropped = 0;  // the queue was full: no output got the frame
 };
 
+enum class PublishMode : std::uint8_t { kDropWhenFull, kWaitWhenFull, kInline };
+
 class OutputPublisher final : public FrameSink {
  public:
   static constexpr std::size_t kQueueCapacity = 64;
@@ -78,12 +84,12 @@ class OutputPublisher final : public FrameSink {
   // matches index; may be null) gives the length and the distance along it; `capacity` is
   // the most frames it can hold. Allocates the queue and starts the thread.
   Status Start(std::span<drivers::LocalisationOutput* const> outputs, const RouteFrames* route,
-               std::size_t route_capacity, bool lossless);
-  // Frame path: never blocks (lossless: until the queue has room), allocates nothing.
+               std::size_t route_capacity, PublishMode mode);
+  // Frame path: allocates nothing; never blocks in kDropWhenFull.
   void OnFrame(LoopMode mode, const FrameResult& result, std::uint64_t route_frames) override;
   // Publishes what is queued and stops the thread. Safe to call twice.
   void Stop();
-  bool running() const { return thread_.joinable(); }
+  bool running() const { return running_; }
   OutputPublisherCounters counters() const;
 
  private:
@@ -93,7 +99,8 @@ class OutputPublisher final : public FrameSink {
   std::span<drivers::LocalisationOutput* const> outputs_;
   const RouteFrames* route_ = nullptr;
   RouteProgress progress_;
-  bool lossless_ = false;
+  PublishMode mode_ = PublishMode::kDropWhenFull;
+  bool running_ = false;
   std::unique_ptr<Queue> queue_;
   std::unique_ptr<drivers::LocalisationMessage> building_;  // the frame path's message
   std::unique_ptr<drivers::LocalisationMessage> popped_;    // the publisher thread's

@@ -91,8 +91,8 @@ void FrameLoopWithSocket(benchmark::State& state, bool dead_reader) {
   }
   drivers::LocalisationOutput* outputs[] = {&socket};
   OutputPublisher publisher;
-  // Not lossless: a live camera's run, where a full queue drops rather than waits.
-  ok = ok && publisher.Start(outputs, &route, route.capacity(), false).ok();
+  // A live camera's run: off the frame loop, a full queue drops rather than waits.
+  ok = ok && publisher.Start(outputs, &route, route.capacity(), PublishMode::kDropWhenFull).ok();
   if (!ok) {
     state.SkipWithError("set-up failed");
   } else {

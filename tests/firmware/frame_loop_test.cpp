@@ -21,6 +21,7 @@
 #include "skyloc/platform/signals.h"
 #include "skyloc/sim/street_source.h"
 #include "small_config.h"
+#include "support/emulator.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::firmware {
@@ -154,7 +155,8 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   drivers::SimulatedStatusOutput status({}, &kMonotonic);
   ASSERT_TRUE(status.Open().ok());
   // The outputs on: the JSON lines to a stream and the in-memory twin, through the
-  // publisher's queue and thread (the counter counts every thread).
+  // publisher's queue and thread (the counter counts every thread); inline under
+  // qemu-user, where a thread cannot start.
   std::FILE* null = std::fopen("/dev/null", "w");
   ASSERT_NE(null, nullptr);
   drivers::FileLinesOutput lines(null);
@@ -162,7 +164,11 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   ASSERT_TRUE(memory.Open().ok());
   drivers::LocalisationOutput* outputs[] = {&lines, &memory};
   OutputPublisher publisher;
-  ASSERT_TRUE(publisher.Start(outputs, &route, route.capacity(), true).ok());
+  ASSERT_TRUE(publisher
+                  .Start(outputs, &route, route.capacity(),
+                         skyloc::testing::UnderUserModeEmulator() ? PublishMode::kInline
+                                                                  : PublishMode::kWaitWhenFull)
+                  .ok());
   LoopOptions options;
   options.max_frames = 10;
   LoopSummary summary;
@@ -218,7 +224,7 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
     drivers::FileLinesOutput lines_output(f);
     drivers::LocalisationOutput* outputs[] = {&lines_output};
     OutputPublisher json;
-    ASSERT_TRUE(json.Start(outputs, &route, route.capacity(), true).ok());
+    ASSERT_TRUE(json.Start(outputs, &route, route.capacity(), PublishMode::kInline).ok());
     LoopSummary summary;
     pipeline.ResetTracking();
     ASSERT_TRUE(RunFrameLoop(camera, nullptr, pipeline, nullptr, &json, {}, &summary).ok());

@@ -171,7 +171,9 @@ TEST(SocketOutput, TwoReadersGetEveryFrameAsTheStdoutLine) {
   Reader a(Connect(path)), b(Connect(path));
   drivers::LocalisationOutput* outputs[] = {&lines, &socket};
   OutputPublisher publisher;
-  ASSERT_TRUE(publisher.Start(outputs, &street.route, street.route.capacity(), true).ok());
+  ASSERT_TRUE(
+      publisher.Start(outputs, &street.route, street.route.capacity(), PublishMode::kWaitWhenFull)
+          .ok());
   WaitForReaders pace({&a, &b});
   TeeSink sink(&publisher, &pace);
   LoopOptions options;
@@ -211,7 +213,9 @@ TEST(SocketOutput, AReaderThatStopsReadingMissesFramesAndBlocksNothing) {
   Reader live(Connect(path));
   drivers::LocalisationOutput* outputs[] = {&socket};
   OutputPublisher publisher;
-  ASSERT_TRUE(publisher.Start(outputs, &street.route, street.route.capacity(), true).ok());
+  ASSERT_TRUE(
+      publisher.Start(outputs, &street.route, street.route.capacity(), PublishMode::kWaitWhenFull)
+          .ok());
   WaitForReaders pace({&live});
   TeeSink sink(&publisher, &pace);
   LoopOptions options;
@@ -309,7 +313,9 @@ TEST(SocketOutput, FramePathAllocatesNothingWithTheSocketOn) {
   Reader live(Connect(path), false);
   drivers::LocalisationOutput* outputs[] = {&socket};
   OutputPublisher publisher;
-  ASSERT_TRUE(publisher.Start(outputs, &street.route, street.route.capacity(), true).ok());
+  ASSERT_TRUE(
+      publisher.Start(outputs, &street.route, street.route.capacity(), PublishMode::kWaitWhenFull)
+          .ok());
   LoopOptions options;
   options.max_frames = 10;
   LoopSummary summary;

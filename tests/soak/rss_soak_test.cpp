@@ -62,7 +62,7 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   drivers::FileLinesOutput lines(null);
   drivers::LocalisationOutput* outputs[] = {&lines};
   OutputPublisher json;
-  ASSERT_TRUE(json.Start(outputs, nullptr, 0, true).ok());
+  ASSERT_TRUE(json.Start(outputs, nullptr, 0, PublishMode::kWaitWhenFull).ok());
   LoopOptions options;
   options.max_frames = 2000;
   LoopSummary summary;
