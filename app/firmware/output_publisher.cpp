@@ -127,8 +127,7 @@ Status OutputPublisher::Start(std::span<drivers::LocalisationOutput* const> outp
   building_ = std::make_unique<drivers::LocalisationMessage>();
   popped_ = std::make_unique<drivers::LocalisationMessage>();
   running_ = true;
-  if (mode_ != PublishMode::kInline)
-    thread_ = std::thread([this] { PublishLoop(); });
+  thread_ = std::thread([this] { PublishLoop(); });
   return Status::Ok();
 }
 
@@ -150,11 +149,6 @@ void OutputPublisher::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t
         devices_->FormatJson(static_cast<double>(r.timestamp.count()) * 1e-9,
                              m.json + m.json_length, sizeof m.json - m.json_length));
     devices_due_ = r.timestamp + std::chrono::seconds(1);
-  }
-  if (mode_ == PublishMode::kInline) {
-    for (drivers::LocalisationOutput* output : outputs_)
-      output->Publish(*building_);
-    return;
   }
   while (!queue_->TryPush(*building_)) {
     if (mode_ == PublishMode::kDropWhenFull) {

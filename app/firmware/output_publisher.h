@@ -1,13 +1,12 @@
 // Each frame's localisation to the configured outputs ([output], docs/OUTPUTS.md).
 // OnFrame() builds the frame's message once (its fields and its JSON line,
-// FormatJsonLine); then, by PublishMode:
-//   kDropWhenFull (a live camera): queued by value on a fixed lock-free queue, which a
-//     publisher thread empties into every output, off the frame loop; a full queue drops
-//     the frame for every output and counts it: the camera does not wait for a reader.
-//   kWaitWhenFull: the same, but the frame loop waits for room (no frame is lost).
-//   kInline (a recording or the simulator: no deadline, and every line is wanted): handed
-//     to the outputs on the frame loop's own thread; no thread at all, which is also what
-//     lets these runs work under qemu-user (tests/support/emulator.h).
+// FormatJsonLine) and queues it by value on a fixed lock-free queue, which the publisher
+// thread empties into every output, off the frame loop. When the queue is full, by
+// PublishMode:
+//   kDropWhenFull (a live camera): the frame is dropped for every output and counted: the
+//     camera does not wait for a reader.
+//   kWaitWhenFull (a recording or the simulator: no deadline, and every line is wanted):
+//     the frame loop waits for room, so no frame is lost.
 #pragma once
 
 #include <atomic>
@@ -70,7 +69,7 @@ struct OutputPublisherCounters {
   std::uint64_t queue_dropped = 0;  // the queue was full: no output got the frame
 };
 
-enum class PublishMode : std::uint8_t { kDropWhenFull, kWaitWhenFull, kInline };
+enum class PublishMode : std::uint8_t { kDropWhenFull, kWaitWhenFull };
 
 class OutputPublisher final : public FrameSink {
  public:

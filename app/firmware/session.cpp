@@ -551,16 +551,13 @@ Status ConnectSinks(Session* s) {
   s->evaluate = s->args.mode == LoopMode::kRepeat && run_frames > 0 && !s->teach_button;
   if (s->evaluate)
     SKYLOC_TRY(s->results.Allocate(run_frames));
-  // A real camera does not wait: its outputs are published off the frame loop and a full
-  // queue drops. A recording or a simulated run has no deadline, and every one of its lines
-  // is wanted (tests and scripts count them): published inline, or with DDS (which
-  // allocates as it serialises, and sends /diagnostics each second) on the publisher
-  // thread, waiting for room.
+  // The outputs are published off the frame loop, on the publisher's thread. A real camera
+  // does not wait: a full queue drops. A recording or a simulated run has no deadline, and
+  // every one of its lines is wanted (tests and scripts count them): the loop waits for
+  // room.
   const bool live = s->args.dataset.empty() && (s->config.camera.kind == CameraKind::kV4l2 ||
                                                 s->config.camera.kind == CameraKind::kLibcamera);
-  const PublishMode mode = live                      ? PublishMode::kDropWhenFull
-                           : s->config.output.to_dds ? PublishMode::kWaitWhenFull
-                                                     : PublishMode::kInline;
+  const PublishMode mode = live ? PublishMode::kDropWhenFull : PublishMode::kWaitWhenFull;
   if (!s->outputs.empty()) {
     SKYLOC_TRY(
         s->publisher.Start(s->outputs, s->args.mode == LoopMode::kRepeat ? &s->route : nullptr,

@@ -22,7 +22,6 @@
 #include "skyloc/platform/signals.h"
 #include "skyloc/sim/street_source.h"
 #include "small_config.h"
-#include "support/emulator.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::firmware {
@@ -229,8 +228,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   drivers::SimulatedStatusOutput status({}, &kMonotonic);
   ASSERT_TRUE(status.Open().ok());
   // The outputs on: the JSON lines to a stream and the in-memory twin, through the
-  // publisher's queue and thread (the counter counts every thread); inline under
-  // qemu-user, where a thread cannot start.
+  // publisher's queue and thread (the counter counts every thread).
   std::FILE* null = std::fopen("/dev/null", "w");
   ASSERT_NE(null, nullptr);
   // stdio would allocate the stream's buffer at its first line, on the publisher's thread,
@@ -242,11 +240,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   ASSERT_TRUE(memory.Open().ok());
   drivers::LocalisationOutput* outputs[] = {&lines, &memory};
   OutputPublisher publisher;
-  ASSERT_TRUE(publisher
-                  .Start(outputs, &route, route.capacity(),
-                         skyloc::testing::UnderUserModeEmulator() ? PublishMode::kInline
-                                                                  : PublishMode::kWaitWhenFull)
-                  .ok());
+  ASSERT_TRUE(publisher.Start(outputs, &route, route.capacity(), PublishMode::kWaitWhenFull).ok());
   LoopOptions options;
   options.max_frames = 10;
   LoopSummary summary;
@@ -302,7 +296,7 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
     drivers::FileLinesOutput lines_output(f);
     drivers::LocalisationOutput* outputs[] = {&lines_output};
     OutputPublisher json;
-    ASSERT_TRUE(json.Start(outputs, &route, route.capacity(), PublishMode::kInline).ok());
+    ASSERT_TRUE(json.Start(outputs, &route, route.capacity(), PublishMode::kWaitWhenFull).ok());
     LoopSummary summary;
     pipeline.ResetTracking();
     ASSERT_TRUE(RunFrameLoop(camera, nullptr, pipeline, nullptr, &json, {}, &summary).ok());
@@ -634,7 +628,7 @@ TEST(JsonLines, DeviceCountersOnceASecond) {
   devices.camera = &camera;
   devices.status = &status;
   publisher.set_devices(&devices);
-  ASSERT_TRUE(publisher.Start(outputs, nullptr, 0, PublishMode::kInline).ok());
+  ASSERT_TRUE(publisher.Start(outputs, nullptr, 0, PublishMode::kWaitWhenFull).ok());
   FrameResult r;
   r.frame = 1;
   for (const int ms : {400, 900, 1399, 1400, 2300, 2500}) {
