@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -266,6 +267,47 @@ TEST(SocketOutput, HungUpReadersAreClosedAndExtraReadersRefused) {
   EXPECT_EQ(socket.readers(), 0);
   EXPECT_EQ(socket.counters().readers_gone, 1u);
   socket.Close();
+}
+
+// The devices' record that rides in a frame's message (about once a second) reaches a
+// reader as a message of its own after the frame's line, as stdout gets it as a line of
+// its own.
+TEST(SocketOutput, TheDevicesRecordIsAMessageOfItsOwn) {
+  skyloc::testing::ScratchDir dir("skyloc-socket-");
+  const std::string path = dir.path() + "/localisation.sock";
+  drivers::UnixSocketOutputConfig c;
+  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutput socket(c);
+  ASSERT_TRUE(socket.Open().ok());
+  const int reader = Connect(path);
+  ASSERT_GE(reader, 0);
+  drivers::LocalisationMessage m;
+  const std::string frame = "{\"schema\":1,\"frame\":7}\n", devices = "{\"devices\":{}}\n";
+  std::memcpy(m.json, frame.data(), frame.size());
+  std::memcpy(m.json + frame.size(), devices.data(), devices.size());
+  m.json_length = static_cast<std::uint32_t>(frame.size());
+  m.devices_length = static_cast<std::uint32_t>(devices.size());
+  socket.Publish(m);
+  m.devices_length = 0;
+  socket.Publish(m);
+  socket.Close();
+  std::vector<std::string> got;
+  char message[64];
+  for (ssize_t n; (n = ::recv(reader, message, sizeof message, 0)) > 0;)
+    got.emplace_back(message, static_cast<std::size_t>(n));
+  ::close(reader);
+  EXPECT_EQ(got, (std::vector<std::string>{frame, devices, frame}));
+
+  char* text = nullptr;
+  std::size_t size = 0;
+  std::FILE* f = open_memstream(&text, &size);
+  ASSERT_NE(f, nullptr);
+  drivers::FileLinesOutput lines(f);
+  m.devices_length = static_cast<std::uint32_t>(devices.size());
+  lines.Publish(m);
+  std::fclose(f);
+  EXPECT_EQ(std::string(text, size), frame + devices);
+  std::free(text);
 }
 
 TEST(SocketOutput, ReplacesAStaleSocketButNeverAFile) {
