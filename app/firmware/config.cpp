@@ -423,7 +423,7 @@ void ReadHeadingSection(SectionReader& r, const toml::table* /*table*/, Config& 
 void ReadOutputKinds(SectionReader& r, const toml::table* table, OutputConfig& o) {
   if (table == nullptr || !r.Has("kinds"))
     return;
-  const toml::array* kinds = table->get("kinds")->as_array();
+  const toml::array* kinds = table->get_as<toml::array>("kinds");
   if (kinds == nullptr) {
     r.Invalid("kinds",
               "must be a list of \"stdout\", \"socket\", \"dds\" (e.g. kinds = "
