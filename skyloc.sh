@@ -31,11 +31,12 @@ die() {
 # ---------------------------------------------------------------------------------------
 # Debian packages, by purpose; deps() below picks them per build kind.
 # The host build of the skyloc executable, all ./skyloc.sh demo installs: compilers, build
-# tools and what the firmware includes and links. The drivers' libraries are in it because
-# the drivers a build contains are a compile definition of every file (SKYLOC_WITH_*): a
+# tools and what the firmware includes and links. The drivers' libraries and Cyclone DDS
+# ([output] dds: cyclonedds-dev, and cyclonedds-tools for its IDL compiler idlc) are in it
+# because what a build contains is a compile definition of every file (SKYLOC_WITH_*): a
 # demo built without them would make the test's build compile everything again.
 BUILD_PACKAGES=(build-essential cmake ninja-build pkg-config ccache libeigen3-dev
-  libtomlplusplus-dev libstb-dev libgpiod-dev libcamera-dev)
+  libtomlplusplus-dev libstb-dev libgpiod-dev libcamera-dev cyclonedds-dev cyclonedds-tools)
 # The tests and benchmarks: GoogleTest (built from Debian's source with each build's
 # flags), Google Benchmark, and Boost.Math, the spherical-harmonics tests' reference.
 TEST_PACKAGES=(googletest libgtest-dev libbenchmark-dev libboost-math-dev)

@@ -124,6 +124,49 @@ foreach(driver V4L2 GPIOD LIBCAMERA)
   endif()
 endforeach()
 
+# [output] kinds = "dds" (ROS 2 topics): Eclipse Cyclone DDS's C library for the target
+# (cyclonedds-dev, from the sysroot when cross-compiling) and its IDL compiler idlc for
+# this machine (cyclonedds-tools; it writes C type support from drivers/src/dds/*.idl, the
+# same for every architecture). ON, OFF or AUTO like the drivers; code asks
+# `#if SKYLOC_WITH_DDS`.
+set(SKYLOC_WITH_DDS ${skyloc_driver_default} CACHE STRING
+    "Build the DDS output: ON (fail when Cyclone DDS is missing), OFF, or AUTO")
+set_property(CACHE SKYLOC_WITH_DDS PROPERTY STRINGS ON OFF AUTO)
+if(NOT SKYLOC_WITH_DDS MATCHES "^(ON|OFF|AUTO)$")
+  message(FATAL_ERROR "skyloc: SKYLOC_WITH_DDS=${SKYLOC_WITH_DDS}: use ON, OFF or AUTO.")
+endif()
+set(skyloc_dds_mode ${SKYLOC_WITH_DDS})
+set(skyloc_dds_missing "")
+if(NOT skyloc_dds_mode STREQUAL "OFF")
+  pkg_check_modules(CYCLONEDDS IMPORTED_TARGET CycloneDDS>=0.10)
+  # idlc runs on this machine, also in a cross build: never from the sysroot.
+  find_program(SKYLOC_IDLC idlc NO_CMAKE_FIND_ROOT_PATH)
+  if(NOT CYCLONEDDS_FOUND)
+    set(skyloc_dds_missing "CycloneDDS>=0.10 (cyclonedds-dev) in ${skyloc_driver_where}")
+  elseif(NOT SKYLOC_IDLC)
+    set(skyloc_dds_missing "idlc (cyclonedds-tools) on this machine")
+  endif()
+endif()
+if(skyloc_dds_mode STREQUAL "OFF")
+  set(SKYLOC_WITH_DDS OFF)
+  message(STATUS "skyloc: DDS output (ROS 2 topics): LEFT OUT (SKYLOC_WITH_DDS=OFF)")
+elseif(skyloc_dds_missing STREQUAL "")
+  set(SKYLOC_WITH_DDS ON)
+  message(STATUS "skyloc: DDS output (ROS 2 topics): built, Cyclone DDS ${CYCLONEDDS_VERSION}, "
+                 "${SKYLOC_IDLC}")
+elseif(skyloc_dds_mode STREQUAL "ON")
+  message(FATAL_ERROR "skyloc: the DDS output is required in this build (SKYLOC_WITH_DDS=ON, "
+                      "the default when cross-compiling), but ${skyloc_dds_missing} was not "
+                      "found. ${skyloc_driver_fix} (cyclonedds-tools goes on the build machine: "
+                      "apt-get install cyclonedds-tools), or configure with "
+                      "-DSKYLOC_WITH_DDS=OFF to build without it.")
+else()
+  set(SKYLOC_WITH_DDS OFF)
+  message(STATUS "skyloc: DDS output (ROS 2 topics): LEFT OUT (SKYLOC_WITH_DDS=AUTO and "
+                 "${skyloc_dds_missing} was not found; -DSKYLOC_WITH_DDS=ON makes this an "
+                 "error)")
+endif()
+
 # GoogleTest is always built from Debian's source package (/usr/src/googletest), so host,
 # sanitizer and cross builds link a GoogleTest compiled with their own compiler and flags.
 if(NOT SKYLOC_BUILD_TESTS STREQUAL "OFF" AND NOT EXISTS /usr/src/googletest/CMakeLists.txt)

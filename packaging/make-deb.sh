@@ -58,6 +58,11 @@ install -m 0644 "$ROOT/README.md" "$pkg/usr/share/doc/skyloc/README.md"
 gzip -9n <"$ROOT/packaging/changelog" >"$pkg/usr/share/doc/skyloc/changelog.gz"
 chmod 0644 "$pkg/usr/share/doc/skyloc/changelog.gz"
 install -m 0644 "$ROOT/packaging/lintian-overrides" "$pkg/usr/share/lintian/overrides/skyloc"
+# The ROS 2 message package of the DDS output, for the user to build in a ROS 2 workspace
+# (docs/OUTPUTS.md).
+install -d "$pkg/usr/share/skyloc/skyloc_msgs/msg"
+install -m 0644 "$ROOT/skyloc_msgs/package.xml" "$ROOT/skyloc_msgs/CMakeLists.txt" "$pkg/usr/share/skyloc/skyloc_msgs/"
+install -m 0644 "$ROOT/skyloc_msgs/msg/Localisation.msg" "$pkg/usr/share/skyloc/skyloc_msgs/msg/"
 install -m 0755 "$ROOT/packaging/postinst" "$ROOT/packaging/prerm" "$ROOT/packaging/postrm" "$pkg/DEBIAN/"
 echo /etc/skyloc/skyloc.toml >"$pkg/DEBIAN/conffiles"
 

@@ -3,12 +3,14 @@
 #include <sys/stat.h>
 #include <toml++/toml.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <span>
 #include <sstream>
 #include <tuple>
@@ -421,6 +423,56 @@ void ReadHeadingSection(SectionReader& r, const toml::table* /*table*/, Config& 
     r.Invalid("elevation_min_deg", "must not be above elevation_max_deg");
 }
 
+// [output] kinds = ["stdout", "socket", "dds"]: any of them, each once (an empty list:
+// nothing but the status lines).
+void ReadOutputKinds(SectionReader& r, const toml::table* table, OutputConfig& o) {
+  if (table == nullptr || !r.Has("kinds"))
+    return;
+  const toml::array* kinds = table->get_as<toml::array>("kinds");
+  if (kinds == nullptr) {
+    r.Invalid("kinds",
+              "must be a list of \"stdout\", \"socket\", \"dds\" (e.g. kinds = "
+              "[\"stdout\", \"socket\"])");
+    return;
+  }
+  o.to_stdout = o.to_socket = o.to_dds = false;
+  for (const toml::node& kind : *kinds) {
+    const std::optional<std::string_view> name = kind.value<std::string_view>();
+    bool* flag = !name               ? nullptr
+                 : *name == "stdout" ? &o.to_stdout
+                 : *name == "socket" ? &o.to_socket
+                 : *name == "dds"    ? &o.to_dds
+                                     : nullptr;
+    if (flag == nullptr) {
+      r.Invalid("kinds", "lists something that is not \"stdout\", \"socket\" or \"dds\"");
+      return;
+    }
+    if (*flag) {
+      r.Invalid("kinds", "lists an output twice");
+      return;
+    }
+    *flag = true;
+  }
+}
+
+// [output]
+void ReadOutputSection(SectionReader& r, const toml::table* table, Config& c) {
+  OutputConfig& o = c.output;
+  ReadOutputKinds(r, table, o);
+  r.String("socket_path", &o.socket_path, false);
+  r.Int("socket_max_readers", &o.socket_max_readers, 1, 64);
+  r.String("ros_topic", &o.ros_topic, false);
+  r.Int("ros_domain_id", &o.ros_domain_id, 0, 232);
+  r.String("frame_id", &o.frame_id, true);
+  if (r.ok() && (o.socket_path[0] != '/' || o.socket_path.size() > 107))
+    r.Invalid("socket_path", "must be an absolute path of at most 107 characters");
+  if (r.ok() && o.ros_topic[0] != '/')
+    r.Invalid("ros_topic", "must be an absolute ROS 2 topic name (\"/skyloc/localisation\")");
+  for (const char ch : o.ros_topic)
+    if (r.ok() && !(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '/'))
+      r.Invalid("ros_topic", "may hold letters, digits, '_' and '/' only (a ROS 2 name)");
+}
+
 // The sections in the order they are read ([attitude] checks [camera]'s kind).
 struct ConfigSection {
   const char* name;
@@ -432,7 +484,7 @@ constexpr ConfigSection kConfigSections[] = {
     {"capacities", ReadCapacitiesSection}, {"state", ReadStateSection},
     {"status", ReadStatusSection},         {"realtime", ReadRealtimeSection},
     {"route_db", ReadRouteDbSection},      {"attitude", ReadAttitudeSection},
-    {"heading", ReadHeadingSection}};
+    {"heading", ReadHeadingSection},       {"output", ReadOutputSection}};
 
 // Every top-level item must be a known [section].
 Status CheckSections(const toml::table& root, const std::string& source) {

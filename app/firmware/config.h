@@ -222,6 +222,23 @@ struct HeadingConfig {
   bool operator==(const HeadingConfig&) const = default;
 };
 
+// [output]: where each frame's localisation goes for the robot's controller, besides the
+// status lines (docs/OUTPUTS.md). Any of the three; the same JSON line on stdout and the
+// socket, the same values on DDS.
+struct OutputConfig {
+  bool to_stdout = true;   // "stdout": the JSON lines (the journal, under the systemd unit)
+  bool to_socket = false;  // "socket": a local SOCK_SEQPACKET socket, one line per message
+  bool to_dds = false;     // "dds": ROS 2 topics through Eclipse Cyclone DDS
+  std::string socket_path = "/run/skyloc/localisation.sock";
+  int socket_max_readers = 8;
+  // The ROS 2 topic (DDS topic "rt" + topic) and domain (ROS_DOMAIN_ID).
+  std::string ros_topic = "/skyloc/localisation";
+  int ros_domain_id = 0;
+  std::string frame_id = "skyloc";  // std_msgs/Header frame_id of every message
+
+  bool operator==(const OutputConfig&) const = default;
+};
+
 struct Config {
   // The file it was read from, or what built it in memory (the demo); empty: the built-in
   // defaults.
@@ -239,6 +256,7 @@ struct Config {
   RouteDbConfig route_db;
   AttitudeConfig attitude;
   HeadingConfig heading;
+  OutputConfig output;
 
   bool operator==(const Config&) const = default;
 };

@@ -7,61 +7,6 @@
 
 namespace skyloc::firmware {
 
-void JsonLinesSink::OnFrame(LoopMode mode, const FrameResult& r, std::uint64_t route_frames) {
-  char line[448];
-  const double t = static_cast<double>(r.timestamp.count()) * 1e-9;
-  const long long latency_us = static_cast<long long>(r.latency.count() / 1000);
-  int n;
-  if (mode == LoopMode::kRecord || mode == LoopMode::kWaitForButton) {
-    n = std::snprintf(line, sizeof line,
-                      "{\"frame\":%llu,\"timestamp\":%.6f,\"latency_us\":%lld}\n",
-                      static_cast<unsigned long long>(r.frame), t, latency_us);
-  } else if (mode == LoopMode::kTeach) {
-    n = std::snprintf(line, sizeof line,
-                      "{\"frame\":%llu,\"timestamp\":%.6f,\"route_frames\":%llu,\"threshold\":%d,"
-                      "\"sky_fraction\":%.4f,\"latency_us\":%lld}\n",
-                      static_cast<unsigned long long>(r.frame), t,
-                      static_cast<unsigned long long>(route_frames), r.threshold,
-                      static_cast<double>(r.sky_fraction), latency_us);
-  } else {
-    char index[24] = "null";
-    if (r.matched)
-      std::snprintf(index, sizeof index, "%lld", static_cast<long long>(r.best_index));
-    // null when there is no estimate (no match, a route without strips, no RANSAC model).
-    char heading[24] = "null", heading_confidence[24] = "null", surf[24] = "null";
-    if (r.has_heading) {
-      std::snprintf(heading, sizeof heading, "%.2f", static_cast<double>(r.heading_deg));
-      std::snprintf(heading_confidence, sizeof heading_confidence, "%.4f",
-                    static_cast<double>(r.heading_confidence));
-    }
-    if (r.has_heading_surf)
-      std::snprintf(surf, sizeof surf, "%.2f", static_cast<double>(r.heading_surf_deg));
-    n = std::snprintf(line, sizeof line,
-                      "{\"frame\":%llu,\"timestamp\":%.6f,\"best_index\":%s,\"uniqueness\":%.4f,"
-                      "\"confidence\":%.4f,\"state\":\"%s\",\"heading_deg\":%s,"
-                      "\"heading_confidence\":%s,\"heading_surf_deg\":%s,"
-                      "\"heading_surf_inliers\":%d,\"latency_us\":%lld}\n",
-                      static_cast<unsigned long long>(r.frame), t, index,
-                      static_cast<double>(r.uniqueness), static_cast<double>(r.confidence),
-                      dsp::LocalisationStateName(r.state), heading, heading_confidence, surf,
-                      r.has_heading_surf ? r.heading_surf_inliers : 0, latency_us);
-  }
-  if (n > 0)
-    Write(line, static_cast<std::size_t>(n));
-  if (devices_ != nullptr && r.timestamp >= devices_due_) {
-    Write(line, devices_->FormatJson(t, line, sizeof line));
-    devices_due_ = r.timestamp + std::chrono::seconds(1);
-  }
-  // One line per frame must reach a pipe reader promptly.
-  if (std::fflush(out_) != 0)
-    failed_ = true;
-}
-
-void JsonLinesSink::Write(const char* line, std::size_t n) {
-  if (n > 0 && std::fwrite(line, 1, n, out_) != n)
-    failed_ = true;
-}
-
 namespace {
 
 // What this loop has put on the status lines, so it can keep them moving between frames.

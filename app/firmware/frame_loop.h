@@ -30,38 +30,8 @@ class FrameSink {
   virtual void OnFrame(LoopMode mode, const FrameResult& result, std::uint64_t route_frames) = 0;
 };
 
-// One JSON object per line on `out`:
-//   repeat: {"frame":12,"timestamp":0.4,"best_index":10,"uniqueness":0.41,
-//            "confidence":0.59,"state":"SEARCHING","heading_deg":-12.30,
-//            "heading_confidence":0.9412,"heading_surf_deg":-12.10,
-//            "heading_surf_inliers":41,"latency_us":812}
-//   teach:  {"frame":12,"timestamp":0.4,"route_frames":13,"threshold":97,
-//            "sky_fraction":0.41,"latency_us":650}
-// best_index is null until SeqSLAM has ds frames; the heading fields are null without a
-// match or when the route has no horizon strips (FrameResult says what they mean).
-// With a DeviceReport, the devices' counters follow the first frame and then the first
-// frame of every second of the frames' time, as one record of their own
-// (DeviceReport::FormatJson: {"devices":{"timestamp":...,"camera":{...},...}}).
-// Formatted into a fixed buffer.
-class JsonLinesSink final : public FrameSink {
- public:
-  explicit JsonLinesSink(std::FILE* out) : out_(out) {}
-  void OnFrame(LoopMode mode, const FrameResult& result, std::uint64_t route_frames) override;
-  bool write_failed() const { return failed_; }
-  // The devices whose counters go into the stream once a second (null: none). They must
-  // outlive the sink's use.
-  void set_devices(const DeviceReport* devices) { devices_ = devices; }
-
- private:
-  void Write(const char* line, std::size_t n);
-
-  std::FILE* out_;
-  bool failed_ = false;
-  const DeviceReport* devices_ = nullptr;
-  Nanoseconds devices_due_ = Nanoseconds::min();  // frame time of the next devices record
-};
-
-// Fans one frame out to two sinks (JSON and a progress line, say).
+// Fans one frame out to two sinks (the outputs and a progress line, say). The JSON lines
+// and the other outputs: firmware/output_publisher.h.
 class TeeSink final : public FrameSink {
  public:
   TeeSink(FrameSink* a, FrameSink* b) : a_(a), b_(b) {}

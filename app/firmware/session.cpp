@@ -8,11 +8,16 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <vector>
 
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/camera_file.h"
 #include "skyloc/drivers/dataset.h"
+#if SKYLOC_WITH_DDS
+#include "skyloc/drivers/dds_output.h"
+#endif
 #include "skyloc/drivers/iio_imu.h"
+#include "skyloc/drivers/localisation_output.h"
 #include "skyloc/drivers/simulated_camera.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
@@ -26,6 +31,7 @@
 #include "skyloc/drivers/gpio_status_output.h"
 #endif
 #include "firmware/button_teach.h"
+#include "firmware/output_publisher.h"
 #include "firmware/session_lines.h"
 #include "firmware/sim_run.h"
 #include "skyloc/dsp/place_metrics.h"
@@ -335,10 +341,26 @@ Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& co
                        "(libgpiod-dev was missing at build time); use \"sim\" or \"none\"");
 }
 
+// [output] kinds = "dds": the ROS 2 topics through Cyclone DDS, when this build has it.
+Result<std::unique_ptr<drivers::LocalisationOutput>> MakeDdsOutput(const OutputConfig& o) {
+#if SKYLOC_WITH_DDS
+  drivers::DdsOutputConfig c;
+  std::snprintf(c.topic, sizeof c.topic, "rt%s", o.ros_topic.c_str());
+  std::snprintf(c.frame_id, sizeof c.frame_id, "%s", o.frame_id.c_str());
+  c.domain_id = o.ros_domain_id;
+  return std::unique_ptr<drivers::LocalisationOutput>(std::make_unique<drivers::DdsOutput>(c));
+#else
+  (void)o;
+  return Status::Error(StatusCode::kUnimplemented,
+                       "[output] kinds lists \"dds\", but this skyloc was built without "
+                       "Cyclone DDS (cyclonedds-dev and cyclonedds-tools were missing at build "
+                       "time): remove \"dds\" or rebuild with them installed");
+#endif
+}
+
 // Everything one run holds, from start-up to shut-down; each stage fills or uses its part.
 struct Session {
-  Session(const SessionArgs& a, const Config& c)
-      : args(a), config(c), label(a.label), json(a.json) {}
+  Session(const SessionArgs& a, const Config& c) : args(a), config(c), label(a.label) {}
 
   const SessionArgs& args;
   Config config;  // the camera's real size and a dataset's lens filled in at start-up
@@ -358,7 +380,12 @@ struct Session {
   std::unique_ptr<drivers::StatusOutput> status;
   ResultRecorder results;
   bool evaluate = false;  // results are kept for the evaluation at the end
-  JsonLinesSink json;
+  // [output]: the open outputs, in `outputs`, fed by the publisher's thread.
+  std::unique_ptr<drivers::FileLinesOutput> stdout_output;
+  std::unique_ptr<drivers::UnixSocketOutput> socket_output;
+  std::unique_ptr<drivers::LocalisationOutput> dds_output;
+  std::vector<drivers::LocalisationOutput*> outputs;
+  OutputPublisher publisher;
   DeviceReport devices;  // every device's counters: SIGUSR1, the exit, the JSON lines
   std::unique_ptr<TeeSink> outer, sink;
   FrameRecorder recorder;  // --record
@@ -485,7 +512,35 @@ Status OpenRecording(Session* s) {
   return Status::Ok();
 }
 
-// Where the frames' results go: the JSON lines, the caller's sink and, for a finite run
+// [output]: the JSON lines on stdout (unless the caller wants none), the socket, DDS. Opened
+// before the loop; an output that cannot open is fatal, naming its key.
+Status OpenOutputs(Session* s) {
+  const OutputConfig& o = s->config.output;
+  if (o.to_stdout && s->args.json != nullptr) {
+    s->stdout_output = std::make_unique<drivers::FileLinesOutput>(s->args.json);
+    s->outputs.push_back(s->stdout_output.get());
+  }
+  if (o.to_socket) {
+    drivers::UnixSocketOutputConfig c;
+    std::snprintf(c.path, sizeof c.path, "%s", o.socket_path.c_str());
+    c.max_readers = o.socket_max_readers;
+    s->socket_output = std::make_unique<drivers::UnixSocketOutput>(c);
+    SKYLOC_TRY(s->socket_output->Open().AddContext("[output] socket_path"));
+    s->outputs.push_back(s->socket_output.get());
+    std::fprintf(stderr, "%s: output socket %s (up to %d readers)\n", s->label, c.path,
+                 c.max_readers);
+  }
+  if (o.to_dds) {
+    SKYLOC_TRY_ASSIGN(s->dds_output, MakeDdsOutput(o));
+    SKYLOC_TRY(s->dds_output->Open().AddContext("[output] kinds = \"dds\""));
+    s->outputs.push_back(s->dds_output.get());
+    std::fprintf(stderr, "%s: output dds: ROS 2 topic %s (DDS rt%s), domain %d, /diagnostics\n",
+                 s->label, o.ros_topic.c_str(), o.ros_topic.c_str(), o.ros_domain_id);
+  }
+  return Status::Ok();
+}
+
+// Where the frames' results go: the outputs, the caller's sink and, for a finite run
 // (a dataset, a simulated trajectory, --frames) the evaluation at the end, which needs the
 // poses those sources have. Not with the teach button: the routes change under the results.
 Status ConnectSinks(Session* s) {
@@ -495,8 +550,20 @@ Status ConnectSinks(Session* s) {
   s->evaluate = s->args.mode == LoopMode::kRepeat && run_frames > 0 && !s->teach_button;
   if (s->evaluate)
     SKYLOC_TRY(s->results.Allocate(run_frames));
+  // The outputs are published off the frame loop, on the publisher's thread. A real camera
+  // does not wait: a full queue drops. A recording or a simulated run has no deadline, and
+  // every one of its lines is wanted (tests and scripts count them): the loop waits for
+  // room.
+  const bool live = s->args.dataset.empty() && (s->config.camera.kind == CameraKind::kV4l2 ||
+                                                s->config.camera.kind == CameraKind::kLibcamera);
+  const PublishMode mode = live ? PublishMode::kDropWhenFull : PublishMode::kWaitWhenFull;
+  if (!s->outputs.empty()) {
+    SKYLOC_TRY(
+        s->publisher.Start(s->outputs, s->args.mode == LoopMode::kRepeat ? &s->route : nullptr,
+                           static_cast<std::size_t>(s->config.capacities.route_frames), mode));
+  }
   s->outer =
-      std::make_unique<TeeSink>(s->args.json != nullptr ? &s->json : nullptr, s->args.extra_sink);
+      std::make_unique<TeeSink>(s->outputs.empty() ? nullptr : &s->publisher, s->args.extra_sink);
   s->sink = std::make_unique<TeeSink>(s->outer.get(), s->evaluate ? &s->results : nullptr);
   return Status::Ok();
 }
@@ -543,8 +610,9 @@ Status StartUp(Session* s, SessionReport* report) {
   s->devices.camera = s->camera;
   s->devices.imu = s->attitude.imu.get();
   s->devices.status = s->status.get();
-  s->json.set_devices(&s->devices);
+  s->publisher.set_devices(&s->devices);
   s->loop.devices = &s->devices;
+  SKYLOC_TRY(OpenOutputs(s));
   SKYLOC_TRY(ConnectSinks(s));
   ApplyRealtimeConfig(*s);
   if (!args.record_dir.empty())
@@ -593,6 +661,35 @@ Status RunLoop(Session* s, SessionReport* report) {
   return looped;
 }
 
+// The publisher drained and stopped, the outputs closed, what they could not deliver said.
+void CloseOutputs(Session* s) {
+  s->publisher.Stop();
+  const OutputPublisherCounters published = s->publisher.counters();
+  if (published.queue_dropped > 0)
+    std::fprintf(stderr,
+                 "%s: outputs: %llu of %llu frames dropped (the publisher's queue was full)\n",
+                 s->label, static_cast<unsigned long long>(published.queue_dropped),
+                 static_cast<unsigned long long>(published.frames));
+  for (drivers::LocalisationOutput* output : s->outputs) {
+    output->Close();
+    const drivers::OutputCounters c = output->counters();
+    if (output == s->stdout_output.get()) {
+      if (c.dropped > 0)
+        std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n",
+                     s->label);
+    } else {
+      std::fprintf(stderr,
+                   "%s: output %s: %llu frames published, %llu deliveries dropped; readers: %llu "
+                   "connected, %llu gone, %llu refused\n",
+                   s->label, output->name(), static_cast<unsigned long long>(c.published),
+                   static_cast<unsigned long long>(c.dropped),
+                   static_cast<unsigned long long>(c.readers_seen),
+                   static_cast<unsigned long long>(c.readers_gone),
+                   static_cast<unsigned long long>(c.readers_refused));
+    }
+  }
+}
+
 // teach: commit what was taught, whatever happened in the loop. Returns the commit's
 // error, unless the loop's own (the failed write) already says it.
 Status CommitRoute(Session* s, const Status& loop_status, SessionReport* report) {
@@ -630,10 +727,9 @@ Status ShutDown(Session* s, const Status& loop_status, SessionReport* report) {
     PrintAttitude(s->label, *s->attitude.source);
     s->attitude.source->Close();
   }
+  CloseOutputs(s);
   s->pipeline.latency().Print(stderr);
   s->devices.Print(stderr);
-  if (s->json.write_failed())
-    std::fprintf(stderr, "%s: warning: writing the JSON lines failed (stdout closed?)\n", s->label);
   if (s->evaluate) {
     // Sized from the run's length, so only a source that delivers more frames than it
     // announced fills it; the evaluation then covers the frames kept, and says so.

@@ -235,7 +235,33 @@ const BadCase kBadCases[] = {
     {"[attitude]\nfilter_kp = -1\n", "[attitude] filter_kp"},
     {"[heading]\nstrip_columns = 100\n", "[heading] strip_columns"},
     {"[heading]\nelevation_min_deg = 30\n", "[heading] elevation_min_deg"},
+    {"[output]\nkinds = \"socket\"\n", "[output] kinds must be a list"},
+    {"[output]\nkinds = [\"stdout\", \"mqtt\"]\n", "[output] kinds lists something that is not"},
+    {"[output]\nkinds = [\"dds\", \"dds\"]\n", "[output] kinds lists an output twice"},
+    {"[output]\nkinds = [3]\n", "[output] kinds"},
+    {"[output]\nsocket_path = \"skyloc.sock\"\n", "[output] socket_path must be an absolute"},
+    {"[output]\nsocket_max_readers = 0\n", "[output] socket_max_readers"},
+    {"[output]\nros_topic = \"skyloc/localisation\"\n", "[output] ros_topic must be an absolute"},
+    {"[output]\nros_topic = \"/skyloc/local-isation\"\n", "[output] ros_topic may hold"},
+    {"[output]\nros_domain_id = 233\n", "[output] ros_domain_id"},
+    {"[output]\nport = 9\n", "key port is not known in [output]"},
 };
+
+// [output] kinds: any of the three, in any order; an empty list is none at all.
+TEST(Config, OutputKindsAreAnyOfTheThree) {
+  Result<Config> c = ParseConfig("[output]\nkinds = [\"dds\", \"socket\"]\n", "t.toml");
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_FALSE(c->output.to_stdout);
+  EXPECT_TRUE(c->output.to_socket);
+  EXPECT_TRUE(c->output.to_dds);
+  c = ParseConfig("[output]\nkinds = []\n", "t.toml");
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  EXPECT_FALSE(c->output.to_stdout || c->output.to_socket || c->output.to_dds);
+  c = ParseConfig("", "t.toml");
+  ASSERT_TRUE(c.ok());
+  EXPECT_TRUE(c->output.to_stdout);
+  EXPECT_FALSE(c->output.to_socket || c->output.to_dds);
+}
 
 class ConfigRejects : public ::testing::TestWithParam<BadCase> {};
 

@@ -9,10 +9,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "firmware/output_publisher.h"
 #include "skyloc/drivers/attitude_source.h"
 #include "skyloc/drivers/simulated_imu.h"
 #include "skyloc/drivers/simulated_status_output.h"
@@ -225,23 +227,45 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   ASSERT_TRUE(camera.Start().ok());
   drivers::SimulatedStatusOutput status({}, &kMonotonic);
   ASSERT_TRUE(status.Open().ok());
+  // The outputs on: the JSON lines to a stream and the in-memory twin, through the
+  // publisher's queue and thread (the counter counts every thread).
   std::FILE* null = std::fopen("/dev/null", "w");
   ASSERT_NE(null, nullptr);
-  JsonLinesSink json(null);
+  // stdio would allocate the stream's buffer at its first line, on the publisher's thread,
+  // which the warm-up below does not wait for: the buffer is the test's from the start.
+  static char stdio_buffer[BUFSIZ];
+  ASSERT_EQ(std::setvbuf(null, stdio_buffer, _IOFBF, sizeof stdio_buffer), 0);
+  drivers::FileLinesOutput lines(null);
+  drivers::MemoryOutput memory(10010);
+  ASSERT_TRUE(memory.Open().ok());
+  drivers::LocalisationOutput* outputs[] = {&lines, &memory};
+  OutputPublisher publisher;
+  ASSERT_TRUE(publisher.Start(outputs, &route, route.capacity(), PublishMode::kWaitWhenFull).ok());
   LoopOptions options;
   options.max_frames = 10;
   LoopSummary summary;
-  // Warm-up: the first JSON line makes stdio allocate its buffer.
-  ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &json, options, &summary).ok());
+  // Warm-up: ten frames before the counted run.
+  ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &publisher, options, &summary).ok());
 
   options.max_frames = 10000;
   AllocationScope scope;
-  const Status s = RunFrameLoop(camera, &status, pipeline, nullptr, &json, options, &summary);
+  const Status s = RunFrameLoop(camera, &status, pipeline, nullptr, &publisher, options, &summary);
+  publisher.Stop();
   const std::uint64_t allocations = scope.allocations();
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_EQ(summary.frames, 10000u);
   EXPECT_EQ(allocations, 0u);
-  EXPECT_FALSE(json.write_failed());
+  EXPECT_EQ(lines.counters().dropped, 0u);
+  EXPECT_EQ(publisher.counters().queue_dropped, 0u);
+  // Every frame reached the outputs, in order, each with its own JSON line.
+  ASSERT_EQ(memory.size(), 10010u);
+  for (std::size_t i = 1; i < memory.size(); ++i)
+    ASSERT_EQ(memory[i].frame, memory[i - 1].frame + 1);
+  const drivers::LocalisationMessage& last = memory[memory.size() - 1];
+  char frame_key[48];
+  std::snprintf(frame_key, sizeof frame_key, "\"frame\":%llu,",
+                static_cast<unsigned long long>(last.frame));
+  EXPECT_NE(std::string(last.json, last.json_length).find(frame_key), std::string::npos);
   // Most frames were matched, so the heading ran thousands of times under the counter.
   EXPECT_GT(pipeline.latency().stage(pipeline.stages().heading).count(), 5000u);
   std::fclose(null);
@@ -269,10 +293,14 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
     std::size_t size = 0;
     std::FILE* f = open_memstream(&text, &size);
     ASSERT_NE(f, nullptr);
-    JsonLinesSink json(f);
+    drivers::FileLinesOutput lines_output(f);
+    drivers::LocalisationOutput* outputs[] = {&lines_output};
+    OutputPublisher json;
+    ASSERT_TRUE(json.Start(outputs, &route, route.capacity(), PublishMode::kWaitWhenFull).ok());
     LoopSummary summary;
     pipeline.ResetTracking();
     ASSERT_TRUE(RunFrameLoop(camera, nullptr, pipeline, nullptr, &json, {}, &summary).ok());
+    json.Stop();
     std::fclose(f);
     const std::string lines(text, size);
     std::free(text);
@@ -473,11 +501,9 @@ TEST(FrameLoop, StopsOnRequestedStop) {
   ClearSignalFlags();
 }
 
+// The one JSON line of each mode, byte for byte (docs/OUTPUTS.md), and the message's fields
+// beside it.
 TEST(JsonLines, RepeatAndTeachLines) {
-  char buffer[2048] = {};
-  std::FILE* f = fmemopen(buffer, sizeof buffer - 1, "w");
-  ASSERT_NE(f, nullptr);
-  JsonLinesSink sink(f);
   FrameResult r;
   r.frame = 12;
   r.timestamp = std::chrono::milliseconds(400);
@@ -487,42 +513,91 @@ TEST(JsonLines, RepeatAndTeachLines) {
   r.confidence = 0.75f;
   r.state = dsp::LocalisationState::kSearching;
   r.latency = std::chrono::microseconds(812);
-  sink.OnFrame(LoopMode::kRepeat, r, 0);
+  std::string text;
+  drivers::LocalisationMessage m;
+  auto line = [&](LoopMode mode, std::uint64_t route_frames, double distance) {
+    BuildLocalisationMessage(mode, r, route_frames, distance, &m);
+    text.append(m.json, m.json_length);
+  };
+  line(LoopMode::kRepeat, 300, 5.0);
+  EXPECT_EQ(m.route_index, 10);
+  EXPECT_EQ(m.route_length, 300u);
+  EXPECT_EQ(m.distance_along_m, 5.0);
+  EXPECT_TRUE(std::isnan(m.heading_deg));
   r.has_heading = true;
   r.heading_deg = -12.304f;
   r.heading_confidence = 0.94123f;
   r.has_heading_surf = true;
   r.heading_surf_deg = -12.1f;
   r.heading_surf_inliers = 41;
-  sink.OnFrame(LoopMode::kRepeat, r, 0);
+  line(LoopMode::kRepeat, 300, std::numeric_limits<double>::quiet_NaN());
+  EXPECT_EQ(m.heading_deg, -12.304f);
   r.has_heading = false;
   r.has_heading_surf = false;
   r.matched = false;
-  sink.OnFrame(LoopMode::kRepeat, r, 0);
+  line(LoopMode::kRepeat, 300, 5.0);
+  EXPECT_EQ(m.route_index, -1);
+  EXPECT_TRUE(std::isnan(m.distance_along_m));
   r.threshold = 97;
   r.sky_fraction = 0.5f;
-  sink.OnFrame(LoopMode::kTeach, r, 13);
-  std::fclose(f);
-  EXPECT_STREQ(buffer,
-               "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
-               "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
-               "\"latency_us\":812}\n"
-               "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":-12.30,"
-               "\"heading_confidence\":0.9412,\"heading_surf_deg\":-12.10,"
-               "\"heading_surf_inliers\":41,\"latency_us\":812}\n"
-               "{\"frame\":12,\"timestamp\":0.400000,\"best_index\":null,\"uniqueness\":0.2500,"
-               "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
-               "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
-               "\"latency_us\":812}\n"
-               "{\"frame\":12,\"timestamp\":0.400000,\"route_frames\":13,\"threshold\":97,"
-               "\"sky_fraction\":0.5000,\"latency_us\":812}\n");
+  line(LoopMode::kTeach, 13, 0);
+  line(LoopMode::kRecord, 0, 0);
+  EXPECT_EQ(text,
+            "{\"schema\":1,\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,"
+            "\"route_length\":300,\"distance_m\":5.00,\"uniqueness\":0.2500,"
+            "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
+            "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
+            "\"latency_us\":812}\n"
+            "{\"schema\":1,\"frame\":12,\"timestamp\":0.400000,\"best_index\":10,"
+            "\"route_length\":300,\"distance_m\":null,\"uniqueness\":0.2500,"
+            "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":-12.30,"
+            "\"heading_confidence\":0.9412,\"heading_surf_deg\":-12.10,"
+            "\"heading_surf_inliers\":41,\"latency_us\":812}\n"
+            "{\"schema\":1,\"frame\":12,\"timestamp\":0.400000,\"best_index\":null,"
+            "\"route_length\":300,\"distance_m\":null,\"uniqueness\":0.2500,"
+            "\"confidence\":0.7500,\"state\":\"SEARCHING\",\"heading_deg\":null,"
+            "\"heading_confidence\":null,\"heading_surf_deg\":null,\"heading_surf_inliers\":0,"
+            "\"latency_us\":812}\n"
+            "{\"schema\":1,\"frame\":12,\"timestamp\":0.400000,\"route_frames\":13,"
+            "\"threshold\":97,\"sky_fraction\":0.5000,\"latency_us\":812}\n"
+            "{\"schema\":1,\"frame\":12,\"timestamp\":0.400000,\"latency_us\":812}\n");
+}
+
+// The distance along the route sums the horizontal steps between the taught poses, and is
+// unknown from a frame without a pose on; a route that grows is followed.
+TEST(RouteProgress, SumsTheStepsBetweenTaughtPoses) {
+  RouteFrames route;
+  ASSERT_TRUE(route.Allocate(4, 1).ok());
+  const float descriptor[1] = {0};
+  auto at = [](double x, double y) {
+    RouteFrameMeta meta;
+    meta.pose = drivers::Pose{};
+    meta.pose->x_m = x;
+    meta.pose->y_m = y;
+    return meta;
+  };
+  ASSERT_TRUE(route.Append(at(0, 0), descriptor));
+  ASSERT_TRUE(route.Append(at(3, 4), descriptor));
+  RouteProgress progress;
+  ASSERT_TRUE(progress.Allocate(route.capacity()).ok());
+  progress.Follow(&route);
+  EXPECT_EQ(progress.length(), 2u);
+  EXPECT_EQ(progress.DistanceTo(1), 5.0);
+  ASSERT_TRUE(route.Append(at(3, 6), descriptor));
+  ASSERT_TRUE(route.Append(RouteFrameMeta{}, descriptor));
+  progress.Follow(&route);
+  EXPECT_EQ(progress.length(), 4u);
+  EXPECT_EQ(progress.DistanceTo(0), 0.0);
+  EXPECT_EQ(progress.DistanceTo(2), 7.0);
+  EXPECT_TRUE(std::isnan(progress.DistanceTo(3)));
+  EXPECT_TRUE(std::isnan(progress.DistanceTo(4)));
+  EXPECT_TRUE(std::isnan(progress.DistanceTo(-1)));
 }
 
 // Every device's counters, as the devices keep them, in one record after the first frame
 // and then after the first frame of each second of the frames' time; a device not there
-// is null.
+// is null. On stdout a line after the frame's; on the socket a message of its own
+// (tests/outputs).
 TEST(JsonLines, DeviceCountersOnceASecond) {
   ManualClock clock(std::chrono::seconds(5));
   sim::FilmedStreet filmed(Repeat(0));
@@ -546,33 +621,37 @@ TEST(JsonLines, DeviceCountersOnceASecond) {
   char buffer[4096] = {};
   std::FILE* f = fmemopen(buffer, sizeof buffer - 1, "w");
   ASSERT_NE(f, nullptr);
-  JsonLinesSink sink(f);
+  drivers::FileLinesOutput lines(f);
+  drivers::LocalisationOutput* outputs[] = {&lines};
+  OutputPublisher publisher;
   DeviceReport devices;
   devices.camera = &camera;
   devices.status = &status;
-  sink.set_devices(&devices);
+  publisher.set_devices(&devices);
+  ASSERT_TRUE(publisher.Start(outputs, nullptr, 0, PublishMode::kWaitWhenFull).ok());
   FrameResult r;
   r.frame = 1;
   for (const int ms : {400, 900, 1399, 1400, 2300, 2500}) {
     r.timestamp = std::chrono::milliseconds(ms);
-    sink.OnFrame(LoopMode::kRecord, r, 0);
+    publisher.OnFrame(LoopMode::kRecord, r, 0);
     if (ms == 1400)
       devices.imu = &imu;
   }
+  publisher.Stop();
   std::fclose(f);
   EXPECT_STREQ(buffer,
-               "{\"frame\":1,\"timestamp\":0.400000,\"latency_us\":0}\n"
+               "{\"schema\":1,\"frame\":1,\"timestamp\":0.400000,\"latency_us\":0}\n"
                "{\"devices\":{\"timestamp\":0.400000,\"camera\":{\"frames\":3,\"dropped\":0,"
                "\"restarts\":0,\"errors\":0},\"imu\":null,\"status\":{\"writes\":1,"
                "\"failures\":0}}}\n"
-               "{\"frame\":1,\"timestamp\":0.900000,\"latency_us\":0}\n"
-               "{\"frame\":1,\"timestamp\":1.399000,\"latency_us\":0}\n"
-               "{\"frame\":1,\"timestamp\":1.400000,\"latency_us\":0}\n"
+               "{\"schema\":1,\"frame\":1,\"timestamp\":0.900000,\"latency_us\":0}\n"
+               "{\"schema\":1,\"frame\":1,\"timestamp\":1.399000,\"latency_us\":0}\n"
+               "{\"schema\":1,\"frame\":1,\"timestamp\":1.400000,\"latency_us\":0}\n"
                "{\"devices\":{\"timestamp\":1.400000,\"camera\":{\"frames\":3,\"dropped\":0,"
                "\"restarts\":0,\"errors\":0},\"imu\":null,\"status\":{\"writes\":1,"
                "\"failures\":0}}}\n"
-               "{\"frame\":1,\"timestamp\":2.300000,\"latency_us\":0}\n"
-               "{\"frame\":1,\"timestamp\":2.500000,\"latency_us\":0}\n"
+               "{\"schema\":1,\"frame\":1,\"timestamp\":2.300000,\"latency_us\":0}\n"
+               "{\"schema\":1,\"frame\":1,\"timestamp\":2.500000,\"latency_us\":0}\n"
                "{\"devices\":{\"timestamp\":2.500000,\"camera\":{\"frames\":3,\"dropped\":0,"
                "\"restarts\":0,\"errors\":0},\"imu\":{\"samples\":4,\"dropped\":0,"
                "\"errors\":0,\"outages\":0,\"reopens\":0},\"status\":{\"writes\":1,"

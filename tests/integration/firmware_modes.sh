@@ -24,7 +24,7 @@ expect_rc() {  # expect_rc WANT DESCRIPTION -- command...
 }
 # The JSON lines of frames (the stream also carries a devices record once a second).
 frame_lines() {
-  grep -c '^{"frame":' "$1"
+  grep -c '^{"schema":1,"frame":' "$1"
 }
 expect_err() {  # expect_err PATTERN DESCRIPTION
   grep -q -- "$1" "$WORK/err" || fail "$2: stderr lacks '$1': $(cat "$WORK/err")"
@@ -55,7 +55,7 @@ expect_rc 0 "repeat" -- "${RUN[@]}" repeat --route "$DB" --config "$CONFIG" --fr
 [ "$(frame_lines "$WORK/out")" -eq 150 ] || fail "repeat printed $(frame_lines "$WORK/out") lines"
 for key in frame timestamp best_index uniqueness confidence state heading_deg heading_confidence \
   heading_surf_deg heading_surf_inliers latency_us; do
-  [ "$(grep '^{"frame":' "$WORK/out" | grep -c "\"$key\":")" -eq 150 ] || fail "repeat: key $key missing on some lines"
+  [ "$(grep '^{"schema":1,"frame":' "$WORK/out" | grep -c "\"$key\":")" -eq 150 ] || fail "repeat: key $key missing on some lines"
 done
 grep -q '"state":"LOCALISED"' "$WORK/out" || fail "repeat never localised"
 # The same street, the same way round: matched frames carry a heading near 0.

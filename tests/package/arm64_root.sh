@@ -28,9 +28,9 @@ SKIP=77
 # network, so apt installs the .deb offline. usr-is-merged: the root is merged-/usr like
 # every Debian 12 system (the setup hook below makes the links), without the usrmerge
 # conversion, which init-system-helpers would otherwise pull in.
-PACKAGES=(apt usr-is-merged libcamera0.0.3 libgpiod2 systemd-standalone-sysusers)
+PACKAGES=(apt usr-is-merged libcamera0.0.3 libgpiod2 libddsc0debian systemd-standalone-sysusers)
 # Bump when this script or the debian_root scenario changes what they make.
-ROOT_FORMAT=1
+ROOT_FORMAT=2
 
 say() { printf 'arm64-root: %s\n' "$*" >&2; }
 fail() {

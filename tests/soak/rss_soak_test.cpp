@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "firmware/frame_loop.h"
+#include "firmware/output_publisher.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/process_memory.h"
@@ -58,7 +59,10 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   ASSERT_TRUE(status.Open().ok());
   std::FILE* null = std::fopen("/dev/null", "w");
   ASSERT_NE(null, nullptr);
-  JsonLinesSink json(null);
+  drivers::FileLinesOutput lines(null);
+  drivers::LocalisationOutput* outputs[] = {&lines};
+  OutputPublisher json;
+  ASSERT_TRUE(json.Start(outputs, nullptr, 0, PublishMode::kWaitWhenFull).ok());
   LoopOptions options;
   options.max_frames = 2000;
   LoopSummary summary;
@@ -69,6 +73,7 @@ TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   options.max_frames = 100000;
   AllocationScope scope;
   ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &json, options, &summary).ok());
+  json.Stop();
   EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_EQ(summary.frames, 100000u);
   Result<std::size_t> after = ResidentSetBytes();
