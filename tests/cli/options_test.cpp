@@ -11,20 +11,13 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "support/command_line.h"
 
 namespace skyloc::cli {
 namespace {
 
 // Arguments as main() hands them over (mutable C strings).
-struct Args {
-  explicit Args(std::vector<std::string> words) : storage(std::move(words)) {
-    for (std::string& w : storage)
-      pointers.push_back(w.data());
-  }
-  std::span<char* const> span() const { return pointers; }
-  std::vector<std::string> storage;
-  std::vector<char*> pointers;
-};
+using Args = skyloc::testing::CommandLine;
 
 enum class Colour : std::uint8_t { kRed, kBlue };
 
@@ -91,9 +84,9 @@ TEST(OptionTable, RefusesBadValuesNamingTheOptionAndTheRange) {
   for (const Case& c : cases) {
     Parsed p;
     const Args a(c.args);
-    testing::internal::CaptureStderr();
+    ::testing::internal::CaptureStderr();
     const ParseOutcome outcome = p.table.Parse(a.span());
-    const std::string err = testing::internal::GetCapturedStderr();
+    const std::string err = ::testing::internal::GetCapturedStderr();
     EXPECT_EQ(outcome, ParseOutcome::kRefused) << c.expected;
     EXPECT_EQ(ExitCode(outcome), kExitUsage);
     EXPECT_NE(err.find("skyloc test: " + c.expected), std::string::npos) << err;
@@ -104,9 +97,9 @@ TEST(OptionTable, RefusesBadValuesNamingTheOptionAndTheRange) {
 TEST(OptionTable, HelpListsEveryOptionWithItsValueAndLine) {
   Parsed p;
   const Args a({"--ds", "0", "--help"});  // --help wins over a bad value
-  testing::internal::CaptureStdout();
+  ::testing::internal::CaptureStdout();
   EXPECT_EQ(p.table.Parse(a.span()), ParseOutcome::kHelpPrinted);
-  const std::string out = testing::internal::GetCapturedStdout();
+  const std::string out = ::testing::internal::GetCapturedStdout();
   EXPECT_EQ(ExitCode(ParseOutcome::kHelpPrinted), kExitOk);
   EXPECT_EQ(out.rfind("usage: skyloc test [options] FILE...\n", 0), 0u) << out;
   for (const char* line : {"--force", "--route FILE", "--ds N", "sequence length in frames",
@@ -127,9 +120,9 @@ TEST(OptionTable, ChoiceListAppendsEachOccurrence) {
   OptionTable other{"test", "[options]", ""};
   other.ChoiceList("--colour", "colours", {{"red", Colour::kRed}}, &refused);
   const Args bad({"--colour", "green"});
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   EXPECT_EQ(other.Parse(bad.span()), ParseOutcome::kRefused);
-  EXPECT_NE(testing::internal::GetCapturedStderr().find("--colour 'green': expected red"),
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("--colour 'green': expected red"),
             std::string::npos);
   EXPECT_TRUE(refused.empty());
 }

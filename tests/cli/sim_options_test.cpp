@@ -9,19 +9,12 @@
 #include "cli/commands.h"
 #include "cli/options.h"
 #include "firmware/config.h"
+#include "support/command_line.h"
 
 namespace skyloc::cli {
 namespace {
 
-struct Args {
-  explicit Args(std::vector<std::string> words) : storage(std::move(words)) {
-    for (std::string& w : storage)
-      pointers.push_back(w.data());
-  }
-  std::span<char* const> span() const { return pointers; }
-  std::vector<std::string> storage;
-  std::vector<char*> pointers;
-};
+using Args = skyloc::testing::CommandLine;
 
 TEST(SimRunOptions, TheRunsOptionsFillTheRun) {
   firmware::SimRunConfig run;
@@ -44,9 +37,9 @@ TEST(SimRunOptions, TeachRefusesTheWorldsOptions) {
   firmware::SimRunConfig run;
   OptionTable t("teach", "[options]", "");
   AddSimRunOptions(&t, SimRunOptions::kRun, &run);
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   EXPECT_EQ(t.Parse(Args({"--spacing", "2"}).span()), ParseOutcome::kRefused);
-  EXPECT_NE(testing::internal::GetCapturedStderr().find("unknown option '--spacing'"),
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("unknown option '--spacing'"),
             std::string::npos);
 }
 
@@ -99,9 +92,9 @@ TEST(SimRunOptions, RefusesOutOfRangeNamingTheOptionAndWhatIsExpected) {
     firmware::SimRunConfig run;
     OptionTable t("simulate", "[options]", "");
     AddSimRunOptions(&t, SimRunOptions::kWorldAndRun, &run);
-    testing::internal::CaptureStderr();
+    ::testing::internal::CaptureStderr();
     EXPECT_EQ(t.Parse(Args(c.args).span()), ParseOutcome::kRefused) << c.args[0];
-    const std::string err = testing::internal::GetCapturedStderr();
+    const std::string err = ::testing::internal::GetCapturedStderr();
     EXPECT_NE(err.find("skyloc simulate: " + c.expected), std::string::npos) << err;
     EXPECT_EQ(run, firmware::SimRunConfig{}) << c.args[0];
   }
@@ -125,9 +118,9 @@ TEST(OptionTable, NumberPairAndTextList) {
     u.NumberPair(
         "--range", "A,B", "a range", "A,B with A <= B", [](double a, double b) { return a <= b; },
         &lo, &hi);
-    testing::internal::CaptureStderr();
+    ::testing::internal::CaptureStderr();
     EXPECT_EQ(u.Parse(Args({"--range", bad}).span()), ParseOutcome::kRefused) << bad;
-    EXPECT_NE(testing::internal::GetCapturedStderr().find("expected A,B with A <= B"),
+    EXPECT_NE(::testing::internal::GetCapturedStderr().find("expected A,B with A <= B"),
               std::string::npos)
         << bad;
   }

@@ -267,7 +267,7 @@ std::unique_ptr<CameraUnderTest> MakeLibcamera(std::string* skip) {
 #endif
 }
 
-const CameraCase kCases[] = {
+const CameraCase kCameraCases[] = {
     {"Simulated", MakeSim, false},
     {"SimulatedStreet", MakeStreet, false},
     {"SimulatedRendered", MakeRendered, false},
@@ -283,7 +283,8 @@ const CameraCase kCases[] = {
 // LibcameraCamera's part (SPSC hand-over, eventfd, request reuse) allocates nothing by
 // construction. Not the dataset camera: replay decodes a file in each Capture(), the one
 // exception camera.h makes on purpose (docs/DRIVERS.md, "The camera contract").
-const CameraCase kAllocationFreeCases[] = {kCases[0], kCases[1], kCases[2], kCases[4], kCases[5]};
+const CameraCase kAllocationFreeCases[] = {kCameraCases[0], kCameraCases[1], kCameraCases[2],
+                                           kCameraCases[4], kCameraCases[5]};
 
 constexpr Nanoseconds kFrameTimeout = seconds(5);  // vimc under QEMU TCG: ~6 fps
 constexpr int kFrames = 8;
@@ -449,7 +450,7 @@ std::string CaseName(const ::testing::TestParamInfo<CameraCase>& info) {
   return info.param.name;
 }
 
-INSTANTIATE_TEST_SUITE_P(AllCameras, CameraCompliance, ::testing::ValuesIn(kCases), CaseName);
+INSTANTIATE_TEST_SUITE_P(AllCameras, CameraCompliance, ::testing::ValuesIn(kCameraCases), CaseName);
 INSTANTIATE_TEST_SUITE_P(AllocationFreeCameras, CameraCaptureAllocation,
                          ::testing::ValuesIn(kAllocationFreeCases), CaseName);
 

@@ -246,7 +246,7 @@ std::unique_ptr<ImuUnderTest> MakeIioPolling(std::string* skip) {
   return MakeIio(skip, IioImuConfig::Mode::kPolling);
 }
 
-const ImuCase kCases[] = {
+const ImuCase kImuCases[] = {
     {"Simulated", MakeSim, false, false},
     {"SimulatedPaced", MakeSimPaced, false, false},
     {"IioFakeBuffer", MakeIioFakeBuffer, true, true},
@@ -551,7 +551,7 @@ TEST_P(ImuCompliance, ReadDoesNotAllocate) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllImus, ImuCompliance, ::testing::ValuesIn(kCases),
+INSTANTIATE_TEST_SUITE_P(AllImus, ImuCompliance, ::testing::ValuesIn(kImuCases),
                          [](const ::testing::TestParamInfo<ImuCase>& param_info) {
                            return std::string(param_info.param.name);
                          });

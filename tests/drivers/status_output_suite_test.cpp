@@ -153,7 +153,7 @@ struct OutputCase {
   StatusLineMode mode;
 };
 
-const OutputCase kCases[] = {
+const OutputCase kOutputCases[] = {
     {"SimulatedPerState", MakeSim, StatusLineMode::kLinePerState},
     {"SimulatedBlink", MakeSim, StatusLineMode::kBlink},
     {"GpiodPerState", MakeGpio, StatusLineMode::kLinePerState},
@@ -357,7 +357,8 @@ std::string CaseName(const ::testing::TestParamInfo<OutputCase>& info) {
   return info.param.name;
 }
 
-INSTANTIATE_TEST_SUITE_P(AllOutputs, StatusOutputSuite, ::testing::ValuesIn(kCases), CaseName);
+INSTANTIATE_TEST_SUITE_P(AllOutputs, StatusOutputSuite, ::testing::ValuesIn(kOutputCases),
+                         CaseName);
 
 }  // namespace
 }  // namespace skyloc::drivers

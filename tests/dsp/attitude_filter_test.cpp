@@ -10,12 +10,11 @@
 #include <string>
 
 #include "skyloc/platform/alloc_counter.h"
+#include "support/angles.h"
 
 namespace skyloc::dsp {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180;
 constexpr double kG = kStandardGravity;
 constexpr std::int64_t kStepNs = 5'000'000;  // 200 Hz
 

@@ -7,10 +7,10 @@
 #include <numbers>
 #include <random>
 
+#include "support/angles.h"
+
 namespace skyloc::dsp {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 LensParams Fisheye(LensModel model, int w, int h, double fov_deg) {
   LensParams p;

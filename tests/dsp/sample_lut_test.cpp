@@ -9,11 +9,10 @@
 
 #include "skyloc/dsp/segmentation.h"
 #include "skyloc/dsp/sh_grid.h"
+#include "support/angles.h"
 
 namespace skyloc::dsp {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // An analytic sky: a spherical cap (body frame) of half-angle `alpha` around `axis`.
 struct Cap {

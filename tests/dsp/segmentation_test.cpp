@@ -9,21 +9,14 @@
 #include <vector>
 
 #include "skyloc/platform/alloc_counter.h"
+#include "support/fisheye_lens.h"
 
 namespace skyloc::dsp {
 namespace {
 
-constexpr int kSize = 200;
+using testing::FisheyeLens;
 
-Lens FisheyeLens(int w = kSize, int h = kSize) {
-  LensParams p;
-  p.width = w;
-  p.height = h;
-  p.fov_deg = 185.0;
-  Lens lens;
-  EXPECT_EQ(lens.Init(p), LensError::kOk);
-  return lens;
-}
+constexpr int kSize = 200;
 
 // Ground truth of a synthetic scene: sky is the cap within 50 degrees of the zenith
 // tilted 20 degrees towards +x, plus a bright square "cloud-free patch" that is ground
@@ -76,7 +69,7 @@ TEST(SkySegmenter, RowRunsAreExactlyTheVisiblePixels) {
 }
 
 TEST(SkySegmenter, BimodalImageSegmentsAbove99PercentAndOutsideIsGround) {
-  const Lens lens = FisheyeLens();
+  const Lens lens = FisheyeLens(kSize, kSize);
   SkySegmenter seg;
   ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
   const std::vector<std::uint8_t> grey = BimodalFrame(lens, 3);
@@ -122,7 +115,7 @@ std::vector<std::uint8_t> BlindFrame(double level, double noise_sigma, std::uint
 }
 
 TEST(SkySegmenter, ABlindFrameHasNoSkyAndANormalFrameHas) {
-  const Lens lens = FisheyeLens();
+  const Lens lens = FisheyeLens(kSize, kSize);
   SkySegmenter seg;
   ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
   std::vector<std::uint8_t> mask(kSize * kSize, 77);
@@ -170,7 +163,7 @@ TEST(SkySegmenter, ABlindFrameHasNoSkyAndANormalFrameHas) {
 }
 
 TEST(SkySegmenter, ColourFormatsUseTheChannelMeanAndYuyvTheLuma) {
-  const Lens lens = FisheyeLens();
+  const Lens lens = FisheyeLens(kSize, kSize);
   SkySegmenter seg;
   ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
   const std::vector<std::uint8_t> grey = BimodalFrame(lens, 4);
@@ -209,7 +202,7 @@ TEST(SkySegmenter, ColourFormatsUseTheChannelMeanAndYuyvTheLuma) {
 }
 
 TEST(SkySegmenter, FixedThresholdAndStridedHistogram) {
-  const Lens lens = FisheyeLens();
+  const Lens lens = FisheyeLens(kSize, kSize);
   const std::vector<std::uint8_t> grey = BimodalFrame(lens, 5);
   SkySegmenter fixed;
   SegmentationOptions options;
@@ -243,7 +236,7 @@ TEST(SkySegmenter, FixedThresholdAndStridedHistogram) {
 }
 
 TEST(SkySegmenter, WrongSizesAreRejected) {
-  const Lens lens = FisheyeLens();
+  const Lens lens = FisheyeLens(kSize, kSize);
   SkySegmenter seg;
   ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
   std::vector<std::uint8_t> buffer(kSize * kSize);
@@ -257,7 +250,7 @@ TEST(SkySegmenter, WrongSizesAreRejected) {
 
 TEST(SkySegmenter, FramePathAllocatesNothing) {
   ASSERT_TRUE(AllocationCounterActive());
-  const Lens lens = FisheyeLens();
+  const Lens lens = FisheyeLens(kSize, kSize);
   SkySegmenter seg;
   ASSERT_EQ(seg.Init(lens, {}), SegmentationError::kOk);
   const std::vector<std::uint8_t> grey = BimodalFrame(lens, 6);

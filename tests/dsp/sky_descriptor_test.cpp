@@ -11,11 +11,13 @@
 #include <vector>
 
 #include "skyloc/platform/alloc_counter.h"
+#include "support/angles.h"
+#include "support/fisheye_lens.h"
 
 namespace skyloc::dsp {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using testing::FisheyeLens;
 
 // A street canyon, body frame: sky where the elevation clears two walls running along
 // `heading`, plus a tree (a cap of ground) over one pavement. Rotating the heading yaws the
@@ -48,16 +50,6 @@ std::vector<std::uint8_t> DrawSky(const Lens& lens, const Sky& is_sky) {
 
 std::vector<std::uint8_t> DrawCanyon(const Lens& lens, double heading, double wall_scale = 1.0) {
   return DrawSky(lens, [&](const Eigen::Vector3d& d) { return CanyonSky(d, heading, wall_scale); });
-}
-
-Lens FisheyeLens(int w, int h) {
-  LensParams p;
-  p.width = w;
-  p.height = h;
-  p.fov_deg = 185.0;
-  Lens lens;
-  EXPECT_EQ(lens.Init(p), LensError::kOk);
-  return lens;
 }
 
 double RelativeL2(const std::vector<float>& a, const std::vector<float>& b) {

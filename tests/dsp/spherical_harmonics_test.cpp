@@ -12,11 +12,10 @@
 
 #include "skyloc/dsp/legendre.h"
 #include "skyloc/platform/alloc_counter.h"
+#include "support/angles.h"
 
 namespace skyloc::dsp {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 ShGrid MakeGrid(const ShGridConfig& config) {
   ShGrid grid;

@@ -9,11 +9,10 @@
 #include <vector>
 
 #include "skyloc/platform/alloc_counter.h"
+#include "support/angles.h"
 
 namespace skyloc::dsp {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // A smooth skyline-like strip from a few harmonics, evaluated at column j - shift: the
 // same content turned by +shift columns (shift may be fractional: the analytic answer).

@@ -14,11 +14,10 @@
 #include "skyloc/dsp/lens.h"
 #include "skyloc/dsp/strip_alignment.h"
 #include "skyloc/platform/alloc_counter.h"
+#include "support/angles.h"
 
 namespace skyloc::dsp {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // A rough integer-valued strip (a smoothed random walk), so that integral sums are exact
 // and shifted copies give bit-identical responses.

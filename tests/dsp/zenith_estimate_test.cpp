@@ -11,11 +11,11 @@
 
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/platform/alloc_counter.h"
+#include "support/angles.h"
 
 namespace skyloc::dsp {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr int kSize = 480;
 
 // Open terrain: sky above a flat horizon at `horizon_deg` of elevation, all round.

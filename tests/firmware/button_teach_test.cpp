@@ -24,15 +24,7 @@ namespace {
 constexpr Nanoseconds kFramePeriod = std::chrono::milliseconds(33);
 
 using testing::SmallConfig;
-
-sim::StreetOptions Street(std::uint64_t run_seed) {
-  sim::StreetOptions o;
-  o.width = 64;
-  o.height = 64;
-  o.seed = 7;
-  o.run_seed = run_seed;
-  return o;
-}
+using testing::SmallStreet;
 
 // Two drives along the same street: the first until capture `second_from`, then another
 // from the start (so a route taught on the first is repeated on the second). Each capture
@@ -41,8 +33,8 @@ class ScriptedCamera final : public drivers::Camera {
  public:
   ScriptedCamera(ManualClock* clock, std::uint64_t second_from,
                  std::function<void(std::uint64_t)> script)
-      : first_(Street(1)),
-        second_(Street(2)),
+      : first_(SmallStreet(1)),
+        second_(SmallStreet(2)),
         clock_(clock),
         second_from_(second_from),
         script_(std::move(script)) {}
@@ -187,7 +179,7 @@ TEST_F(ButtonTeach, TheOldRouteIsKeptUntilTheNewOneIsCommitted) {
   {
     RouteDbWriter old;
     ASSERT_TRUE(old.Create(path_.c_str(), pipeline_.route_settings(), 25, false).ok());
-    sim::FilmedStreet filmed(Street(1));
+    sim::FilmedStreet filmed(SmallStreet(1));
     drivers::Camera& street = filmed.camera;
     ASSERT_TRUE(street.Open().ok());
     ASSERT_TRUE(street.Start().ok());
@@ -230,7 +222,7 @@ TEST_F(ButtonTeach, RepeatWithTheButtonPolledAllocatesNothing) {
   ASSERT_TRUE(AllocationCounterActive());
   RouteFrames taught;
   {
-    sim::FilmedStreet filmed(Street(1));
+    sim::FilmedStreet filmed(SmallStreet(1));
     drivers::Camera& street = filmed.camera;
     ASSERT_TRUE(street.Open().ok());
     ASSERT_TRUE(street.Start().ok());
@@ -245,7 +237,7 @@ TEST_F(ButtonTeach, RepeatWithTheButtonPolledAllocatesNothing) {
     }
   }
   ASSERT_TRUE(pipeline_.SetRoute(route_).ok());
-  sim::FilmedStreet filmed(Street(2));
+  sim::FilmedStreet filmed(SmallStreet(2));
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -271,7 +263,7 @@ TEST_F(ButtonTeach, TeachingWithTheButtonAndItsPatternAllocatesNothing) {
   ASSERT_TRUE(AllocationCounterActive());
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path_.c_str(), pipeline_.route_settings(), 25, false).ok());
-  sim::FilmedStreet filmed(Street(1));
+  sim::FilmedStreet filmed(SmallStreet(1));
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());

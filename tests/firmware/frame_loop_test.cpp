@@ -28,6 +28,7 @@ namespace skyloc::firmware {
 namespace {
 
 using testing::SmallConfig;
+using testing::SmallStreet;
 
 // The state the simulated output's lines show (one line per state): the lit line.
 drivers::LocalisationState ShownState(const drivers::SimulatedStatusOutput& status) {
@@ -42,18 +43,9 @@ drivers::LocalisationState ShownState(const drivers::SimulatedStatusOutput& stat
 // CLOCK_MONOTONIC too).
 const MonotonicClock kMonotonic;
 
-sim::StreetOptions Street(std::uint64_t frames) {
-  sim::StreetOptions o;
-  o.width = 64;
-  o.height = 64;
-  o.seed = 7;
-  o.frames = frames;
-  return o;
-}
-
 // Teaches `frames` frames of the street into `route` through the teach-mode pipeline.
 void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
-  sim::FilmedStreet filmed(Street(frames));
+  sim::FilmedStreet filmed(SmallStreet(0, frames));
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -75,7 +67,7 @@ void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
 }
 
 // Counts states and checks each LOCALISED frame's match against the truth: the taught
-// street has a frame every 0.5 m from x = 0 (Street()), so the right route index for a
+// street has a frame every 0.5 m from x = 0 (SmallStreet), so the right route index for a
 // repeat frame is its own position / 0.5 m, whatever the repeat's speed. Correct within
 // +-5 frames, the rule of eval and the experiments (the paper's): the route filter's
 // estimate runs up to ~4 rows ahead where neighbouring street frames look alike
@@ -99,7 +91,7 @@ class TrackingSink final : public FrameSink {
 // no repeat frame is a copy of a taught one and the route index drifts from the frame
 // number (a matcher that only finds identical frames, or that assumes equal speed, fails).
 sim::StreetOptions Repeat(std::uint64_t frames) {
-  sim::StreetOptions o = Street(frames);
+  sim::StreetOptions o = SmallStreet(0, frames);
   o.run_seed = 2;
   o.speed_jitter = 0.2;
   return o;
@@ -392,7 +384,7 @@ TEST(FrameLoop, TeachFramesAllocateNothingAndLand) {
   const std::string path = scratch.path() + "/route.db";
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path.c_str(), pipeline.route_settings(), 25, false).ok());
-  sim::FilmedStreet filmed(Street(0));
+  sim::FilmedStreet filmed(SmallStreet(0, 0));
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -489,7 +481,7 @@ TEST(FrameLoop, StopsOnRequestedStop) {
   RouteFrames route;
   Teach(pipeline, 50, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
-  sim::FilmedStreet filmed(Street(0));
+  sim::FilmedStreet filmed(SmallStreet(0, 0));
   drivers::Camera& camera = filmed.camera;
   ASSERT_TRUE(camera.Open().ok());
   ASSERT_TRUE(camera.Start().ok());
@@ -673,7 +665,7 @@ class FaultyStreet final : public drivers::Camera {
   FaultyStreet(drivers::CameraFault::Kind kind, std::uint64_t at_frame, std::uint32_t count,
                const drivers::StatusOutput* lines = nullptr, ManualClock* clock = nullptr,
                Nanoseconds failure_takes = Nanoseconds{0})
-      : street_(Street(0)),
+      : street_(SmallStreet(0, 0)),
         fault_{kind, at_frame, count},
         lines_(lines),
         clock_(clock),
@@ -952,7 +944,7 @@ class FrameLoopBlink : public ::testing::Test {
   // armed.
   void Run(Nanoseconds first, Nanoseconds period, std::uint64_t frames,
            drivers::StatusOutput* status = nullptr) {
-    camera_ = std::make_unique<TimedCamera>(&clock_, first, period, Street(frames));
+    camera_ = std::make_unique<TimedCamera>(&clock_, first, period, SmallStreet(0, frames));
     ASSERT_TRUE(camera_->Open().ok());
     ASSERT_TRUE(camera_->Start().ok());
     LoopOptions options;

@@ -67,7 +67,7 @@ void WaitWritten(const FrameRecorder& r, std::uint64_t n) {
 
 TEST(FrameRecorder, WritesADatasetThatReplayReadsBackExactly) {
   SKIP_UNDER_EMULATION();
-  testing::ScratchDir scratch("skyloc_recorder_");
+  skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
   o.camera_toml = "[image]\nwidth = 64\nheight = 48\n";
@@ -105,7 +105,7 @@ TEST(FrameRecorder, WritesADatasetThatReplayReadsBackExactly) {
 
 TEST(FrameRecorder, DropsAndCountsFramesWhenEverySlotIsBusy) {
   SKIP_UNDER_EMULATION();
-  testing::ScratchDir scratch("skyloc_recorder_");
+  skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
   o.slots = 2;
@@ -127,7 +127,7 @@ TEST(FrameRecorder, DropsAndCountsFramesWhenEverySlotIsBusy) {
 
 TEST(FrameRecorder, SubmitAllocatesNothing) {
   SKIP_UNDER_EMULATION();
-  testing::ScratchDir scratch("skyloc_recorder_");
+  skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
   o.start_paused = true;  // the writer thread (which allocates) stays idle meanwhile
@@ -144,7 +144,7 @@ TEST(FrameRecorder, SubmitAllocatesNothing) {
 }
 
 TEST(FrameRecorder, RefusesAFolderThatHoldsARecording) {
-  testing::ScratchDir scratch("skyloc_recorder_");
+  skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
   {
@@ -166,7 +166,7 @@ TEST(FrameRecorder, AFullDiskStopsTheRecordingAndKeepsTheFramesBefore) {
   GTEST_SKIP() << "ThreadSanitizer cannot start threads in a forked child (its own thread makes "
                   "every fork multi-threaded); the host and asan builds run this test";
 #endif
-  testing::ScratchDir scratch("skyloc_recorder_");
+  skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   const std::string dir = scratch.path() + "/run";
   const pid_t child = ::fork();
   ASSERT_GE(child, 0);

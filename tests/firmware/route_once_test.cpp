@@ -19,21 +19,13 @@
 namespace skyloc::firmware {
 namespace {
 
-sim::StreetOptions Street(std::uint64_t run_seed, std::uint64_t frames) {
-  sim::StreetOptions o;
-  o.width = 64;
-  o.height = 64;
-  o.seed = 7;
-  o.run_seed = run_seed;
-  o.frames = frames;
-  return o;
-}
+using testing::SmallStreet;
 
 // Teaches `frames` frames of the street into a route database file, as teach does.
 void TeachFile(Pipeline& pipeline, const std::string& path, std::uint64_t frames) {
   RouteDbWriter writer;
   ASSERT_TRUE(writer.Create(path.c_str(), pipeline.route_settings(), 50, false).ok());
-  sim::FilmedStreet filmed(Street(0, frames));
+  sim::FilmedStreet filmed(SmallStreet(0, frames));
   ASSERT_TRUE(filmed.camera.Open().ok());
   ASSERT_TRUE(filmed.camera.Start().ok());
   for (Result<drivers::Frame> f = filmed.camera.Capture(std::chrono::seconds(1)); f.ok();
@@ -90,7 +82,7 @@ TEST(RouteHeldOnce, ALoadThroughThePipelinesSinkMatchesAsACopiedRouteAndKeepsNoD
   EXPECT_TRUE(copied.heading_enabled());
 
   // Another drive of the street, through both: the same result in every frame.
-  sim::FilmedStreet filmed(Street(1, 250));
+  sim::FilmedStreet filmed(SmallStreet(1, 250));
   ASSERT_TRUE(filmed.camera.Open().ok());
   ASSERT_TRUE(filmed.camera.Start().ok());
   int frames = 0, localised = 0, with_heading = 0;

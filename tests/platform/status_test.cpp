@@ -36,7 +36,7 @@ TEST(Status, LongMessageIsTruncatedWithEllipsis) {
   std::string longname(1000, 'a');
   Status s = Status::Error(StatusCode::kNotFound, "%s", longname.c_str());
   EXPECT_EQ(std::strlen(s.message()), Status::kMessageCapacity - 1);
-  EXPECT_THAT(std::string(s.message()), testing::EndsWith("..."));
+  EXPECT_THAT(std::string(s.message()), ::testing::EndsWith("..."));
 }
 
 TEST(Status, FromErrnoKeepsErrnoAndMapsCode) {

@@ -8,12 +8,11 @@
 #include <vector>
 
 #include "skyloc/sim/world.h"
+#include "support/angles.h"
 
 namespace skyloc::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180;
 constexpr double kG = dsp::kStandardGravity;
 
 std::vector<TrajectoryPoint> Standing(const drivers::Pose& pose, int frames, double fps = 10) {

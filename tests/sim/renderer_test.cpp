@@ -7,12 +7,10 @@
 #include <vector>
 
 #include "skyloc/dsp/otsu.h"
+#include "support/angles.h"
 
 namespace skyloc::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kDeg = kPi / 180.0;
 
 // Lighting with nothing random in it: no clouds, noise or flare.
 Lighting PlainLighting() {
