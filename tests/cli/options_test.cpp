@@ -154,9 +154,9 @@ TEST(OptionTable, OptionalDestinationsHoldAValueOnlyWhenGiven) {
   EXPECT_EQ(all.tilt, -12.5);
   EXPECT_EQ(all.colour, Colour::kRed);
   Optionals refused;
-  testing::internal::CaptureStderr();
+  ::testing::internal::CaptureStderr();
   EXPECT_EQ(refused.table.Parse(Args({"--tilt", "91"}).span()), ParseOutcome::kRefused);
-  EXPECT_NE(testing::internal::GetCapturedStderr().find("--tilt '91': expected a number in"),
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("--tilt '91': expected a number in"),
             std::string::npos);
   EXPECT_FALSE(refused.tilt.has_value());
 }
