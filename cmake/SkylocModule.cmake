@@ -19,6 +19,11 @@ endfunction()
 function(skyloc_add_gtest name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
+  # A test folder compiles as units of 8 files: each test file parses GoogleTest, GoogleMock
+  # and often Eigen, which cost more than the tests themselves, and the five build kinds of
+  # ./skyloc.sh test compile every test. Measured on the dsp tests, cold: 108 s of CPU
+  # against 169 s file by file. File-local names must therefore be unique within a folder
+  # (shared helpers live in tests/support).
   set_target_properties(${name} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} skyloc::warnings GTest::gtest_main GTest::gmock)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
