@@ -29,16 +29,6 @@ namespace {
 using namespace skyloc;
 using namespace skyloc::firmware;
 
-sim::StreetOptions Street(std::uint64_t frames, std::uint64_t run_seed) {
-  sim::StreetOptions o;
-  o.width = 64;
-  o.height = 64;
-  o.seed = 7;
-  o.frames = frames;
-  o.run_seed = run_seed;
-  return o;
-}
-
 double g_p99_without_reader_us = 0;
 
 void FrameLoopWithSocket(benchmark::State& state, bool dead_reader) {
@@ -58,7 +48,7 @@ void FrameLoopWithSocket(benchmark::State& state, bool dead_reader) {
   RouteFrames route;
   bool ok = pipeline.Init(skyloc::firmware::testing::SmallConfig()).ok();
   {
-    sim::FilmedStreet taught(Street(300, 1));
+    sim::FilmedStreet taught(skyloc::firmware::testing::SmallStreet(1, 300));
     ok = ok && taught.camera.Open().ok() && taught.camera.Start().ok() &&
          route
              .Allocate(400, static_cast<std::size_t>(pipeline.dim()),
@@ -74,7 +64,7 @@ void FrameLoopWithSocket(benchmark::State& state, bool dead_reader) {
     }
   }
   ok = ok && pipeline.SetRoute(route).ok();
-  sim::FilmedStreet filmed(Street(0, 2));
+  sim::FilmedStreet filmed(skyloc::firmware::testing::SmallStreet(2, 0));
   drivers::SimulatedStatusOutput status({}, &clock);
   drivers::UnixSocketOutputConfig c;
   std::snprintf(c.path, sizeof c.path, "%s", path.c_str());

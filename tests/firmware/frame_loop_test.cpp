@@ -22,6 +22,7 @@
 #include "skyloc/platform/signals.h"
 #include "skyloc/sim/street_source.h"
 #include "small_config.h"
+#include "small_street_route.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::firmware {
@@ -29,6 +30,7 @@ namespace {
 
 using testing::SmallConfig;
 using testing::SmallStreet;
+using testing::TeachSmallStreet;
 
 // The state the simulated output's lines show (one line per state): the lit line.
 drivers::LocalisationState ShownState(const drivers::SimulatedStatusOutput& status) {
@@ -42,29 +44,6 @@ drivers::LocalisationState ShownState(const drivers::SimulatedStatusOutput& stat
 // The clock of the tests that run in real time (the street camera stamps its frames with
 // CLOCK_MONOTONIC too).
 const MonotonicClock kMonotonic;
-
-// Teaches `frames` frames of the street into `route` through the teach-mode pipeline.
-void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
-  sim::FilmedStreet filmed(SmallStreet(0, frames));
-  drivers::Camera& camera = filmed.camera;
-  ASSERT_TRUE(camera.Open().ok());
-  ASSERT_TRUE(camera.Start().ok());
-  ASSERT_TRUE(route
-                  ->Allocate(400, static_cast<std::size_t>(pipeline.dim()),
-                             pipeline.strip_settings().columns)
-                  .ok());
-  for (;;) {
-    Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1));
-    if (!f.ok())
-      break;
-    FrameResult r;
-    ASSERT_TRUE(pipeline.Describe(f->image, &r).ok());
-    RouteFrameMeta meta;
-    meta.pose = drivers::Pose{};
-    meta.pose->x_m = f->pose->x_m;
-    ASSERT_TRUE(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
-  }
-}
 
 // Counts states and checks each LOCALISED frame's match against the truth: the taught
 // street has a frame every 0.5 m from x = 0 (SmallStreet), so the right route index for a
@@ -102,7 +81,7 @@ TEST(FrameLoop, LocalisesOnAnotherDriveAlongTheTaughtStreet) {
   Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
-  Teach(pipeline, 300, &route);
+  TeachSmallStreet(pipeline, 0, 300, &route);
   ASSERT_EQ(route.size(), 300u);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
 
@@ -179,7 +158,7 @@ TEST(FrameLoop, ABlindCameraNeverLocalises) {
     Pipeline pipeline(kMonotonic);
     ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
     RouteFrames route;
-    Teach(pipeline, 40, &route);
+    TeachSmallStreet(pipeline, 0, 40, &route);
     ASSERT_EQ(route.size(), 40u);
     ASSERT_TRUE(pipeline.SetRoute(route).ok());
 
@@ -209,7 +188,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
-  Teach(pipeline, 300, &route);
+  TeachSmallStreet(pipeline, 0, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
   // The heading path runs on every matched frame (strip, correlation, 1D SURF + RANSAC).
   ASSERT_TRUE(pipeline.heading_enabled());
@@ -272,7 +251,7 @@ TEST(FrameLoop, JsonCarriesTheHeadingOfARepeatTurnedByAKnownYaw) {
   Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
-  Teach(pipeline, 300, &route);
+  TeachSmallStreet(pipeline, 0, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
   for (const double yaw : {25.0, -40.0}) {
     sim::StreetOptions o = Repeat(200);
@@ -337,7 +316,7 @@ TEST(FrameLoop, AttitudeOnAllocatesNothingAndADeadImuLeavesFramesLevel) {
   ASSERT_TRUE(pipeline.uses_attitude());
   EXPECT_NE(pipeline.route_settings().gravity_cap_cdeg, kNoGravityCap);
   RouteFrames route;
-  Teach(pipeline, 300, &route);
+  TeachSmallStreet(pipeline, 0, 300, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
   // A still, level IMU at 200 Hz over the first 40 s of the street (30 fps frames).
   std::vector<dsp::ImuSample> samples(8000);
@@ -479,7 +458,7 @@ TEST(FrameLoop, StopsOnRequestedStop) {
   Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
   RouteFrames route;
-  Teach(pipeline, 50, &route);
+  TeachSmallStreet(pipeline, 0, 50, &route);
   ASSERT_TRUE(pipeline.SetRoute(route).ok());
   sim::FilmedStreet filmed(SmallStreet(0, 0));
   drivers::Camera& camera = filmed.camera;
@@ -710,7 +689,7 @@ class FrameLoopFaults : public ::testing::Test {
     ClearSignalFlags();
     ASSERT_TRUE(pipeline_.Init(SmallConfig()).ok());
     RouteFrames route;
-    Teach(pipeline_, 100, &route);
+    TeachSmallStreet(pipeline_, 0, 100, &route);
     ASSERT_TRUE(pipeline_.SetRoute(route).ok());
     ASSERT_TRUE(status_.Open().ok());
   }
@@ -931,7 +910,7 @@ class FrameLoopBlink : public ::testing::Test {
   // no place in it is unique, so every frame is LOST.
   void SetRoute(bool street) {
     RouteFrames route;
-    Teach(pipeline_, street ? 100 : 1, &route);
+    TeachSmallStreet(pipeline_, 0, street ? 100 : 1, &route);
     while (route.size() < 100) {
       const std::span<const std::uint8_t> strip =
           pipeline_.strip_settings().columns > 0 ? route.strip(0) : std::span<const std::uint8_t>{};

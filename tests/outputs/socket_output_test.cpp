@@ -21,6 +21,7 @@
 #include "firmware/frame_loop.h"
 #include "firmware/output_publisher.h"
 #include "firmware/small_config.h"
+#include "firmware/small_street_route.h"
 #include "skyloc/drivers/localisation_output.h"
 #include "skyloc/drivers/simulated_status_output.h"
 #include "skyloc/platform/alloc_counter.h"
@@ -32,36 +33,6 @@ namespace skyloc::firmware {
 namespace {
 
 const MonotonicClock kMonotonic;
-
-sim::StreetOptions Street(std::uint64_t frames, std::uint64_t run_seed) {
-  sim::StreetOptions o;
-  o.width = 64;
-  o.height = 64;
-  o.seed = 7;
-  o.frames = frames;
-  o.run_seed = run_seed;
-  return o;
-}
-
-// A taught street of `frames` frames, with poses (so distance_m is a number).
-void Teach(Pipeline& pipeline, std::uint64_t frames, RouteFrames* route) {
-  sim::FilmedStreet filmed(Street(frames, 1));
-  drivers::Camera& camera = filmed.camera;
-  ASSERT_TRUE(camera.Open().ok());
-  ASSERT_TRUE(camera.Start().ok());
-  ASSERT_TRUE(route
-                  ->Allocate(400, static_cast<std::size_t>(pipeline.dim()),
-                             pipeline.strip_settings().columns)
-                  .ok());
-  for (Result<drivers::Frame> f = camera.Capture(std::chrono::seconds(1)); f.ok();
-       f = camera.Capture(std::chrono::seconds(1))) {
-    FrameResult r;
-    ASSERT_TRUE(pipeline.Describe(f->image, &r).ok());
-    RouteFrameMeta meta;
-    meta.pose = *f->pose;
-    ASSERT_TRUE(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
-  }
-}
 
 int Connect(const std::string& path) {
   const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
@@ -135,9 +106,9 @@ struct StreetRun {
   void SetUp(std::uint64_t repeat_frames) {
     ClearSignalFlags();
     ASSERT_TRUE(pipeline.Init(testing::SmallConfig()).ok());
-    Teach(pipeline, 300, &route);
+    testing::TeachSmallStreet(pipeline, 1, 300, &route);
     ASSERT_TRUE(pipeline.SetRoute(route).ok());
-    filmed = std::make_unique<sim::FilmedStreet>(Street(repeat_frames, 2));
+    filmed = std::make_unique<sim::FilmedStreet>(testing::SmallStreet(2, repeat_frames));
     ASSERT_TRUE(filmed->camera.Open().ok());
     ASSERT_TRUE(filmed->camera.Start().ok());
     ASSERT_TRUE(status.Open().ok());
