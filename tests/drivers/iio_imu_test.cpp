@@ -113,14 +113,20 @@ TEST(ImuMounting, AnglesFollowTheLensConvention) {
   EXPECT_EQ(ImuMountingMatrix({0, 0, INFINITY}).status().code(), StatusCode::kInvalidArgument);
 }
 
+// The driver pointed at a fake device's sysfs and /dev folders.
+IioImuConfig FakeDeviceConfig(const FakeIioDevice& fake, const char* device = "fake_imu") {
+  IioImuConfig c;
+  std::snprintf(c.device, sizeof(c.device), "%s", device);
+  std::snprintf(c.sysfs_root, sizeof(c.sysfs_root), "%s", fake.sysfs_root().c_str());
+  std::snprintf(c.dev_root, sizeof(c.dev_root), "%s", fake.dev_root().c_str());
+  return c;
+}
+
 class IioImuFake : public ::testing::Test {
  protected:
   IioImuConfig Config(const FakeIioDevice& fake, const char* device = "fake_imu") {
-    IioImuConfig c;
-    std::snprintf(c.device, sizeof(c.device), "%s", device);
+    IioImuConfig c = FakeDeviceConfig(fake, device);
     std::snprintf(c.trigger, sizeof(c.trigger), "faketrig");
-    std::snprintf(c.sysfs_root, sizeof(c.sysfs_root), "%s", fake.sysfs_root().c_str());
-    std::snprintf(c.dev_root, sizeof(c.dev_root), "%s", fake.dev_root().c_str());
     return c;
   }
   skyloc::testing::ScratchDir scratch_{"imu_iio_"};
@@ -358,10 +364,7 @@ TEST(SimulatedImu, FaultsVanishStallDrop) {
 TEST(IioImu, PollingTimingOutagesAndReopensFollowTheClock) {
   const skyloc::testing::ScratchDir scratch("imu_iio_clock_");
   FakeIioDevice fake(scratch.path(), FakeIioDevice::Options{"fake_imu", 2, false, true});
-  IioImuConfig c;
-  std::snprintf(c.device, sizeof c.device, "fake_imu");
-  std::snprintf(c.sysfs_root, sizeof c.sysfs_root, "%s", fake.sysfs_root().c_str());
-  std::snprintf(c.dev_root, sizeof c.dev_root, "%s", fake.dev_root().c_str());
+  IioImuConfig c = FakeDeviceConfig(fake);
   c.sample_rate_hz = 100.0;  // a tick every 10 ms
   c.mode = IioImuConfig::Mode::kPolling;
   ManualClock clock(std::chrono::seconds(1000));
@@ -425,10 +428,7 @@ TEST(IioImu, AnImuBackAfterAnyOutageIsReopenedWithinASecond) {
     SCOPED_TRACE(outage_ms);
     const skyloc::testing::ScratchDir scratch("imu_iio_back_");
     FakeIioDevice fake(scratch.path(), FakeIioDevice::Options{"fake_imu", 2, false, true});
-    IioImuConfig c;
-    std::snprintf(c.device, sizeof c.device, "fake_imu");
-    std::snprintf(c.sysfs_root, sizeof c.sysfs_root, "%s", fake.sysfs_root().c_str());
-    std::snprintf(c.dev_root, sizeof c.dev_root, "%s", fake.dev_root().c_str());
+    IioImuConfig c = FakeDeviceConfig(fake);
     c.sample_rate_hz = 100.0;
     c.mode = IioImuConfig::Mode::kPolling;
     ManualClock clock(std::chrono::seconds(1000));

@@ -34,6 +34,13 @@ namespace {
 
 const MonotonicClock kMonotonic;
 
+// The socket output's configuration with its socket at `path`.
+drivers::UnixSocketOutputConfig SocketAt(const std::string& path) {
+  drivers::UnixSocketOutputConfig c;
+  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  return c;
+}
+
 int Connect(const std::string& path) {
   const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
   sockaddr_un a{};
@@ -131,8 +138,7 @@ TEST(SocketOutput, TwoReadersGetEveryFrameAsTheStdoutLine) {
   std::FILE* out = std::fopen(stdout_path.c_str(), "w");
   ASSERT_NE(out, nullptr);
   drivers::FileLinesOutput lines(out);
-  drivers::UnixSocketOutputConfig c;
-  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutputConfig c = SocketAt(path);
   drivers::UnixSocketOutput socket(c);
   ASSERT_TRUE(socket.Open().ok());
   struct stat st {};
@@ -176,8 +182,7 @@ TEST(SocketOutput, AReaderThatStopsReadingMissesFramesAndBlocksNothing) {
   StreetRun street;
   street.SetUp(400);
   const std::string path = dir.path() + "/localisation.sock";
-  drivers::UnixSocketOutputConfig c;
-  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutputConfig c = SocketAt(path);
   drivers::UnixSocketOutput socket(c);
   ASSERT_TRUE(socket.Open().ok());
   const int dead = Connect(path);  // connects, never reads
@@ -215,8 +220,7 @@ TEST(SocketOutput, AReaderThatStopsReadingMissesFramesAndBlocksNothing) {
 TEST(SocketOutput, HungUpReadersAreClosedAndExtraReadersRefused) {
   skyloc::testing::ScratchDir dir("skyloc-socket-");
   const std::string path = dir.path() + "/localisation.sock";
-  drivers::UnixSocketOutputConfig c;
-  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutputConfig c = SocketAt(path);
   c.max_readers = 1;
   drivers::UnixSocketOutput socket(c);
   ASSERT_TRUE(socket.Open().ok());
@@ -246,8 +250,7 @@ TEST(SocketOutput, HungUpReadersAreClosedAndExtraReadersRefused) {
 TEST(SocketOutput, TheDevicesRecordIsAMessageOfItsOwn) {
   skyloc::testing::ScratchDir dir("skyloc-socket-");
   const std::string path = dir.path() + "/localisation.sock";
-  drivers::UnixSocketOutputConfig c;
-  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutputConfig c = SocketAt(path);
   drivers::UnixSocketOutput socket(c);
   ASSERT_TRUE(socket.Open().ok());
   const int reader = Connect(path);
@@ -284,8 +287,7 @@ TEST(SocketOutput, TheDevicesRecordIsAMessageOfItsOwn) {
 TEST(SocketOutput, ReplacesAStaleSocketButNeverAFile) {
   skyloc::testing::ScratchDir dir("skyloc-socket-");
   const std::string path = dir.path() + "/localisation.sock";
-  drivers::UnixSocketOutputConfig c;
-  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutputConfig c = SocketAt(path);
   {
     // A socket file left behind, as by a crash: no Close().
     const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET, 0);
@@ -318,8 +320,7 @@ TEST(SocketOutput, FramePathAllocatesNothingWithTheSocketOn) {
   StreetRun street;
   street.SetUp(0);
   const std::string path = dir.path() + "/localisation.sock";
-  drivers::UnixSocketOutputConfig c;
-  std::snprintf(c.path, sizeof c.path, "%s", path.c_str());
+  drivers::UnixSocketOutputConfig c = SocketAt(path);
   drivers::UnixSocketOutput socket(c);
   ASSERT_TRUE(socket.Open().ok());
   const int dead = Connect(path);
