@@ -18,21 +18,7 @@ card=$(v4l2-ctl -d "$HIL_VIVID_VIDEO" --info | sed -n 's/^[[:space:]]*Card type 
 CONFIG=/tmp/skyloc_button.toml
 ROUTE=/tmp/button_route.db
 BUTTON=$HIL_GPIO_SIM_DIR/sim_gpio7
-cat >"$CONFIG" <<EOF
-[camera]
-kind = "v4l2"
-device = "vivid:$card"
-width = 640
-height = 480
-frame_timeout_ms = 1000
-
-[descriptor]
-bands = 16
-
-[capacities]
-route_frames = 400
-
-EOF
+camera_config v4l2 "vivid:$card" 640 400 >"$CONFIG"
 status_gpio_config >>"$CONFIG"
 cat >>"$CONFIG" <<EOF
 button_line = 7

@@ -22,13 +22,10 @@
 SKYLOC=/hil/bin/skyloc
 [ -x "$SKYLOC" ] || pending "skyloc is not in this image"
 
-CFG=/sys/kernel/config/iio
+CFG=$IIO_CONFIGFS
 NAME=hilimu
 TRIGGER=hiltrig
-check "modprobe iio_dummy" modprobe iio_dummy
-check "modprobe iio-trig-hrtimer" modprobe iio-trig-hrtimer
-check "iio_dummy device $NAME created in configfs" mkdir "$CFG/devices/dummy/$NAME"
-check "hrtimer trigger $TRIGGER created in configfs" mkdir "$CFG/triggers/hrtimer/$TRIGGER"
+make_iio_imu "$NAME" "$TRIGGER"
 [ "$failures" -eq 0 ] || finish_scenario
 
 card=$(v4l2-ctl -d "$HIL_VIVID_VIDEO" --info | sed -n 's/^[[:space:]]*Card type *: //p')
@@ -36,20 +33,8 @@ CONFIG=/tmp/skyloc_imu.toml
 ROUTE=/tmp/imu_route.db
 OUT=/tmp/imu-repeat.out
 ERR=/tmp/imu-repeat.err
-cat >"$CONFIG" <<EOF
-[camera]
-kind = "v4l2"
-device = "vivid:$card"
-width = 640
-height = 480
-frame_timeout_ms = 1000
-
-[descriptor]
-bands = 16
-
-[capacities]
-route_frames = 200
-
+camera_config v4l2 "vivid:$card" 640 200 >"$CONFIG"
+cat >>"$CONFIG" <<EOF
 [attitude]
 kind = "iio"
 device = "$NAME"

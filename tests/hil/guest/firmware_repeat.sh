@@ -22,22 +22,8 @@ for d in "$DRV"/vivid*; do [ -L "$d" ] && DEV=${d##*/}; done
 card=$(v4l2-ctl -d "$HIL_VIVID_VIDEO" --info | sed -n 's/^[[:space:]]*Card type *: //p')
 CONFIG=/tmp/skyloc.toml
 ROUTE=/tmp/route.db
-cat >"$CONFIG" <<EOF
-[camera]
-kind = "v4l2"
-# By name: after the camera is plugged back it may get another node number.
-device = "vivid:$card"
-width = 640
-height = 480
-frame_timeout_ms = 1000
-
-[descriptor]
-bands = 16
-
-[capacities]
-route_frames = 200
-
-EOF
+# The camera by name: after it is plugged back it may get another node number.
+camera_config v4l2 "vivid:$card" 640 200 >"$CONFIG"
 status_gpio_config >>"$CONFIG"
 
 holds_video() { # PID: 0 when the process has a /dev/video* node open

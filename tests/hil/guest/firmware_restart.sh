@@ -22,22 +22,8 @@ for d in "$VDRV"/vimc*; do [ -L "$d" ] && VDEV=${d##*/}; done
 }
 CONFIG=/tmp/skyloc_libcamera.toml
 ROUTE=/tmp/libcamera_route.db
-cat >"$CONFIG" <<EOF
-[camera]
-kind = "libcamera"
-device = "first"
 # vimc through libcamera 0.0.3 offers 636 columns, not 640 (its debayer crops).
-width = 636
-height = 480
-frame_timeout_ms = 1000
-
-[descriptor]
-bands = 16
-
-[capacities]
-route_frames = 200
-
-EOF
+camera_config libcamera first 636 200 >"$CONFIG"
 status_gpio_config >>"$CONFIG"
 wait_json() { # FILE COUNT SECONDS: until FILE has COUNT JSON lines or skyloc exits
   i=0

@@ -7,14 +7,11 @@
 . /hil/tests/lib.sh
 
 T=/hil/bin/skyloc_drivers_tests
-CFG=/sys/kernel/config/iio
+CFG=$IIO_CONFIGFS
 NAME=hilimu
 TRIGGER=hiltrig
 
-check "modprobe iio_dummy" modprobe iio_dummy
-check "modprobe iio-trig-hrtimer" modprobe iio-trig-hrtimer
-check "iio_dummy device $NAME created in configfs" mkdir "$CFG/devices/dummy/$NAME"
-check "hrtimer trigger $TRIGGER created in configfs" mkdir "$CFG/triggers/hrtimer/$TRIGGER"
+make_iio_imu "$NAME" "$TRIGGER"
 
 # The device and trigger by name, as the driver finds them.
 DEV=

@@ -41,6 +41,21 @@ status_levels() {
 lines_held_by_skyloc() {
   gpioinfo "$HIL_GPIOCHIP" | sed -n "$1" | grep -c '"skyloc"'
 }
+# camera_config KIND DEVICE WIDTH ROUTE_FRAMES: the [camera], [descriptor] and [capacities]
+# tables of the firmware scenarios (480 rows, frames within a second, 16 bands).
+camera_config() {
+  printf '[camera]\nkind = "%s"\ndevice = "%s"\nwidth = %s\nheight = 480\nframe_timeout_ms = 1000\n\n[descriptor]\nbands = 16\n\n[capacities]\nroute_frames = %s\n\n' "$1" "$2" "$3" "$4"
+}
+# make_iio_imu NAME TRIGGER: the kernel's iio_dummy, patched into a still, level 6-axis IMU
+# (tests/hil/iio_dummy_imu.patch), as device NAME, and an hrtimer trigger TRIGGER, both made
+# in configfs ($IIO_CONFIGFS).
+IIO_CONFIGFS=/sys/kernel/config/iio
+make_iio_imu() {
+  check "modprobe iio_dummy" modprobe iio_dummy
+  check "modprobe iio-trig-hrtimer" modprobe iio-trig-hrtimer
+  check "iio_dummy device $1 created in configfs" mkdir "$IIO_CONFIGFS/devices/dummy/$1"
+  check "hrtimer trigger $2 created in configfs" mkdir "$IIO_CONFIGFS/triggers/hrtimer/$2"
+}
 # The [status] table of a firmware configuration: gpio-sim lines 0-2, one per state.
 status_gpio_config() {
   printf '[status]\nkind = "gpio"\nchip = "%s"\nline_lost = 0\nline_searching = 1\nline_localised = 2\nencoding = "per-state"\n' "$HIL_GPIOCHIP"
