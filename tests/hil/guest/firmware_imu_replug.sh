@@ -46,11 +46,11 @@ EOF
 # in a guest that never suspends, to 10 ms (the frames' timestamps are CLOCK_MONOTONIC).
 now_s() { cut -d ' ' -f 1 /proc/uptime; }
 # "frame timestamp" of every per-frame JSON line of FILE.
-frame_times() { sed -n 's/^{"frame":\([0-9]*\),"timestamp":\([0-9.]*\),.*/\1 \2/p' "$1"; }
+frame_times() { sed -n 's/^{"schema":[0-9]*,"frame":\([0-9]*\),"timestamp":\([0-9.]*\),.*/\1 \2/p' "$1"; }
 # How many times stderr said the cap went off (frames as if level) and came back.
 offs() { grep -c 'frames are described as if level until it returns' "$ERR"; }
 backs() { grep -c "attitude iio:$NAME is back at frame" "$ERR"; }
-frame_lines() { grep -c '^{"frame":' "$1"; }
+frame_lines() { grep -c '^{"schema":[0-9]*,"frame":' "$1"; }
 # The newest devices record's IMU counter NAME (outages, reopens), or nothing.
 json_imu_counter() {
   grep '^{"devices":' "$OUT" | tail -n 1 | sed -n "s/.*\"imu\":{[^}]*\"$1\":\([0-9]*\).*/\1/p"
