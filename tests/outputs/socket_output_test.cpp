@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -120,6 +121,20 @@ struct StreetRun {
     ASSERT_TRUE(filmed->camera.Start().ok());
     ASSERT_TRUE(status.Open().ok());
   }
+
+  // Repeats the street to its end with `outputs` fed by a publisher that waits for room,
+  // `pace` beside it; the publisher has drained when this returns.
+  void Repeat(std::span<drivers::LocalisationOutput* const> outputs, FrameSink* pace,
+              LoopSummary* summary) {
+    OutputPublisher publisher;
+    ASSERT_TRUE(
+        publisher.Start(outputs, &route, route.capacity(), PublishMode::kWaitWhenFull).ok());
+    TeeSink sink(&publisher, pace);
+    ASSERT_TRUE(
+        RunFrameLoop(filmed->camera, &status, pipeline, nullptr, &sink, LoopOptions{}, summary)
+            .ok());
+    publisher.Stop();
+  }
 };
 
 std::string Slurp(const std::string& path) {
@@ -148,18 +163,9 @@ TEST(SocketOutput, TwoReadersGetEveryFrameAsTheStdoutLine) {
 
   Reader a(Connect(path)), b(Connect(path));
   drivers::LocalisationOutput* outputs[] = {&lines, &socket};
-  OutputPublisher publisher;
-  ASSERT_TRUE(
-      publisher.Start(outputs, &street.route, street.route.capacity(), PublishMode::kWaitWhenFull)
-          .ok());
   WaitForReaders pace({&a, &b});
-  TeeSink sink(&publisher, &pace);
-  LoopOptions options;
   LoopSummary summary;
-  ASSERT_TRUE(RunFrameLoop(street.filmed->camera, &street.status, street.pipeline, nullptr, &sink,
-                           options, &summary)
-                  .ok());
-  publisher.Stop();
+  street.Repeat(outputs, &pace, &summary);
   socket.Close();  // the readers see the end
   std::fclose(out);
   a.Join();
@@ -189,18 +195,9 @@ TEST(SocketOutput, AReaderThatStopsReadingMissesFramesAndBlocksNothing) {
   ASSERT_GE(dead, 0);
   Reader live(Connect(path));
   drivers::LocalisationOutput* outputs[] = {&socket};
-  OutputPublisher publisher;
-  ASSERT_TRUE(
-      publisher.Start(outputs, &street.route, street.route.capacity(), PublishMode::kWaitWhenFull)
-          .ok());
   WaitForReaders pace({&live});
-  TeeSink sink(&publisher, &pace);
-  LoopOptions options;
   LoopSummary summary;
-  ASSERT_TRUE(RunFrameLoop(street.filmed->camera, &street.status, street.pipeline, nullptr, &sink,
-                           options, &summary)
-                  .ok());
-  publisher.Stop();
+  street.Repeat(outputs, &pace, &summary);
   // The dead reader's queue holds what fits; everything after it was dropped for it
   // alone: the live reader got all 400.
   char message[drivers::kMaxJsonLine];
