@@ -25,7 +25,6 @@
 #include "skyloc/sim/rendered_source.h"
 #include "skyloc/sim/street_source.h"
 #include "skyloc/sim/world.h"
-#include "support/emulator.h"
 #include "support/scratch_dir.h"
 #include "support/status_assertions.h"
 #include "test_env.h"
@@ -234,15 +233,6 @@ std::unique_ptr<CameraUnderTest> MakeV4l2Fake(std::string* skip) {
 // --- libcamera ---
 std::unique_ptr<CameraUnderTest> MakeLibcamera(std::string* skip) {
 #if SKYLOC_WITH_LIBCAMERA
-  // libcamera's CameraManager starts its own threads, and qemu-user 7.2 hangs in
-  // pthread_create for a dynamically linked ARM program: the cross builds' libcamera
-  // cases run in the arm64 HIL VM (tests/hil) instead.
-  if (skyloc::testing::UnderUserModeEmulator()) {
-    *skip =
-        "under qemu-user: libcamera's CameraManager starts threads, which qemu-user 7.2 "
-        "cannot run; the arm64 HIL VM runs this case";
-    return nullptr;
-  }
   const char* id = testing::Env("SKYLOC_TEST_LIBCAMERA_CAMERA");
   if (id == nullptr) {
     *skip =

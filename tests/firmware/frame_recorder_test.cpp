@@ -14,20 +14,12 @@
 #include "skyloc/drivers/dataset.h"
 #include "skyloc/drivers/image_file.h"
 #include "skyloc/platform/alloc_counter.h"
-#include "support/emulator.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::firmware {
 namespace {
 
 constexpr int kWidth = 64, kHeight = 48;
-
-#define SKIP_UNDER_EMULATION()                                                          \
-  do {                                                                                  \
-    if (skyloc::testing::UnderUserModeEmulator())                                       \
-      GTEST_SKIP() << "the recorder's writer thread cannot start under qemu-user "      \
-                      "(support/emulator.h); the host build and the arm64 VM run this"; \
-  } while (false)
 
 // Frame i: a noisy grey pattern of its own (PNG cannot shrink it much: ~3.1 KB), or a flat
 // grey (`flat`: ~100 bytes), at i x 100 ms.
@@ -66,7 +58,6 @@ void WaitWritten(const FrameRecorder& r, std::uint64_t n) {
 }
 
 TEST(FrameRecorder, WritesADatasetThatReplayReadsBackExactly) {
-  SKIP_UNDER_EMULATION();
   skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
@@ -104,7 +95,6 @@ TEST(FrameRecorder, WritesADatasetThatReplayReadsBackExactly) {
 }
 
 TEST(FrameRecorder, DropsAndCountsFramesWhenEverySlotIsBusy) {
-  SKIP_UNDER_EMULATION();
   skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
@@ -126,7 +116,6 @@ TEST(FrameRecorder, DropsAndCountsFramesWhenEverySlotIsBusy) {
 }
 
 TEST(FrameRecorder, SubmitAllocatesNothing) {
-  SKIP_UNDER_EMULATION();
   skyloc::testing::ScratchDir scratch("skyloc_recorder_");
   FrameRecorderOptions o;
   o.dir = scratch.path() + "/run";
@@ -161,7 +150,6 @@ TEST(FrameRecorder, RefusesAFolderThatHoldsARecording) {
 // error while Submit goes on being refused quietly; the frames written before it are a
 // valid dataset. Two flat frames fit, the first noisy one does not.
 TEST(FrameRecorder, AFullDiskStopsTheRecordingAndKeepsTheFramesBefore) {
-  SKIP_UNDER_EMULATION();
 #if defined(__SANITIZE_THREAD__)
   GTEST_SKIP() << "ThreadSanitizer cannot start threads in a forked child (its own thread makes "
                   "every fork multi-threaded); the host and asan builds run this test";

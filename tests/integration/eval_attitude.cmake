@@ -5,11 +5,6 @@
 # 96x72: ds 1 P@R100 0.92 without, 1.00 with). And a dataset without roll/pitch columns is
 # refused by name.
 set(dir ${WORK_DIR}/eval_attitude)
-# Under qemu-user (cross builds) eval runs on one thread: Debian 12's qemu 7.2 hangs in
-# pthread_create for a dynamic binary run with -L (tests/support/emulator.h).
-if(EMULATOR)
-  set(jobs --jobs 1)
-endif()
 file(REMOVE_RECURSE ${dir})
 foreach(spec "ref;1;noon;0" "query;2;dawn;25")
   list(GET spec 0 name)
@@ -29,7 +24,7 @@ endforeach()
 function(precision_at_full_recall attitude out_var)
   execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${dir}/ref --query ${dir}/query
                           --out ${dir}/out_${attitude} --method sky --ds 1 --max-advance 8
-                          --attitude ${attitude} ${jobs} ${ARGN}
+                          --attitude ${attitude} ${ARGN}
     RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "eval --attitude ${attitude} failed (${rc}):\n${out}\n${err}")
@@ -60,7 +55,7 @@ foreach(i RANGE 119)
 endforeach()
 file(WRITE ${dir}/truth.csv "${truth}")
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${dir}/ref --query ${dir}/query
-                        --out ${dir}/out_missing --method sky --ds 1 --attitude dataset ${jobs}
+                        --out ${dir}/out_missing --method sky --ds 1 --attitude dataset
                         --gt ${dir}/truth.csv
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 1 OR NOT err MATCHES "000000.png has no roll and pitch recorded")

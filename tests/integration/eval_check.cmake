@@ -18,13 +18,8 @@ else()
   # Ground truth from the recorded poses (nearest reference, +-5 frames).
   set(args --batch --method vanilla)
 endif()
-# Under qemu-user (cross builds) eval runs on one thread: Debian 12's qemu 7.2 hangs in
-# pthread_create for a dynamic binary run with -L (tests/support/emulator.h).
-if(EMULATOR)
-  set(jobs --jobs 1)
-endif()
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/reference
-                --query ${WORK}/query --ds 1 --ds 10 --out ${WORK}/out ${args} ${jobs}
+                --query ${WORK}/query --ds 1 --ds 10 --out ${WORK}/out ${args}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval failed (${rc}):\n${out}\n${err}")
@@ -88,7 +83,7 @@ if(MODE STREQUAL "streaming")
   file(WRITE ${WORK}/gt_partial.csv "${gt_partial}\n")
   execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/reference
                   --query ${WORK}/query --ds 10 --out ${WORK}/out_partial --gt ${WORK}/gt_partial.csv
-                  --streaming --method vanilla ${jobs}
+                  --streaming --method vanilla
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "skyloc eval with a partial ground truth failed (${rc}):\n${out}\n${err}")

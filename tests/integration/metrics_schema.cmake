@@ -7,11 +7,8 @@ execute_process(COMMAND ${EMULATOR} ${GEN} ${WORK}/data RESULT_VARIABLE rc ERROR
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "dataset generator failed (${rc}): ${err}")
 endif()
-if(EMULATOR)
-  set(jobs --jobs 1)  # qemu-user hangs in pthread_create (tests/support/emulator.h)
-endif()
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/data/reference
-                --query ${WORK}/data/query --method vanilla --ds 10 --out ${WORK}/eval ${jobs}
+                --query ${WORK}/data/query --method vanilla --ds 10 --out ${WORK}/eval
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval failed (${rc}):\n${out}\n${err}")

@@ -9,12 +9,8 @@
 #include <cstdio>
 #include <thread>
 
-#include "support/emulator.h"
-
 namespace skyloc {
 namespace {
-
-using skyloc::testing::UnderUserModeEmulator;
 
 TEST(SpscQueue, IsFifoAndReportsFullAndEmpty) {
   SpscQueue<int, 4> q;
@@ -38,10 +34,6 @@ TEST(SpscQueue, IsFifoAndReportsFullAndEmpty) {
 }
 
 TEST(SpscQueue, TwoThreadsLoseAndReorderNothing) {
-  if (UnderUserModeEmulator()) {
-    GTEST_SKIP() << "running under a user-mode emulator (qemu-user), whose pthread_create "
-                    "hangs on these machines; the test runs on the host and on ARM boards";
-  }
   // The producer pushes 0..N-1 (retrying when full); the consumer must see exactly that
   // sequence. Under TSan/ASan builds this also exercises the memory ordering.
   constexpr std::uint64_t kCount = 200'000;

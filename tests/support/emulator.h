@@ -1,9 +1,9 @@
 // Whether this test program runs under a user-mode emulator (qemu-user), as the cross
-// builds' tests do under ctest. qemu-user 7.2 on the build machines hangs in
-// pthread_create for dynamically linked aarch64 programs, and spins in a forked child
-// that changes its user id or writes past RLIMIT_FSIZE, so tests that need threads,
-// setresuid or a file-size limit in a child skip there; they run
-// natively in the arm64 VM (tests/hil), where the parent is an arm64 shell.
+// builds' tests do under ctest. qemu-user 7.2 on the build machines spins in a forked
+// child that changes its user id or writes past RLIMIT_FSIZE, so tests that need setresuid
+// or a file-size limit in a child skip there; they run natively in the arm64 VM
+// (tests/hil), where the parent is an arm64 shell. (Threads run under it: the recorder's
+// writer, the output publisher and the queue's two-thread test do.)
 #pragma once
 
 #include <fcntl.h>

@@ -10,24 +10,13 @@
 #include <string>
 #include <vector>
 
-#include "support/emulator.h"
 #include "support/synthetic_descriptors.h"
 #include "tools/progress.h"
 
 namespace skyloc::tools {
 namespace {
 
-// qemu-user cannot start threads for these programs (support/emulator.h): the cross
-// builds skip; the host build and the arm64 VM run them.
-#define SKIP_UNDER_EMULATION()                                                            \
-  do {                                                                                    \
-    if (skyloc::testing::UnderUserModeEmulator())                                         \
-      GTEST_SKIP() << "qemu-user hangs in pthread_create here (support/emulator.h); the " \
-                      "host build and the arm64 VM run this";                             \
-  } while (false)
-
 TEST(ParallelFor, RunsEveryTaskOnceWithWorkerIndicesInRange) {
-  SKIP_UNDER_EMULATION();
   for (const int jobs : {1, 2, 3, 8}) {
     std::vector<std::atomic<int>> runs(100);
     std::atomic<int> bad_worker{0};
@@ -63,7 +52,6 @@ void ExpectSame(const std::vector<dsp::SeqSlamMatch>& a, const std::vector<dsp::
 // Block size and thread count do not change a bit of the
 // result, for float and for byte descriptors.
 TEST(BlockedSeqSlamThreads, BitIdenticalToTheUnblockedOneThreadEngine) {
-  SKIP_UNDER_EMULATION();
   testing::SyntheticRoute route;
   // 512 values (a quarter of the vanilla descriptor's, so the 32 runs stay quick under
   // qemu on the ARM builds); the kernels' tails are covered by tests/dsp.
