@@ -23,6 +23,7 @@
 #include "skyloc/sim/street_source.h"
 #include "small_config.h"
 #include "small_street_route.h"
+#include "support/emulator.h"
 #include "support/scratch_dir.h"
 
 namespace skyloc::firmware {
@@ -182,8 +183,12 @@ TEST(FrameLoop, ABlindCameraNeverLocalises) {
   }
 }
 
-TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
+// Ten thousand counted frames natively and under the sanitizers; under qemu-user (the ARM
+// builds' tests, where a frame costs 3 to 9 times as much) two thousand, still more than six
+// passes of the 300-frame route.
+TEST(FrameLoop, ThousandsOfRepeatFramesAllocateNothing) {
   ASSERT_TRUE(AllocationCounterActive());
+  const std::uint64_t counted = skyloc::testing::UnderUserModeEmulator() ? 2000 : 10000;
   ClearSignalFlags();
   Pipeline pipeline(kMonotonic);
   ASSERT_TRUE(pipeline.Init(SmallConfig()).ok());
@@ -207,7 +212,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   static char stdio_buffer[BUFSIZ];
   ASSERT_EQ(std::setvbuf(null, stdio_buffer, _IOFBF, sizeof stdio_buffer), 0);
   drivers::FileLinesOutput lines(null);
-  drivers::MemoryOutput memory(10010);
+  drivers::MemoryOutput memory(static_cast<std::size_t>(counted) + 10);
   ASSERT_TRUE(memory.Open().ok());
   drivers::LocalisationOutput* outputs[] = {&lines, &memory};
   OutputPublisher publisher;
@@ -218,18 +223,18 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
   // Warm-up: ten frames before the counted run.
   ASSERT_TRUE(RunFrameLoop(camera, &status, pipeline, nullptr, &publisher, options, &summary).ok());
 
-  options.max_frames = 10000;
+  options.max_frames = counted;
   AllocationScope scope;
   const Status s = RunFrameLoop(camera, &status, pipeline, nullptr, &publisher, options, &summary);
   publisher.Stop();
   const std::uint64_t allocations = scope.allocations();
   ASSERT_TRUE(s.ok()) << s.message();
-  EXPECT_EQ(summary.frames, 10000u);
+  EXPECT_EQ(summary.frames, counted);
   EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(lines.counters().dropped, 0u);
   EXPECT_EQ(publisher.counters().queue_dropped, 0u);
   // Every frame reached the outputs, in order, each with its own JSON line.
-  ASSERT_EQ(memory.size(), 10010u);
+  ASSERT_EQ(memory.size(), counted + 10);
   for (std::size_t i = 1; i < memory.size(); ++i)
     ASSERT_EQ(memory[i].frame, memory[i - 1].frame + 1);
   const drivers::LocalisationMessage& last = memory[memory.size() - 1];
@@ -238,7 +243,7 @@ TEST(FrameLoop, TenThousandRepeatFramesAllocateNothing) {
                 static_cast<unsigned long long>(last.frame));
   EXPECT_NE(std::string(last.json, last.json_length).find(frame_key), std::string::npos);
   // Most frames were matched, so the heading ran thousands of times under the counter.
-  EXPECT_GT(pipeline.latency().stage(pipeline.stages().heading).count(), 5000u);
+  EXPECT_GT(pipeline.latency().stage(pipeline.stages().heading).count(), counted / 2);
   std::fclose(null);
 }
 
