@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <thread>
 
+#include "support/emulator.h"
+
 namespace skyloc {
 namespace {
 
@@ -35,10 +37,12 @@ TEST(SpscQueue, IsFifoAndReportsFullAndEmpty) {
 
 TEST(SpscQueue, TwoThreadsLoseAndReorderNothing) {
   // The producer pushes 0..N-1 (retrying when full); the consumer must see exactly that
-  // sequence. Under TSan/ASan builds this also exercises the memory ordering.
-  constexpr std::uint64_t kCount = 200'000;
+  // sequence. Under TSan/ASan builds this also exercises the memory ordering. Under
+  // qemu-user, where every yield of a spinning thread costs a host context switch, 20,000:
+  // still more than a thousand laps of the 16 slots.
+  const std::uint64_t kCount = skyloc::testing::UnderUserModeEmulator() ? 20'000 : 200'000;
   SpscQueue<std::uint64_t, 16> q;
-  std::thread producer([&q] {
+  std::thread producer([&q, kCount] {
     for (std::uint64_t i = 0; i < kCount;) {
       if (q.TryPush(i))
         ++i;
