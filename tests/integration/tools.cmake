@@ -119,4 +119,7 @@ add_test(NAME cli.experiment_bad_grid_exits_2 COMMAND ${CMAKE_COMMAND}
 skyloc_expect_output(cli.fabmap_train_eval COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
   -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fabmap -P ${CMAKE_CURRENT_SOURCE_DIR}/fabmap_check.cmake
   OUTPUT "all fabmap checks passed")
-set_tests_properties(cli.fabmap_train_eval PROPERTIES TIMEOUT 300)
+# COST: seconds, so a parallel run starts the long ones first (tests/test_costs.cmake).
+set_tests_properties(cli.fabmap_train_eval PROPERTIES TIMEOUT 300 COST 40)
+set_tests_properties(cli.experiment_speed_writes_outputs cli.experiment_heading_writes_outputs
+                     PROPERTIES COST 20)
