@@ -210,11 +210,17 @@ configure_and_build() {
   # The HIL VM cache is shared by the host and aarch64 builds (docs/HIL.md).
   local args=(-G Ninja -S "$ROOT" -B "$dir" -DSKYLOC_HIL_CACHE="$BUILD_ROOT/hil-cache")
   [ "${CI:-}" = "true" ] && args+=(-DSKYLOC_WERROR=ON)
+  # The builds that exist to run the demo and the tests (host, the sanitizers, ARM): line
+  # tables (-g1) are all their reports and backtraces use, and full debug information (-g)
+  # made compiling about a quarter slower (measured: 18 s of CPU against 23 s on the
+  # heaviest test file, 7.3 s against 10.4 s on app/tools/experiment.cpp). To step through
+  # locals in a debugger, configure a Debug build of your own.
+  local optimised_with_lines="-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
   case "$kind" in
     # Tests and tools ON, not the default left in the cache by a demo: missing libraries
     # fail the configure instead of leaving tests out.
-    host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSKYLOC_BUILD_TESTS=ON -DSKYLOC_TOOLS=ON) ;;
-    demo) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSKYLOC_BUILD_TESTS=AUTO -DSKYLOC_TOOLS=AUTO) ;;
+    host) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "$optimised_with_lines" -DSKYLOC_BUILD_TESTS=ON -DSKYLOC_TOOLS=ON) ;;
+    demo) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "$optimised_with_lines" -DSKYLOC_BUILD_TESTS=AUTO -DSKYLOC_TOOLS=AUTO) ;;
     release) args+=(-DCMAKE_BUILD_TYPE=Release -DSKYLOC_BUILD_TESTS=OFF) ;;
     # What goes into the .deb: Release, the firmware only, every driver required.
     package-*)
@@ -229,18 +235,15 @@ configure_and_build() {
         *) die "unknown package kind '${kind#package-}' (host, aarch64, armhf)" ;;
       esac
       ;;
-    # The sanitizer and ARM builds exist to run the tests: line tables (-g1) are all their
-    # reports and backtraces use, and full debug information (-g) made compiling them about
-    # a quarter slower (measured on the heaviest test file: 18 s of CPU against 23 s).
     asan) args+=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DSKYLOC_SANITIZE=address
       -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
     tsan) args+=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DSKYLOC_SANITIZE=thread
       -DSKYLOC_BUILD_BENCHMARKS=OFF) ;;
     # No benchmarks in the ARM builds either (nothing runs them there; stage_cost counts
     # their instructions).
-    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
+    aarch64) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "$optimised_with_lines"
       -DSKYLOC_BUILD_BENCHMARKS=OFF -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/aarch64-linux-gnu.cmake" -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-arm64") ;;
-    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG"
+    armhf) args+=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "$optimised_with_lines"
       -DSKYLOC_BUILD_BENCHMARKS=OFF -DCMAKE_TOOLCHAIN_FILE="$ROOT/toolchains/arm-linux-gnueabihf.cmake" -DSKYLOC_SYSROOT="$BUILD_ROOT/sysroot-armhf") ;;
     *) die "unknown build kind '$kind' (demo, host, asan, tsan, release, aarch64, armhf)" ;;
   esac
@@ -261,54 +264,106 @@ configure_and_build() {
   cmake --build "$dir" -j "$JOBS" "${targets[@]}" || die "build failed for $kind"
 }
 
-# Runs ctest in a build and records its pass/fail counts for the final summary line.
-TOTAL_PASSED=0
-TOTAL_FAILED=0
-TOTAL_SKIPPED=0
-FAILED_KINDS=()
+# Runs ctest in DIR (a build folder, or one of its test folders: a ctest there runs only
+# that folder's tests and keeps its own Testing/ records, so two runs in one build do not
+# share them) and writes its counts to $RESULTS_DIR/NAME, which summarise_results adds
+# up; a run in the background reports the same way.
+#   run_ctest NAME DIR CTEST-ARGS...
+RESULTS_DIR="$BUILD_ROOT/test-results"
+NICE=()
 run_ctest() {
-  local kind=$1
-  shift
-  local dir="$BUILD_ROOT/$kind" log="$BUILD_ROOT/ctest-$kind.log" rc=0
-  say "testing $kind: ctest $*"
-  (cd "$dir" && ctest --output-on-failure -j "$JOBS" --timeout 900 "$@") 2>&1 | tee "$log" || rc=$?
-  local line passed failed
+  local name=$1 dir=$2
+  shift 2
+  local log="$BUILD_ROOT/ctest-$name.log" rc=0
+  mkdir -p "$RESULTS_DIR"
+  say "testing $name: ctest $*"
+  (cd "$dir" && "${NICE[@]}" ctest --output-on-failure -j "$JOBS" --timeout 900 "$@") 2>&1 | tee "$log" || rc=$?
+  local line
   line=$(grep -E "tests passed, [0-9]+ tests failed out of [0-9]+" "$log" | tail -1 || true)
   if [ -z "$line" ]; then
-    FAILED_KINDS+=("$kind(no result)")
+    echo "0 0 0 no-result" >"$RESULTS_DIR/$name"
     return 0
   fi
+  local failed total skipped verdict=ok
   failed=$(sed -E 's/.* ([0-9]+) tests failed out of ([0-9]+).*/\1/' <<<"$line")
-  local total
   total=$(sed -E 's/.* tests failed out of ([0-9]+).*/\1/' <<<"$line")
   # CTest counts a skipped test (a VM test without QEMU, a real-driver test without a
   # device) as not failed; it is listed as "(Skipped)" and must not be reported as passed.
-  local skipped
   skipped=$(grep -cE '^[[:space:]]+[0-9]+ - .* \(Skipped\)$' "$log" || true)
-  passed=$((total - failed - skipped))
-  TOTAL_PASSED=$((TOTAL_PASSED + passed))
-  TOTAL_SKIPPED=$((TOTAL_SKIPPED + skipped))
-  TOTAL_FAILED=$((TOTAL_FAILED + failed))
-  if [ "$rc" -ne 0 ] || [ "$failed" -ne 0 ]; then FAILED_KINDS+=("$kind"); fi
+  if [ "$rc" -ne 0 ] || [ "$failed" -ne 0 ]; then verdict=failed; fi
+  echo "$((total - failed - skipped)) $failed $skipped $verdict" >"$RESULTS_DIR/$name"
+}
+
+# The runs that did not pass (their names), from the counts run_ctest wrote.
+failed_runs() {
+  local f passed failed skipped verdict
+  for f in "$RESULTS_DIR"/*; do
+    [ "$(basename "$f")" = phases ] && continue
+    read -r passed failed skipped verdict <"$f"
+    [ "$verdict" = ok ] || printf '%s ' "$(basename "$f")($verdict)"
+  done
+}
+
+# phase NAME COMMAND...: runs COMMAND and notes its wall time for the closing table.
+phase() {
+  local name=$1 start=$SECONDS
+  shift
+  "$@"
+  printf '%-22s %4d s\n' "$name" $((SECONDS - start)) >>"$RESULTS_DIR/phases"
+}
+
+# The VM tests run in the background: QEMU (TCG, one vCPU) keeps one core busy for
+# minutes, and the builds and test runs after them use the other. Those are niced while a
+# VM runs, so the guest keeps its pace (its scenarios time a reopening). Output of a
+# background job: $BUILD_ROOT/background-NAME.out, its ctest log as run_ctest's.
+BACKGROUND=()
+start_background() {
+  local name=$1
+  shift
+  say "in the background from now: $name (its output: $BUILD_ROOT/background-$name.out)"
+  ("$@") >"$BUILD_ROOT/background-$name.out" 2>&1 &
+  BACKGROUND+=("$name:$!")
+  NICE=(nice -n 10)
+}
+wait_background() {
+  local entry
+  for entry in "${BACKGROUND[@]}"; do
+    say "waiting for the background job ${entry%%:*}"
+    wait "${entry##*:}" || echo "0 0 0 died" >"$RESULTS_DIR/${entry%%:*}-job"
+  done
+  BACKGROUND=()
+  NICE=()
+}
+stop_background() {
+  local entry
+  for entry in "${BACKGROUND[@]}"; do kill_tree "${entry##*:}"; done
+}
+kill_tree() {
+  local child
+  for child in $(pgrep -P "$1" || true); do kill_tree "$child"; done
+  kill "$1" 2>/dev/null || true
 }
 
 cmd_test() {
   local start=$SECONDS
-  deps host
-  deps aarch64
-  deps armhf
-  configure_and_build host
-  # Not the package test (label package, tests/package): 2.5 min and ~60 MB from the
-  # archive at every run; ctest -L package runs it (docs/PACKAGING.md).
-  run_ctest host -LE "hil|package"
-  # VM tests get one more try when they fail: libcamera 0.0.3 under QEMU TCG hung once in
-  # 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc. A real failure
-  # fails both tries.
-  run_ctest host -L hil --repeat until-pass:2
-  configure_and_build asan
+  rm -rf "$RESULTS_DIR"
+  mkdir -p "$RESULTS_DIR"
+  # A failure or Ctrl-C in the foreground stops the VMs too.
+  trap stop_background EXIT
+  phase "packages, sysroots" deps_for_test
+  phase "host build" configure_and_build host
+  # The VM tests (label hil) get one more try when they fail: libcamera 0.0.3 under QEMU
+  # TCG hung once in 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc.
+  # A real failure fails both tries. Not the package test (label package, tests/package):
+  # 2.5 min and ~60 MB from the archive at every run; ctest -L package runs it
+  # (docs/PACKAGING.md).
+  start_background host-vm phase "host VM tests" \
+    run_ctest host-vm "$BUILD_ROOT/host/tests/hil" -L hil --repeat until-pass:2
+  phase "host tests" run_ctest host "$BUILD_ROOT/host" -LE "hil|package"
+  phase "asan build" configure_and_build asan
   # The sanitizer and aarch64 builds run every test but the VM ones (those boot a guest
   # with the host build's binaries) and the long soak runs (the host build runs those).
-  run_ctest asan -LE "hil|slow"
+  phase "asan tests" run_ctest asan "$BUILD_ROOT/asan" -LE "hil|slow"
   # ThreadSanitizer over what runs threads: the recorder's writer thread and its queue,
   # and eval's fork-join (the batch matcher and the descriptors). Not cli.firmware_modes:
   # it expects a recording without drops, and TSan slows the writer below the camera.
@@ -317,27 +372,50 @@ cmd_test() {
   # FrameRecorder in the firmware tests, ParallelFor and BlockedSeqSlamThreads in the tools
   # tests, and skyloc with make_eval_datasets for cli.eval_*. (A test executable left out
   # here would be registered as <name>_NOT_BUILT, which the -R filter does not pick.)
-  configure_and_build tsan skyloc_platform_tests skyloc_firmware_tests skyloc_tools_tests \
-    skyloc make_eval_datasets
-  run_ctest tsan -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
-  configure_and_build aarch64
-  # Every aarch64 test, the hil ones included: those boot an arm64 kernel in
-  # qemu-system-aarch64 with the cross-built binaries (the rest run under qemu-user),
-  # package.deb_arm64 too (the arm64 .deb installed in an arm64 Debian root in the VM).
+  phase "tsan build" configure_and_build tsan skyloc_platform_tests skyloc_firmware_tests \
+    skyloc_tools_tests skyloc make_eval_datasets
+  phase "tsan tests" run_ctest tsan "$BUILD_ROOT/tsan" \
+    -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
+  phase "aarch64 build" configure_and_build aarch64
+  # One VM at a time (each takes a core, and they share the HIL cache).
+  wait_background
+  # Every aarch64 VM test: those boot an arm64 kernel in qemu-system-aarch64 with the
+  # cross-built binaries (the rest run under qemu-user), package.deb_arm64 too (the arm64
+  # .deb installed in an arm64 Debian root in the VM).
+  start_background aarch64-vm phase "aarch64 VM tests" \
+    run_ctest aarch64-vm "$BUILD_ROOT/aarch64/tests/hil" -L hil --repeat until-pass:2
   # The slow soak runs are the host build's job.
-  run_ctest aarch64 -LE "slow|hil"
-  run_ctest aarch64 -L hil --repeat until-pass:2
+  phase "aarch64 tests" run_ctest aarch64 "$BUILD_ROOT/aarch64" -LE "slow|hil"
   # 32-bit ARM (Raspberry Pi OS 32-bit, ARMv7 boards): what only a 32-bit target shows
   # (size_t and off_t of 32 bits, long double = double), under qemu-arm. No VM for it.
-  configure_and_build armhf
-  run_ctest armhf -LE "slow|hil"
-  say "all test runs took $((SECONDS - start)) s"
-  if [ ${#FAILED_KINDS[@]} -gt 0 ]; then
-    echo "failing builds: ${FAILED_KINDS[*]}"
-  fi
-  # CI reads this closing line: "N passed, N failed" with ", N skipped" after it.
-  echo "total: ${TOTAL_PASSED} passed, ${TOTAL_FAILED} failed, ${TOTAL_SKIPPED} skipped"
-  [ ${#FAILED_KINDS[@]} -eq 0 ]
+  phase "armhf build" configure_and_build armhf
+  phase "armhf tests" run_ctest armhf "$BUILD_ROOT/armhf" -LE "slow|hil"
+  wait_background
+  trap - EXIT
+  summarise_results $((SECONDS - start))
+}
+
+# The closing lines: each phase's wall time (the background ones overlap what follows
+# them), the failing runs, and the total CI reads: "N passed, N failed, N skipped".
+summarise_results() {
+  local seconds=$1 f passed failed skipped verdict
+  local total_passed=0 total_failed=0 total_skipped=0
+  for f in "$RESULTS_DIR"/*; do
+    [ "$(basename "$f")" = phases ] && continue
+    read -r passed failed skipped verdict <"$f"
+    total_passed=$((total_passed + passed))
+    total_failed=$((total_failed + failed))
+    total_skipped=$((total_skipped + skipped))
+  done
+  echo "phases (wall time; the VM tests ran beside the phases after them):"
+  sed 's/^/  /' "$RESULTS_DIR/phases"
+  say "all test runs took $seconds s ($((seconds / 60)) min $((seconds % 60)) s)"
+  local failing
+  failing=$(failed_runs)
+  [ -z "$failing" ] || echo "failing runs: $failing"
+  # CI reads this closing line.
+  echo "total: ${total_passed} passed, ${total_failed} failed, ${total_skipped} skipped"
+  [ -z "$failing" ]
 }
 
 # Long fuzzing runs (the test suite runs each target for seconds only). Each target keeps
@@ -471,8 +549,9 @@ main() {
       case "$kind" in host | aarch64) ;; *) die "hil runs for host or aarch64, not '$kind'" ;; esac
       deps "$kind"
       configure_and_build "$kind"
-      run_ctest "$kind" -L hil
-      [ ${#FAILED_KINDS[@]} -eq 0 ] || die "hil tests failed (console logs: $BUILD_ROOT/$kind/hil-logs/)"
+      rm -rf "$RESULTS_DIR"
+      run_ctest "$kind-vm" "$BUILD_ROOT/$kind/tests/hil" -L hil
+      [ -z "$(failed_runs)" ] || die "hil tests failed (console logs: $BUILD_ROOT/$kind/hil-logs/)"
       ;;
     bench)
       deps host
