@@ -655,12 +655,6 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
 
 namespace {
 
-Status NotARegularFile(const char* path, mode_t mode) {
-  return Status::Error(StatusCode::kInvalidArgument,
-                       "%s is %s, not a route database file: name a regular file", path,
-                       FileKindName(mode));
-}
-
 Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
   struct stat st {};
   if (::fstat(fd, &st) != 0)
@@ -865,17 +859,10 @@ Status RouteDbWriter::CreateLocked(const char* path, const RouteDbSettings& sett
   // No teach holds the lock, so a FILE.tmp here was left by one that was killed: say what
   // it held before it is replaced.
   replaced_tmp_ = InspectRouteTmp(path);
-  // O_NOFOLLOW/O_NONBLOCK + the check below: a symlink or FIFO planted at FILE.tmp is
-  // refused, not followed or waited on.
-  UniqueFd fd(
-      ::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
-  if (!fd.is_valid())
-    return Status::FromErrno(errno, "cannot create %s", tmp);
-  struct stat created {};
-  if (::fstat(fd.get(), &created) != 0)
-    return Status::FromErrno(errno, "cannot stat %s", tmp);
-  if (!S_ISREG(created.st_mode))
-    return NotARegularFile(tmp, created.st_mode);
+  // A symlink or FIFO planted at FILE.tmp is refused, not followed or waited on.
+  UniqueFd fd;
+  SKYLOC_TRY(CreateRegularFile(tmp, O_WRONLY | O_TRUNC, 0644, "the teach's temporary file",
+                               "remove it so a teach can write the route", &fd));
   // Held until the writer closes: `route recover` refuses the file meanwhile.
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
     return Status::FromErrno(errno, "cannot lock %s", tmp);
