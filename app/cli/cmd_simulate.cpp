@@ -59,8 +59,8 @@ struct Options {
   std::string out;
 };
 
-// Returns kExitOk, the help's kExitOk with `*done`, or kExitUsage after printing one error.
-int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
+// Parses and checks the command line; kRun or the outcome to exit with.
+ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   o->run = firmware::SimulateDefaults(/*seville=*/false);
   o->run.world.name.clear();  // --world is required
   OptionTable t("simulate", "--world NAME --out DIR [options]", kDescription);
@@ -93,10 +93,8 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
          &o->camera_file);
   t.Choice<std::string>("--mode", "uv (default), visible or both",
                         {{"uv", "uv"}, {"visible", "visible"}, {"both", "both"}}, &o->mode);
-  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
-    *done = true;
-    return ExitCode(outcome);
-  }
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
+    return outcome;
   if (o->run.world.name.empty())
     return t.Refuse("--world is required (seville, city, forest, repetitive)");
   if (o->out.empty())
@@ -131,7 +129,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   }
   o->sun_given = t.Given("--sun");
   o->clouds_given = t.Given("--clouds");
-  return kExitOk;
+  return ParseOutcome::kRun;
 }
 
 Result<std::string> ReadText(const std::string& path) {
@@ -259,9 +257,8 @@ int Fail(const Status& s) {
 
 int RunSimulate(std::span<char* const> args) {
   Options o;
-  bool done = false;
-  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
-    return rc;
+  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
+    return ExitCode(p);
   sim::WorldKind world_kind{};
   sim::ParseWorldKind(o.run.world.name.c_str(), &world_kind);  // --world accepted only these
   const bool seville = world_kind == sim::WorldKind::kSeville;
