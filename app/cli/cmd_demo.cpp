@@ -65,7 +65,7 @@ class ProgressLine final : public FrameSink {
 Config DemoConfig(const char* world, bool quick) {
   Config c = DefaultConfig();
   c.camera.kind = CameraKind::kSim;
-  c.camera.sim.world = world;
+  c.camera.sim.name = world;
   c.camera.width = quick ? 96 : 320;
   c.camera.height = quick ? 96 : 240;
   c.camera.fps = 10;

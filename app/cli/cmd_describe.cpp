@@ -50,9 +50,8 @@ struct Options {
   std::vector<std::string> images;
 };
 
-// Returns kExitOk when parsed, else the exit code (help: kExitOk via `done`).
-int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
-  *done = false;
+// Parses and checks the command line; kRun or the outcome to exit with.
+ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   OptionTable t("describe", "[options] IMAGE...", kDescription);
   t.Text("--camera", "FILE.toml",
          "camera file (docs/CAMERA_FILE.md). Without one, a square-ish image is an equidistant "
@@ -84,10 +83,8 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
            &o->radius_px);
   t.Positional("IMAGE", "the images to describe", 0, std::numeric_limits<std::size_t>::max(),
                &o->images);
-  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
-    *done = outcome == ParseOutcome::kHelpPrinted;
-    return ExitCode(outcome);
-  }
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
+    return outcome;
   if (o->images.empty())
     return t.Refuse("no image given: pass one or more PNG/PGM/PPM files");
   if (t.Given("--centre") && t.Given("--center"))
@@ -96,7 +93,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     o->centre_x = centre_x;
     o->centre_y = centre_y;
   }
-  return kExitOk;
+  return ParseOutcome::kRun;
 }
 
 // The lens for an image of this size: the camera file's, or a guess from the shape.
@@ -204,9 +201,8 @@ Status InitDescribeDescriptor(const firmware::Config& config, const dsp::Lens& l
 
 int RunDescribe(std::span<char* const> args) {
   Options o;
-  bool done = false;
-  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
-    return rc;
+  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
+    return ExitCode(p);
 
   std::optional<dsp::LensParams> camera;
   if (!o.camera.empty()) {

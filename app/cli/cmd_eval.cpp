@@ -176,23 +176,19 @@ ParseOutcome ParseArgs(std::span<char* const> args, EvalOptions* o) {
   AddOptions(&t, o);
   if (const ParseOutcome p = t.Parse(args); p != ParseOutcome::kRun)
     return p;
-  const auto refuse = [&t](const char* what) {
-    t.Refuse(what);
-    return ParseOutcome::kRefused;
-  };
   if (o->reference.empty() || o->query.empty() || o->out.empty())
-    return refuse("--reference, --query and --out are required");
+    return t.Refuse("--reference, --query and --out are required");
   if (o->batch && o->streaming)
-    return refuse("--batch and --streaming exclude each other");
+    return t.Refuse("--batch and --streaming exclude each other");
   if (!o->gt_file.empty() && o->tolerance_m > 0)
-    return refuse("--gt and --tolerance-m exclude each other");
+    return t.Refuse("--gt and --tolerance-m exclude each other");
   const auto asked = [o](ScoredDescriptor d) {
     return std::find(o->methods.begin(), o->methods.end(), d) != o->methods.end();
   };
   if (asked(ScoredDescriptor::kFabmap) && o->vocab.empty())
-    return refuse("--method fabmap needs --vocab FILE (write one with skyloc fabmap-train)");
+    return t.Refuse("--method fabmap needs --vocab FILE (write one with skyloc fabmap-train)");
   if (o->describe.max_tilt_deg && !o->describe.attitude_from_dataset)
-    return refuse("--max-tilt sets the gravity-aligned cap: add --attitude dataset");
+    return t.Refuse("--max-tilt sets the gravity-aligned cap: add --attitude dataset");
   if (o->methods.empty()) {
     o->methods = {ScoredDescriptor::kSky, ScoredDescriptor::kVanilla};
     if (!o->vocab.empty())
@@ -203,7 +199,8 @@ ParseOutcome ParseArgs(std::span<char* const> args, EvalOptions* o) {
     o->matchers = {openseqslam_window ? Matcher::kOpenSeqSlam : Matcher::kRouteFilter};
   } else if (openseqslam_window && std::find(o->matchers.begin(), o->matchers.end(),
                                              Matcher::kOpenSeqSlam) == o->matchers.end()) {
-    return refuse("--batch and --streaming choose openseqslam's window: add --matcher openseqslam");
+    return t.Refuse(
+        "--batch and --streaming choose openseqslam's window: add --matcher openseqslam");
   }
   std::sort(o->matchers.begin(), o->matchers.end());
   o->matchers.erase(std::unique(o->matchers.begin(), o->matchers.end()), o->matchers.end());

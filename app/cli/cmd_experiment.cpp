@@ -63,9 +63,8 @@ struct Options {
 
 constexpr const char* kExperiments[] = {"tilt", "manoeuvre", "ants", "speed", "heading"};
 
-// Returns kExitOk when parsed, else the exit code (help: kExitOk via `done`).
-int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
-  *done = false;
+// Parses and checks the command line; kRun or the outcome to exit with.
+ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   tools::ExperimentOptions& e = o->experiment;
   firmware::DescriptorConfig& descriptor = e.config.descriptor;
   std::vector<std::string> name;
@@ -113,10 +112,8 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
          "vocabulary from `skyloc fabmap-train`, trained on a run of another world "
          "(docs/FABMAP.md)",
          &o->vocabulary_path);
-  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
-    *done = outcome == ParseOutcome::kHelpPrinted;
-    return ExitCode(outcome);
-  }
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
+    return outcome;
   if (name.empty())
     return t.Refuse("name the experiment: tilt, manoeuvre, ants, speed, heading or surf1d");
   o->name = name.front();
@@ -130,7 +127,7 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
     return t.Refuse("--out DIR is required");
   o->spacing_given = t.Given("--spacing");
   firmware::ResolveDescriptorGrid(&descriptor);
-  return kExitOk;
+  return ParseOutcome::kRun;
 }
 
 // The methods an experiment compares, in column order: the JSON and file name of each
@@ -576,9 +573,8 @@ int RunExperiment(std::span<char* const> args) {
   if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
     return RunSurf1dExperiment(args);
   Options o;
-  bool done = false;
-  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
-    return rc;
+  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
+    return ExitCode(p);
   std::string command = "skyloc experiment";
   for (char* const a : args)
     command += std::string(" ") + a;

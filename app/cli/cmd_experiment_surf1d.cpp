@@ -98,7 +98,8 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   if (t.Given("--seed"))
     o.world_seed = static_cast<std::uint64_t>(seed);
   if (out.empty())
-    return t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)");
+    return ExitCode(
+        t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)"));
   tools::Surf1dCameraResult forward, fisheye;
   if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress); !s.ok()) {
     std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());

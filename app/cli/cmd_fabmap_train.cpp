@@ -43,7 +43,7 @@ int RunFabmapTrain(std::span<char* const> args) {
     return ExitCode(outcome);
   o.seed = static_cast<std::uint64_t>(seed);
   if (o.datasets.empty() || out.empty())
-    return t.Refuse("--train DIR and --out VOCAB are required");
+    return ExitCode(t.Refuse("--train DIR and --out VOCAB are required"));
   Result<tools::Vocabulary> v = tools::TrainVocabulary(o);
   Status s = v.ok() ? tools::SaveVocabulary(out, *v) : v.status();
   if (!s.ok()) {

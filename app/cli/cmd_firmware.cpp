@@ -103,7 +103,7 @@ int RunOnRoute(std::span<char* const> args, LoopMode mode) {
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);
   if (s.route_path.empty())
-    return t.Refuse("--route FILE.db is required");
+    return ExitCode(t.Refuse("--route FILE.db is required"));
   return RunWithConfigFile(s);
 }
 
@@ -148,7 +148,7 @@ int RunReplay(std::span<char* const> args) {
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
     return ExitCode(o);
   if (s.route_path.empty())
-    return t.Refuse("--route FILE.db is required");
+    return ExitCode(t.Refuse("--route FILE.db is required"));
   s.dataset = dataset.front();
   return RunWithConfigFile(s);
 }
@@ -163,9 +163,10 @@ int RunRoute(std::span<char* const> args) {
     return ExitCode(o);
   const bool recover = words[0] == "recover";
   if (!recover && words[0] != "info")
-    return t.Refuse("unknown route subcommand '" + words[0] + "': expected info or recover");
+    return ExitCode(
+        t.Refuse("unknown route subcommand '" + words[0] + "': expected info or recover"));
   if (salvage && !recover)
-    return t.Refuse("--salvage is for 'route recover' only");
+    return ExitCode(t.Refuse("--salvage is for 'route recover' only"));
   const char* path = words[1].c_str();
   RouteDbLoadReport report;
   Status s;

@@ -46,11 +46,12 @@ struct Options {
   std::string route_file;
   std::string data_dir = "../shared/data/seville2009";
   double fps = sim::MotionConfig{}.fps;
-  double start = 0, zigzag_period = 20, lateral = 0;
+  // simulate's own motion options (--zigzag-period, --lateral, --start, --frames); the run
+  // gives the rest of the motion (firmware::SimMotionConfig).
+  sim::MotionConfig motion;
   double exposure = 0;
   double sun_azimuth = 0, sun_elevation = 0, clouds = 0;
   bool sun_given = false, clouds_given = false;  // else the lighting preset's
-  int frames = 0;
   bool no_flare = false;
   int width = 320, height = 240;
   std::string camera_file;
@@ -58,10 +59,10 @@ struct Options {
   std::string out;
 };
 
-// Returns kExitOk, the help's kExitOk with `*done`, or kExitUsage after printing one error.
-int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
+// Parses and checks the command line; kRun or the outcome to exit with.
+ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   o->run = firmware::SimulateDefaults(/*seville=*/false);
-  o->run.world.clear();  // --world is required
+  o->run.world.name.clear();  // --world is required
   OptionTable t("simulate", "--world NAME --out DIR [options]", kDescription);
   t.Text("--out", "DIR", "the dataset folder to write", &o->out);
   t.Text("--route", "FILE", "route CSV (x_cm,y_cm,... or x_m,y_m,...)", &o->route_file);
@@ -70,13 +71,14 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   t.Number("--fps", "N", "camera frame rate (default 10)", {0, 1000, true}, &o->fps);
   AddSimRunOptions(&t, SimRunOptions::kWorldAndRun, &o->run);
   t.Number("--zigzag-period", "M", "route distance of one zigzag weave (default 20)", kPositive,
-           &o->zigzag_period);
+           &o->motion.zigzag_period_m);
   t.Number("--lateral", "M",
            "wander sideways off the route within +-M metres, a drift over 40-80 m and a weave "
            "over 12-25 m: a second drive never retraces the first (default 0)",
-           {0, 5}, &o->lateral);
-  t.Number("--start", "M", "start this far along the route (default 0)", {0}, &o->start);
-  t.Int("--frames", "N", "at most N frames (default: the whole route)", 1, 10'000'000, &o->frames);
+           {0, 5}, &o->motion.lateral_m);
+  t.Number("--start", "M", "start this far along the route (default 0)", {0}, &o->motion.start_m);
+  t.Int("--frames", "N", "at most N frames (default: the whole route)", 1, 10'000'000,
+        &o->motion.max_frames);
   t.NumberPair(
       "--sun", "AZ,EL", "sun azimuth (counter-clockwise from east) and elevation, degrees",
       "AZ,EL in degrees with EL within -90..90",
@@ -91,11 +93,9 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
          &o->camera_file);
   t.Choice<std::string>("--mode", "uv (default), visible or both",
                         {{"uv", "uv"}, {"visible", "visible"}, {"both", "both"}}, &o->mode);
-  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
-    *done = true;
-    return ExitCode(outcome);
-  }
-  if (o->run.world.empty())
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
+    return outcome;
+  if (o->run.world.name.empty())
     return t.Refuse("--world is required (seville, city, forest, repetitive)");
   if (o->out.empty())
     return t.Refuse("--out DIR is required");
@@ -119,17 +119,17 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
         "--width/--height and --camera both give the image size: use one (the camera file's "
         "[image] table)");
   if (spacing)
-    o->run.sampling = firmware::SimSampling::kDistance;
-  if (o->run.world == "seville") {  // an ant's run unless told otherwise
+    o->run.world.sampling = firmware::SimSampling::kDistance;
+  if (o->run.world.name == "seville") {  // an ant's run unless told otherwise
     const firmware::SimRunConfig ant = firmware::SimulateDefaults(/*seville=*/true);
     if (!t.Given("--speed"))
-      o->run.speed.cruise_mps = ant.speed.cruise_mps;
+      o->run.world.speed.cruise_mps = ant.world.speed.cruise_mps;
     if (!t.Given("--camera-height"))
       o->run.camera_height_m = ant.camera_height_m;
   }
   o->sun_given = t.Given("--sun");
   o->clouds_given = t.Given("--clouds");
-  return kExitOk;
+  return ParseOutcome::kRun;
 }
 
 Result<std::string> ReadText(const std::string& path) {
@@ -189,7 +189,7 @@ Status WriteSimulationToml(const std::string& dir, const Options& o, sim::Spectr
       "\n[lighting]\npreset = \"%s\"\nsun_azimuth_deg = %.6f\nsun_elevation_deg = %.6f\n"
       "cloud_cover = %.6f\nsky_brightness = %.6f\nexposure_ev = %.6f\nnoise_sigma = %.6f\n"
       "flare = %.6f\n",
-      o.run.world.c_str(), static_cast<unsigned long long>(o.run.seed),
+      o.run.world.name.c_str(), static_cast<unsigned long long>(o.run.world.seed),
       o.route_file.empty() ? "(the world's own)" : o.route_file.c_str(),
       static_cast<unsigned long long>(o.run.run_seed), sim::SpectrumName(spectrum), sampling,
       motion.height_m, motion.start_m, motion.tilt_deg, motion.zigzag_deg, motion.zigzag_period_m,
@@ -233,16 +233,6 @@ class Progress {
   std::size_t last_decile_ = 0;
 };
 
-// The run's motion: the one conversion of a simulated run, and simulate's own options.
-sim::MotionConfig Motion(const Options& o) {
-  sim::MotionConfig motion = firmware::SimMotionConfig(o.run, o.fps);
-  motion.zigzag_period_m = o.zigzag_period;
-  motion.lateral_m = o.lateral;
-  motion.start_m = o.start;
-  motion.max_frames = o.frames;
-  return motion;
-}
-
 // The run's lighting preset, with the options that override it piecewise.
 Result<sim::Lighting> Lighting(const Options& o) {
   SKYLOC_TRY_ASSIGN(sim::Lighting lighting, firmware::SimLighting(o.run));
@@ -267,11 +257,10 @@ int Fail(const Status& s) {
 
 int RunSimulate(std::span<char* const> args) {
   Options o;
-  bool done = false;
-  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
-    return rc;
+  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
+    return ExitCode(p);
   sim::WorldKind world_kind{};
-  sim::ParseWorldKind(o.run.world.c_str(), &world_kind);  // --world accepted only these
+  sim::ParseWorldKind(o.run.world.name.c_str(), &world_kind);  // --world accepted only these
   const bool seville = world_kind == sim::WorldKind::kSeville;
 
   // The world and its route.
@@ -290,7 +279,8 @@ int RunSimulate(std::span<char* const> args) {
     }
     if (o.route_file.empty())
       o.route_file = o.data_dir + "/routes/ant1_route1.csv";
-  } else if (const Status s = sim::MakeProceduralWorld(world_kind, o.run.seed, &world); !s.ok()) {
+  } else if (const Status s = sim::MakeProceduralWorld(world_kind, o.run.world.seed, &world);
+             !s.ok()) {
     return Fail(s);
   }
   if (!o.route_file.empty()) {
@@ -301,7 +291,7 @@ int RunSimulate(std::span<char* const> args) {
     closed = world.route_closed;
   }
 
-  const sim::MotionConfig motion = Motion(o);
+  const sim::MotionConfig motion = firmware::SimMotionConfig(o.run, o.fps, o.motion);
   std::vector<sim::TrajectoryPoint> trajectory;
   if (const Status s = sim::BuildTrajectory(route, closed, motion, &trajectory); !s.ok())
     return Fail(Status(s).AddContext("route"));
@@ -355,8 +345,8 @@ int RunSimulate(std::span<char* const> args) {
 
   std::fprintf(stderr,
                "skyloc simulate: %s world (%zu triangles), %zu frames at %dx%d, mode %s -> %s\n",
-               o.run.world.c_str(), world.triangles().size(), trajectory.size(), o.width, o.height,
-               o.mode.c_str(), o.out.c_str());
+               o.run.world.name.c_str(), world.triangles().size(), trajectory.size(), o.width,
+               o.height, o.mode.c_str(), o.out.c_str());
   Progress progress(trajectory.size());
   const auto begin = std::chrono::steady_clock::now();
   double render_s = 0;

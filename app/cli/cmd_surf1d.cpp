@@ -47,8 +47,8 @@ struct Options {
   dsp::Surf1dOptions surf;
 };
 
-// Returns kExitOk, the help's kExitOk with `*done`, or kExitUsage after printing one error.
-int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
+// Parses and checks the command line; kRun or the outcome to exit with.
+ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   OptionTable t("surf1d", "IMAGE_A IMAGE_B [options]", kDescription);
   t.Positional("IMAGE_A IMAGE_B", "the two images", 0, 2, &o->images);
   t.Text("--camera", "FILE", "camera file (docs/CAMERA_FILE.md)", &o->camera);
@@ -63,14 +63,12 @@ int ParseArgs(std::span<char* const> args, Options* o, bool* done) {
   t.Number("--threshold", "T", "1D SURF's response threshold (default 2)", {0, 1000}, &threshold);
   t.Text("--plot", "FILE.svg", "draw both strips, their features and the matches (inliers green)",
          &o->plot);
-  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun) {
-    *done = true;
-    return ExitCode(outcome);
-  }
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
+    return outcome;
   o->surf.threshold = static_cast<float>(threshold);
   if (o->images.size() != 2)
     return t.Refuse("give two images: IMAGE_A IMAGE_B");
-  return kExitOk;
+  return ParseOutcome::kRun;
 }
 
 // The lens of an image: the camera file's (its size must match), or describe's guess.
@@ -195,9 +193,8 @@ std::string PlotSvg(const View& a, const View& b, const dsp::LandmarkMatcher& ma
 
 int RunSurf1d(std::span<char* const> args) {
   Options o;
-  bool done = false;
-  if (const int rc = ParseArgs(args, &o, &done); rc != kExitOk || done)
-    return rc;
+  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
+    return ExitCode(p);
   dsp::Surf1d surf;
   View a, b;
   for (auto [path, view] :

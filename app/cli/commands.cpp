@@ -19,10 +19,10 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
                   *expected = "seville, city, forest or repetitive";
                   return false;
                 }
-                run->world = sim::WorldKindName(kind);
+                run->world.name = sim::WorldKindName(kind);
                 return true;
               });
-    t->Count("--seed", "N", "procedural world seed (default 1)", &run->seed);
+    t->Count("--seed", "N", "procedural world seed (default 1)", &run->world.seed);
   }
   t->Count("--run", "N",
            "run seed: speed profile and stops (or speed jitter), bumps, clouds, sensor noise "
@@ -31,25 +31,25 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
   if (which == SimRunOptions::kWorldAndRun) {
     constexpr NumberRange kFraction{0, 1, false, true};
     t->Number("--speed", "M/S", "mean cruise speed (default 1; seville 0.5)", {0, 100, true},
-              &run->speed.cruise_mps);
+              &run->world.speed.cruise_mps);
     t->Number("--speed-band", "F", "cruise speed varies within (1 +- F) (default 0.3)", kFraction,
-              &run->speed.band);
+              &run->world.speed.band);
     t->Number("--accel", "A", "acceleration and braking, m/s^2 (default 0.5)", {0, 100, true},
-              &run->speed.accel_mps2);
+              &run->world.speed.accel_mps2);
     t->Number("--start-stop", "S", "seconds standing before the start (default 2)", {0, 3600},
-              &run->speed.start_stop_s);
-    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000, &run->speed.stops);
+              &run->world.speed.start_stop_s);
+    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000, &run->world.speed.stops);
     t->NumberPair(
         "--stop-seconds", "MIN,MAX", "each stop's length, seconds (default 2,6)",
         "MIN,MAX seconds with 0 <= MIN <= MAX <= 3600",
         [](double lo, double hi) { return lo >= 0 && lo <= hi && hi <= 3600; },
-        &run->speed.stop_min_s, &run->speed.stop_max_s);
+        &run->world.speed.stop_min_s, &run->world.speed.stop_max_s);
     t->Number("--spacing", "M",
               "distance sampling instead: a frame every M metres on average (seville: 0.05); "
               "not with the time-sampling options",
-              kPositive, &run->spacing_m);
+              kPositive, &run->world.spacing_m);
     t->Number("--jitter", "F", "with --spacing: speed varies within (1 +- F) (default 0.2)",
-              kFraction, &run->speed_jitter);
+              kFraction, &run->world.speed_jitter);
     t->Number("--camera-height", "M", "camera above the ground (default 1, seville 0.01: an ant)",
               kPositive, &run->camera_height_m);
   }

@@ -11,29 +11,20 @@
 
 namespace skyloc::cli {
 
-using CommandFn = int (*)(std::span<char* const> args);
+// Every command: the arguments after its name in, the process exit code out.
+using CommandMain = int(std::span<char* const> args);
 
 struct Command {
   const char* name;
   const char* summary;
-  CommandFn run;
+  CommandMain* run;
 };
 
-int RunDemo(std::span<char* const> args);
-int RunTeach(std::span<char* const> args);
-int RunRepeat(std::span<char* const> args);
-int RunReplay(std::span<char* const> args);
-int RunRecord(std::span<char* const> args);
-int RunRoute(std::span<char* const> args);
-int RunDescribe(std::span<char* const> args);
-// The lab's tools (SKYLOC_TOOLS builds only).
-int RunEval(std::span<char* const> args);
-int RunSurf1d(std::span<char* const> args);
-int RunSimulate(std::span<char* const> args);
-int RunExperiment(std::span<char* const> args);
-// `skyloc experiment surf1d` (cmd_experiment_surf1d.cpp); args[0] is "surf1d".
-int RunSurf1dExperiment(std::span<char* const> args);
-int RunFabmapTrain(std::span<char* const> args);
+// The robot's commands.
+CommandMain RunDemo, RunTeach, RunRepeat, RunReplay, RunRecord, RunRoute, RunDescribe;
+// The lab's tools (SKYLOC_TOOLS builds only); RunSurf1dExperiment is `skyloc experiment
+// surf1d` (cmd_experiment_surf1d.cpp), its args[0] "surf1d".
+CommandMain RunEval, RunSurf1d, RunSimulate, RunExperiment, RunSurf1dExperiment, RunFabmapTrain;
 
 // True for the flags that ask a command for its usage text.
 inline bool IsHelpFlag(const char* arg) {

@@ -244,10 +244,10 @@ bool OptionTable::Given(std::string_view name) const {
   return o != nullptr && o->given;
 }
 
-int OptionTable::Refuse(std::string_view what) const {
+ParseOutcome OptionTable::Refuse(std::string_view what) const {
   std::fprintf(stderr, "skyloc %s: %.*s\nRun 'skyloc %s --help' for the options.\n", command_,
                static_cast<int>(what.size()), what.data(), command_);
-  return kExitUsage;
+  return ParseOutcome::kRefused;
 }
 
 ParseOutcome OptionTable::Parse(std::span<char* const> args) {
@@ -266,40 +266,35 @@ ParseOutcome OptionTable::Parse(std::span<char* const> args) {
     }
     Option* o = Find(a);
     if (o == nullptr) {
-      Refuse(std::string("unknown option '") + a + "'");
-      return ParseOutcome::kRefused;
+      return Refuse(std::string("unknown option '") + a + "'");
     }
     if (o->given && !o->repeatable) {
-      Refuse(std::string(a) + " is given twice");
-      return ParseOutcome::kRefused;
+      return Refuse(std::string(a) + " is given twice");
     }
     o->given = true;
     const char* text = "";
     if (!o->value.empty()) {
       if (i + 1 >= args.size()) {
-        Refuse(std::string(a) + " needs a value: " + o->value);
-        return ParseOutcome::kRefused;
+        return Refuse(std::string(a) + " needs a value: " + o->value);
       }
       text = args[++i];
     }
     std::string expected;
     if (!o->store(text, &expected)) {
-      Refuse(std::string(a) + " '" + text + "': expected " + expected + " (" + o->help + ")");
-      return ParseOutcome::kRefused;
+      return Refuse(std::string(a) + " '" + text + "': expected " + expected + " (" + o->help +
+                    ")");
     }
   }
   const PositionalSpec* spec = positional_ ? &*positional_ : nullptr;
   const std::size_t min = spec != nullptr ? spec->min : 0;
   const std::size_t max = spec != nullptr ? spec->max : 0;
   if (words.size() > max) {
-    Refuse(spec == nullptr ? "unexpected argument '" + words[max] + "'"
-                           : "unexpected argument '" + words[max] + "' (at most " +
-                                 std::to_string(max) + " " + spec->value + ")");
-    return ParseOutcome::kRefused;
+    return Refuse(spec == nullptr ? "unexpected argument '" + words[max] + "'"
+                                  : "unexpected argument '" + words[max] + "' (at most " +
+                                        std::to_string(max) + " " + spec->value + ")");
   }
   if (words.size() < min) {
-    Refuse("missing " + spec->value + " (" + spec->help + ")");
-    return ParseOutcome::kRefused;
+    return Refuse("missing " + spec->value + " (" + spec->help + ")");
   }
   if (spec != nullptr)
     *spec->out = std::move(words);

@@ -117,8 +117,8 @@ class OptionTable {
   // True when the option was on the command line (after Parse).
   bool Given(std::string_view name) const;
   // A refusal found after Parse (options that exclude each other, a missing one): prints
-  // "skyloc COMMAND: WHAT" and where the options are described; returns kExitUsage.
-  int Refuse(std::string_view what) const;
+  // "skyloc COMMAND: WHAT" and where the options are described; returns kRefused.
+  ParseOutcome Refuse(std::string_view what) const;
   void PrintHelp(std::FILE* out) const;
   const char* command() const { return command_; }
 

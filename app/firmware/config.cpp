@@ -213,8 +213,8 @@ void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c
   r.String("device", &c.camera.device, false);
   r.Path("dataset", &c.camera.dataset);
   r.Path("lens_file", &c.camera.lens_file);
-  SimRunConfig& sim = c.camera.sim;
-  r.OneOf("sim_world", &sim.world, {"city", "forest", "repetitive", "street"});
+  SimWorldConfig& sim = c.camera.sim;
+  r.OneOf("sim_world", &sim.name, {"city", "forest", "repetitive", "street"});
   std::int64_t seed = static_cast<std::int64_t>(sim.seed);
   r.Int64("sim_seed", &seed, 0, INT64_MAX);
   sim.seed = static_cast<std::uint64_t>(seed);

@@ -36,18 +36,28 @@ const char* NameOf(E value);
 // frame every 1/fps seconds along a speed profile with stops (docs/SIMULATOR.md).
 enum class SimSampling : std::uint8_t { kDistance, kTime };
 
-// A simulated run: the one description that the [camera] sim_* keys, the SIM flags of
-// teach, repeat and record, and `skyloc simulate` fill. Its defaults are the
-// configuration's; `skyloc simulate` starts from SimulateDefaults() (sim_run.h).
-struct SimRunConfig {
-  std::string world = "city";  // city | forest | repetitive; config: street; simulate: seville
-  std::uint64_t seed = 1;      // the procedural world's seed
-  std::uint64_t run_seed = 1;  // speed jitter or profile and stops, bumps, clouds, noise
+// The world of a simulated run and how a run through it is sampled: what the
+// configuration's [camera] sim_* keys own (and `skyloc simulate`'s --world, --seed and
+// sampling options).
+struct SimWorldConfig {
+  std::string name = "city";  // city | forest | repetitive; config: street; simulate: seville
+  std::uint64_t seed = 1;     // the procedural world's seed
   SimSampling sampling = SimSampling::kDistance;
   double spacing_m = 1.0;     // kDistance: mean distance between frames
   double speed_jitter = 0.2;  // kDistance: speed varies within (1 +- jitter)
   sim::SpeedProfile speed;    // kTime: the cruise speed, its band, and the stops
-  double speed_ratio = 1.0;   // kTime: scales the cruise speed (a faster repeat run)
+
+  bool operator==(const SimWorldConfig&) const = default;
+};
+
+// A simulated run: the one description that the [camera] sim_* keys (its world), the SIM
+// flags of teach, repeat and record (the rest), and `skyloc simulate` (all of it) fill.
+// Its defaults are the configuration's; `skyloc simulate` starts from SimulateDefaults()
+// (sim_run.h).
+struct SimRunConfig {
+  SimWorldConfig world;
+  std::uint64_t run_seed = 1;  // speed jitter or profile and stops, bumps, clouds, noise
+  double speed_ratio = 1.0;    // kTime: scales the cruise speed (a faster repeat run)
   double camera_height_m = 1.0;
   double tilt_deg = 0;            // constant pitch, nose up positive (the paper's alpha)
   double zigzag_deg = 0;          // yaw weave amplitude
@@ -68,7 +78,7 @@ struct CameraConfig {
   bool lens_file_from_dataset = false;
   // kind = sim: the world and how a run through it is sampled (the sim_* keys); the
   // command line's SIM flags give the rest of the run.
-  SimRunConfig sim;
+  SimWorldConfig sim;
   int width = 640;
   int height = 480;
   double fps = 30.0;

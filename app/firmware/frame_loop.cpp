@@ -89,6 +89,133 @@ Status SleepMovingLines(drivers::StatusOutput* status, Shown shown, const Clock&
   return Status::Ok();
 }
 
+// SIGUSR1: the latency table and the devices' counters so far, the run going on.
+void PrintReportIfAsked(const LatencyTable& latency, const LoopOptions& options,
+                        std::uint64_t frames) {
+  if (!TakeReportRequest())
+    return;
+  std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
+               static_cast<unsigned long long>(frames));
+  latency.Print(stderr);
+  if (options.devices != nullptr)
+    options.devices->Print(stderr);
+}
+
+// The teach button's pending edges through its debouncer: true when a press was accepted.
+Result<bool> ButtonPressed(drivers::StatusOutput& status, ButtonDebouncer& button,
+                           const Clock& clock) {
+  for (;;) {
+    Result<drivers::ButtonEvent> edge = status.ReadButtonEvent();
+    if (!edge.ok()) {
+      if (edge.status().code() == StatusCode::kDeadlineExceeded)
+        break;  // no edge pending
+      Status failed = edge.status();
+      return failed.AddContext("the teach button");
+    }
+    button.OnEdge(*edge);
+  }
+  return button.TakePress(clock.Now());
+}
+
+// The attitude at each frame's time, said once when it goes missing and once when it is
+// back; without one the frame is described as if level (the cap about the body's z axis),
+// never dropped.
+class FrameAttitudes {
+ public:
+  // The frame's attitude, kept in `*storage`; null when there is none (counted in
+  // `*missing`).
+  const dsp::Attitude* At(drivers::AttitudeSource& source, const drivers::Frame& frame,
+                          dsp::Attitude* storage, std::uint64_t* missing) {
+    Result<dsp::Attitude> a = source.At(frame);
+    if (a.ok()) {
+      *storage = *a;
+      if (outage_)
+        std::fprintf(stderr, "skyloc: attitude %s is back at frame %llu\n", source.name(),
+                     static_cast<unsigned long long>(frame.sequence));
+      outage_ = false;
+      return storage;
+    }
+    ++*missing;
+    if (!outage_)
+      std::fprintf(stderr,
+                   "skyloc: warning: %s: frames are described as if level until it returns\n",
+                   a.status().message());
+    outage_ = true;
+    return nullptr;
+  }
+
+ private:
+  bool outage_ = false;
+};
+
+// The run of failed captures and frames the loop is riding out.
+struct Retries {
+  int errors_in_a_row = 0;
+  Nanoseconds unavailable_since{-1};
+};
+
+enum class AfterCaptureError : std::uint8_t { kRetry, kEnd, kFail };
+
+// A failed capture (`code`, the Capture() call between t0 and t1): kEnd when the source
+// ended (end_of_source) or a signal cut the wait; kRetry for a time-out or a corrupt frame
+// (up to max_consecutive_errors in a row) and for an unplugged camera within
+// reconnect_timeout, counted in capture_errors; else kFail, the error ends the run. No
+// frame means no localisation: the lines go to the safe state until frames flow again,
+// and the SeqSLAM sequence starts over (it needs consecutive frames).
+AfterCaptureError OnCaptureError(StatusCode code, Nanoseconds t0, Nanoseconds t1,
+                                 const LoopOptions& options, drivers::StatusOutput* status,
+                                 Pipeline& pipeline, Shown* shown, Retries* retries,
+                                 LoopSummary* s) {
+  if (code == StatusCode::kOutOfRange) {
+    s->end_of_source = true;
+    return AfterCaptureError::kEnd;
+  }
+  // A signal interrupted the wait: the loop condition sees the flag.
+  if (StopRequested())
+    return AfterCaptureError::kEnd;
+  if (status != nullptr)
+    (void)status->SafeState();
+  *shown = Shown::kNothing;
+  pipeline.ResetTracking();
+  if (code == StatusCode::kDataLoss && options.recorded)
+    return AfterCaptureError::kFail;
+  if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
+      ++retries->errors_in_a_row < options.max_consecutive_errors) {
+    ++s->capture_errors;
+    return AfterCaptureError::kRetry;
+  }
+  if (code == StatusCode::kUnavailable && options.reconnect_timeout.count() > 0) {
+    if (retries->unavailable_since.count() < 0)
+      retries->unavailable_since = t1;
+    if (t1 - retries->unavailable_since < options.reconnect_timeout) {
+      ++s->capture_errors;
+      // A driver that reports the loss without waiting must not make this spin.
+      if (t1 - t0 < std::chrono::milliseconds(10))
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      return AfterCaptureError::kRetry;
+    }
+  }
+  return AfterCaptureError::kFail;
+}
+
+// teach: the frame described and appended to the route (its time and pose with it); with
+// show_teaching the lines show that it is teaching.
+Status TeachFrame(const drivers::Frame& frame, const dsp::Attitude* attitude, bool show_teaching,
+                  drivers::StatusOutput* status, Pipeline& pipeline, RouteDbWriter& route,
+                  FrameResult* result, Shown* shown) {
+  SKYLOC_TRY(pipeline.Describe(frame.image, result, attitude));
+  RouteFrameMeta meta;
+  meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
+  meta.pose = frame.pose;
+  StageTimer timer(pipeline.latency(), pipeline.stages().output, pipeline.clock());
+  SKYLOC_TRY(route.Append(meta, pipeline.descriptor(), pipeline.strip()));
+  if (status != nullptr && show_teaching) {
+    SKYLOC_TRY(ShowTeaching(*status, pipeline.clock().Now()));
+    *shown = Shown::kTeaching;
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipeline& pipeline,
@@ -106,38 +233,20 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     LoopSummary* to;
     ~PublishSummary() { *to = from; }
   } publish{s, summary};
-  int errors_in_a_row = 0;
-  Nanoseconds unavailable_since{-1};
+  Retries retries;
   Nanoseconds first_timestamp{-1};
   Nanoseconds loop_start = clock.Now();
   std::uint64_t last_sequence = 0;
   bool have_sequence = false;
-  bool attitude_outage = false;   // warned about; cleared when an attitude comes back
+  FrameAttitudes attitudes;
   Shown shown = Shown::kNothing;  // what the caller left on the lines is theirs
 
   while (!StopRequested() && (options.max_frames == 0 || s.frames < options.max_frames)) {
-    if (TakeReportRequest()) {
-      std::fprintf(stderr, "skyloc: latency after %llu frames (SIGUSR1; the run goes on):\n",
-                   static_cast<unsigned long long>(s.frames));
-      latency.Print(stderr);
-      if (options.devices != nullptr)
-        options.devices->Print(stderr);
-    }
+    PrintReportIfAsked(latency, options, s.frames);
     if (options.button != nullptr && status != nullptr) {
-      for (;;) {
-        Result<drivers::ButtonEvent> edge = status->ReadButtonEvent();
-        if (!edge.ok()) {
-          if (edge.status().code() == StatusCode::kDeadlineExceeded)
-            break;  // no edge pending
-          Status failed = edge.status();
-          return failed.AddContext("the teach button");
-        }
-        options.button->OnEdge(*edge);
-      }
-      if (options.button->TakePress(clock.Now())) {
-        s.button_pressed = true;
+      SKYLOC_TRY_ASSIGN(s.button_pressed, ButtonPressed(*status, *options.button, clock));
+      if (s.button_pressed)
         break;
-      }
     }
     const Nanoseconds t0 = clock.Now();
     Status lines_failed;
@@ -146,45 +255,17 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     const Nanoseconds t1 = clock.Now();
     SKYLOC_TRY(lines_failed);
     if (!captured.ok()) {
-      const StatusCode code = captured.status().code();
-      if (code == StatusCode::kOutOfRange) {
-        s.end_of_source = true;
+      const AfterCaptureError after = OnCaptureError(captured.status().code(), t0, t1, options,
+                                                     status, pipeline, &shown, &retries, &s);
+      if (after == AfterCaptureError::kEnd)
         break;
-      }
-      // A signal interrupted the wait: the loop condition sees the flag.
-      if (StopRequested())
-        break;
-      // No frame means no localisation: the lines go to the safe state until frames flow
-      // again, and the SeqSLAM sequence starts over (it needs consecutive frames).
-      if (status != nullptr)
-        (void)status->SafeState();
-      shown = Shown::kNothing;
-      pipeline.ResetTracking();
-      if (code == StatusCode::kDataLoss && options.recorded) {
-        return captured.status();
-      }
-      if ((code == StatusCode::kDeadlineExceeded || code == StatusCode::kDataLoss) &&
-          ++errors_in_a_row < options.max_consecutive_errors) {
-        ++s.capture_errors;
+      if (after == AfterCaptureError::kRetry)
         continue;
-      }
-      if (code == StatusCode::kUnavailable && options.reconnect_timeout.count() > 0) {
-        if (unavailable_since.count() < 0)
-          unavailable_since = t1;
-        if (t1 - unavailable_since < options.reconnect_timeout) {
-          ++s.capture_errors;
-          // A driver that reports the loss without waiting must not make this spin.
-          if (t1 - t0 < std::chrono::milliseconds(10))
-            std::this_thread::sleep_for(std::chrono::milliseconds(50));
-          continue;
-        }
-      }
       // Every Capture() error names its camera (drivers/camera.h, checked by the camera
       // compliance test), so the message already says which device failed.
       return captured.status();
     }
-    errors_in_a_row = 0;
-    unavailable_since = Nanoseconds{-1};
+    retries = Retries{};
     latency.Record(pipeline.stages().capture, t1 - t0);
     const drivers::Frame& frame = *captured;
 
@@ -206,51 +287,24 @@ Status RunFrameLoop(drivers::Camera& camera, drivers::StatusOutput* status, Pipe
     FrameResult result;
     result.frame = frame.sequence;
     result.timestamp = frame.timestamp;
-    // The attitude at the frame's time; without one the frame is described as if level
-    // (the cap about the body's z axis), never dropped.
     dsp::Attitude frame_attitude;
-    const dsp::Attitude* attitude_used = nullptr;
-    if (attitude != nullptr && pipeline.uses_attitude()) {
-      Result<dsp::Attitude> a = attitude->At(frame);
-      if (a.ok()) {
-        frame_attitude = *a;
-        attitude_used = &frame_attitude;
-        if (attitude_outage)
-          std::fprintf(stderr, "skyloc: attitude %s is back at frame %llu\n", attitude->name(),
-                       static_cast<unsigned long long>(frame.sequence));
-        attitude_outage = false;
-      } else {
-        ++s.attitude_missing;
-        if (!attitude_outage)
-          std::fprintf(stderr,
-                       "skyloc: warning: %s: frames are described as if level until it returns\n",
-                       a.status().message());
-        attitude_outage = true;
-      }
-    }
+    const dsp::Attitude* attitude_used =
+        attitude != nullptr && pipeline.uses_attitude()
+            ? attitudes.At(*attitude, frame, &frame_attitude, &s.attitude_missing)
+            : nullptr;
     if (options.recorder != nullptr)
       (void)options.recorder->Submit(frame, attitude_used);  // dropped frames are counted
     if (options.mode == LoopMode::kRecord || options.mode == LoopMode::kWaitForButton) {
       result.matched = false;  // the recorder has the frame; nothing else to do
     } else if (options.mode == LoopMode::kTeach) {
-      SKYLOC_TRY(pipeline.Describe(frame.image, &result, attitude_used));
-      RouteFrameMeta meta;
-      meta.timestamp_ns = static_cast<std::uint64_t>(frame.timestamp.count());
-      meta.pose = frame.pose;
-      {
-        StageTimer timer(latency, pipeline.stages().output, clock);
-        SKYLOC_TRY(route->Append(meta, pipeline.descriptor(), pipeline.strip()));
-        if (status != nullptr && options.show_teaching) {
-          SKYLOC_TRY(ShowTeaching(*status, clock.Now()));
-          shown = Shown::kTeaching;
-        }
-      }
+      SKYLOC_TRY(TeachFrame(frame, attitude_used, options.show_teaching, status, pipeline, *route,
+                            &result, &shown));
     } else {
       Status st = pipeline.Localise(frame, &result, attitude_used);
       if (!st.ok()) {
         // A frame the descriptor rejects (wrong size from a misbehaving driver) is
         // skipped like a corrupt capture; the next frame may be fine.
-        if (options.recorded || ++errors_in_a_row >= options.max_consecutive_errors) {
+        if (options.recorded || ++retries.errors_in_a_row >= options.max_consecutive_errors) {
           return st;
         }
         ++s.capture_errors;

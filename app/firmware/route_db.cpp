@@ -251,181 +251,13 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
-// The lens record
+// Loading
 
 namespace {
 
-struct LensDiff {
-  // Whole items only, short enough that the fix and the caller's path still fit the
-  // 240-character Status message; the rest is counted.
-  static constexpr std::size_t kRoom = 100;
-  char text[kRoom + 1] = {};
-  std::size_t used = 0;
-  int count = 0;
-  int left_out = 0;
-};
-
-// Appends "; " and one difference if it fits whole, else counts it as left out.
-[[gnu::format(printf, 2, 3)]] void AddLensDiff(LensDiff* d, const char* format, ...) {
-  ++d->count;
-  char item[96];
-  std::va_list args;
-  va_start(args, format);
-  const int n = std::vsnprintf(item, sizeof item, format, args);
-  va_end(args);
-  const std::size_t separator = d->used > 0 ? 2 : 0;
-  if (n < 0 || d->used + separator + static_cast<std::size_t>(n) > LensDiff::kRoom) {
-    ++d->left_out;
-    return;
-  }
-  std::snprintf(d->text + d->used, sizeof d->text - d->used, "%s%s", separator > 0 ? "; " : "",
-                item);
-  d->used += separator + static_cast<std::size_t>(n);
-}
-
-}  // namespace
-
-const char* RouteDbLensModelName(std::uint32_t model) {
-  static constexpr const char* kNames[] = {"equidistant", "equisolid",       "kannala_brandt",
-                                           "ocamcalib",   "equirectangular", "pinhole"};
-  return model < std::size(kNames) ? kNames[model] : "unknown";
-}
-
-Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now) {
-  // What differs, in words, taught value first; as much as fits the Status message.
-  LensDiff d;
-  auto near = [](double a, double b, double tolerance) {
-    return std::fabs(a - b) <= tolerance;  // false for NaN
-  };
-  auto near_relative = [](double a, double b) {
-    return std::fabs(a - b) <=
-           kRouteDbLensRelativeTolerance * std::max(std::fabs(a), std::fabs(b)) + 1e-12;
-  };
-  if (taught.model != now.model)
-    AddLensDiff(&d, "model %s vs %s", RouteDbLensModelName(taught.model),
-                RouteDbLensModelName(now.model));
-  if (taught.width != now.width || taught.height != now.height)
-    AddLensDiff(&d, "image size %ux%u vs %ux%u", taught.width, taught.height, now.width,
-                now.height);
-  if (!near(taught.fov_deg, now.fov_deg, kRouteDbLensDegreeTolerance))
-    AddLensDiff(&d, "fov %.2f vs %.2f degrees", taught.fov_deg, now.fov_deg);
-  if (!near(taught.centre_x, now.centre_x, kRouteDbLensPixelTolerance))
-    AddLensDiff(&d, "centre x %.2f vs %.2f px", taught.centre_x, now.centre_x);
-  if (!near(taught.centre_y, now.centre_y, kRouteDbLensPixelTolerance))
-    AddLensDiff(&d, "centre y %.2f vs %.2f px", taught.centre_y, now.centre_y);
-  if (!near(taught.radius_px, now.radius_px, kRouteDbLensPixelTolerance))
-    AddLensDiff(&d, "radius %.2f vs %.2f px", taught.radius_px, now.radius_px);
-  if (!near_relative(taught.fx, now.fx) || !near_relative(taught.fy, now.fy))
-    AddLensDiff(&d, "fx/fy %g/%g vs %g/%g px", taught.fx, taught.fy, now.fx, now.fy);
-  for (std::size_t i = 0; i < taught.k.size(); ++i) {
-    if (!near_relative(taught.k[i], now.k[i]))
-      AddLensDiff(&d, "k%zu %g vs %g", i + 1, taught.k[i], now.k[i]);
-  }
-  if (taught.ocam_hash != now.ocam_hash)
-    AddLensDiff(&d, "OCamCalib polynomials (hash %016llx vs %016llx)",
-                static_cast<unsigned long long>(taught.ocam_hash),
-                static_cast<unsigned long long>(now.ocam_hash));
-  const double taught_mount[] = {taught.roll_deg, taught.pitch_deg, taught.yaw_deg};
-  const double now_mount[] = {now.roll_deg, now.pitch_deg, now.yaw_deg};
-  const char* mount_names[] = {"roll", "pitch", "yaw"};
-  for (std::size_t i = 0; i < 3; ++i) {
-    if (!near(taught_mount[i], now_mount[i], kRouteDbLensDegreeTolerance))
-      AddLensDiff(&d, "mount %s %.2f vs %.2f degrees", mount_names[i], taught_mount[i],
-                  now_mount[i]);
-  }
-  if (d.count == 0)
-    return Status::Ok();
-  // Short: the Status holds 240 characters and the caller puts the path in front.
-  return Status::Error(StatusCode::kFailedPrecondition,
-                       "lens differs (taught vs now): %s%s: use the camera file it was taught "
-                       "with, or teach again",
-                       d.text, d.left_out > 0 ? "; and more" : "");
-}
-
-void FormatRouteDbLens(const RouteDbLens& l, char* out, std::size_t size) {
-  if (!l.known) {
-    std::snprintf(out, size, "not stored (format older than version 3: only the lens hash)");
-    return;
-  }
-  const int n = std::snprintf(
-      out, size,
-      "%s %ux%u, fov %.2f degrees, centre %.2f %.2f px, radius %.2f px, mount roll %.2f "
-      "pitch %.2f yaw %.2f degrees",
-      RouteDbLensModelName(l.model), l.width, l.height, l.fov_deg, l.centre_x, l.centre_y,
-      l.radius_px, l.roll_deg, l.pitch_deg, l.yaw_deg);
-  if (n < 0 || static_cast<std::size_t>(n) >= size)
-    return;
-  const auto used = static_cast<std::size_t>(n);
-  if (l.fx != 0 || l.fy != 0) {
-    std::snprintf(out + used, size - used, ", fx %.6g fy %.6g, k %.6g %.6g %.6g %.6g", l.fx, l.fy,
-                  l.k[0], l.k[1], l.k[2], l.k[3]);
-  } else if (l.ocam_hash != 0) {
-    std::snprintf(out + used, size - used, ", OCamCalib polynomials hash %016llx",
-                  static_cast<unsigned long long>(l.ocam_hash));
-  }
-}
-
-// ---------------------------------------------------------------------------------------
-// RouteFrames
-
-Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns,
-                             RouteSink* sink) {
-  sink_ = sink;
-  const std::size_t kept = sink != nullptr ? 1 : capacity;
-  SKYLOC_TRY(descriptors_.Allocate(kept * dim));
-  SKYLOC_TRY(strips_.Allocate(kept * strip_columns));
-  SKYLOC_TRY(meta_.Allocate(capacity));
-  dim_ = dim;
-  strip_columns_ = strip_columns;
-  Clear();
-  return Status::Ok();
-}
-
-bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
-                         std::span<const std::uint8_t> strip) {
-  if (descriptor.size() != dim_ || (!strip.empty() && strip.size() != strip_columns_))
-    return false;
-  const Slot slot = Emplace(meta, !strip.empty());
-  if (slot.descriptor.empty())
-    return false;
-  std::memcpy(slot.descriptor.data(), descriptor.data(), slot.descriptor.size_bytes());
-  if (!strip.empty())
-    std::memcpy(slot.strip.data(), strip.data(), strip.size());
-  if (!Complete(slot).ok()) {
-    --size_;  // the sink refused it (full): the frame is not part of the route
-    return false;
-  }
-  return true;
-}
-
-Status RouteFrames::Complete(const Slot& slot) {
-  if (sink_ == nullptr)
-    return Status::Ok();
-  return sink_->AddFrame(slot.descriptor, slot.strip);
-}
-
-RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_strip) {
-  if (size_ >= meta_.size() || (with_strip && strip_columns_ == 0))
-    return {};
-  if (size_ == 0)
-    has_strips_ = with_strip;
-  else if (with_strip != has_strips_)
-    return {};
-  meta_[size_] = meta;
-  Slot slot;
-  slot.descriptor = {descriptors_.data() + (sink_ != nullptr ? 0 : size_ * dim_), dim_};
-  if (with_strip)
-    slot.strip = {strips_.data() + (sink_ != nullptr ? 0 : size_ * strip_columns_), strip_columns_};
-  ++size_;
-  return slot;
-}
-
-// ---------------------------------------------------------------------------------------
-// Loading
-
-Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
-                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report) {
-  RouteDbLoadReport r;
+// The header, the lens record and the strip record: the file's version and settings into
+// `r`, each checked (checksums, sizes); the chunks are not read.
+Status ParseRouteDbHeader(std::span<const std::uint8_t> bytes, RouteDbLoadReport* r) {
   const std::size_t size = bytes.size();
   const std::uint8_t* b = bytes.data();
   if (size < kRouteDbHeaderBytes) {
@@ -465,8 +297,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                          "lens record (offset %zu): checksum mismatch, the file is corrupt",
                          kRouteDbHeaderBytes);
   }
-  r.version = version;
-  RouteDbSettings& s = r.settings;
+  r->version = version;
+  RouteDbSettings& s = r->settings;
   s.descriptor_kind = LoadBytes<std::uint32_t>(b + 16);
   s.bands = LoadBytes<std::uint32_t>(b + 20);
   s.rings = LoadBytes<std::uint32_t>(b + 24);
@@ -499,6 +331,91 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                          "invalid",
                          s.dim);
   }
+  return Status::Ok();
+}
+
+// A frames chunk's `count` records at `payload` appended to `out` (its strips when
+// `keep_strips`); kResourceExhausted when `out` is full (`chunk` names the chunk).
+Status AppendRecords(const std::uint8_t* payload, std::uint32_t count, std::size_t record_bytes,
+                     std::uint32_t dim, bool keep_strips, std::size_t chunk, RouteFrames* out) {
+  if (out->size() + count > out->capacity()) {
+    return Status::Error(StatusCode::kResourceExhausted,
+                         "the route has more than %zu frames (chunk %zu): raise [capacities] "
+                         "route_frames",
+                         out->capacity(), chunk);
+  }
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
+    RouteFrameMeta meta;
+    meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
+    if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0)
+      meta.pose = LoadPose(rec + 16);
+    // Copied byte-wise: the input need not be aligned for float.
+    const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
+    if (slot.descriptor.size() != dim)
+      return Status::Error(StatusCode::kInternal, "route frames rejected a record");
+    std::memcpy(slot.descriptor.data(), rec + kRouteDbRecordFixedBytes,
+                slot.descriptor.size_bytes());
+    if (keep_strips)
+      std::memcpy(slot.strip.data(), rec + kRouteDbRecordFixedBytes + 4 * std::size_t{dim},
+                  slot.strip.size());
+    if (Status added = out->Complete(slot); !added.ok()) {
+      return Status::Error(added.code(), "route frame %zu: %s", out->size() - 1, added.message());
+    }
+  }
+  return Status::Ok();
+}
+
+// After the chunks: what `policy` makes of damage (`problem`, found at `offset`), of bytes
+// after the commit record and of a missing commit record; damage kept is counted in `r`.
+Status CheckEndOfChunks(std::span<const std::uint8_t> bytes, const Status& problem,
+                        std::size_t offset, RouteDbLoadPolicy policy, RouteDbLoadReport* r) {
+  if (!problem.ok()) {
+    // Damage followed by an intact chunk header is in the middle of the route: dropping
+    // the tail would hide the frames after it, so only --salvage does that.
+    std::size_t intact_after = 0;
+    for (std::size_t o = offset + 4; o + kRouteDbChunkHeaderBytes <= bytes.size(); o += 4) {
+      if (ChunkHeaderIntact(bytes.data() + o)) {
+        intact_after = o;
+        break;
+      }
+    }
+    if (intact_after != 0 && policy != RouteDbLoadPolicy::kSalvage) {
+      // Short: the Status holds 240 characters and the caller puts the path in front.
+      return Status::Error(StatusCode::kDataLoss,
+                           "%s; intact data follows at offset %zu: damaged mid-file, not cut "
+                           "short; 'route recover --salvage' keeps the %zu frames before it",
+                           problem.message(), intact_after, r->frames);
+    }
+    if (policy == RouteDbLoadPolicy::kStrict)
+      return problem;
+    r->dropped_bytes = bytes.size() - r->valid_bytes;
+    r->damaged_mid_file = intact_after != 0;
+  } else if (r->trailing_bytes > 0 && policy == RouteDbLoadPolicy::kStrict) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "%zu trailing bytes after the commit record at offset %zu: the %zu "
+                         "frames are complete but something was appended; 'skyloc route "
+                         "recover' cuts the trailing bytes off",
+                         r->trailing_bytes, r->valid_bytes, r->frames);
+  } else if (!r->committed && policy == RouteDbLoadPolicy::kStrict) {
+    return Status::Error(StatusCode::kDataLoss,
+                         "no commit record after chunk %zu (offset %zu): teach was interrupted "
+                         "or the file truncated; 'skyloc route recover' keeps its %zu frames",
+                         r->chunks, r->valid_bytes, r->frames);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report) {
+  RouteDbLoadReport r;
+  SKYLOC_TRY(ParseRouteDbHeader(bytes, &r));
+  const std::size_t size = bytes.size();
+  const std::uint8_t* b = bytes.data();
+  const RouteDbSettings& s = r.settings;
+  const std::size_t data_offset = RouteDbDataOffset(r.version);
   if (expected != nullptr)
     SKYLOC_TRY(CheckSettings(s, *expected));
   if (out != nullptr) {
@@ -579,34 +496,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                               chunk, offset, r.frames, r.frames + count - 1);
       break;
     }
-    if (out != nullptr) {
-      if (out->size() + count > out->capacity()) {
-        return Status::Error(StatusCode::kResourceExhausted,
-                             "the route has more than %zu frames (chunk %zu): raise [capacities] "
-                             "route_frames",
-                             out->capacity(), chunk);
-      }
-      for (std::uint32_t i = 0; i < count; ++i) {
-        const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
-        RouteFrameMeta meta;
-        meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
-        if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0)
-          meta.pose = LoadPose(rec + 16);
-        // Copied byte-wise: the input need not be aligned for float.
-        const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
-        if (slot.descriptor.size() != s.dim)
-          return Status::Error(StatusCode::kInternal, "route frames rejected a record");
-        std::memcpy(slot.descriptor.data(), rec + kRouteDbRecordFixedBytes,
-                    slot.descriptor.size_bytes());
-        if (keep_strips)
-          std::memcpy(slot.strip.data(), rec + kRouteDbRecordFixedBytes + 4 * std::size_t{s.dim},
-                      slot.strip.size());
-        if (Status added = out->Complete(slot); !added.ok()) {
-          return Status::Error(added.code(), "route frame %zu: %s", out->size() - 1,
-                               added.message());
-        }
-      }
-    }
+    if (out != nullptr)
+      SKYLOC_TRY(AppendRecords(payload, count, record_bytes, s.dim, keep_strips, chunk, out));
     r.frames += count;
     ++r.chunks;
     offset += kRouteDbChunkHeaderBytes + payload_bytes;
@@ -615,51 +506,13 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   if (r.valid_bytes == 0)
     r.valid_bytes = data_offset;
 
-  if (!problem.ok()) {
-    // Damage followed by an intact chunk header is in the middle of the route: dropping
-    // the tail would hide the frames after it, so only --salvage does that.
-    std::size_t intact_after = 0;
-    for (std::size_t o = offset + 4; o + kRouteDbChunkHeaderBytes <= size; o += 4) {
-      if (ChunkHeaderIntact(b + o)) {
-        intact_after = o;
-        break;
-      }
-    }
-    if (intact_after != 0 && policy != RouteDbLoadPolicy::kSalvage) {
-      // Short: the Status holds 240 characters and the caller puts the path in front.
-      return Status::Error(StatusCode::kDataLoss,
-                           "%s; intact data follows at offset %zu: damaged mid-file, not cut "
-                           "short; 'route recover --salvage' keeps the %zu frames before it",
-                           problem.message(), intact_after, r.frames);
-    }
-    if (policy == RouteDbLoadPolicy::kStrict)
-      return problem;
-    r.dropped_bytes = size - r.valid_bytes;
-    r.damaged_mid_file = intact_after != 0;
-  } else if (r.trailing_bytes > 0 && policy == RouteDbLoadPolicy::kStrict) {
-    return Status::Error(StatusCode::kDataLoss,
-                         "%zu trailing bytes after the commit record at offset %zu: the %zu "
-                         "frames are complete but something was appended; 'skyloc route "
-                         "recover' cuts the trailing bytes off",
-                         r.trailing_bytes, r.valid_bytes, r.frames);
-  } else if (!r.committed && policy == RouteDbLoadPolicy::kStrict) {
-    return Status::Error(StatusCode::kDataLoss,
-                         "no commit record after chunk %zu (offset %zu): teach was interrupted "
-                         "or the file truncated; 'skyloc route recover' keeps its %zu frames",
-                         r.chunks, r.valid_bytes, r.frames);
-  }
+  SKYLOC_TRY(CheckEndOfChunks(bytes, problem, offset, policy, &r));
   if (report != nullptr)
     *report = r;
   return Status::Ok();
 }
 
 namespace {
-
-Status NotARegularFile(const char* path, mode_t mode) {
-  return Status::Error(StatusCode::kInvalidArgument,
-                       "%s is %s, not a route database file: name a regular file", path,
-                       FileKindName(mode));
-}
 
 Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
   struct stat st {};
@@ -865,17 +718,10 @@ Status RouteDbWriter::CreateLocked(const char* path, const RouteDbSettings& sett
   // No teach holds the lock, so a FILE.tmp here was left by one that was killed: say what
   // it held before it is replaced.
   replaced_tmp_ = InspectRouteTmp(path);
-  // O_NOFOLLOW/O_NONBLOCK + the check below: a symlink or FIFO planted at FILE.tmp is
-  // refused, not followed or waited on.
-  UniqueFd fd(
-      ::open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
-  if (!fd.is_valid())
-    return Status::FromErrno(errno, "cannot create %s", tmp);
-  struct stat created {};
-  if (::fstat(fd.get(), &created) != 0)
-    return Status::FromErrno(errno, "cannot stat %s", tmp);
-  if (!S_ISREG(created.st_mode))
-    return NotARegularFile(tmp, created.st_mode);
+  // A symlink or FIFO planted at FILE.tmp is refused, not followed or waited on.
+  UniqueFd fd;
+  SKYLOC_TRY(CreateRegularFile(tmp, O_WRONLY | O_TRUNC, 0644, "the teach's temporary file",
+                               "remove it so a teach can write the route", &fd));
   // Held until the writer closes: `route recover` refuses the file meanwhile.
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0)
     return Status::FromErrno(errno, "cannot lock %s", tmp);

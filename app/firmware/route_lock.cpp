@@ -50,17 +50,12 @@ Status RouteLock::Acquire(const char* route_path) {
   // The holder removes the file while it holds the lock; a lock taken on a file that was
   // removed (or replaced) meanwhile excludes nobody, so it is let go and taken again.
   for (int attempt = 0; attempt < 100; ++attempt) {
-    UniqueFd fd(::open(lock_path, O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644));
-    if (!fd.is_valid())
-      return Status::FromErrno(errno, "cannot create the route's lock file %s", lock_path);
+    UniqueFd fd;
+    SKYLOC_TRY(CreateRegularFile(lock_path, O_RDWR, 0644, "the route's lock file",
+                                 "remove it so a teach can lock the route", &fd));
     struct stat opened {};
     if (::fstat(fd.get(), &opened) != 0)
       return Status::FromErrno(errno, "cannot stat %s", lock_path);
-    if (!S_ISREG(opened.st_mode))
-      return Status::Error(StatusCode::kInvalidArgument,
-                           "%s is %s, not the route's lock file: remove it so a teach can lock "
-                           "the route",
-                           lock_path, FileKindName(opened.st_mode));
     struct flock fl = WholeFile(F_WRLCK);
     if (::fcntl(fd.get(), F_OFD_SETLK, &fl) != 0) {
       const int e = errno;

@@ -19,7 +19,7 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
   } else if (cam.kind == CameraKind::kSim) {
     std::snprintf(camera, sizeof camera,
                   "camera sim (SIMULATED world \"%s\", seed %llu), %s %dx%d @ %g fps",
-                  cam.sim.world.c_str(), static_cast<unsigned long long>(cam.sim.seed), format,
+                  cam.sim.name.c_str(), static_cast<unsigned long long>(cam.sim.seed), format,
                   info.width, info.height, cam.fps);
   } else {
     std::snprintf(camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", NameOf(cam.kind),

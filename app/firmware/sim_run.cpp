@@ -4,32 +4,28 @@ namespace skyloc::firmware {
 
 SimRunConfig SimulateDefaults(bool seville) {
   SimRunConfig run;
-  run.sampling = SimSampling::kTime;
+  run.world.sampling = SimSampling::kTime;
   if (seville) {
-    run.speed.cruise_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
+    run.world.speed.cruise_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
     run.camera_height_m = 0.01;
   }
   return run;
 }
 
-SimRunConfig ConfiguredSimRun(const SimRunConfig& configured, const SimRunConfig& command_line) {
+SimRunConfig ConfiguredSimRun(const SimWorldConfig& configured, const SimRunConfig& command_line) {
   SimRunConfig run = command_line;
-  run.world = configured.world;
-  run.seed = configured.seed;
-  run.sampling = configured.sampling;
-  run.spacing_m = configured.spacing_m;
-  run.speed_jitter = configured.speed_jitter;
-  run.speed = configured.speed;
+  run.world = configured;
   return run;
 }
 
-sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps) {
-  sim::MotionConfig motion;
+sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps,
+                                  const sim::MotionConfig& base) {
+  sim::MotionConfig motion = base;
   motion.sampling =
-      run.sampling == SimSampling::kTime ? sim::Sampling::kTime : sim::Sampling::kDistance;
-  motion.frame_spacing_m = run.spacing_m;
-  motion.speed_jitter = run.speed_jitter;
-  motion.speed = run.speed;
+      run.world.sampling == SimSampling::kTime ? sim::Sampling::kTime : sim::Sampling::kDistance;
+  motion.frame_spacing_m = run.world.spacing_m;
+  motion.speed_jitter = run.world.speed_jitter;
+  motion.speed = run.world.speed;
   motion.speed_ratio = run.speed_ratio;
   motion.fps = fps;
   motion.height_m = run.camera_height_m;

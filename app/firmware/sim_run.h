@@ -16,11 +16,13 @@ SimRunConfig SimulateDefaults(bool seville);
 // A firmware run on the simulated camera: the world and its sampling from the
 // configuration's [camera] sim_* keys, the rest (run seed, attitude, lighting, speed
 // ratio, camera height) from the command line's SIM flags.
-SimRunConfig ConfiguredSimRun(const SimRunConfig& configured, const SimRunConfig& command_line);
+SimRunConfig ConfiguredSimRun(const SimWorldConfig& configured, const SimRunConfig& command_line);
 
-// The motion of the run; `fps` is the camera's frame rate (kTime samples at it, and it
-// stamps the frames).
-sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps);
+// The motion of the run over `base`, which gives what a run does not describe (the zigzag
+// period, lateral wander, start and frame limit: `skyloc simulate`'s own options); `fps`
+// is the camera's frame rate (kTime samples at it, and it stamps the frames).
+sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps,
+                                  const sim::MotionConfig& base = {});
 
 // The lighting preset `run.lighting` with the run's seed; kInvalidArgument for a name
 // that is not dawn, noon or overcast.

@@ -120,10 +120,9 @@ ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_d
   return o;
 }
 
-}  // namespace
-
-Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
-                   const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
+// A row's motion (its own tilt, bumps, zigzag and seed) sampled as the experiment's options
+// say: sampling, spacing or speed profile, frame rate, camera height and frame limit.
+MotionConfig RowMotion(const RunSpec& spec, const ExperimentOptions& options) {
   MotionConfig motion = spec.motion;
   motion.sampling = options.sampling;
   motion.frame_spacing_m = options.spacing_m;
@@ -131,6 +130,14 @@ Status DescribeRun(const World& world, std::span<const Point2> route, bool close
   motion.speed = options.speed;
   motion.height_m = options.camera_height_m;
   motion.max_frames = options.max_frames;
+  return motion;
+}
+
+}  // namespace
+
+Status DescribeRun(const World& world, std::span<const Point2> route, bool closed,
+                   const RunSpec& spec, const ExperimentOptions& options, RunDescriptors* out) {
+  const MotionConfig motion = RowMotion(spec, options);
   out->label = spec.label;
   SKYLOC_TRY(BuildTrajectory(route, closed, motion, &out->trajectory));
   out->closed_loop = closed && motion.max_frames == 0;

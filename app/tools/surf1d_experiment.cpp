@@ -116,38 +116,37 @@ bool PinholeHorizonRow(const dsp::Lens& lens, const drivers::Pose& pose, double 
   return *row >= -0.5 && *row <= lens.params().height - 0.5;
 }
 
-Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraResult* forward,
-                           Surf1dCameraResult* fisheye, ProgressFn progress) {
-  const Surf1dExperimentOptions& o = options;
-  if (o.images_per_place < 4 || o.places < 1 || o.column_step < 1 || o.band_rows < 1)
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "surf1d experiment: need at least 4 images a place, 1 place, a column "
-                         "step and band rows of at least 1");
-  if (progress != nullptr)
-    progress("city world");
-  World world;
-  SKYLOC_TRY(MakeProceduralWorld(WorldKind::kCity, o.world_seed, &world));
-  const std::vector<Point2> places = Places(world, o.places);
-  const int per_place = o.images_per_place;
-  const auto total = static_cast<std::size_t>(per_place) * places.size();
-  auto pose_of = [&](std::size_t k) {
+namespace {
+
+// The shots of the experiment: `images_per_place` headings, evenly apart, at each place.
+struct Shots {
+  const Surf1dExperimentOptions& o;
+  std::vector<Point2> places;
+  std::size_t per_place() const { return static_cast<std::size_t>(o.images_per_place); }
+  std::size_t total() const { return per_place() * places.size(); }
+  drivers::Pose PoseOf(std::size_t k) const {
     drivers::Pose p;
-    const Point2& at = places[k / static_cast<std::size_t>(per_place)];
+    const Point2& at = places[k / per_place()];
     p.x_m = at.x;
     p.y_m = at.y;
     p.z_m = o.camera_height_m;
-    p.yaw_deg = 360.0 * static_cast<double>(k % static_cast<std::size_t>(per_place)) / per_place;
+    p.yaw_deg = 360.0 * static_cast<double>(k % per_place()) / o.images_per_place;
     return p;
-  };
-  auto heading_gap_deg = [&](std::size_t i, std::size_t j) {
-    const double d = std::fabs(pose_of(i).yaw_deg - pose_of(j).yaw_deg);
+  }
+  double HeadingGapDeg(std::size_t i, std::size_t j) const {
+    const double d = std::fabs(PoseOf(i).yaw_deg - PoseOf(j).yaw_deg);
     return std::min(d, 360.0 - d);
-  };
-  auto same_place = [&](std::size_t i, std::size_t j) {
-    return i / static_cast<std::size_t>(per_place) == j / static_cast<std::size_t>(per_place);
-  };
+  }
+  bool SamePlace(std::size_t i, std::size_t j) const { return i / per_place() == j / per_place(); }
+};
 
-  // ---- Forward pinhole camera --------------------------------------------------------
+// The forward pinhole camera: a strip along the horizon row of each shot, its features,
+// each pair of a place scored, and again without the partly overlapping non-matches.
+Status RunForward(const World& world, const Shots& shots, ProgressFn progress,
+                  Surf1dCameraResult* forward) {
+  const Surf1dExperimentOptions& o = shots.o;
+  const std::size_t total = shots.total();
+  auto same_place = [&](std::size_t i, std::size_t j) { return shots.SamePlace(i, j); };
   dsp::LensParams pinhole;
   pinhole.model = dsp::LensModel::kPinhole;
   pinhole.width = o.width;
@@ -173,9 +172,9 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   std::vector<ImageFeatures> images(total);
   double features = 0;
   for (std::size_t k = 0; k < total; ++k) {
-    if (progress != nullptr && k % static_cast<std::size_t>(per_place) == 0)
+    if (progress != nullptr && k % shots.per_place() == 0)
       progress("forward camera: rendering and extracting");
-    drivers::Pose pose = pose_of(k);
+    drivers::Pose pose = shots.PoseOf(k);
     pose.pitch_deg = o.pitch_deg + uniform(jitter);
     pose.roll_deg = uniform(jitter);
     SKYLOC_TRY(renderer.Render(pose, o.lighting, Spectrum::kVisible, k + 1, view));
@@ -222,7 +221,7 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
     progress("forward camera: matching pairs");
   SKYLOC_TRY(ScorePairs(
       images, n, o.match, same_place,
-      [&](std::size_t i, std::size_t j) { return heading_gap_deg(i, j) < o.match_below_deg; },
+      [&](std::size_t i, std::size_t j) { return shots.HeadingGapDeg(i, j) < o.match_below_deg; },
       forward));
 
   // The same scores without the partly overlapping non-matches.
@@ -230,9 +229,9 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   std::size_t pair = 0;
   for (std::size_t i = 0; i < total; ++i) {
     for (std::size_t j = i + 1; j < total; ++j) {
-      if (!same_place(i, j))
+      if (!shots.SamePlace(i, j))
         continue;
-      const double gap = heading_gap_deg(i, j);
+      const double gap = shots.HeadingGapDeg(i, j);
       if (gap < o.match_below_deg || gap >= o.fov_deg) {
         nn.push_back(forward->nn[pair]);
         ransac.push_back(forward->ransac[pair]);
@@ -247,7 +246,19 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
   forward->auc_ransac_disjoint =
       dsp::RocArea(std::span(roc).first(dsp::RocCurve(ransac, order, roc)));
 
-  // ---- Upward fisheye and its 360-degree strip ------------------------------------------
+  return Status::Ok();
+}
+
+// The upward fisheye: its 360-degree strip of each shot, its features, each pair of a place
+// scored (every pair of a place sees the same sky, turned).
+Status RunUpward(const World& world, const Shots& shots, ProgressFn progress,
+                 Surf1dCameraResult* fisheye) {
+  const Surf1dExperimentOptions& o = shots.o;
+  const std::size_t total = shots.total();
+  auto same_place = [&](std::size_t i, std::size_t j) { return shots.SamePlace(i, j); };
+  std::vector<dsp::Surf1dFeature> found(4096);
+  std::vector<ImageFeatures> images(total);
+  double features = 0;
   Renderer up;
   SKYLOC_TRY(up.Init(&world, DefaultSimLens(o.fisheye_width, o.fisheye_height)));
   dsp::HorizonStrip horizon;
@@ -264,11 +275,10 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
       drivers::OwnedImage::Allocate(o.fisheye_width, o.fisheye_height, dsp::PixelFormat::kRgb24));
   const dsp::MutableImageView view_up = frame_up.mutable_view();
   std::vector<float> strip_up(static_cast<std::size_t>(m));
-  features = 0;
   for (std::size_t k = 0; k < total; ++k) {
-    if (progress != nullptr && k % static_cast<std::size_t>(per_place) == 0)
+    if (progress != nullptr && k % shots.per_place() == 0)
       progress("upward fisheye: rendering and extracting");
-    SKYLOC_TRY(up.Render(pose_of(k), o.lighting, Spectrum::kVisible, k + 1, view_up));
+    SKYLOC_TRY(up.Render(shots.PoseOf(k), o.lighting, Spectrum::kVisible, k + 1, view_up));
     if (const dsp::HorizonStripError e = horizon.Extract(view_up, strip_up);
         e != dsp::HorizonStripError::kOk)
       return Status::Error(StatusCode::kInvalidArgument, "horizon strip: %s",
@@ -288,6 +298,24 @@ Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraR
     progress("upward fisheye: matching pairs");
   return ScorePairs(
       images, m, o.match, [](std::size_t, std::size_t) { return true; }, same_place, fisheye);
+}
+
+}  // namespace
+
+Status RunSurf1dExperiment(const Surf1dExperimentOptions& options, Surf1dCameraResult* forward,
+                           Surf1dCameraResult* fisheye, ProgressFn progress) {
+  const Surf1dExperimentOptions& o = options;
+  if (o.images_per_place < 4 || o.places < 1 || o.column_step < 1 || o.band_rows < 1)
+    return Status::Error(StatusCode::kInvalidArgument,
+                         "surf1d experiment: need at least 4 images a place, 1 place, a column "
+                         "step and band rows of at least 1");
+  if (progress != nullptr)
+    progress("city world");
+  World world;
+  SKYLOC_TRY(MakeProceduralWorld(WorldKind::kCity, o.world_seed, &world));
+  const Shots shots{o, Places(world, o.places)};
+  SKYLOC_TRY(RunForward(world, shots, progress, forward));
+  return RunUpward(world, shots, progress, fisheye);
 }
 
 }  // namespace skyloc::tools

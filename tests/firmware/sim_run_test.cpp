@@ -1,5 +1,6 @@
-// A simulated run: the configuration's sim_* keys, the command line's SIM flags and
-// `skyloc simulate` fill one SimRunConfig, and one conversion makes the simulator's motion.
+// A simulated run: the configuration's sim_* keys (its world), the command line's SIM flags
+// and `skyloc simulate` fill one SimRunConfig, and one conversion makes the simulator's
+// motion.
 #include "firmware/sim_run.h"
 
 #include <gtest/gtest.h>
@@ -11,19 +12,19 @@ namespace {
 
 SimRunConfig EveryFieldSet() {
   SimRunConfig r;
-  r.world = "forest";
-  r.seed = 7;
+  r.world.name = "forest";
+  r.world.seed = 7;
   r.run_seed = 9;
-  r.sampling = SimSampling::kTime;
-  r.spacing_m = 0.5;
-  r.speed_jitter = 0.1;
-  r.speed.cruise_mps = 2.5;
-  r.speed.band = 0.2;
-  r.speed.accel_mps2 = 0.75;
-  r.speed.start_stop_s = 3;
-  r.speed.stops = 4;
-  r.speed.stop_min_s = 1;
-  r.speed.stop_max_s = 5;
+  r.world.sampling = SimSampling::kTime;
+  r.world.spacing_m = 0.5;
+  r.world.speed_jitter = 0.1;
+  r.world.speed.cruise_mps = 2.5;
+  r.world.speed.band = 0.2;
+  r.world.speed.accel_mps2 = 0.75;
+  r.world.speed.start_stop_s = 3;
+  r.world.speed.stops = 4;
+  r.world.speed.stop_min_s = 1;
+  r.world.speed.stop_max_s = 5;
   r.speed_ratio = 1.5;
   r.camera_height_m = 2;
   r.tilt_deg = 10;
@@ -63,6 +64,24 @@ TEST(SimRun, MotionCarriesEveryField) {
   EXPECT_EQ(m.max_frames, 0);
 }
 
+// `skyloc simulate`'s own options ride in the base; the run overrides only what it
+// describes.
+TEST(SimRun, MotionKeepsTheBasesOwnFields) {
+  sim::MotionConfig base;
+  base.zigzag_period_m = 7;
+  base.lateral_m = 1.5;
+  base.start_m = 30;
+  base.max_frames = 99;
+  base.tilt_deg = 80;  // the run's: replaced
+  const sim::MotionConfig m = SimMotionConfig(EveryFieldSet(), 12.5, base);
+  EXPECT_EQ(m.zigzag_period_m, 7.0);
+  EXPECT_EQ(m.lateral_m, 1.5);
+  EXPECT_EQ(m.start_m, 30.0);
+  EXPECT_EQ(m.max_frames, 99);
+  EXPECT_EQ(m.tilt_deg, 10.0);
+  EXPECT_EQ(m.fps, 12.5);
+}
+
 // The defaults of a run are the simulator's: a default SimRunConfig moves as a default
 // MotionConfig does.
 TEST(SimRun, DefaultsAreTheSimulatorsDefaults) {
@@ -84,29 +103,27 @@ TEST(SimRun, DefaultsAreTheSimulatorsDefaults) {
 }
 
 TEST(SimRun, SimulateStartsInTimeAndSevilleIsAnAnt) {
-  EXPECT_EQ(SimulateDefaults(false).sampling, SimSampling::kTime);
-  EXPECT_EQ(SimulateDefaults(false).speed.cruise_mps, 1.0);
+  EXPECT_EQ(SimulateDefaults(false).world.sampling, SimSampling::kTime);
+  EXPECT_EQ(SimulateDefaults(false).world.speed.cruise_mps, 1.0);
   EXPECT_EQ(SimulateDefaults(false).camera_height_m, 1.0);
-  EXPECT_EQ(SimulateDefaults(true).speed.cruise_mps, 0.5);
+  EXPECT_EQ(SimulateDefaults(true).world.speed.cruise_mps, 0.5);
   EXPECT_EQ(SimulateDefaults(true).camera_height_m, 0.01);
 }
 
 // The world and its sampling are the configuration's; the run is the command line's.
 TEST(SimRun, ConfiguredRunTakesTheWorldFromTheConfigAndTheRunFromTheFlags) {
-  SimRunConfig configured = EveryFieldSet();
+  const SimWorldConfig configured = EveryFieldSet().world;
   SimRunConfig flags;
-  flags.world = "repetitive";  // not a flag: ignored
-  flags.sampling = SimSampling::kDistance;
+  flags.world.name = "repetitive";  // not a flag: ignored
+  flags.world.sampling = SimSampling::kDistance;
   flags.run_seed = 3;
   flags.tilt_deg = -5;
   flags.lighting = "overcast";
   flags.speed_ratio = 2;
   const SimRunConfig run = ConfiguredSimRun(configured, flags);
-  EXPECT_EQ(run.world, "forest");
-  EXPECT_EQ(run.seed, 7u);
-  EXPECT_EQ(run.sampling, SimSampling::kTime);
-  EXPECT_EQ(run.speed.cruise_mps, 2.5);
-  EXPECT_EQ(run.speed.stops, 4);
+  EXPECT_EQ(run.world, configured);
+  EXPECT_EQ(run.world.name, "forest");
+  EXPECT_EQ(run.world.sampling, SimSampling::kTime);
   EXPECT_EQ(run.run_seed, 3u);
   EXPECT_EQ(run.tilt_deg, -5.0);
   EXPECT_EQ(run.zigzag_deg, 0.0);
@@ -125,7 +142,7 @@ TEST(SimRun, LightingIsAPresetOrRefused) {
   EXPECT_NE(std::string(bad.status().message()).find("\"dusk\""), std::string::npos);
 }
 
-// The [camera] sim_* keys land in the one struct.
+// The [camera] sim_* keys fill the run's world.
 TEST(SimRun, ConfigKeysFillTheRun) {
   const Result<Config> c = ParseConfig(
       "[camera]\nsim_world = \"forest\"\nsim_seed = 5\nsim_sampling = \"time\"\n"
@@ -133,8 +150,8 @@ TEST(SimRun, ConfigKeysFillTheRun) {
       "sim_start_stop_s = 0\nsim_stops = 3\nsim_stop_min_s = 1\nsim_stop_max_s = 2\n",
       "robot.toml");
   ASSERT_TRUE(c.ok()) << c.status().message();
-  const SimRunConfig& s = c->camera.sim;
-  EXPECT_EQ(s.world, "forest");
+  const SimWorldConfig& s = c->camera.sim;
+  EXPECT_EQ(s.name, "forest");
   EXPECT_EQ(s.seed, 5u);
   EXPECT_EQ(s.sampling, SimSampling::kTime);
   EXPECT_EQ(s.speed.cruise_mps, 2.0);
@@ -144,7 +161,7 @@ TEST(SimRun, ConfigKeysFillTheRun) {
   EXPECT_EQ(s.speed.stops, 3);
   EXPECT_EQ(s.speed.stop_min_s, 1.0);
   EXPECT_EQ(s.speed.stop_max_s, 2.0);
-  EXPECT_EQ(DefaultConfig().camera.sim, SimRunConfig{});
+  EXPECT_EQ(DefaultConfig().camera.sim, SimRunConfig{}.world);
 }
 
 }  // namespace

@@ -80,7 +80,7 @@ TEST(DdsOutput, TheTypeIsNamedAsRos2NamesIt) {
 TEST(DdsOutput, ASubscriberSeesEveryFrameOfRepeatAsItsJsonLine) {
   const skyloc::testing::ScratchDir dir("skyloc-dds-");
   Config config = testing::SmallConfig();
-  config.camera.sim.world = "city";
+  config.camera.sim.name = "city";
   SessionArgs teach;
   teach.mode = LoopMode::kTeach;
   teach.route_path = dir.path() + "/route.db";
