@@ -34,13 +34,17 @@ SampleLutError SampleLut::Init(const Lens& lens, std::span<const double> ring_th
       return SampleLutError::kBadGrid;
   width_ = lens.params().width;
   height_ = lens.params().height;
-  if (width_ > 0xffff || height_ > 0xffff)
+  // Offsets into the sky plane and its padding are 32-bit.
+  if (width_ > 0xffff || height_ > 0xffff ||
+      (static_cast<std::uint64_t>(width_) + 1) * static_cast<std::uint64_t>(height_ + 1) >=
+          0xffffffffu)
     return SampleLutError::kSizeMismatch;
+  unseen_offset_ = static_cast<std::uint32_t>(width_) * static_cast<std::uint32_t>(height_);
   rings_ = static_cast<int>(ring_theta.size());
   n_phi_ = n_phi;
   taps_per_sample_ = k * k;
   tap_weight_ = 1.0f / static_cast<float>(taps_per_sample_);
-  taps_.assign(size() * static_cast<std::size_t>(taps_per_sample_), Tap{});
+  taps_.assign(size() * static_cast<std::size_t>(taps_per_sample_), UnseenTap());
 
   const bool wraps = lens.params().model == LensModel::kEquirectangular;
   const int half = k / 2;
@@ -77,20 +81,23 @@ SampleLutError SampleLut::Init(const Lens& lens, std::span<const double> ring_th
           // A tap is sky-capable only if the camera sees its pixel centre.
           if (!lens.PixelToCameraRay(x, y, &ray))
             continue;
-          *out = Tap{static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), 0, 0, 1, 0};
+          *out = Tap{static_cast<std::uint32_t>(y) * static_cast<std::uint32_t>(width_) +
+                         static_cast<std::uint32_t>(x),
+                     0, 0, 1, 0};
         }
       }
     }
   }
   visible_fraction_ = static_cast<double>(visible) / static_cast<double>(size());
+  PlanRuns(lens, taps_);
   return SampleLutError::kOk;
 }
 
-SampleLut::Tap SampleLut::BilinearTap(const Lens& lens, double px, double py) {
+SampleLut::Tap SampleLut::BilinearTap(const Lens& lens, double px, double py) const {
   const int width = lens.params().width;
   const int height = lens.params().height;
   if (width < 2 || height < 2)
-    return Tap{};
+    return UnseenTap();
   const bool wraps = lens.params().model == LensModel::kEquirectangular;
   if (wraps)
     px = std::fmod(std::fmod(px, width) + width, width);
@@ -100,7 +107,7 @@ SampleLut::Tap SampleLut::BilinearTap(const Lens& lens, double px, double py) {
     nx %= width;
   const auto ny = static_cast<int>(std::lround(py));
   if (nx < 0 || ny < 0 || nx >= width || ny >= height || !lens.PixelToCameraRay(nx, ny, &ray))
-    return Tap{};
+    return UnseenTap();
   // The block stays inside the image: a position within half a pixel of the border reads
   // the border pixels (on an equirectangular image's seam, the last column's value
   // continues to its edge instead of wrapping: half a pixel of one column).
@@ -108,16 +115,57 @@ SampleLut::Tap SampleLut::BilinearTap(const Lens& lens, double px, double py) {
   const double fy = std::clamp(py, 0.0, height - 1.0);
   const int x0 = std::min(static_cast<int>(fx), width - 2);
   const int y0 = std::min(static_cast<int>(fy), height - 2);
-  Tap tap{static_cast<std::uint16_t>(x0),
-          static_cast<std::uint16_t>(y0),
-          static_cast<std::uint8_t>(std::min(255.0, std::floor((fx - x0) * 256.0))),
-          static_cast<std::uint8_t>(std::min(255.0, std::floor((fy - y0) * 256.0))),
-          0,
-          0};
-  for (int b = 0; b < 4; ++b)
-    if (lens.PixelToCameraRay(x0 + (b & 1), y0 + (b >> 1), &ray))
-      tap.seen = static_cast<std::uint8_t>(tap.seen | (1 << b));
-  return tap;
+  // Which of the block's pixels the camera sees is the sky plane's business (PlanRuns).
+  return Tap{static_cast<std::uint32_t>(y0) * static_cast<std::uint32_t>(width) +
+                 static_cast<std::uint32_t>(x0),
+             static_cast<std::uint8_t>(std::min(255.0, std::floor((fx - x0) * 256.0))),
+             static_cast<std::uint8_t>(std::min(255.0, std::floor((fy - y0) * 256.0))), 1, 0};
+}
+
+void SampleLut::PlanRuns(const Lens& lens, std::span<const Tap> taps) {
+  const auto width = static_cast<std::size_t>(width_);
+  const auto height = static_cast<std::size_t>(height_);
+  const std::size_t plane = width * height;
+  // Per row, the first and the last pixel a tap reads.
+  std::vector<std::size_t> first(height, width), last(height, 0);
+  auto read = [&](std::size_t offset) {
+    if (offset >= plane)
+      return;
+    const std::size_t y = offset / width, x = offset % width;
+    first[y] = std::min(first[y], x);
+    last[y] = std::max(last[y], x);
+  };
+  const bool bilinear = taps_per_sample_ == 1;
+  for (const Tap& tap : taps) {
+    if (tap.seen == 0)
+      continue;
+    read(tap.offset);
+    if (bilinear) {
+      read(tap.offset + 1);
+      read(tap.offset + width);
+      read(tap.offset + width + 1);
+    }
+  }
+  // Between them, the runs of pixels the camera sees: one a row for every lens model (its
+  // view is convex along a row), but nothing here relies on it.
+  runs_.clear();
+  Eigen::Vector3d ray;
+  for (std::size_t y = 0; y < height; ++y) {
+    Run run;
+    for (std::size_t x = first[y]; x <= last[y] && x < width; ++x) {
+      if (lens.PixelToCameraRay(static_cast<int>(x), static_cast<int>(y), &ray)) {
+        if (run.length == 0)
+          run = Run{static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), 0};
+        ++run.length;
+      } else if (run.length > 0) {
+        runs_.push_back(run);
+        run = Run{};
+      }
+    }
+    if (run.length > 0)
+      runs_.push_back(run);
+  }
+  sky_.assign(plane + width + 2, 0);
 }
 
 SampleLutError SampleLut::Init(const Lens& lens, const ShGrid& grid,
@@ -153,7 +201,7 @@ SampleLutError SampleLut::InitOriented(const Lens& lens, const ShGrid& grid,
   table_rho_ = static_cast<float>(rho);
   table_scale_ = static_cast<float>(scale);
   table_.assign(static_cast<std::size_t>(table_cells_) * static_cast<std::size_t>(table_cells_),
-                Tap{});
+                UnseenTap());
   for (int b = 0; b < table_cells_; ++b) {
     const double v = (b + 0.5) / scale - rho;
     for (int a = 0; a < table_cells_; ++a) {
@@ -183,6 +231,8 @@ SampleLutError SampleLut::InitOriented(const Lens& lens, const ShGrid& grid,
     sin_phi_[static_cast<std::size_t>(j)] = static_cast<float>(std::sin(grid.phi(j)));
   }
   meridian_.assign(3 * static_cast<std::size_t>(n_phi_), 0.0f);
+  // Every frame's taps come from the table.
+  PlanRuns(lens, table_);
   Orient({0.0, 0.0, 1.0});
   return SampleLutError::kOk;
 }
@@ -194,7 +244,7 @@ void SampleLut::Orient(const std::array<double, 3>& up) {
   const double ux = up[0], uy = up[1], uz = up[2];
   if (!(uz > -1.0 + 1e-6)) {
     for (Tap& t : taps_)
-      t = Tap{};
+      t = UnseenTap();
     return;
   }
   const double h = 1.0 / (1.0 + uz);
@@ -218,7 +268,7 @@ void SampleLut::Orient(const std::array<double, 3>& up) {
       const float bx = st * meridian_[3 * j] + zx;
       const float by = st * meridian_[3 * j + 1] + zy;
       const float bz = st * meridian_[3 * j + 2] + zz;
-      *tap = Tap{};
+      *tap = UnseenTap();
       if (!(bz > -0.99f))
         continue;
       const float s = table_scale_ / (1.0f + bz);
@@ -240,86 +290,93 @@ void SampleLut::FillUnseenFromAbove(std::span<float> samples) const {
       samples[s] = s < n_phi ? 0.0f : samples[s - n_phi];
 }
 
-template <typename Predicate>
-void SampleLut::Gather(const ImageView& image, const Predicate& is_sky,
-                       std::span<float> samples) const {
+template <typename RunIsSky>
+void SampleLut::Threshold(const ImageView& image, std::size_t pixel_bytes,
+                          const RunIsSky& run_is_sky) {
+  std::uint8_t* const plane = sky_.data();
+  const auto width = static_cast<std::size_t>(width_);
+  for (const Run& run : runs_)
+    run_is_sky(image.Row(run.y) + run.x * pixel_bytes, plane + run.y * width + run.x,
+               static_cast<std::size_t>(run.length));
+}
+
+void SampleLut::Gather(std::span<float> samples) const {
+  const std::uint8_t* const sky = sky_.data();
   const Tap* tap = taps_.data();
   if (taps_per_sample_ == 1) {
-    // Bilinear between the 2 x 2 pixels around the sub-pixel position; unseen pixels are
-    // ground. fx, fy are multiples of 1/256, so an all-sky block reads exactly 1.
-    constexpr float kInv = 1.0f / 256.0f;
+    // top = a (1 - fx) + b fx, bottom likewise, s = top (1 - fy) + bottom fy, in units of
+    // 1/65536: at most 65536, exact in an int and in a float.
+    const auto width = static_cast<std::size_t>(width_);
+    constexpr float kUnit = 1.0f / 65536.0f;
     for (float& s : samples) {
-      if (tap->seen == 0) {
-        s = 0.0f;
-        ++tap;
-        continue;
-      }
-      const float fx = static_cast<float>(tap->fx) * kInv;
-      const float fy = static_cast<float>(tap->fy) * kInv;
-      const std::uint8_t* r0 = image.Row(tap->y);
-      const std::uint8_t* r1 = image.Row(tap->y + 1);
-      const std::uint16_t x0 = tap->x;
-      const auto x1 = static_cast<std::uint16_t>(x0 + 1);
-      const unsigned seen = tap->seen;
-      const float top = ((seen & 1u) != 0 && is_sky(r0, x0) ? 1.0f - fx : 0.0f) +
-                        ((seen & 2u) != 0 && is_sky(r0, x1) ? fx : 0.0f);
-      const float bottom = ((seen & 4u) != 0 && is_sky(r1, x0) ? 1.0f - fx : 0.0f) +
-                           ((seen & 8u) != 0 && is_sky(r1, x1) ? fx : 0.0f);
-      s = top + fy * (bottom - top);
+      const std::uint8_t* p = sky + tap->offset;
+      const int a = p[0];
+      const int b = p[1];
+      const int c = p[width];
+      const int d = p[width + 1];
+      const int fx = tap->fx;
+      const int top = a * 256 + (b - a) * fx;
+      const int bottom = c * 256 + (d - c) * fx;
+      s = static_cast<float>(top * 256 + (bottom - top) * tap->fy) * kUnit;
       ++tap;
     }
     return;
   }
   for (float& s : samples) {
-    int sky = 0;
+    int count = 0;
     for (int t = 0; t < taps_per_sample_; ++t, ++tap)
-      sky += (tap->seen != 0 && is_sky(image.Row(tap->y), tap->x)) ? 1 : 0;
-    s = static_cast<float>(sky) * tap_weight_;
+      count += sky[tap->offset];
+    s = static_cast<float>(count) * tap_weight_;
   }
 }
 
-SampleLutError SampleLut::SampleMask(const ImageView& mask, std::span<float> samples) const {
+SampleLutError SampleLut::SampleMask(const ImageView& mask, std::span<float> samples) {
   if (mask.width != width_ || mask.height != height_ || mask.data == nullptr ||
       mask.format != PixelFormat::kGrey8)
     return SampleLutError::kSizeMismatch;
   if (samples.size() != size())
     return SampleLutError::kBadOutputSize;
-  Gather(
-      mask, [](const std::uint8_t* row, std::uint16_t x) { return row[x] != 0; }, samples);
+  Threshold(mask, 1, [](const std::uint8_t* in, std::uint8_t* out, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i)
+      out[i] = in[i] != 0 ? 1 : 0;
+  });
+  Gather(samples);
   return SampleLutError::kOk;
 }
 
 SampleLutError SampleLut::SampleImage(const ImageView& image, int threshold,
-                                      std::span<float> samples) const {
+                                      std::span<float> samples) {
   if (image.width != width_ || image.height != height_ || image.data == nullptr)
     return SampleLutError::kSizeMismatch;
   if (samples.size() != size())
     return SampleLutError::kBadOutputSize;
-  const auto t = static_cast<unsigned>(threshold < 0 ? 0 : threshold);
+  // Byte-wide comparisons (the loops vectorise): a threshold of 255 or more finds no sky.
+  const auto t = static_cast<std::uint8_t>(std::clamp(threshold, 0, 255));
   switch (image.format) {
     case PixelFormat::kGrey8:
-      Gather(
-          image, [t](const std::uint8_t* row, std::uint16_t x) { return row[x] > t; }, samples);
+      Threshold(image, 1, [t](const std::uint8_t* in, std::uint8_t* out, std::size_t n) {
+        for (std::size_t i = 0; i < n; ++i)
+          out[i] = in[i] > t ? 1 : 0;
+      });
       break;
     case PixelFormat::kRgb24:
-    case PixelFormat::kBgr24:
-      Gather(
-          image,
-          [t](const std::uint8_t* row, std::uint16_t x) {
-            const std::uint8_t* p = row + 3 * static_cast<std::size_t>(x);
-            return (unsigned{p[0]} + p[1] + p[2]) / 3u > t;
-          },
-          samples);
+    case PixelFormat::kBgr24: {
+      // (r + g + b) / 3 > t, in integers: r + g + b > 3 t + 2.
+      const unsigned sum_t = 3u * t + 2u;
+      Threshold(image, 3, [sum_t](const std::uint8_t* in, std::uint8_t* out, std::size_t n) {
+        for (std::size_t i = 0; i < n; ++i)
+          out[i] = unsigned{in[3 * i]} + in[3 * i + 1] + in[3 * i + 2] > sum_t ? 1 : 0;
+      });
       break;
+    }
     case PixelFormat::kYuyv:
-      Gather(
-          image,
-          [t](const std::uint8_t* row, std::uint16_t x) {
-            return row[2 * static_cast<std::size_t>(x)] > t;
-          },
-          samples);
+      Threshold(image, 2, [t](const std::uint8_t* in, std::uint8_t* out, std::size_t n) {
+        for (std::size_t i = 0; i < n; ++i)
+          out[i] = in[2 * i] > t ? 1 : 0;
+      });
       break;
   }
+  Gather(samples);
   return SampleLutError::kOk;
 }
 

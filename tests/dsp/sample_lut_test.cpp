@@ -165,6 +165,68 @@ TEST(SampleLut, FootprintOneReadsTheSubPixelPositionBilinearly) {
   EXPECT_GE(unseen, grid.longitudes());
 }
 
+// Every bilinear sample of a noisy frame is, bit for bit, the formula of
+// docs/SKY_DESCRIPTOR.md ("Sampling") evaluated in floats from the lens alone: the block
+// around the direction's sub-pixel position, its fractions floored to 1/256, each of its
+// pixels sky when the camera sees it and it is above the threshold, top + fy (bottom -
+// top). The table mixes in integers; the fractions make both exact, so they must agree to
+// the bit, also at the rim and on a lens pitched off the image's centre.
+TEST(SampleLut, BilinearSamplesAreTheFloatFormulaBitForBit) {
+  // A 150-degree view, pitched: its rim crosses the low rings at every longitude.
+  LensParams params = MakeLens(LensModel::kEquidistant, 240, 200, 9.0).params();
+  params.fov_deg = 150.0;
+  Lens lens;
+  ASSERT_EQ(lens.Init(params), LensError::kOk);
+  const int w = 240, h = 200;
+  ShGrid grid;
+  ASSERT_EQ(grid.Init(DefaultShGridConfig(48)), ShError::kOk);
+  SampleLut lut;
+  ASSERT_EQ(lut.Init(lens, grid, SampleLutOptions{1}), SampleLutError::kOk);
+  std::vector<std::uint8_t> grey(static_cast<std::size_t>(w * h));
+  std::uint32_t state = 777;
+  for (std::uint8_t& v : grey) {
+    state = state * 1664525u + 1013904223u;
+    v = static_cast<std::uint8_t>(state >> 24);
+  }
+  constexpr int kThreshold = 100;
+  std::vector<float> samples(lut.size());
+  ASSERT_EQ(lut.SampleImage({grey.data(), w, h, static_cast<std::size_t>(w), PixelFormat::kGrey8},
+                            kThreshold, samples),
+            SampleLutError::kOk);
+  Eigen::Vector3d ray;
+  auto sky = [&](int x, int y) {
+    return lens.PixelToCameraRay(x, y, &ray) &&
+           grey[static_cast<std::size_t>(y * w + x)] > kThreshold;
+  };
+  int mixed = 0, rim = 0;
+  for (std::size_t s = 0; s < samples.size(); ++s) {
+    const ShDirection dir = grid.direction(s);
+    double px = 0, py = 0;
+    float expected = 0.0f;
+    if (lens.RayToPixel(Eigen::Vector3d(dir.x, dir.y, dir.z), &px, &py) &&
+        lens.PixelToCameraRay(static_cast<int>(std::lround(px)), static_cast<int>(std::lround(py)),
+                              &ray)) {
+      const double cx = std::clamp(px, 0.0, w - 1.0), cy = std::clamp(py, 0.0, h - 1.0);
+      const int x0 = std::min(static_cast<int>(cx), w - 2);
+      const int y0 = std::min(static_cast<int>(cy), h - 2);
+      const float fx = static_cast<float>(std::min(255.0, std::floor((cx - x0) * 256.0)) / 256.0);
+      const float fy = static_cast<float>(std::min(255.0, std::floor((cy - y0) * 256.0)) / 256.0);
+      const float top = (sky(x0, y0) ? 1.0f - fx : 0.0f) + (sky(x0 + 1, y0) ? fx : 0.0f);
+      const float bottom = (sky(x0, y0 + 1) ? 1.0f - fx : 0.0f) + (sky(x0 + 1, y0 + 1) ? fx : 0.0f);
+      expected = top + fy * (bottom - top);
+      bool whole_block_seen = true;
+      for (int b = 0; b < 4; ++b)
+        whole_block_seen =
+            whole_block_seen && lens.PixelToCameraRay(x0 + (b & 1), y0 + (b >> 1), &ray);
+      rim += whole_block_seen ? 0 : 1;
+    }
+    ASSERT_EQ(samples[s], expected) << "sample " << s;
+    mixed += (expected > 0.0f && expected < 1.0f) ? 1 : 0;
+  }
+  EXPECT_GT(mixed, static_cast<int>(samples.size() / 4));  // not trivially 0 or 1
+  EXPECT_GT(rim, 10);  // blocks with a pixel outside the view (21 here)
+}
+
 TEST(SampleLut, FootprintAveragesAndOutsideTheViewIsGround) {
   const Lens lens = MakeLens(LensModel::kEquidistant, 300, 300, 0.0);
   ShGrid grid;

@@ -8,6 +8,15 @@
 // field of view) count as ground, and so does a direction whose nearest pixel it does not
 // see. Samples are written ring-major: index i * n_phi + j, the order the SH projector
 // takes.
+//
+// A frame is sampled in two passes. The first thresholds, row by row in memory order, only
+// the pixels the table reads and the camera sees, into a plane of 0/1 bytes the table owns
+// (every other byte of it stays 0: ground). The second is the gather: per sample one
+// 8-byte entry (the block's offset in that plane and its two fractions) and four byte
+// reads, mixed in integers. The pixel format, the stride and the camera's view then cost
+// nothing per sample. The fractions are multiples of 1/256, so the mix is exact in 32-bit
+// integers and its conversion to float is exact too: the same value, bit for bit, as the
+// bilinear formula in floats.
 #pragma once
 
 #include <array>
@@ -72,11 +81,12 @@ class SampleLut {
   // meridian and never come back (the field of view is a cap about the body zenith).
   void FillUnseenFromAbove(std::span<float> samples) const;
 
-  // From a binary mask (kGrey8; any non-zero byte is sky).
-  SampleLutError SampleMask(const ImageView& mask, std::span<float> samples) const;
+  // From a binary mask (kGrey8; any non-zero byte is sky). Writes the table's own sky
+  // plane, so not const; no allocation.
+  SampleLutError SampleMask(const ImageView& mask, std::span<float> samples);
   // Straight from the frame: a pixel is sky when its channel mean is > threshold. Same
   // result as SampleMask on the mask Segment() would write, without writing it.
-  SampleLutError SampleImage(const ImageView& image, int threshold, std::span<float> samples) const;
+  SampleLutError SampleImage(const ImageView& image, int threshold, std::span<float> samples);
 
   int rings() const { return rings_; }
   int n_phi() const { return n_phi_; }
@@ -87,25 +97,37 @@ class SampleLut {
   double visible_fraction() const { return visible_fraction_; }
 
  private:
-  // Footprint 1: the 2 x 2 block whose top-left pixel is (x, y), mixed by fx, fy (1/256
-  // pixel); bit k of `seen` says the camera sees pixel k of the block (0 top-left, 1
-  // top-right, 2 bottom-left, 3 bottom-right). Footprint k > 1: one pixel (x, y), seen 1
-  // or 0. A tap with seen == 0 reads as ground (for footprint 1: the direction is unseen,
-  // which FillUnseenFromAbove tests).
+  // Footprint 1: the 2 x 2 block whose top-left pixel is at `offset` in the sky plane
+  // (y * width + x), mixed by fx, fy (1/256 pixel). Footprint k > 1: the one pixel at
+  // `offset`. `seen` is 0 for a direction the camera does not see (FillUnseenFromAbove
+  // tests it); such a tap points at the plane's zero padding and reads as ground.
   struct Tap {
-    std::uint16_t x = 0;
-    std::uint16_t y = 0;
+    std::uint32_t offset = 0;
     std::uint8_t fx = 0;
     std::uint8_t fy = 0;
     std::uint8_t seen = 0;
     std::uint8_t unused = 0;
   };
+  // One run of pixels of row y, from column x, that the first pass thresholds: pixels the
+  // camera sees, between the first and the last pixel of the row a tap reads.
+  struct Run {
+    std::uint16_t x = 0;
+    std::uint16_t y = 0;
+    std::uint32_t length = 0;
+  };
+  // The tap of a direction the camera does not see.
+  Tap UnseenTap() const { return Tap{unseen_offset_, 0, 0, 0, 0}; }
   // The bilinear tap of a sub-pixel position (unseen if the camera does not see its nearest
   // pixel).
-  static Tap BilinearTap(const Lens& lens, double px, double py);
+  Tap BilinearTap(const Lens& lens, double px, double py) const;
+  // Sizes the sky plane (zero) and lists the runs the first pass thresholds: every pixel
+  // the taps may read, seen by the camera.
+  void PlanRuns(const Lens& lens, std::span<const Tap> taps);
 
-  template <typename Predicate>
-  void Gather(const ImageView& image, const Predicate& is_sky, std::span<float> samples) const;
+  // The first pass: run_is_sky(pixels, plane bytes, count) for every run.
+  template <typename RunIsSky>
+  void Threshold(const ImageView& image, std::size_t pixel_bytes, const RunIsSky& run_is_sky);
+  void Gather(std::span<float> samples) const;
 
   int width_ = 0;
   int height_ = 0;
@@ -114,7 +136,12 @@ class SampleLut {
   int taps_per_sample_ = 1;  // 1: bilinear taps; k * k: box taps
   float tap_weight_ = 1.0f;
   double visible_fraction_ = 0.0;
-  std::vector<Tap> taps_;  // size() * taps_per_sample_
+  std::uint32_t unseen_offset_ = 0;  // width * height: the start of the plane's padding
+  std::vector<Tap> taps_;            // size() * taps_per_sample_
+  std::vector<Run> runs_;
+  // Per frame: 1 where a pixel is sky and seen, else 0; width * height bytes and a zero
+  // padding of width + 2 bytes that unseen taps read.
+  std::vector<std::uint8_t> sky_;
 
   // Oriented sampling only.
   int table_cells_ = 0;    // the stereographic table is table_cells_ x table_cells_
