@@ -345,6 +345,174 @@ TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
             2u * 120 + 4u * (10 + 2));
 }
 
+// ---- Code rows (ReferenceStorage::kCodes8, kCodes16) -----------------------------------
+
+// The codes' contract, checked against its analytic bound: every value within half a step
+// of its code, the step (2^exponent) below max(row) / 2^(bits - 1), the largest value's code
+// in the upper half of the range, and decoding then encoding again gives the same codes.
+template <typename Code>
+void ExpectCodesWithinHalfAStep(unsigned seed) {
+  constexpr float kTop = sizeof(Code) == 1 ? 255.0f : 65535.0f;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::uniform_int_distribution<int> magnitude(-40, 40);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const std::size_t dim = 1 + static_cast<std::size_t>(trial % 130);
+    const float scale = std::ldexp(1.0f, magnitude(rng));
+    std::vector<float> row(dim);
+    for (float& v : row)
+      v = unit(rng) * scale;
+    if (trial % 7 == 0)
+      row[0] = 0.0f;
+    float max = 0;
+    for (const float v : row)
+      max = std::max(max, v);
+    std::vector<Code> codes(dim);
+    const std::int8_t e = EncodeCodes<Code>(row, codes);
+    std::vector<float> decoded(dim);
+    DecodeCodes<Code>(codes, e, decoded);
+    const double step = std::ldexp(1.0, e);
+    ASSERT_LE(step, 2.0 * static_cast<double>(max) / static_cast<double>(kTop) + 1e-30)
+        << "trial " << trial;
+    Code top = 0;
+    for (std::size_t i = 0; i < dim; ++i) {
+      EXPECT_LE(std::fabs(static_cast<double>(row[i]) - static_cast<double>(decoded[i])), step / 2)
+          << trial << " " << i;
+      EXPECT_EQ(static_cast<double>(decoded[i]), static_cast<double>(codes[i]) * step);
+      top = std::max(top, codes[i]);
+    }
+    if (max > 0) {
+      EXPECT_GE(static_cast<float>(top), (kTop + 1) / 2) << "trial " << trial;
+    }
+    std::vector<Code> again(dim);
+    EXPECT_EQ(EncodeCodes<Code>(decoded, again), e) << "trial " << trial;
+    EXPECT_EQ(again, codes) << "trial " << trial;
+  }
+}
+
+TEST(ReferenceCodes, EveryValueWithinHalfAStepOfItsCode) {
+  ExpectCodesWithinHalfAStep<std::uint8_t>(5u);
+  ExpectCodesWithinHalfAStep<std::uint16_t>(6u);
+}
+
+TEST(ReferenceCodes, WorkedExamples) {
+  // max 1 = 0.5 * 2^1: step 2^-7, so 1 -> 128, 0.5 -> 64, 0.25 -> 32.
+  std::vector<std::uint8_t> codes(4);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{1.0f, 0.5f, 0.25f, 0.0f}, codes), -7);
+  EXPECT_EQ(codes, (std::vector<std::uint8_t>{128, 64, 32, 0}));
+  // 255 fits step 1; 255.6 rounds past 255, so the step doubles: 127.8 -> 128.
+  std::vector<std::uint8_t> one(1);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{255.0f}, one), 0);
+  EXPECT_EQ(one[0], 255);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{255.6f}, one), 1);
+  EXPECT_EQ(one[0], 128);
+  // Ties go to even: 3 = 0.75 * 2^2 gives step 2^-6; half a step -> 0, 1.5 steps -> 2.
+  std::vector<std::uint8_t> ties(3);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{3.0f, 0x1p-7f, 3 * 0x1p-7f}, ties), -6);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{192, 0, 2}));
+  // Negative and NaN values are not amplitudes: code 0; an all-zero row stays zero.
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{-1.0f, std::nanf(""), 2.0f}, ties), -6);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 128}));
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{0.0f, 0.0f, 0.0f}, ties),
+            kCodeMinExponent);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 0}));
+}
+
+// The code scan gives DifferenceColumn's floats over the decoded rows, bit for bit, at
+// every descriptor length (whole lanes and tails).
+TEST(ReferenceCodes, DifferenceColumnEqualsTheDecodedFloats) {
+  std::mt19937 rng(9u);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (const int dim : {1, 7, 8, 13, 64, 120}) {
+    const int n = 37;
+    std::vector<float> rows(static_cast<std::size_t>(n * dim)),
+        query(static_cast<std::size_t>(dim));
+    for (float& v : rows)
+      v = unit(rng) * unit(rng);
+    for (float& v : query)
+      v = unit(rng) * 0.5f;
+    std::vector<std::uint8_t> codes8(rows.size());
+    std::vector<std::uint16_t> codes16(rows.size());
+    std::vector<std::int8_t> e8(static_cast<std::size_t>(n)), e16(static_cast<std::size_t>(n));
+    std::vector<float> decoded8(rows.size()), decoded16(rows.size());
+    const auto d = static_cast<std::size_t>(dim);
+    for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r) {
+      const std::span<const float> row(rows.data() + r * d, d);
+      e8[r] = EncodeCodes<std::uint8_t>(row, std::span(codes8.data() + r * d, d));
+      e16[r] = EncodeCodes<std::uint16_t>(row, std::span(codes16.data() + r * d, d));
+      DecodeCodes<std::uint8_t>(std::span<const std::uint8_t>(codes8.data() + r * d, d), e8[r],
+                                std::span(decoded8.data() + r * d, d));
+      DecodeCodes<std::uint16_t>(std::span<const std::uint16_t>(codes16.data() + r * d, d), e16[r],
+                                 std::span(decoded16.data() + r * d, d));
+    }
+    std::vector<float> want(static_cast<std::size_t>(n)), got(static_cast<std::size_t>(n));
+    DifferenceColumn(decoded8, dim, query, want);
+    DifferenceColumnCodes<std::uint8_t>(codes8, e8, dim, query, got);
+    EXPECT_EQ(got, want) << "8-bit codes, dim " << dim;
+    DifferenceColumn(decoded16, dim, query, want);
+    DifferenceColumnCodes<std::uint16_t>(codes16, e16, dim, query, got);
+    EXPECT_EQ(got, want) << "16-bit codes, dim " << dim;
+    // And the decoded column is within the codes' bound of the exact one: the mean of
+    // per-element errors of at most half a step each.
+    std::vector<float> exact(static_cast<std::size_t>(n));
+    DifferenceColumn(rows, dim, query, exact);
+    DifferenceColumnCodes<std::uint8_t>(codes8, e8, dim, query, got);
+    for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r) {
+      const double half_step = std::ldexp(0.5, e8[r]);
+      EXPECT_LE(std::fabs(static_cast<double>(got[r]) - static_cast<double>(exact[r])),
+                half_step + 1e-6)
+          << dim;
+    }
+  }
+}
+
+TEST(SeqSlamStreaming, CodeStorageEqualsBatchOnDecodedDescriptors) {
+  PlantedRoute route = MakeRoute(150, 40, 20.0, 1.1, 0.3f, 17u);
+  // Amplitudes are >= 0: the planted sines (|x| <= 3) moved up.
+  for (float& x : route.reference)
+    x += 3.0f;
+  for (float& x : route.query)
+    x += 3.0f;
+  for (const ReferenceStorage storage : {ReferenceStorage::kCodes8, ReferenceStorage::kCodes16}) {
+    SeqSlamParams p;
+    std::vector<float> decoded = route.reference;
+    const auto d = static_cast<std::size_t>(route.dim);
+    for (std::size_t r = 0; r < 150; ++r) {
+      const std::span<float> row(decoded.data() + r * d, d);
+      if (storage == ReferenceStorage::kCodes8) {
+        std::vector<std::uint8_t> c(d);
+        DecodeCodes<std::uint8_t>(c, EncodeCodes<std::uint8_t>(row, c), row);
+      } else {
+        std::vector<std::uint16_t> c(d);
+        DecodeCodes<std::uint16_t>(c, EncodeCodes<std::uint16_t>(row, c), row);
+      }
+    }
+    std::vector<SeqSlamMatch> batch(40);
+    ASSERT_EQ(BatchSeqSlam(decoded, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
+              SeqSlamError::kOk);
+    StreamingSeqSlam s;
+    ASSERT_EQ(s.Init(p, route.dim, 150, storage), SeqSlamError::kOk);
+    ASSERT_TRUE(AddRoute(s, route));
+    AllocationScope scope;
+    int correct = 0;
+    for (int t = 0; t < 40; ++t) {
+      SeqSlamMatch m;
+      ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
+      const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
+      ASSERT_EQ(m.valid, b.valid);
+      EXPECT_EQ(m.reference, b.reference);
+      EXPECT_EQ(m.score, b.score);
+      EXPECT_EQ(m.uniqueness, b.uniqueness);
+      correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
+    }
+    EXPECT_EQ(scope.allocations(), 0u);
+    EXPECT_EQ(correct, 31) << ReferenceStorageName(storage);  // as float32 and bfloat16
+  }
+  EXPECT_EQ(StreamingSeqSlam::BytesPerReference(SeqSlamParams{}, 64, ReferenceStorage::kCodes8),
+            64u + 1 + 4u * (10 + 2));
+  EXPECT_EQ(ReferenceRowBytes(ReferenceStorage::kCodes16, 120), 241u);
+}
+
 TEST(SeqSlamStreaming, BFloat16RoundsToNearestEven) {
   EXPECT_EQ(ToBFloat16(1.0f), 0x3F80);
   EXPECT_EQ(ToBFloat16(-2.0f), 0xC000);
