@@ -103,23 +103,35 @@ struct RouteFrameMeta {
 inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
 // Version 3 added the lens record after the header. Version 4 added the strip record after
-// the lens record and a horizon strip at the end of every frame record. This version reads
-// 1 to 4, writes 4.
-inline constexpr std::uint32_t kRouteDbVersion = 4;
+// the lens record and a horizon strip at the end of every frame record. Version 5 made the
+// frame record compact: the descriptor as 8-bit codes with a power-of-two scale
+// (dsp::EncodeCodes), the pose as floats. This version reads 1 to 5, writes 5.
+inline constexpr std::uint32_t kRouteDbVersion = 5;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
 inline constexpr std::size_t kRouteDbLensRecordBytes = 144;  // version 3, after the header
 inline constexpr std::size_t kRouteDbStripRecordBytes = 32;  // version 4, after the lens
 // Where the first chunk starts: after the header (versions 1, 2), the lens record (3) and
-// the strip record (4).
+// the strip record (4 and 5).
 constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
   return kRouteDbHeaderBytes + (version >= 3 ? kRouteDbLensRecordBytes : 0) +
          (version >= 4 ? kRouteDbStripRecordBytes : 0);
 }
 inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
-inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
-// A frame record: the fixed part, dim floats, then strip_columns bytes (version 4).
-constexpr std::size_t RouteDbRecordBytes(std::size_t dim, std::size_t strip_columns) {
-  return kRouteDbRecordFixedBytes + 4 * dim + strip_columns;
+// The frame record's part before the descriptor: versions 1 to 4 a u64 timestamp, u32
+// flags, u32 reserved and six f64 pose values; version 5 a u64 timestamp, u8 flags, the
+// descriptor's i8 scale exponent and six f32 pose values.
+constexpr std::size_t RouteDbRecordFixedBytes(std::uint32_t version) {
+  return version >= 5 ? 34 : 64;
+}
+// Bytes per descriptor value: f32 before version 5, an 8-bit code from version 5.
+constexpr std::size_t RouteDbDescriptorValueBytes(std::uint32_t version) {
+  return version >= 5 ? 1 : 4;
+}
+// A frame record: the fixed part, the descriptor, then strip_columns bytes (version 4+).
+constexpr std::size_t RouteDbRecordBytes(std::uint32_t version, std::size_t dim,
+                                         std::size_t strip_columns) {
+  return RouteDbRecordFixedBytes(version) + RouteDbDescriptorValueBytes(version) * dim +
+         strip_columns;
 }
 
 // Where a route's descriptors and strips go when RouteFrames does not keep them: the
@@ -309,7 +321,9 @@ class RouteDbWriter {
   // flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
-  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0.
+  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0. The descriptor
+  // is stored as 8-bit codes (dsp::EncodeCodes: values >= 0, each within max / 255 of its
+  // code), the pose as floats.
   Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
                 std::span<const std::uint8_t> strip = {});
   // Writes the buffered frames as one chunk and waits until they are on the disk.
