@@ -100,6 +100,11 @@ struct RouteFrameMeta {
   std::optional<drivers::Pose> pose;  // when the camera knew it
 };
 
+// The pose as a version-5 route file and RouteFrames keep it: each value rounded to a
+// float (a coordinate within 0.5 mm up to 8 km from the origin, an angle within 4e-6
+// degree).
+drivers::Pose RoutePoseFloats(const drivers::Pose& pose);
+
 inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
 // Version 3 added the lens record after the header. Version 4 added the strip record after
@@ -170,7 +175,7 @@ class RouteFrames {
                             std::span<const std::uint8_t> strip = {});
 
   std::size_t size() const { return size_; }
-  std::size_t capacity() const { return meta_.size(); }
+  std::size_t capacity() const { return timestamps_.size(); }
   std::size_t dim() const { return dim_; }
   std::size_t strip_columns() const { return strip_columns_; }
   bool has_strips() const { return has_strips_; }
@@ -187,7 +192,9 @@ class RouteFrames {
       return {};
     return {strips_.data() + i * strip_columns_, strip_columns_};
   }
-  const RouteFrameMeta& meta(std::size_t i) const { return meta_[i]; }
+  // Frame i's time and pose; the pose as the route file keeps it since version 5, in
+  // floats (RoutePoseFloats).
+  RouteFrameMeta meta(std::size_t i) const;
 
   // Adds a frame and returns its storage to fill in (the loader copies straight into it):
   // the descriptor, and the strip when `with_strip` (which the first frame decides for
@@ -204,7 +211,10 @@ class RouteFrames {
   RouteSink* sink_ = nullptr;
   FixedArray<float> descriptors_;    // capacity x dim; with a sink: one frame, to fill
   FixedArray<std::uint8_t> strips_;  // capacity x strip columns; with a sink: one frame
-  FixedArray<RouteFrameMeta> meta_;
+  // Per frame 32 bytes, not a RouteFrameMeta's 64: the time, and the pose as six floats
+  // (x NaN: no pose). A pose grades a repeat against the route and steers nothing.
+  FixedArray<std::uint64_t> timestamps_;
+  FixedArray<std::array<float, 6>> poses_;
   std::size_t dim_ = 0;
   std::size_t strip_columns_ = 0;
   std::size_t size_ = 0;

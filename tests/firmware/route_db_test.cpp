@@ -142,7 +142,8 @@ void ExpectFrames(const RouteFrames& frames, std::size_t n) {
     ASSERT_EQ(frames.meta(i).timestamp_ns, want.timestamp_ns) << i;
     ASSERT_EQ(frames.meta(i).pose.has_value(), want.pose.has_value()) << i;
     if (want.pose) {
-      const drivers::Pose& got = *frames.meta(i).pose;
+      const RouteFrameMeta loaded = frames.meta(i);
+      const drivers::Pose& got = *loaded.pose;
       ASSERT_EQ(got.x_m, want.pose->x_m) << i;
       ASSERT_EQ(got.y_m, want.pose->y_m) << i;
       ASSERT_EQ(got.z_m, want.pose->z_m) << i;
