@@ -180,16 +180,18 @@ float PowerOfTwo(int e) {
   return std::bit_cast<float>(static_cast<std::uint32_t>(e + 127) << 23);
 }
 
-// Codes with a power-of-two scale per row: element = float(code) * 2^exponent, exact (a
-// code has at most 16 significant bits, the scale is a power of two), so the differences
-// are those of the decoded floats.
+// Codes with a power-of-two scale per row: element = code * 2^exponent (16 bits) or
+// code^2 * 2^exponent (8 bits, square law), exact in float (at most 16 significant bits
+// times a power of two), so the differences are those of the decoded floats.
 template <typename Code>
 struct CodeRows {
   const Code* data;
   const std::int8_t* exponents;
   std::size_t dim;
+  static constexpr bool kSquareLaw = sizeof(Code) == 1;
   float At(std::size_t r, std::size_t i) const {
-    return static_cast<float>(data[r * dim + i]) * PowerOfTwo(exponents[r]);
+    const float c = static_cast<float>(data[r * dim + i]);
+    return (kSquareLaw ? c * c : c) * PowerOfTwo(exponents[r]);
   }
   void Load8(std::size_t r, std::size_t i, Float4* lo, Float4* hi) const {
     using Byte4 = std::uint8_t __attribute__((vector_size(4)));
@@ -200,8 +202,13 @@ struct CodeRows {
     std::memcpy(&a, p, sizeof a);
     std::memcpy(&b, p + 4, sizeof b);
     const float scale = PowerOfTwo(exponents[r]);
-    *lo = __builtin_convertvector(a, Float4) * scale;
-    *hi = __builtin_convertvector(b, Float4) * scale;
+    Float4 c_lo = __builtin_convertvector(a, Float4), c_hi = __builtin_convertvector(b, Float4);
+    if constexpr (kSquareLaw) {
+      c_lo *= c_lo;
+      c_hi *= c_hi;
+    }
+    *lo = c_lo * scale;
+    *hi = c_hi * scale;
   }
 };
 
@@ -231,27 +238,36 @@ void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
 
 template <typename Code>
 std::int8_t EncodeCodes(std::span<const float> row, std::span<Code> codes) {
-  constexpr int kBits = 8 * static_cast<int>(sizeof(Code));
-  constexpr float kMaxCode = static_cast<float>((1u << kBits) - 1u);
+  constexpr bool kSquareLaw = sizeof(Code) == 1;
+  constexpr float kMaxCode = sizeof(Code) == 1 ? 255.0f : 65535.0f;
+  // The largest scaled value whose code is at most kMaxCode: 65535.5 (linear) or 255.5^2
+  // (square law); fitting max(row) / 2^e below it with the smallest e puts the largest
+  // code at 32768.. (linear) or 181.. (square law).
+  constexpr float kLimit = kSquareLaw ? 255.5f * 255.5f : 65535.5f;
   float max = 0.0f;
   for (const float v : row)
     max = v > max ? v : max;  // NaN and negative values never raise it
   int exponent = kCodeMinExponent;
   if (max > 0.0f && std::isfinite(max)) {
-    // max = m 2^e2 with m in [0.5, 1): max / 2^(e2 - bits) = m 2^bits is in [2^(bits-1),
-    // 2^bits); one step up when it rounds past the largest code.
+    // max = m 2^e2 with m in [0.5, 1): max / 2^(e2 - 16) = m 2^16 is in [2^15, 2^16); one
+    // step up when it reaches the limit.
     int e2 = 0;
     (void)std::frexp(max, &e2);
-    exponent = e2 - kBits;
-    if (std::ldexp(max, -exponent) > kMaxCode)
+    exponent = e2 - 16;
+    if (std::ldexp(max, -exponent) >= kLimit)
       ++exponent;
     exponent = std::clamp(exponent, kCodeMinExponent, kCodeMaxExponent);
   }
   for (std::size_t i = 0; i < row.size(); ++i) {
     const float v = row[i];
-    // ldexp by a power of two is exact; nearbyint rounds half to even (the default mode).
-    const float scaled = v > 0.0f ? std::nearbyint(std::ldexp(v, -exponent)) : 0.0f;
-    codes[i] = static_cast<Code>(std::min(scaled, kMaxCode));
+    // ldexp by a power of two is exact, sqrt is correctly rounded (IEEE), nearbyint rounds
+    // half to even (the default mode): the same codes on every machine.
+    float code = 0.0f;
+    if (v > 0.0f) {
+      const float scaled = std::ldexp(v, -exponent);
+      code = std::nearbyint(kSquareLaw ? std::sqrt(scaled) : scaled);
+    }
+    codes[i] = static_cast<Code>(std::min(code, kMaxCode));
   }
   return static_cast<std::int8_t>(exponent);
 }
@@ -259,8 +275,10 @@ std::int8_t EncodeCodes(std::span<const float> row, std::span<Code> codes) {
 template <typename Code>
 void DecodeCodes(std::span<const Code> codes, std::int8_t exponent, std::span<float> out) {
   const float scale = PowerOfTwo(exponent);
-  for (std::size_t i = 0; i < codes.size(); ++i)
-    out[i] = static_cast<float>(codes[i]) * scale;
+  for (std::size_t i = 0; i < codes.size(); ++i) {
+    const float c = static_cast<float>(codes[i]);
+    out[i] = (sizeof(Code) == 1 ? c * c : c) * scale;
+  }
 }
 
 template <typename Code>

@@ -347,12 +347,13 @@ TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
 
 // ---- Code rows (ReferenceStorage::kCodes8, kCodes16) -----------------------------------
 
-// The codes' contract, checked against its analytic bound: every value within half a step
-// of its code, the step (2^exponent) below max(row) / 2^(bits - 1), the largest value's code
-// in the upper half of the range, and decoding then encoding again gives the same codes.
+// The codes' contract, checked against its analytic bound (seqslam.h): for 16 bits every
+// value within half a step, the step 2^e below max(row) / 32767.5; for 8 bits (square
+// law) |v - c^2 2^e| <= (sqrt(v / 2^e) + 1/4) 2^e with 2^e <= max(row) / 32640; the largest
+// value's code in the top of the range; decoding then encoding again gives the same codes.
 template <typename Code>
-void ExpectCodesWithinHalfAStep(unsigned seed) {
-  constexpr float kTop = sizeof(Code) == 1 ? 255.0f : 65535.0f;
+void ExpectCodesWithinTheirBound(unsigned seed) {
+  constexpr bool kSquareLaw = sizeof(Code) == 1;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   std::uniform_int_distribution<int> magnitude(-40, 40);
@@ -361,28 +362,28 @@ void ExpectCodesWithinHalfAStep(unsigned seed) {
     const float scale = std::ldexp(1.0f, magnitude(rng));
     std::vector<float> row(dim);
     for (float& v : row)
-      v = unit(rng) * scale;
+      v = unit(rng) * unit(rng) * scale;
     if (trial % 7 == 0)
       row[0] = 0.0f;
-    float max = 0;
+    double max = 0;
     for (const float v : row)
-      max = std::max(max, v);
+      max = std::max(max, static_cast<double>(v));
     std::vector<Code> codes(dim);
     const std::int8_t e = EncodeCodes<Code>(row, codes);
     std::vector<float> decoded(dim);
     DecodeCodes<Code>(codes, e, decoded);
     const double step = std::ldexp(1.0, e);
-    ASSERT_LE(step, 2.0 * static_cast<double>(max) / static_cast<double>(kTop) + 1e-30)
-        << "trial " << trial;
+    ASSERT_LE(step, max / (kSquareLaw ? 32640.0 : 32767.5) + 1e-30) << "trial " << trial;
     Code top = 0;
     for (std::size_t i = 0; i < dim; ++i) {
-      EXPECT_LE(std::fabs(static_cast<double>(row[i]) - static_cast<double>(decoded[i])), step / 2)
-          << trial << " " << i;
-      EXPECT_EQ(static_cast<double>(decoded[i]), static_cast<double>(codes[i]) * step);
+      const double v = static_cast<double>(row[i]), c = static_cast<double>(codes[i]);
+      const double bound = kSquareLaw ? (std::sqrt(v / step) + 0.25) * step : step / 2;
+      EXPECT_LE(std::fabs(v - static_cast<double>(decoded[i])), bound) << trial << " " << i;
+      EXPECT_EQ(static_cast<double>(decoded[i]), (kSquareLaw ? c * c : c) * step);
       top = std::max(top, codes[i]);
     }
     if (max > 0) {
-      EXPECT_GE(static_cast<float>(top), (kTop + 1) / 2) << "trial " << trial;
+      EXPECT_GE(top, kSquareLaw ? 181 : 32768) << "trial " << trial;
     }
     std::vector<Code> again(dim);
     EXPECT_EQ(EncodeCodes<Code>(decoded, again), e) << "trial " << trial;
@@ -390,32 +391,38 @@ void ExpectCodesWithinHalfAStep(unsigned seed) {
   }
 }
 
-TEST(ReferenceCodes, EveryValueWithinHalfAStepOfItsCode) {
-  ExpectCodesWithinHalfAStep<std::uint8_t>(5u);
-  ExpectCodesWithinHalfAStep<std::uint16_t>(6u);
+TEST(ReferenceCodes, EveryValueWithinTheCodesBound) {
+  ExpectCodesWithinTheirBound<std::uint8_t>(5u);
+  ExpectCodesWithinTheirBound<std::uint16_t>(6u);
 }
 
 TEST(ReferenceCodes, WorkedExamples) {
-  // max 1 = 0.5 * 2^1: step 2^-7, so 1 -> 128, 0.5 -> 64, 0.25 -> 32.
+  // 8 bits, square law. max 1 = 0.5 * 2^1: 2^e = 2^-15, so 1 -> sqrt(32768) = 181.02 -> 181,
+  // 0.5 -> sqrt(16384) = 128, 0.25 -> sqrt(8192) = 90.5 -> 91 (above the tie).
   std::vector<std::uint8_t> codes(4);
-  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{1.0f, 0.5f, 0.25f, 0.0f}, codes), -7);
-  EXPECT_EQ(codes, (std::vector<std::uint8_t>{128, 64, 32, 0}));
-  // 255 fits step 1; 255.6 rounds past 255, so the step doubles: 127.8 -> 128.
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{1.0f, 0.5f, 0.25f, 0.0f}, codes), -15);
+  EXPECT_EQ(codes, (std::vector<std::uint8_t>{181, 128, 91, 0}));
+  // 255^2 fits 2^e = 1; 65281 >= 255.5^2 does not, so the step doubles: sqrt(32640.5) ->
+  // 181.
   std::vector<std::uint8_t> one(1);
-  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{255.0f}, one), 0);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{65025.0f}, one), 0);
   EXPECT_EQ(one[0], 255);
-  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{255.6f}, one), 1);
-  EXPECT_EQ(one[0], 128);
-  // Ties go to even: 3 = 0.75 * 2^2 gives step 2^-6; half a step -> 0, 1.5 steps -> 2.
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{65281.0f}, one), 1);
+  EXPECT_EQ(one[0], 181);
+  // Ties go to even: sqrt(180.5^2) -> 180, sqrt(5.5^2) -> 6.
   std::vector<std::uint8_t> ties(3);
-  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{3.0f, 0x1p-7f, 3 * 0x1p-7f}, ties), -6);
-  EXPECT_EQ(ties, (std::vector<std::uint8_t>{192, 0, 2}));
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{65025.0f, 32580.25f, 30.25f}, ties), 0);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{255, 180, 6}));
   // Negative and NaN values are not amplitudes: code 0; an all-zero row stays zero.
-  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{-1.0f, std::nanf(""), 2.0f}, ties), -6);
-  EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 128}));
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{-1.0f, std::nanf(""), 2.0f}, ties), -14);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 181}));
   EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{0.0f, 0.0f, 0.0f}, ties),
             kCodeMinExponent);
   EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 0}));
+  // 16 bits, linear: max 1 -> 2^-15, so 1 -> 32768 and 2^-16 + 2^-17 (1.5 steps) -> 2.
+  std::vector<std::uint16_t> wide(2);
+  EXPECT_EQ(EncodeCodes<std::uint16_t>(std::vector<float>{1.0f, 0x1p-15f + 0x1p-16f}, wide), -15);
+  EXPECT_EQ(wide, (std::vector<std::uint16_t>{32768, 2}));
 }
 
 // The code scan gives DifferenceColumn's floats over the decoded rows, bit for bit, at
@@ -452,13 +459,17 @@ TEST(ReferenceCodes, DifferenceColumnEqualsTheDecodedFloats) {
     DifferenceColumn(decoded16, dim, query, want);
     DifferenceColumnCodes<std::uint16_t>(codes16, e16, dim, query, got);
     EXPECT_EQ(got, want) << "16-bit codes, dim " << dim;
-    // And the decoded column is within the codes' bound of the exact one: the mean of
-    // per-element errors of at most half a step each.
+    // And the decoded column is within the codes' bound of the exact one: the mean of the
+    // per-element bounds (square law, seqslam.h).
     std::vector<float> exact(static_cast<std::size_t>(n));
     DifferenceColumn(rows, dim, query, exact);
     DifferenceColumnCodes<std::uint8_t>(codes8, e8, dim, query, got);
     for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r) {
-      const double half_step = std::ldexp(0.5, e8[r]);
+      const double step = std::ldexp(1.0, e8[r]);
+      double half_step = 0;  // the mean bound
+      for (std::size_t i = 0; i < d; ++i)
+        half_step += (std::sqrt(static_cast<double>(rows[r * d + i]) / step) + 0.25) * step;
+      half_step /= static_cast<double>(d);
       EXPECT_LE(std::fabs(static_cast<double>(got[r]) - static_cast<double>(exact[r])),
                 half_step + 1e-6)
           << dim;

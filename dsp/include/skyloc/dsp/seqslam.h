@@ -125,14 +125,21 @@ void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
 std::uint16_t ToBFloat16(float value);
 float FromBFloat16(std::uint16_t value);
 
-// A descriptor row as unsigned integer codes with one power-of-two scale for the row
-// (ReferenceStorage::kCodes8, kCodes16): value = code * 2^exponent. The exponent is the
-// smallest that fits the row's largest value in the codes, so that value's code is in the
-// upper half of the range (128..255 for 8 bits) and every value is within half a step of
-// its code: |v - code * 2^exponent| <= 2^(exponent - 1) < max(row) / (2^bits - 1). A power
-// of two makes the decoded value exact in float (no rounding on any machine) and the
-// encoding idempotent: a decoded row encodes to the same codes and exponent, so a route
-// read back from its file and stored again is bit for bit the same.
+// A descriptor row as unsigned integer codes with one power-of-two scale 2^e for the row
+// (ReferenceStorage::kCodes8, kCodes16). The exponent e is the smallest that fits the
+// row's largest value in the codes.
+//  - 16 bits, linear: value = code * 2^e, code = round(v / 2^e); the largest value's code
+//    is 32768..65535, and |v - code 2^e| <= 2^(e-1) < max(row) / 65535.
+//  - 8 bits, square law: value = code^2 * 2^e, code = round(sqrt(v / 2^e)); the largest
+//    value's code is 181..255 and 2^e <= max(row) / 32640, so
+//    |v - code^2 2^e| <= (sqrt(v / 2^e) + 1/4) 2^e: about max / 181 at the largest value
+//    and sqrt(v max / 32640) below it, a relative error that grows only as 1/sqrt(v)
+//    where a linear 8-bit code's grows as 1/v. Amplitude spectra hold a few large and many
+//    small values, and the small ones (fine detail) are what tells similar places apart.
+// A power of two (and code^2 <= 65025 < 2^24) makes the decoded value exact in float (no
+// rounding on any machine) and the encoding idempotent: a decoded row encodes to the same
+// codes and exponent, so a route read back from its file and stored again is bit for bit
+// the same.
 // Amplitude spectra are >= 0: a negative or NaN value is stored as code 0. The exponent
 // stays in kCodeMinExponent..kCodeMaxExponent, so every decoded value is a normal float or
 // zero (a row whose largest value is below 2^-110 has codes of 0 and small integers).
@@ -268,9 +275,10 @@ enum class ReferenceStorage : std::uint8_t {
   kBFloat16,  // rounded to 8 significant bits (relative error <= 2^-9): half the memory and
               // the memory traffic; far below the noise of any image descriptor
   // Codes with a power-of-two scale per row (EncodeCodes): dim + 1 bytes a row for kCodes8
-  // (error <= max(row) / 255), 2 dim + 1 for kCodes16 (<= max(row) / 65535). The route
-  // database stores the descriptors so (format version 5), so a route loads into this
-  // storage exactly as it was taught. For amplitude spectra (values >= 0).
+  // (square law, error about sqrt(v max(row)) / 181), 2 dim + 1 for kCodes16 (linear,
+  // <= max(row) / 65535). The route database stores the descriptors as 8-bit codes
+  // (format version 5), so a route loads into kCodes8 exactly as it was taught. For
+  // amplitude spectra (values >= 0).
   kCodes8,
   kCodes16,
 };
