@@ -554,6 +554,7 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   const std::size_t record_bytes = RouteDbRecordBytes(version, s.dim, s.strip.columns);
   const std::size_t fixed_bytes = RouteDbRecordFixedBytes(version);
   const std::size_t strip_at = fixed_bytes + RouteDbDescriptorValueBytes(version) * s.dim;
+  std::vector<std::uint16_t> codes(version >= 5 ? s.dim : 0);  // a version-5 record's codes
 
   std::size_t offset = data_offset;
   std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
@@ -641,10 +642,12 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
         if (slot.descriptor.size() != s.dim)
           return Status::Error(StatusCode::kInternal, "route frames rejected a record");
         if (version >= 5) {
-          // Decoded exactly (a code times a power of two); a matcher holding codes encodes
-          // the floats back to the same codes (dsp::EncodeCodes is idempotent).
-          dsp::DecodeCodes(std::span<const std::uint8_t>(rec + fixed_bytes, s.dim),
-                           static_cast<std::int8_t>(rec[9]), slot.descriptor);
+          // Decoded exactly (a code times a power of two); a matcher holding 16-bit codes
+          // encodes the floats back to the same codes (dsp::EncodeCodes is idempotent).
+          for (std::size_t k = 0; k < s.dim; ++k)
+            codes[k] = LoadBytes<std::uint16_t>(rec + fixed_bytes + 2 * k);  // any alignment
+          dsp::DecodeCodes(std::span<const std::uint16_t>(codes), static_cast<std::int8_t>(rec[9]),
+                           slot.descriptor);
         } else {
           // Copied byte-wise: the input need not be aligned for float.
           std::memcpy(slot.descriptor.data(), rec + fixed_bytes, slot.descriptor.size_bytes());
@@ -912,6 +915,7 @@ Status RouteDbWriter::CreateLocked(const char* path, const RouteDbSettings& sett
   const std::size_t record_bytes =
       RouteDbRecordBytes(kRouteDbVersion, settings.dim, settings.strip.columns);
   SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
+  SKYLOC_TRY(codes_.Allocate(settings.dim));
 
   char tmp[sizeof write_path_];
   std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
@@ -986,11 +990,12 @@ Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> 
   rec[8] = meta.pose ? static_cast<std::uint8_t>(kHasPose) : std::uint8_t{0};
   if (meta.pose)
     StorePoseFloats(*meta.pose, rec + 10);
-  const std::int8_t exponent =
-      dsp::EncodeCodes(descriptor, std::span<std::uint8_t>(rec + kFixed, descriptor.size()));
+  const std::int8_t exponent = dsp::EncodeCodes(descriptor, codes_.span());
+  for (std::size_t k = 0; k < descriptor.size(); ++k)
+    StoreBytes<std::uint16_t>(rec + kFixed + 2 * k, codes_[k]);  // little-endian
   rec[9] = static_cast<std::uint8_t>(exponent);
   if (!strip.empty())
-    std::memcpy(rec + kFixed + descriptor.size(), strip.data(), strip.size());
+    std::memcpy(rec + kFixed + 2 * descriptor.size(), strip.data(), strip.size());
   ++pending_;
   ++appended_;
   if (pending_ == flush_every_)

@@ -109,7 +109,7 @@ inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
 // Version 3 added the lens record after the header. Version 4 added the strip record after
 // the lens record and a horizon strip at the end of every frame record. Version 5 made the
-// frame record compact: the descriptor as 8-bit codes with a power-of-two scale
+// frame record compact: the descriptor as 16-bit codes with a power-of-two scale
 // (dsp::EncodeCodes), the pose as floats. This version reads 1 to 5, writes 5.
 inline constexpr std::uint32_t kRouteDbVersion = 5;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
@@ -128,9 +128,10 @@ inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
 constexpr std::size_t RouteDbRecordFixedBytes(std::uint32_t version) {
   return version >= 5 ? 34 : 64;
 }
-// Bytes per descriptor value: f32 before version 5, an 8-bit code from version 5.
+// Bytes per descriptor value: f32 before version 5, a 16-bit code from version 5 (8-bit
+// codes lost accuracy: docs/ROUTE_DB.md).
 constexpr std::size_t RouteDbDescriptorValueBytes(std::uint32_t version) {
-  return version >= 5 ? 1 : 4;
+  return version >= 5 ? 2 : 4;
 }
 // A frame record: the fixed part, the descriptor, then strip_columns bytes (version 4+).
 constexpr std::size_t RouteDbRecordBytes(std::uint32_t version, std::size_t dim,
@@ -332,8 +333,8 @@ class RouteDbWriter {
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
   // `strip`: settings.strip.columns bytes (version 4), empty when that is 0. The descriptor
-  // is stored as 8-bit codes (dsp::EncodeCodes: values >= 0, each within max / 255 of its
-  // code), the pose as floats.
+  // is stored as 16-bit codes (dsp::EncodeCodes: values >= 0, each within max / 65535
+  // of its code), the pose as floats.
   Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
                 std::span<const std::uint8_t> strip = {});
   // Writes the buffered frames as one chunk and waits until they are on the disk.
@@ -379,7 +380,8 @@ class RouteDbWriter {
   RouteTmpReport replaced_tmp_;
   std::uint64_t lost_ = 0;
   RouteDbSettings settings_;
-  FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
+  FixedArray<std::uint8_t> chunk_;   // chunk header + flush_every records
+  FixedArray<std::uint16_t> codes_;  // one descriptor's codes (format 5), before storing
   std::size_t flush_every_ = 0;
   std::size_t pending_ = 0;
   std::uint64_t appended_ = 0;

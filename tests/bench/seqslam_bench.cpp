@@ -123,8 +123,8 @@ BENCHMARK(BM_RouteFilterStepBFloat16)
     ->Arg(100000)
     ->Unit(benchmark::kMicrosecond);
 
-// The route held as 8-bit codes with a power-of-two scale per row (the route file's form,
-// format version 5): a quarter of the float route's bytes.
+// The route held as 8-bit square-law codes with a power-of-two scale per row: a quarter
+// of the float route's bytes.
 void BM_RouteFilterStepCodes8(benchmark::State& state) {
   RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kCodes8);
 }

@@ -276,8 +276,8 @@ enum class ReferenceStorage : std::uint8_t {
               // the memory traffic; far below the noise of any image descriptor
   // Codes with a power-of-two scale per row (EncodeCodes): dim + 1 bytes a row for kCodes8
   // (square law, error about sqrt(v max(row)) / 181), 2 dim + 1 for kCodes16 (linear,
-  // <= max(row) / 65535). The route database stores the descriptors as 8-bit codes
-  // (format version 5), so a route loads into kCodes8 exactly as it was taught. For
+  // <= max(row) / 65535). The route database stores the descriptors as 16-bit codes
+  // (format version 5), so a route loads into kCodes16 exactly as it was taught. For
   // amplitude spectra (values >= 0).
   kCodes8,
   kCodes16,
