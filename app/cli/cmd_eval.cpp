@@ -339,6 +339,7 @@ Status Evaluation::AddMatcherRuns(ScoredDescriptor method, const RunDescription&
       tools::MatcherSettings settings;
       settings.matcher = matcher;
       settings.filter = config().seqslam.filter;
+      settings.storage = config().capacities.route_storage;
       settings.filter.sequence_length = ds;
       settings.openseqslam = dsp::SeqSlamParams{};
       settings.openseqslam.sequence_length = ds;

@@ -78,6 +78,14 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   t.Int("--bands", "N", "SH bands of the sky descriptor (default 64, the robot's; the paper 120)",
         2, 200, &descriptor.bands);
   AddDescriptorChoices(&t, &descriptor.grid, &descriptor.normalisation);
+  t.Choice("--route-storage",
+           "how the route filter holds the taught descriptors, as [capacities] route_storage: "
+           "codes8, codes16, bfloat16 or float32 (default: the firmware's default)",
+           {{"float32", dsp::ReferenceStorage::kFloat32},
+            {"bfloat16", dsp::ReferenceStorage::kBFloat16},
+            {"codes8", dsp::ReferenceStorage::kCodes8},
+            {"codes16", dsp::ReferenceStorage::kCodes16}},
+           &e.config.capacities.route_storage);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
            &e.spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,
@@ -287,14 +295,16 @@ std::string CommonNotes(const tools::ExperimentOptions& e) {
          Format(
              ". OpenSeqSLAM: ds %d (unless stated), v %.1f..%.1f, R %d, Rwindow %d, centred "
              "window. Route filter: ds as OpenSeqSLAM's, K %d, keyframe noise factor %.3g, "
-             "Rwindow %d, causal. Ground truth: the reference frames tied (within 1 cm) "
+             "Rwindow %d, causal, route held as %s. Ground truth: the reference frames tied "
+             "(within 1 cm) "
              "for nearest by position; correct within %d frames of them; no truth farther "
              "than %.3g m.\n",
              e.seqslam.sequence_length, static_cast<double>(e.seqslam.v_min),
              static_cast<double>(e.seqslam.v_max), e.seqslam.contrast_window,
              e.seqslam.uniqueness_window, e.filter.max_advance,
              static_cast<double>(e.filter.keyframe_noise_factor), e.filter.uniqueness_window,
-             e.tolerance_frames, e.max_offset_m);
+             dsp::ReferenceStorageName(e.config.capacities.route_storage), e.tolerance_frames,
+             e.max_offset_m);
 }
 
 std::string HeadingCell(const dsp::HeadingErrorSummary& e) {

@@ -144,7 +144,8 @@ struct SeqSlamConfig {
 
 struct CapacityConfig {
   int route_frames = 10000;  // the largest route teach records and repeat loads
-  // How the matcher holds the route in memory (the route file always stores floats).
+  // How the matcher holds the route in memory (the route file stores 16-bit codes since
+  // format 5, which float32 and codes16 hold exactly).
   dsp::ReferenceStorage route_storage = dsp::ReferenceStorage::kFloat32;
 
   bool operator==(const CapacityConfig&) const = default;

@@ -13,8 +13,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <iterator>
+#include <limits>
 #include <vector>
 
+#include "skyloc/dsp/seqslam.h"
 #include "skyloc/dsp/spherical_harmonics.h"
 #include "skyloc/platform/bytes.h"
 #include "skyloc/platform/crc32.h"
@@ -26,21 +28,33 @@ namespace skyloc::firmware {
 
 namespace {
 
-// A frame record's pose: six little-endian doubles, x, y, z (m), roll, pitch, yaw (deg),
-// zero when the camera did not know it (docs/ROUTE_DB.md).
-void StorePose(const drivers::Pose& pose, std::uint8_t* p) {
-  const double values[6] = {pose.x_m,      pose.y_m,       pose.z_m,
-                            pose.roll_deg, pose.pitch_deg, pose.yaw_deg};
-  for (int i = 0; i < 6; ++i)
-    StoreBytes<double>(p + 8 * i, values[i]);
-}
-
+// A version 1-4 frame record's pose: six little-endian doubles, x, y, z (m), roll, pitch,
+// yaw (deg), zero when the camera did not know it (docs/ROUTE_DB.md).
 drivers::Pose LoadPose(const std::uint8_t* p) {
   drivers::Pose pose;
   double* const fields[6] = {&pose.x_m,      &pose.y_m,       &pose.z_m,
                              &pose.roll_deg, &pose.pitch_deg, &pose.yaw_deg};
   for (int i = 0; i < 6; ++i)
     *fields[i] = LoadBytes<double>(p + 8 * i);
+  return pose;
+}
+
+// Version 5: the pose as six floats. The pose is the camera's own (simulator, recorded
+// dataset) and only grades a repeat against the route; a float keeps a metre coordinate
+// within 0.5 mm up to 8 km from the origin and an angle within 4e-6 degree.
+void StorePoseFloats(const drivers::Pose& pose, std::uint8_t* p) {
+  const double values[6] = {pose.x_m,      pose.y_m,       pose.z_m,
+                            pose.roll_deg, pose.pitch_deg, pose.yaw_deg};
+  for (int i = 0; i < 6; ++i)
+    StoreBytes<float>(p + 4 * i, static_cast<float>(values[i]));
+}
+
+drivers::Pose LoadPoseFloats(const std::uint8_t* p) {
+  drivers::Pose pose;
+  double* const fields[6] = {&pose.x_m,      &pose.y_m,       &pose.z_m,
+                             &pose.roll_deg, &pose.pitch_deg, &pose.yaw_deg};
+  for (int i = 0; i < 6; ++i)
+    *fields[i] = static_cast<double>(LoadBytes<float>(p + 4 * i));
   return pose;
 }
 
@@ -139,8 +153,8 @@ void EncodeHeader(const RouteDbSettings& s, std::uint8_t* h) {
   StoreBytes<std::uint32_t>(h + 32, s.dim);
   StoreBytes<std::uint32_t>(h + 36, s.normalisation);
   StoreBytes<std::uint64_t>(h + 40, s.lens_hash);
-  StoreBytes<std::uint32_t>(h + 48,
-                            static_cast<std::uint32_t>(RouteDbRecordBytes(s.dim, s.strip.columns)));
+  StoreBytes<std::uint32_t>(h + 48, static_cast<std::uint32_t>(RouteDbRecordBytes(
+                                        kRouteDbVersion, s.dim, s.strip.columns)));
   StoreBytes<std::uint32_t>(h + 52, s.gravity_cap_cdeg);
   StoreBytes<std::uint32_t>(h + 56, s.gravity_cap_taper_cdeg);
   StoreBytes<std::uint32_t>(h + 60, CrcOf(h, 60));
@@ -325,7 +339,7 @@ Status ParseRouteDbHeader(std::span<const std::uint8_t> bytes, RouteDbLoadReport
     }
   }
   if (s.dim == 0 || s.dim > kMaxDim ||
-      LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(s.dim, s.strip.columns)) {
+      LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(version, s.dim, s.strip.columns)) {
     return Status::Error(StatusCode::kDataLoss,
                          "header (offset 0): descriptor size %u is "
                          "invalid",
@@ -335,30 +349,45 @@ Status ParseRouteDbHeader(std::span<const std::uint8_t> bytes, RouteDbLoadReport
 }
 
 // A frames chunk's `count` records at `payload` appended to `out` (its strips when
-// `keep_strips`); kResourceExhausted when `out` is full (`chunk` names the chunk).
+// `keep_strips`); kResourceExhausted when `out` is full (`chunk` names the chunk). `codes`:
+// room for a version-5 record's dim codes.
 Status AppendRecords(const std::uint8_t* payload, std::uint32_t count, std::size_t record_bytes,
-                     std::uint32_t dim, bool keep_strips, std::size_t chunk, RouteFrames* out) {
+                     std::uint32_t version, std::uint32_t dim, bool keep_strips, std::size_t chunk,
+                     std::span<std::uint16_t> codes, RouteFrames* out) {
   if (out->size() + count > out->capacity()) {
     return Status::Error(StatusCode::kResourceExhausted,
                          "the route has more than %zu frames (chunk %zu): raise [capacities] "
                          "route_frames",
                          out->capacity(), chunk);
   }
+  const std::size_t fixed_bytes = RouteDbRecordFixedBytes(version);
+  const std::size_t strip_at = fixed_bytes + RouteDbDescriptorValueBytes(version) * dim;
   for (std::uint32_t i = 0; i < count; ++i) {
     const std::uint8_t* rec = payload + std::size_t{i} * record_bytes;
     RouteFrameMeta meta;
     meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
-    if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0)
+    if (version >= 5) {
+      if ((rec[8] & kHasPose) != 0)
+        meta.pose = LoadPoseFloats(rec + 10);
+    } else if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0) {
       meta.pose = LoadPose(rec + 16);
-    // Copied byte-wise: the input need not be aligned for float.
+    }
     const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
     if (slot.descriptor.size() != dim)
       return Status::Error(StatusCode::kInternal, "route frames rejected a record");
-    std::memcpy(slot.descriptor.data(), rec + kRouteDbRecordFixedBytes,
-                slot.descriptor.size_bytes());
+    if (version >= 5) {
+      // Decoded exactly (a code times a power of two); a matcher holding 16-bit codes
+      // encodes the floats back to the same codes (dsp::EncodeCodes is idempotent).
+      for (std::size_t k = 0; k < dim; ++k)
+        codes[k] = LoadBytes<std::uint16_t>(rec + fixed_bytes + 2 * k);  // any alignment
+      dsp::DecodeCodes(std::span<const std::uint16_t>(codes.data(), dim),
+                       static_cast<std::int8_t>(rec[9]), slot.descriptor);
+    } else {
+      // Copied byte-wise: the input need not be aligned for float.
+      std::memcpy(slot.descriptor.data(), rec + fixed_bytes, slot.descriptor.size_bytes());
+    }
     if (keep_strips)
-      std::memcpy(slot.strip.data(), rec + kRouteDbRecordFixedBytes + 4 * std::size_t{dim},
-                  slot.strip.size());
+      std::memcpy(slot.strip.data(), rec + strip_at, slot.strip.size());
     if (Status added = out->Complete(slot); !added.ok()) {
       return Status::Error(added.code(), "route frame %zu: %s", out->size() - 1, added.message());
     }
@@ -372,9 +401,11 @@ Status CheckEndOfChunks(std::span<const std::uint8_t> bytes, const Status& probl
                         std::size_t offset, RouteDbLoadPolicy policy, RouteDbLoadReport* r) {
   if (!problem.ok()) {
     // Damage followed by an intact chunk header is in the middle of the route: dropping
-    // the tail would hide the frames after it, so only --salvage does that.
+    // the tail would hide the frames after it, so only --salvage does that. Searched at
+    // every byte: a version-5 record (34 + 2 dim + columns bytes) leaves chunks at any
+    // alignment.
     std::size_t intact_after = 0;
-    for (std::size_t o = offset + 4; o + kRouteDbChunkHeaderBytes <= bytes.size(); o += 4) {
+    for (std::size_t o = offset + 1; o + kRouteDbChunkHeaderBytes <= bytes.size(); ++o) {
       if (ChunkHeaderIntact(bytes.data() + o)) {
         intact_after = o;
         break;
@@ -429,7 +460,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   // without them loads the descriptors only (CheckSettings refuses two different strips).
   const bool keep_strips =
       out != nullptr && s.strip.columns != 0 && out->strip_columns() == s.strip.columns;
-  const std::size_t record_bytes = RouteDbRecordBytes(s.dim, s.strip.columns);
+  const std::size_t record_bytes = RouteDbRecordBytes(version, s.dim, s.strip.columns);
+  std::vector<std::uint16_t> codes(version >= 5 ? s.dim : 0);  // a version-5 record's codes
 
   std::size_t offset = data_offset;
   std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
@@ -497,7 +529,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
       break;
     }
     if (out != nullptr)
-      SKYLOC_TRY(AppendRecords(payload, count, record_bytes, s.dim, keep_strips, chunk, out));
+      SKYLOC_TRY(AppendRecords(payload, count, record_bytes, version, s.dim, keep_strips, chunk,
+                               codes, out));
     r.frames += count;
     ++r.chunks;
     offset += kRouteDbChunkHeaderBytes + payload_bytes;
@@ -710,8 +743,10 @@ Status RouteDbWriter::CreateLocked(const char* path, const RouteDbSettings& sett
   } else if (errno != ENOENT) {
     return Status::FromErrno(errno, "cannot check %s", path);
   }
-  const std::size_t record_bytes = RouteDbRecordBytes(settings.dim, settings.strip.columns);
+  const std::size_t record_bytes =
+      RouteDbRecordBytes(kRouteDbVersion, settings.dim, settings.strip.columns);
   SKYLOC_TRY(chunk_.Allocate(kRouteDbChunkHeaderBytes + flush_every * record_bytes));
+  SKYLOC_TRY(codes_.Allocate(settings.dim));
 
   char tmp[sizeof write_path_];
   std::snprintf(tmp, sizeof tmp, "%s.tmp", path);
@@ -770,17 +805,21 @@ Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> 
     return Status::Error(StatusCode::kInvalidArgument, "horizon strip has %zu columns, expected %u",
                          strip.size(), settings_.strip.columns);
   }
-  std::uint8_t* rec = chunk_.data() + kRouteDbChunkHeaderBytes +
-                      pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns);
-  std::memset(rec, 0, kRouteDbRecordFixedBytes);
+  std::uint8_t* rec =
+      chunk_.data() + kRouteDbChunkHeaderBytes +
+      pending_ * RouteDbRecordBytes(kRouteDbVersion, settings_.dim, settings_.strip.columns);
+  constexpr std::size_t kFixed = RouteDbRecordFixedBytes(kRouteDbVersion);
+  std::memset(rec, 0, kFixed);
   StoreBytes<std::uint64_t>(rec, meta.timestamp_ns);
-  StoreBytes<std::uint32_t>(rec + 8, meta.pose ? kHasPose : 0u);
+  rec[8] = meta.pose ? static_cast<std::uint8_t>(kHasPose) : std::uint8_t{0};
   if (meta.pose)
-    StorePose(*meta.pose, rec + 16);
-  std::memcpy(rec + kRouteDbRecordFixedBytes, descriptor.data(), descriptor.size_bytes());
+    StorePoseFloats(*meta.pose, rec + 10);
+  const std::int8_t exponent = dsp::EncodeCodes(descriptor, codes_.span());
+  for (std::size_t k = 0; k < descriptor.size(); ++k)
+    StoreBytes<std::uint16_t>(rec + kFixed + 2 * k, codes_[k]);  // little-endian
+  rec[9] = static_cast<std::uint8_t>(exponent);
   if (!strip.empty())
-    std::memcpy(rec + kRouteDbRecordFixedBytes + descriptor.size_bytes(), strip.data(),
-                strip.size());
+    std::memcpy(rec + kFixed + 2 * descriptor.size(), strip.data(), strip.size());
   ++pending_;
   ++appended_;
   if (pending_ == flush_every_)
@@ -812,8 +851,9 @@ Status RouteDbWriter::Flush() {
     return Status::Error(StatusCode::kFailedPrecondition, "route database is not open");
   if (pending_ == 0)
     return Status::Ok();
-  SKYLOC_TRY(WriteChunk(kChunkFrames, durable_, static_cast<std::uint32_t>(pending_),
-                        pending_ * RouteDbRecordBytes(settings_.dim, settings_.strip.columns)));
+  SKYLOC_TRY(WriteChunk(
+      kChunkFrames, durable_, static_cast<std::uint32_t>(pending_),
+      pending_ * RouteDbRecordBytes(kRouteDbVersion, settings_.dim, settings_.strip.columns)));
   durable_ += pending_;
   pending_ = 0;
   return Status::Ok();

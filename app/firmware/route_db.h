@@ -100,26 +100,44 @@ struct RouteFrameMeta {
   std::optional<drivers::Pose> pose;  // when the camera knew it
 };
 
+// The pose as a version-5 route file and RouteFrames keep it: each value rounded to a
+// float (a coordinate within 0.5 mm up to 8 km from the origin, an angle within 4e-6
+// degree).
+drivers::Pose RoutePoseFloats(const drivers::Pose& pose);
+
 inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 2 added the gravity cap (header offsets 52, 56, reserved and 0 in version 1).
 // Version 3 added the lens record after the header. Version 4 added the strip record after
-// the lens record and a horizon strip at the end of every frame record. This version reads
-// 1 to 4, writes 4.
-inline constexpr std::uint32_t kRouteDbVersion = 4;
+// the lens record and a horizon strip at the end of every frame record. Version 5 made the
+// frame record compact: the descriptor as 16-bit codes with a power-of-two scale
+// (dsp::EncodeCodes), the pose as floats. This version reads 1 to 5, writes 5.
+inline constexpr std::uint32_t kRouteDbVersion = 5;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
 inline constexpr std::size_t kRouteDbLensRecordBytes = 144;  // version 3, after the header
 inline constexpr std::size_t kRouteDbStripRecordBytes = 32;  // version 4, after the lens
 // Where the first chunk starts: after the header (versions 1, 2), the lens record (3) and
-// the strip record (4).
+// the strip record (4 and 5).
 constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
   return kRouteDbHeaderBytes + (version >= 3 ? kRouteDbLensRecordBytes : 0) +
          (version >= 4 ? kRouteDbStripRecordBytes : 0);
 }
 inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
-inline constexpr std::size_t kRouteDbRecordFixedBytes = 64;  // before the descriptor
-// A frame record: the fixed part, dim floats, then strip_columns bytes (version 4).
-constexpr std::size_t RouteDbRecordBytes(std::size_t dim, std::size_t strip_columns) {
-  return kRouteDbRecordFixedBytes + 4 * dim + strip_columns;
+// The frame record's part before the descriptor: versions 1 to 4 a u64 timestamp, u32
+// flags, u32 reserved and six f64 pose values; version 5 a u64 timestamp, u8 flags, the
+// descriptor's i8 scale exponent and six f32 pose values.
+constexpr std::size_t RouteDbRecordFixedBytes(std::uint32_t version) {
+  return version >= 5 ? 34 : 64;
+}
+// Bytes per descriptor value: f32 before version 5, a 16-bit code from version 5 (8-bit
+// codes lost accuracy: docs/ROUTE_DB.md).
+constexpr std::size_t RouteDbDescriptorValueBytes(std::uint32_t version) {
+  return version >= 5 ? 2 : 4;
+}
+// A frame record: the fixed part, the descriptor, then strip_columns bytes (version 4+).
+constexpr std::size_t RouteDbRecordBytes(std::uint32_t version, std::size_t dim,
+                                         std::size_t strip_columns) {
+  return RouteDbRecordFixedBytes(version) + RouteDbDescriptorValueBytes(version) * dim +
+         strip_columns;
 }
 
 // Where a route's descriptors and strips go when RouteFrames does not keep them: the
@@ -158,7 +176,7 @@ class RouteFrames {
                             std::span<const std::uint8_t> strip = {});
 
   std::size_t size() const { return size_; }
-  std::size_t capacity() const { return meta_.size(); }
+  std::size_t capacity() const { return timestamps_.size(); }
   std::size_t dim() const { return dim_; }
   std::size_t strip_columns() const { return strip_columns_; }
   bool has_strips() const { return has_strips_; }
@@ -175,7 +193,9 @@ class RouteFrames {
       return {};
     return {strips_.data() + i * strip_columns_, strip_columns_};
   }
-  const RouteFrameMeta& meta(std::size_t i) const { return meta_[i]; }
+  // Frame i's time and pose; the pose as the route file keeps it since version 5, in
+  // floats (RoutePoseFloats).
+  RouteFrameMeta meta(std::size_t i) const;
 
   // Adds a frame and returns its storage to fill in (the loader copies straight into it):
   // the descriptor, and the strip when `with_strip` (which the first frame decides for
@@ -192,7 +212,10 @@ class RouteFrames {
   RouteSink* sink_ = nullptr;
   FixedArray<float> descriptors_;    // capacity x dim; with a sink: one frame, to fill
   FixedArray<std::uint8_t> strips_;  // capacity x strip columns; with a sink: one frame
-  FixedArray<RouteFrameMeta> meta_;
+  // Per frame 32 bytes, not a RouteFrameMeta's 64: the time, and the pose as six floats
+  // (x NaN: no pose). A pose grades a repeat against the route and steers nothing.
+  FixedArray<std::uint64_t> timestamps_;
+  FixedArray<std::array<float, 6>> poses_;
   std::size_t dim_ = 0;
   std::size_t strip_columns_ = 0;
   std::size_t size_ = 0;
@@ -309,7 +332,9 @@ class RouteDbWriter {
   // flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
-  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0.
+  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0. The descriptor
+  // is stored as 16-bit codes (dsp::EncodeCodes: values >= 0, each within max / 65535
+  // of its code), the pose as floats.
   Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
                 std::span<const std::uint8_t> strip = {});
   // Writes the buffered frames as one chunk and waits until they are on the disk.
@@ -355,7 +380,8 @@ class RouteDbWriter {
   RouteTmpReport replaced_tmp_;
   std::uint64_t lost_ = 0;
   RouteDbSettings settings_;
-  FixedArray<std::uint8_t> chunk_;  // chunk header + flush_every records
+  FixedArray<std::uint8_t> chunk_;   // chunk header + flush_every records
+  FixedArray<std::uint16_t> codes_;  // one descriptor's codes (format 5), before storing
   std::size_t flush_every_ = 0;
   std::size_t pending_ = 0;
   std::uint64_t appended_ = 0;

@@ -1,9 +1,27 @@
 // RouteFrames: a loaded route's frames in memory (route_db.h), allocated once at start-up.
+#include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "firmware/route_db.h"
 
 namespace skyloc::firmware {
+
+drivers::Pose RoutePoseFloats(const drivers::Pose& p) {
+  const auto f = [](double v) { return static_cast<double>(static_cast<float>(v)); };
+  return drivers::Pose{f(p.x_m), f(p.y_m), f(p.z_m), f(p.roll_deg), f(p.pitch_deg), f(p.yaw_deg)};
+}
+
+RouteFrameMeta RouteFrames::meta(std::size_t i) const {
+  RouteFrameMeta m;
+  m.timestamp_ns = timestamps_[i];
+  const std::array<float, 6>& p = poses_[i];
+  if (!std::isnan(p[0])) {
+    const auto d = [](float v) { return static_cast<double>(v); };
+    m.pose = drivers::Pose{d(p[0]), d(p[1]), d(p[2]), d(p[3]), d(p[4]), d(p[5])};
+  }
+  return m;
+}
 
 Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns,
                              RouteSink* sink) {
@@ -11,7 +29,8 @@ Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t 
   const std::size_t kept = sink != nullptr ? 1 : capacity;
   SKYLOC_TRY(descriptors_.Allocate(kept * dim));
   SKYLOC_TRY(strips_.Allocate(kept * strip_columns));
-  SKYLOC_TRY(meta_.Allocate(capacity));
+  SKYLOC_TRY(timestamps_.Allocate(capacity));
+  SKYLOC_TRY(poses_.Allocate(capacity));
   dim_ = dim;
   strip_columns_ = strip_columns;
   Clear();
@@ -42,13 +61,21 @@ Status RouteFrames::Complete(const Slot& slot) {
 }
 
 RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_strip) {
-  if (size_ >= meta_.size() || (with_strip && strip_columns_ == 0))
+  if (size_ >= timestamps_.size() || (with_strip && strip_columns_ == 0))
     return {};
   if (size_ == 0)
     has_strips_ = with_strip;
   else if (with_strip != has_strips_)
     return {};
-  meta_[size_] = meta;
+  timestamps_[size_] = meta.timestamp_ns;
+  std::array<float, 6>& pose = poses_[size_];
+  if (meta.pose) {
+    pose = {static_cast<float>(meta.pose->x_m),       static_cast<float>(meta.pose->y_m),
+            static_cast<float>(meta.pose->z_m),       static_cast<float>(meta.pose->roll_deg),
+            static_cast<float>(meta.pose->pitch_deg), static_cast<float>(meta.pose->yaw_deg)};
+  } else {
+    pose.fill(std::numeric_limits<float>::quiet_NaN());
+  }
   Slot slot;
   slot.descriptor = {descriptors_.data() + (sink_ != nullptr ? 0 : size_ * dim_), dim_};
   if (with_strip)

@@ -40,10 +40,10 @@ std::span<const float> Row(const DescriptorRows& d, int i) {
 // The firmware's engine, as repeat runs it: causal, one query at a time.
 dsp::SeqSlamError RouteFilterMatches(const DescriptorRows& reference, const DescriptorRows& query,
                                      const dsp::RouteFilterParams& params,
-                                     const MatchProgress& progress,
+                                     dsp::ReferenceStorage storage, const MatchProgress& progress,
                                      std::span<dsp::SeqSlamMatch> matches) {
   dsp::RouteFilter engine;
-  dsp::SeqSlamError e = engine.Init(params, reference.dim, std::max(1, reference.count));
+  dsp::SeqSlamError e = engine.Init(params, reference.dim, std::max(1, reference.count), storage);
   for (int r = 0; e == dsp::SeqSlamError::kOk && r < reference.count; ++r)
     e = engine.AddReference(Row(reference, r));
   if (e == dsp::SeqSlamError::kOk)
@@ -56,10 +56,11 @@ dsp::SeqSlamError RouteFilterMatches(const DescriptorRows& reference, const Desc
 }
 
 dsp::SeqSlamError StreamingMatches(const DescriptorRows& reference, const DescriptorRows& query,
-                                   const dsp::SeqSlamParams& params, const MatchProgress& progress,
+                                   const dsp::SeqSlamParams& params, dsp::ReferenceStorage storage,
+                                   const MatchProgress& progress,
                                    std::span<dsp::SeqSlamMatch> matches) {
   dsp::StreamingSeqSlam engine;
-  dsp::SeqSlamError e = engine.Init(params, reference.dim, std::max(1, reference.count));
+  dsp::SeqSlamError e = engine.Init(params, reference.dim, std::max(1, reference.count), storage);
   for (int r = 0; e == dsp::SeqSlamError::kOk && r < reference.count; ++r)
     e = engine.AddReference(Row(reference, r));
   for (int t = 0; e == dsp::SeqSlamError::kOk && t < query.count; ++t) {
@@ -125,9 +126,9 @@ Status MatchRows(const DescriptorRows& reference, const DescriptorRows& query,
   };
   dsp::SeqSlamError e = dsp::SeqSlamError::kOk;
   if (settings.matcher == Matcher::kRouteFilter)
-    e = RouteFilterMatches(reference, query, settings.filter, update, matches);
+    e = RouteFilterMatches(reference, query, settings.filter, settings.storage, update, matches);
   else if (settings.streaming)
-    e = StreamingMatches(reference, query, settings.openseqslam, update, matches);
+    e = StreamingMatches(reference, query, settings.openseqslam, settings.storage, update, matches);
   else
     e = BatchMatches(reference, query, settings.openseqslam, settings.jobs, update, matches);
   if (progress)

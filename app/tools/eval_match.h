@@ -44,6 +44,9 @@ struct MatcherSettings {
   dsp::RouteFilterParams filter;   // kRouteFilter; its sequence_length is the run's ds
   dsp::SeqSlamParams openseqslam;  // kOpenSeqSlam; its sequence_length is the run's ds
   bool streaming = false;          // kOpenSeqSlam: the causal engine instead of the centred batch
+  // How the causal engines (the route filter, streaming OpenSeqSLAM) hold the reference
+  // rows: [capacities] route_storage, as the firmware does.
+  dsp::ReferenceStorage storage = dsp::ReferenceStorage::kFloat32;
   int jobs = 1;                    // threads of the batch engine; the matches do not depend on it
   const char* progress = nullptr;  // what a progress line on stderr calls the run; null: none
 };

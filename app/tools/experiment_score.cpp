@@ -65,6 +65,7 @@ Status SequenceMatches(const RunDescriptors& reference, const RunDescriptors& qu
   settings.filter = options.filter;
   settings.filter.sequence_length = options.seqslam.sequence_length;
   settings.openseqslam = options.seqslam;
+  settings.storage = options.config.capacities.route_storage;
   return MatchRows(rows(ref_descriptors), rows(query_descriptors), settings, matches);
 }
 

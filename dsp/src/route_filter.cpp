@@ -293,9 +293,8 @@ int RouteFilter::ReportedFrame(int best) const {
 }
 
 std::size_t RouteFilter::BytesPerReference(int dim, ReferenceStorage storage) {
-  const std::size_t element = storage == ReferenceStorage::kFloat32 ? 4 : 2;
   // Descriptor, two frame numbers, two cost columns, the difference column.
-  return element * Sz(dim) + 2 * sizeof(int) + 3 * sizeof(float);
+  return ReferenceRowBytes(storage, dim) + 2 * sizeof(int) + 3 * sizeof(float);
 }
 
 std::size_t RouteFilter::AllocatedBytes() const {

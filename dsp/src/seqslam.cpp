@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "float4.h"
 
@@ -88,28 +89,28 @@ using simd::Abs4;
 using simd::Float4;
 using simd::Load4;
 
-// Mean absolute difference of every row of a database to the query. `Rows` says how the
-// database holds its elements (float or bfloat16): Load8 gives elements i .. i + 7 of a
-// row as two Float4, Element one element as a float.
+// Mean absolute difference of every row of a database to the query. `rows` says how the
+// database holds its elements (float, bfloat16 or codes with a per-row scale):
+// rows.Load8(r, i, ...) gives elements i .. i + 7 of row r as two Float4, rows.At(r, i) one
+// element as a float.
 //
 // Eight independent partial sums per row (lane l sums elements l, l + 8, l + 16, ...),
 // held as two SIMD registers, combined as ((0+1)+(2+3))+((4+5)+(6+7)). No sum is
-// reordered (no fast-math), so every build gives the same floats, and a bfloat16
+// reordered (no fast-math), so every build gives the same floats, and a bfloat16 or code
 // database gives exactly what its float conversion would. Two rows per pass share each
 // load of the query, which does not fit in registers.
 template <typename Rows>
-void DifferenceRows(const typename Rows::Element* database, int dim, const float* q,
-                    std::span<float> out) {
+void DifferenceRows(const Rows& rows, int dim, const float* q, std::span<float> out) {
   const std::size_t d = Sz(dim);
   const float inv_dim = 1.0f / static_cast<float>(dim);
   constexpr std::size_t kLanes = 8;
   const std::size_t whole = d - d % kLanes;
-  const auto finish = [&](Float4 lo, Float4 hi, const typename Rows::Element* row) {
+  const auto finish = [&](Float4 lo, Float4 hi, std::size_t r) {
     float lane[kLanes];
     std::memcpy(lane, &lo, sizeof lo);
     std::memcpy(lane + 4, &hi, sizeof hi);
     for (std::size_t i = whole; i < d; ++i)
-      lane[i - whole] += std::fabs(Rows::ToFloat(row[i]) - q[i]);
+      lane[i - whole] += std::fabs(rows.At(r, i) - q[i]);
     const float sum =
         ((lane[0] + lane[1]) + (lane[2] + lane[3])) + ((lane[4] + lane[5]) + (lane[6] + lane[7]));
     // Mean absolute difference (OpenSeqSLAM divides by the number of references instead:
@@ -118,54 +119,54 @@ void DifferenceRows(const typename Rows::Element* database, int dim, const float
   };
   std::size_t r = 0;
   for (; r + 2 <= out.size(); r += 2) {
-    const typename Rows::Element* row0 = database + r * d;
-    const typename Rows::Element* row1 = row0 + d;
     Float4 a_lo = {}, a_hi = {}, b_lo = {}, b_hi = {};
     for (std::size_t i = 0; i < whole; i += kLanes) {
       const Float4 q_lo = Load4(q + i), q_hi = Load4(q + i + 4);
       Float4 lo, hi;
-      Rows::Load8(row0 + i, &lo, &hi);
+      rows.Load8(r, i, &lo, &hi);
       a_lo += Abs4(lo - q_lo);
       a_hi += Abs4(hi - q_hi);
-      Rows::Load8(row1 + i, &lo, &hi);
+      rows.Load8(r + 1, i, &lo, &hi);
       b_lo += Abs4(lo - q_lo);
       b_hi += Abs4(hi - q_hi);
     }
-    out[r] = finish(a_lo, a_hi, row0);
-    out[r + 1] = finish(b_lo, b_hi, row1);
+    out[r] = finish(a_lo, a_hi, r);
+    out[r + 1] = finish(b_lo, b_hi, r + 1);
   }
   for (; r < out.size(); ++r) {
-    const typename Rows::Element* row = database + r * d;
     Float4 acc_lo = {}, acc_hi = {};
     for (std::size_t i = 0; i < whole; i += kLanes) {
       Float4 lo, hi;
-      Rows::Load8(row + i, &lo, &hi);
+      rows.Load8(r, i, &lo, &hi);
       acc_lo += Abs4(lo - Load4(q + i));
       acc_hi += Abs4(hi - Load4(q + i + 4));
     }
-    out[r] = finish(acc_lo, acc_hi, row);
+    out[r] = finish(acc_lo, acc_hi, r);
   }
 }
 
 struct Float32Rows {
-  using Element = float;
-  static float ToFloat(float x) { return x; }
-  static void Load8(const float* p, Float4* lo, Float4* hi) {
+  const float* data;
+  std::size_t dim;
+  float At(std::size_t r, std::size_t i) const { return data[r * dim + i]; }
+  void Load8(std::size_t r, std::size_t i, Float4* lo, Float4* hi) const {
+    const float* p = data + r * dim + i;
     *lo = Load4(p);
     *hi = Load4(p + 4);
   }
 };
 
 struct BFloat16Rows {
-  using Element = std::uint16_t;
-  static float ToFloat(std::uint16_t x) { return FromBFloat16(x); }
+  const std::uint16_t* data;
+  std::size_t dim;
+  float At(std::size_t r, std::size_t i) const { return FromBFloat16(data[r * dim + i]); }
   // Eight bfloat16 become eight floats by interleaving them with zero halves: the
   // bfloat16 lands in the high 16 bits of each 32-bit lane (punpcklwd / zip1).
-  static void Load8(const std::uint16_t* p, Float4* lo, Float4* hi) {
+  void Load8(std::size_t r, std::size_t i, Float4* lo, Float4* hi) const {
     static_assert(std::endian::native == std::endian::little, "lane layout assumes little endian");
     using Half8 = std::uint16_t __attribute__((vector_size(16)));
     Half8 h;
-    std::memcpy(&h, p, sizeof h);
+    std::memcpy(&h, data + r * dim + i, sizeof h);
     const Half8 zero = {};
     const Half8 low = __builtin_shuffle(zero, h, Half8{0, 8, 1, 9, 2, 10, 3, 11});
     const Half8 high = __builtin_shuffle(zero, h, Half8{4, 12, 5, 13, 6, 14, 7, 15});
@@ -174,11 +175,48 @@ struct BFloat16Rows {
   }
 };
 
+// 2^e as a float, exact for kCodeMinExponent..kCodeMaxExponent (normal floats).
+float PowerOfTwo(int e) {
+  return std::bit_cast<float>(static_cast<std::uint32_t>(e + 127) << 23);
+}
+
+// Codes with a power-of-two scale per row: element = code * 2^exponent (16 bits) or
+// code^2 * 2^exponent (8 bits, square law), exact in float (at most 16 significant bits
+// times a power of two), so the differences are those of the decoded floats.
+template <typename Code>
+struct CodeRows {
+  const Code* data;
+  const std::int8_t* exponents;
+  std::size_t dim;
+  static constexpr bool kSquareLaw = sizeof(Code) == 1;
+  float At(std::size_t r, std::size_t i) const {
+    const float c = static_cast<float>(data[r * dim + i]);
+    return (kSquareLaw ? c * c : c) * PowerOfTwo(exponents[r]);
+  }
+  void Load8(std::size_t r, std::size_t i, Float4* lo, Float4* hi) const {
+    using Byte4 = std::uint8_t __attribute__((vector_size(4)));
+    using Short4 = std::uint16_t __attribute__((vector_size(8)));
+    using Code4 = std::conditional_t<sizeof(Code) == 1, Byte4, Short4>;
+    Code4 a, b;
+    const Code* p = data + r * dim + i;
+    std::memcpy(&a, p, sizeof a);
+    std::memcpy(&b, p + 4, sizeof b);
+    const float scale = PowerOfTwo(exponents[r]);
+    Float4 c_lo = __builtin_convertvector(a, Float4), c_hi = __builtin_convertvector(b, Float4);
+    if constexpr (kSquareLaw) {
+      c_lo *= c_lo;
+      c_hi *= c_hi;
+    }
+    *lo = c_lo * scale;
+    *hi = c_hi * scale;
+  }
+};
+
 }  // namespace
 
 void DifferenceColumn(std::span<const float> database, int dim, std::span<const float> query,
                       std::span<float> out) {
-  DifferenceRows<Float32Rows>(database.data(), dim, query.data(), out);
+  DifferenceRows(Float32Rows{database.data(), Sz(dim)}, dim, query.data(), out);
 }
 
 std::uint16_t ToBFloat16(float value) {
@@ -195,7 +233,46 @@ float FromBFloat16(std::uint16_t value) {
 
 void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
                               std::span<const float> query, std::span<float> out) {
-  DifferenceRows<BFloat16Rows>(database.data(), dim, query.data(), out);
+  DifferenceRows(BFloat16Rows{database.data(), Sz(dim)}, dim, query.data(), out);
+}
+
+template <typename Code>
+void DifferenceColumnCodes(std::span<const Code> codes, std::span<const std::int8_t> exponents,
+                           int dim, std::span<const float> query, std::span<float> out) {
+  DifferenceRows(CodeRows<Code>{codes.data(), exponents.data(), Sz(dim)}, dim, query.data(), out);
+}
+
+template void DifferenceColumnCodes(std::span<const std::uint8_t>, std::span<const std::int8_t>,
+                                    int, std::span<const float>, std::span<float>);
+template void DifferenceColumnCodes(std::span<const std::uint16_t>, std::span<const std::int8_t>,
+                                    int, std::span<const float>, std::span<float>);
+
+const char* ReferenceStorageName(ReferenceStorage storage) {
+  switch (storage) {
+    case ReferenceStorage::kFloat32:
+      return "float32";
+    case ReferenceStorage::kBFloat16:
+      return "bfloat16";
+    case ReferenceStorage::kCodes8:
+      return "codes8";
+    case ReferenceStorage::kCodes16:
+      return "codes16";
+  }
+  return "?";
+}
+
+std::size_t ReferenceRowBytes(ReferenceStorage storage, int dim) {
+  switch (storage) {
+    case ReferenceStorage::kFloat32:
+      return 4 * Sz(dim);
+    case ReferenceStorage::kBFloat16:
+      return 2 * Sz(dim);
+    case ReferenceStorage::kCodes8:
+      return Sz(dim) + 1;
+    case ReferenceStorage::kCodes16:
+      return 2 * Sz(dim) + 1;
+  }
+  return 0;
 }
 
 float EnhancementShift(int n, int contrast_window) {
@@ -554,33 +631,68 @@ SeqSlamError BatchSeqSlam(std::span<const float> reference, std::span<const floa
 void ReferenceRows::Allocate(int dim, int capacity, ReferenceStorage storage) {
   dim_ = dim;
   storage_ = storage;
-  float32_.clear();
-  float32_.shrink_to_fit();
-  bfloat16_.clear();
-  bfloat16_.shrink_to_fit();
-  if (storage == ReferenceStorage::kFloat32) {
-    float32_.assign(Sz(capacity) * Sz(dim), 0.0f);
-  } else {
-    bfloat16_.assign(Sz(capacity) * Sz(dim), 0);
+  float32_ = {};
+  bfloat16_ = {};
+  codes8_ = {};
+  codes16_ = {};
+  exponents_ = {};
+  const std::size_t elements = Sz(capacity) * Sz(dim);
+  switch (storage) {
+    case ReferenceStorage::kFloat32:
+      float32_.assign(elements, 0.0f);
+      break;
+    case ReferenceStorage::kBFloat16:
+      bfloat16_.assign(elements, 0);
+      break;
+    case ReferenceStorage::kCodes8:
+      codes8_.assign(elements, 0);
+      exponents_.assign(Sz(capacity), 0);
+      break;
+    case ReferenceStorage::kCodes16:
+      codes16_.assign(elements, 0);
+      exponents_.assign(Sz(capacity), 0);
+      break;
   }
 }
 
 void ReferenceRows::Store(int row, std::span<const float> descriptor) {
   const std::size_t at = Sz(row) * Sz(dim_);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    std::copy(descriptor.begin(), descriptor.end(), float32_.data() + at);
-  } else {
-    for (std::size_t i = 0; i < descriptor.size(); ++i)
-      bfloat16_[at + i] = ToBFloat16(descriptor[i]);
+  switch (storage_) {
+    case ReferenceStorage::kFloat32:
+      std::copy(descriptor.begin(), descriptor.end(), float32_.data() + at);
+      break;
+    case ReferenceStorage::kBFloat16:
+      for (std::size_t i = 0; i < descriptor.size(); ++i)
+        bfloat16_[at + i] = ToBFloat16(descriptor[i]);
+      break;
+    case ReferenceStorage::kCodes8:
+      exponents_[Sz(row)] =
+          EncodeCodes(descriptor, std::span<std::uint8_t>(codes8_.data() + at, Sz(dim_)));
+      break;
+    case ReferenceStorage::kCodes16:
+      exponents_[Sz(row)] =
+          EncodeCodes(descriptor, std::span<std::uint16_t>(codes16_.data() + at, Sz(dim_)));
+      break;
   }
 }
 
 void ReferenceRows::Copy(int from, int to) {
   const std::size_t dim = Sz(dim_);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    std::copy_n(float32_.data() + Sz(from) * dim, dim, float32_.data() + Sz(to) * dim);
-  } else {
-    std::copy_n(bfloat16_.data() + Sz(from) * dim, dim, bfloat16_.data() + Sz(to) * dim);
+  switch (storage_) {
+    case ReferenceStorage::kFloat32:
+      std::copy_n(float32_.data() + Sz(from) * dim, dim, float32_.data() + Sz(to) * dim);
+      break;
+    case ReferenceStorage::kBFloat16:
+      std::copy_n(bfloat16_.data() + Sz(from) * dim, dim, bfloat16_.data() + Sz(to) * dim);
+      break;
+    case ReferenceStorage::kCodes8:
+      std::copy_n(codes8_.data() + Sz(from) * dim, dim, codes8_.data() + Sz(to) * dim);
+      exponents_[Sz(to)] = exponents_[Sz(from)];
+      break;
+    case ReferenceStorage::kCodes16:
+      std::copy_n(codes16_.data() + Sz(from) * dim, dim, codes16_.data() + Sz(to) * dim);
+      exponents_[Sz(to)] = exponents_[Sz(from)];
+      break;
   }
 }
 
@@ -588,27 +700,52 @@ void ReferenceRows::Differences(std::span<const float> query, int first_row, int
                                 float* out) const {
   const std::size_t at = Sz(first_row) * Sz(dim_);
   const std::size_t elements = Sz(count) * Sz(dim_);
-  if (storage_ == ReferenceStorage::kFloat32) {
-    DifferenceColumn(std::span<const float>(float32_.data() + at, elements), dim_, query,
-                     std::span<float>(out, Sz(count)));
-  } else {
-    DifferenceColumnBFloat16(std::span<const std::uint16_t>(bfloat16_.data() + at, elements), dim_,
-                             query, std::span<float>(out, Sz(count)));
+  const std::span<float> column(out, Sz(count));
+  switch (storage_) {
+    case ReferenceStorage::kFloat32:
+      DifferenceColumn(std::span<const float>(float32_.data() + at, elements), dim_, query, column);
+      break;
+    case ReferenceStorage::kBFloat16:
+      DifferenceColumnBFloat16(std::span<const std::uint16_t>(bfloat16_.data() + at, elements),
+                               dim_, query, column);
+      break;
+    case ReferenceStorage::kCodes8:
+      DifferenceColumnCodes(std::span<const std::uint8_t>(codes8_.data() + at, elements),
+                            std::span<const std::int8_t>(exponents_.data() + first_row, Sz(count)),
+                            dim_, query, column);
+      break;
+    case ReferenceStorage::kCodes16:
+      DifferenceColumnCodes(std::span<const std::uint16_t>(codes16_.data() + at, elements),
+                            std::span<const std::int8_t>(exponents_.data() + first_row, Sz(count)),
+                            dim_, query, column);
+      break;
   }
 }
 
 void ReferenceRows::RowAsFloat(int row, float* out) const {
   const std::size_t dim = Sz(dim_), at = Sz(row) * dim;
-  if (storage_ == ReferenceStorage::kFloat32) {
-    std::copy_n(float32_.data() + at, dim, out);
-  } else {
-    for (std::size_t k = 0; k < dim; ++k)
-      out[k] = FromBFloat16(bfloat16_[at + k]);
+  switch (storage_) {
+    case ReferenceStorage::kFloat32:
+      std::copy_n(float32_.data() + at, dim, out);
+      break;
+    case ReferenceStorage::kBFloat16:
+      for (std::size_t k = 0; k < dim; ++k)
+        out[k] = FromBFloat16(bfloat16_[at + k]);
+      break;
+    case ReferenceStorage::kCodes8:
+      DecodeCodes(std::span<const std::uint8_t>(codes8_.data() + at, dim), exponents_[Sz(row)],
+                  std::span<float>(out, dim));
+      break;
+    case ReferenceStorage::kCodes16:
+      DecodeCodes(std::span<const std::uint16_t>(codes16_.data() + at, dim), exponents_[Sz(row)],
+                  std::span<float>(out, dim));
+      break;
   }
 }
 
 std::size_t ReferenceRows::AllocatedBytes() const {
-  return sizeof(float) * float32_.size() + sizeof(std::uint16_t) * bfloat16_.size();
+  return sizeof(float) * float32_.size() + sizeof(std::uint16_t) * bfloat16_.size() +
+         codes8_.size() + sizeof(std::uint16_t) * codes16_.size() + exponents_.size();
 }
 
 // ---- Streaming engine ------------------------------------------------------------------
@@ -709,8 +846,7 @@ SeqSlamError StreamingSeqSlam::Step(std::span<const float> query, SeqSlamMatch* 
 
 std::size_t StreamingSeqSlam::BytesPerReference(const SeqSlamParams& params, int dim,
                                                 ReferenceStorage storage) {
-  const std::size_t element = storage == ReferenceStorage::kFloat32 ? 4 : 2;
-  return element * Sz(dim) + sizeof(float) * (Sz(params.sequence_length) + 2);
+  return ReferenceRowBytes(storage, dim) + sizeof(float) * (Sz(params.sequence_length) + 2);
 }
 
 std::size_t StreamingSeqSlam::AllocatedBytes() const {

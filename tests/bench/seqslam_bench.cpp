@@ -123,6 +123,17 @@ BENCHMARK(BM_RouteFilterStepBFloat16)
     ->Arg(100000)
     ->Unit(benchmark::kMicrosecond);
 
+// The route held as 8-bit square-law codes with a power-of-two scale per row: a quarter
+// of the float route's bytes.
+void BM_RouteFilterStepCodes8(benchmark::State& state) {
+  RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kCodes8);
+}
+BENCHMARK(BM_RouteFilterStepCodes8)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMicrosecond);
+
 void BM_DifferenceColumn(benchmark::State& state) {
   const std::size_t n = static_cast<std::size_t>(state.range(0));
   const std::vector<float> db = RandomFloats(n * kDim, 1), q = RandomFloats(kDim, 2);

@@ -270,13 +270,22 @@ Scenario StopsAndSpeeds() {
 }
 
 TEST(RouteFilter, EqualsTheNaiveImplementationEveryFrame) {
-  for (const ReferenceStorage storage : {ReferenceStorage::kFloat32, ReferenceStorage::kBFloat16}) {
+  for (const ReferenceStorage storage :
+       {ReferenceStorage::kFloat32, ReferenceStorage::kBFloat16, ReferenceStorage::kCodes8}) {
     Scenario sc = StopsAndSpeeds();
     const int dim = sc.field.dim();
+    // The naive filter sees the route as the engine stores it.
     if (storage == ReferenceStorage::kBFloat16) {
-      // The naive filter sees the route as the engine stores it.
       for (float& v : sc.reference.descriptors)
         v = FromBFloat16(ToBFloat16(v));
+    }
+    if (storage == ReferenceStorage::kCodes8) {
+      const auto d = static_cast<std::size_t>(dim);
+      std::vector<std::uint8_t> codes(d);
+      for (std::size_t at = 0; at < sc.reference.descriptors.size(); at += d) {
+        const std::span<float> row(sc.reference.descriptors.data() + at, d);
+        DecodeCodes<std::uint8_t>(codes, EncodeCodes<std::uint8_t>(row, codes), row);
+      }
     }
     for (const int ds : {1, 4, 10}) {
       RouteFilterParams p;

@@ -345,6 +345,185 @@ TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
             2u * 120 + 4u * (10 + 2));
 }
 
+// ---- Code rows (ReferenceStorage::kCodes8, kCodes16) -----------------------------------
+
+// The codes' contract, checked against its analytic bound (seqslam.h): for 16 bits every
+// value within half a step, the step 2^e below max(row) / 32767.5; for 8 bits (square
+// law) |v - c^2 2^e| <= (sqrt(v / 2^e) + 1/4) 2^e with 2^e <= max(row) / 32640; the largest
+// value's code in the top of the range; decoding then encoding again gives the same codes.
+template <typename Code>
+void ExpectCodesWithinTheirBound(unsigned seed) {
+  constexpr bool kSquareLaw = sizeof(Code) == 1;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::uniform_int_distribution<int> magnitude(-40, 40);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const std::size_t dim = 1 + static_cast<std::size_t>(trial % 130);
+    const float scale = std::ldexp(1.0f, magnitude(rng));
+    std::vector<float> row(dim);
+    for (float& v : row)
+      v = unit(rng) * unit(rng) * scale;
+    if (trial % 7 == 0)
+      row[0] = 0.0f;
+    double max = 0;
+    for (const float v : row)
+      max = std::max(max, static_cast<double>(v));
+    std::vector<Code> codes(dim);
+    const std::int8_t e = EncodeCodes<Code>(row, codes);
+    std::vector<float> decoded(dim);
+    DecodeCodes<Code>(codes, e, decoded);
+    const double step = std::ldexp(1.0, e);
+    ASSERT_LE(step, max / (kSquareLaw ? 32640.0 : 32767.5) + 1e-30) << "trial " << trial;
+    Code top = 0;
+    for (std::size_t i = 0; i < dim; ++i) {
+      const double v = static_cast<double>(row[i]), c = static_cast<double>(codes[i]);
+      const double bound = kSquareLaw ? (std::sqrt(v / step) + 0.25) * step : step / 2;
+      EXPECT_LE(std::fabs(v - static_cast<double>(decoded[i])), bound) << trial << " " << i;
+      EXPECT_EQ(static_cast<double>(decoded[i]), (kSquareLaw ? c * c : c) * step);
+      top = std::max(top, codes[i]);
+    }
+    if (max > 0) {
+      EXPECT_GE(top, kSquareLaw ? 181 : 32768) << "trial " << trial;
+    }
+    std::vector<Code> again(dim);
+    EXPECT_EQ(EncodeCodes<Code>(decoded, again), e) << "trial " << trial;
+    EXPECT_EQ(again, codes) << "trial " << trial;
+  }
+}
+
+TEST(ReferenceCodes, EveryValueWithinTheCodesBound) {
+  ExpectCodesWithinTheirBound<std::uint8_t>(5u);
+  ExpectCodesWithinTheirBound<std::uint16_t>(6u);
+}
+
+TEST(ReferenceCodes, WorkedExamples) {
+  // 8 bits, square law. max 1 = 0.5 * 2^1: 2^e = 2^-15, so 1 -> sqrt(32768) = 181.02 -> 181,
+  // 0.5 -> sqrt(16384) = 128, 0.25 -> sqrt(8192) = 90.5 -> 91 (above the tie).
+  std::vector<std::uint8_t> codes(4);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{1.0f, 0.5f, 0.25f, 0.0f}, codes), -15);
+  EXPECT_EQ(codes, (std::vector<std::uint8_t>{181, 128, 91, 0}));
+  // 255^2 fits 2^e = 1; 65281 >= 255.5^2 does not, so the step doubles: sqrt(32640.5) ->
+  // 181.
+  std::vector<std::uint8_t> one(1);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{65025.0f}, one), 0);
+  EXPECT_EQ(one[0], 255);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{65281.0f}, one), 1);
+  EXPECT_EQ(one[0], 181);
+  // Ties go to even: sqrt(180.5^2) -> 180, sqrt(5.5^2) -> 6.
+  std::vector<std::uint8_t> ties(3);
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{65025.0f, 32580.25f, 30.25f}, ties), 0);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{255, 180, 6}));
+  // Negative and NaN values are not amplitudes: code 0; an all-zero row stays zero.
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{-1.0f, std::nanf(""), 2.0f}, ties), -14);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 181}));
+  EXPECT_EQ(EncodeCodes<std::uint8_t>(std::vector<float>{0.0f, 0.0f, 0.0f}, ties),
+            kCodeMinExponent);
+  EXPECT_EQ(ties, (std::vector<std::uint8_t>{0, 0, 0}));
+  // 16 bits, linear: max 1 -> 2^-15, so 1 -> 32768 and 2^-16 + 2^-17 (1.5 steps) -> 2.
+  std::vector<std::uint16_t> wide(2);
+  EXPECT_EQ(EncodeCodes<std::uint16_t>(std::vector<float>{1.0f, 0x1p-15f + 0x1p-16f}, wide), -15);
+  EXPECT_EQ(wide, (std::vector<std::uint16_t>{32768, 2}));
+}
+
+// The code scan gives DifferenceColumn's floats over the decoded rows, bit for bit, at
+// every descriptor length (whole lanes and tails).
+TEST(ReferenceCodes, DifferenceColumnEqualsTheDecodedFloats) {
+  std::mt19937 rng(9u);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (const int dim : {1, 7, 8, 13, 64, 120}) {
+    const int n = 37;
+    std::vector<float> rows(static_cast<std::size_t>(n * dim)),
+        query(static_cast<std::size_t>(dim));
+    for (float& v : rows)
+      v = unit(rng) * unit(rng);
+    for (float& v : query)
+      v = unit(rng) * 0.5f;
+    std::vector<std::uint8_t> codes8(rows.size());
+    std::vector<std::uint16_t> codes16(rows.size());
+    std::vector<std::int8_t> e8(static_cast<std::size_t>(n)), e16(static_cast<std::size_t>(n));
+    std::vector<float> decoded8(rows.size()), decoded16(rows.size());
+    const auto d = static_cast<std::size_t>(dim);
+    for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r) {
+      const std::span<const float> row(rows.data() + r * d, d);
+      e8[r] = EncodeCodes<std::uint8_t>(row, std::span(codes8.data() + r * d, d));
+      e16[r] = EncodeCodes<std::uint16_t>(row, std::span(codes16.data() + r * d, d));
+      DecodeCodes<std::uint8_t>(std::span<const std::uint8_t>(codes8.data() + r * d, d), e8[r],
+                                std::span(decoded8.data() + r * d, d));
+      DecodeCodes<std::uint16_t>(std::span<const std::uint16_t>(codes16.data() + r * d, d), e16[r],
+                                 std::span(decoded16.data() + r * d, d));
+    }
+    std::vector<float> want(static_cast<std::size_t>(n)), got(static_cast<std::size_t>(n));
+    DifferenceColumn(decoded8, dim, query, want);
+    DifferenceColumnCodes<std::uint8_t>(codes8, e8, dim, query, got);
+    EXPECT_EQ(got, want) << "8-bit codes, dim " << dim;
+    DifferenceColumn(decoded16, dim, query, want);
+    DifferenceColumnCodes<std::uint16_t>(codes16, e16, dim, query, got);
+    EXPECT_EQ(got, want) << "16-bit codes, dim " << dim;
+    // And the decoded column is within the codes' bound of the exact one: the mean of the
+    // per-element bounds (square law, seqslam.h).
+    std::vector<float> exact(static_cast<std::size_t>(n));
+    DifferenceColumn(rows, dim, query, exact);
+    DifferenceColumnCodes<std::uint8_t>(codes8, e8, dim, query, got);
+    for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r) {
+      const double step = std::ldexp(1.0, e8[r]);
+      double half_step = 0;  // the mean bound
+      for (std::size_t i = 0; i < d; ++i)
+        half_step += (std::sqrt(static_cast<double>(rows[r * d + i]) / step) + 0.25) * step;
+      half_step /= static_cast<double>(d);
+      EXPECT_LE(std::fabs(static_cast<double>(got[r]) - static_cast<double>(exact[r])),
+                half_step + 1e-6)
+          << dim;
+    }
+  }
+}
+
+TEST(SeqSlamStreaming, CodeStorageEqualsBatchOnDecodedDescriptors) {
+  PlantedRoute route = MakeRoute(150, 40, 20.0, 1.1, 0.3f, 17u);
+  // Amplitudes are >= 0: the planted sines (|x| <= 3) moved up.
+  for (float& x : route.reference)
+    x += 3.0f;
+  for (float& x : route.query)
+    x += 3.0f;
+  for (const ReferenceStorage storage : {ReferenceStorage::kCodes8, ReferenceStorage::kCodes16}) {
+    SeqSlamParams p;
+    std::vector<float> decoded = route.reference;
+    const auto d = static_cast<std::size_t>(route.dim);
+    for (std::size_t r = 0; r < 150; ++r) {
+      const std::span<float> row(decoded.data() + r * d, d);
+      if (storage == ReferenceStorage::kCodes8) {
+        std::vector<std::uint8_t> c(d);
+        DecodeCodes<std::uint8_t>(c, EncodeCodes<std::uint8_t>(row, c), row);
+      } else {
+        std::vector<std::uint16_t> c(d);
+        DecodeCodes<std::uint16_t>(c, EncodeCodes<std::uint16_t>(row, c), row);
+      }
+    }
+    std::vector<SeqSlamMatch> batch(40);
+    ASSERT_EQ(BatchSeqSlam(decoded, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
+              SeqSlamError::kOk);
+    StreamingSeqSlam s;
+    ASSERT_EQ(s.Init(p, route.dim, 150, storage), SeqSlamError::kOk);
+    ASSERT_TRUE(AddRoute(s, route));
+    AllocationScope scope;
+    int correct = 0;
+    for (int t = 0; t < 40; ++t) {
+      SeqSlamMatch m;
+      ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
+      const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
+      ASSERT_EQ(m.valid, b.valid);
+      EXPECT_EQ(m.reference, b.reference);
+      EXPECT_EQ(m.score, b.score);
+      EXPECT_EQ(m.uniqueness, b.uniqueness);
+      correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
+    }
+    EXPECT_EQ(scope.allocations(), 0u);
+    EXPECT_EQ(correct, 31) << ReferenceStorageName(storage);  // as float32 and bfloat16
+  }
+  EXPECT_EQ(StreamingSeqSlam::BytesPerReference(SeqSlamParams{}, 64, ReferenceStorage::kCodes8),
+            64u + 1 + 4u * (10 + 2));
+  EXPECT_EQ(ReferenceRowBytes(ReferenceStorage::kCodes16, 120), 241u);
+}
+
 TEST(SeqSlamStreaming, BFloat16RoundsToNearestEven) {
   EXPECT_EQ(ToBFloat16(1.0f), 0x3F80);
   EXPECT_EQ(ToBFloat16(-2.0f), 0xC000);

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -58,10 +59,52 @@ RouteDbSettings Settings() {
 // Where the first chunk starts in a file this skyloc writes (header + lens record).
 constexpr std::size_t kDataOffset = RouteDbDataOffset(kRouteDbVersion);
 
-// The file (written without strips) rewritten as an older version: the header says
-// `version`; below version 4 the strip record is cut out, below version 3 the lens record
-// too (those versions have none); version 1 also loses the cap.
-std::vector<std::uint8_t> AsVersion(std::vector<std::uint8_t> b, std::uint32_t version) {
+template <typename T>
+T Load(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <typename T>
+void Store(std::uint8_t* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+// The file (written without strips, complete chunks only) rewritten as an older version,
+// by the layouts docs/ROUTE_DB.md gives, independently of the writer: every frame record
+// becomes the 64-byte fixed part (u64 timestamp, u32 flags, u32 reserved, six f64 pose
+// values) and dim f32 values (16-bit code x 2^exponent); the header says `version`; below
+// version 4 the strip record is cut out, below version 3 the lens record too (those
+// versions have none); version 1 also loses the cap.
+std::vector<std::uint8_t> AsVersion(const std::vector<std::uint8_t>& v5, std::uint32_t version) {
+  std::vector<std::uint8_t> b(v5.begin(), v5.begin() + static_cast<long>(kDataOffset));
+  const std::size_t old_record = 64 + 4 * kDim, new_record = 34 + 2 * kDim;
+  Store<std::uint32_t>(b.data() + 48, static_cast<std::uint32_t>(old_record));
+  for (std::size_t o = kDataOffset; o + kRouteDbChunkHeaderBytes <= v5.size();) {
+    std::uint8_t header[kRouteDbChunkHeaderBytes];
+    std::memcpy(header, v5.data() + o, sizeof header);
+    const std::uint32_t count = Load<std::uint32_t>(header + 16);
+    std::vector<std::uint8_t> payload(count * old_record, 0);
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint8_t* in = v5.data() + o + kRouteDbChunkHeaderBytes + i * new_record;
+      std::uint8_t* out = payload.data() + i * old_record;
+      std::memcpy(out, in, 8);  // timestamp
+      Store<std::uint32_t>(out + 8, in[8]);
+      for (std::size_t k = 0; k < 6; ++k)
+        Store<double>(out + 16 + 8 * k, static_cast<double>(Load<float>(in + 10 + 4 * k)));
+      const int exponent = static_cast<std::int8_t>(in[9]);
+      for (std::size_t k = 0; k < kDim; ++k)
+        Store<float>(
+            out + 64 + 4 * k,
+            std::ldexp(static_cast<float>(Load<std::uint16_t>(in + 34 + 2 * k)), exponent));
+    }
+    Store<std::uint32_t>(header + 20, static_cast<std::uint32_t>(payload.size()));
+    Store<std::uint32_t>(header + 24, Crc32(payload));
+    Store<std::uint32_t>(header + 28, Crc32({header, 28}));
+    b.insert(b.end(), header, header + sizeof header);
+    b.insert(b.end(), payload.begin(), payload.end());
+    o += kRouteDbChunkHeaderBytes + count * new_record;
+  }
   std::memcpy(b.data() + 8, &version, 4);
   if (version < 4) {
     b.erase(b.begin() + static_cast<long>(RouteDbDataOffset(version)),
@@ -76,7 +119,9 @@ std::vector<std::uint8_t> AsVersion(std::vector<std::uint8_t> b, std::uint32_t v
   return b;
 }
 
-// Frame i's content: every value depends on i, so a misplaced record is noticed.
+// Frame i's content: every value depends on i, so a misplaced record is noticed. The
+// descriptor is one a version-5 record holds exactly (integers below 2^16, here squares,
+// times a power of two that changes from frame to frame), and the pose one a float does.
 void FrameContent(std::size_t i, RouteFrameMeta* meta, float* descriptor) {
   meta->timestamp_ns = 1000000ull * i + 7;
   meta->pose.reset();
@@ -84,8 +129,11 @@ void FrameContent(std::size_t i, RouteFrameMeta* meta, float* descriptor) {
     const double base = static_cast<double>(i) * 0.5;
     meta->pose = drivers::Pose{base, base + 1, base + 2, base + 3, base + 4, base + 5};
   }
-  for (std::size_t k = 0; k < kDim; ++k)
-    descriptor[k] = static_cast<float>(i) + 0.25f * static_cast<float>(k);
+  const int exponent = -3 - static_cast<int>(i % 5);
+  const auto square = [](std::size_t c) { return static_cast<float>(c * c); };
+  descriptor[0] = std::ldexp(square(255 - i % 75), exponent);
+  for (std::size_t k = 1; k < kDim; ++k)
+    descriptor[k] = std::ldexp(square((i * 31 + 17 * k) % 181), exponent);
 }
 
 void ExpectFrames(const RouteFrames& frames, std::size_t n) {
@@ -97,7 +145,8 @@ void ExpectFrames(const RouteFrames& frames, std::size_t n) {
     ASSERT_EQ(frames.meta(i).timestamp_ns, want.timestamp_ns) << i;
     ASSERT_EQ(frames.meta(i).pose.has_value(), want.pose.has_value()) << i;
     if (want.pose) {
-      const drivers::Pose& got = *frames.meta(i).pose;
+      const RouteFrameMeta loaded = frames.meta(i);
+      const drivers::Pose& got = *loaded.pose;
       ASSERT_EQ(got.x_m, want.pose->x_m) << i;
       ASSERT_EQ(got.y_m, want.pose->y_m) << i;
       ASSERT_EQ(got.z_m, want.pose->z_m) << i;
@@ -159,7 +208,7 @@ std::size_t ChunkOffset(std::size_t k, std::size_t f, std::size_t n) {
   std::size_t offset = kDataOffset;
   for (std::size_t j = 1; j < k; ++j) {
     const std::size_t frames = std::min(f, n - (j - 1) * f);
-    offset += kRouteDbChunkHeaderBytes + frames * RouteDbRecordBytes(kDim, 0);
+    offset += kRouteDbChunkHeaderBytes + frames * RouteDbRecordBytes(kRouteDbVersion, kDim, 0);
   }
   return offset;
 }
@@ -174,13 +223,15 @@ TEST_F(RouteDbTest, RoundTrip) {
   EXPECT_EQ(report.frames, 137u);
   EXPECT_EQ(report.chunks, 14u);
   EXPECT_EQ(report.settings, Settings());  // the lens record too
-  EXPECT_EQ(report.version, 4u);
+  EXPECT_EQ(report.version, 5u);
   ExpectFrames(frames_, 137);
   EXPECT_FALSE(frames_.has_strips());
   // The size follows from the format alone.
   EXPECT_EQ(Bytes().size(), kRouteDbHeaderBytes + kRouteDbLensRecordBytes +
                                 kRouteDbStripRecordBytes + 15 * kRouteDbChunkHeaderBytes +
-                                137 * RouteDbRecordBytes(kDim, 0));
+                                137 * RouteDbRecordBytes(kRouteDbVersion, kDim, 0));
+  // Version 5's record: u64 timestamp, u8 flags, i8 exponent, six f32, two bytes a value.
+  EXPECT_EQ(RouteDbRecordBytes(kRouteDbVersion, kDim, 0), 34 + 2 * kDim);
 }
 
 // Teach no longer leaves a route without frames (it removes the file), but a file that
@@ -514,12 +565,12 @@ TEST_F(RouteDbTest, ReadsVersionOneAndRefusesANewerVersion) {
   EXPECT_EQ(report.settings.gravity_cap_cdeg, kNoGravityCap);
   EXPECT_FALSE(report.settings.lens.known);
   ExpectFrames(frames_, 5);
-  std::vector<std::uint8_t> v5 = Bytes();
-  const std::uint32_t five = 5;
-  std::memcpy(v5.data() + 8, &five, 4);
-  s = Parse(v5);
+  std::vector<std::uint8_t> v6 = Bytes();
+  const std::uint32_t six = 6;
+  std::memcpy(v6.data() + 8, &six, 4);
+  s = Parse(v6);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(s.message()).find("version 5; this skyloc reads versions 1 to 4"),
+  EXPECT_NE(std::string(s.message()).find("version 6; this skyloc reads versions 1 to 5"),
             std::string::npos)
       << s.message();
 }
@@ -589,8 +640,8 @@ TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
     EXPECT_EQ(w.Append({}, d, short_strip).code(), StatusCode::kInvalidArgument);
     ASSERT_TRUE(w.Commit().ok());
   }
-  EXPECT_EQ(Bytes().size(), kDataOffset + 4 * kRouteDbChunkHeaderBytes +
-                                10 * (kRouteDbRecordFixedBytes + 4 * kDim + kColumns));
+  EXPECT_EQ(Bytes().size(),
+            kDataOffset + 4 * kRouteDbChunkHeaderBytes + 10 * (34 + 2 * kDim + kColumns));
   RouteFrames with_strips;
   ASSERT_TRUE(with_strips.Allocate(20, kDim, kColumns).ok());
   RouteDbLoadReport report;
@@ -627,7 +678,7 @@ TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
 TEST_F(RouteDbTest, VersionThreeLoadsWithoutStrips) {
   Teach(9, 4, true);
   const std::vector<std::uint8_t> v3 = AsVersion(Bytes(), 3);
-  EXPECT_EQ(v3.size() + kRouteDbStripRecordBytes, Bytes().size());
+  EXPECT_EQ(v3.size() + kRouteDbStripRecordBytes, AsVersion(Bytes(), 4).size());
   RouteDbSettings want = Settings();
   want.strip = {360, 16, 0, 2000};
   RouteFrames frames;
@@ -1021,6 +1072,90 @@ TEST_F(RouteDbTest, SurvivesKillDuringTeach) {
         "round_" + std::to_string(round),
         std::to_string(last_flushed) + " flushed, " + std::to_string(frames_.size()) + " loaded");
   }
+}
+
+// Every version this skyloc ever wrote (1 to 4: f32 descriptors and f64 poses, records
+// rewritten by the documented layout) loads to the same frames as the version-5 file.
+TEST_F(RouteDbTest, EveryOlderVersionLoadsTheSameFrames) {
+  Teach(23, 6, true);
+  for (std::uint32_t version = 1; version <= 4; ++version) {
+    const std::vector<std::uint8_t> old = AsVersion(Bytes(), version);
+    RouteDbLoadReport report;
+    RouteDbSettings want = Settings();
+    Status s = ParseRouteDb(old, &want, RouteDbLoadPolicy::kStrict, &frames_, &report);
+    ASSERT_TRUE(s.ok()) << "version " << version << ": " << s.message();
+    EXPECT_EQ(report.version, version);
+    EXPECT_EQ(report.frames, 23u);
+    ExpectFrames(frames_, 23);
+  }
+}
+
+// Any descriptor (not one the codes hold exactly) comes back within the 16-bit codes'
+// analytic bound (dsp/seqslam.h): half a step, a step below max / 32767.5, so within
+// max / 65535 of what was taught. Timestamps exactly, poses to a float.
+TEST_F(RouteDbTest, DescriptorsComeBackWithinTheCodesBound) {
+  std::mt19937 rng(3u);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<std::vector<float>> taught;
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 7, true).ok());
+    for (std::size_t i = 0; i < 40; ++i) {
+      std::vector<float> d(kDim);
+      const float scale = std::ldexp(1.0f, static_cast<int>(i % 13) - 6);
+      for (float& v : d)
+        v = unit(rng) * scale;
+      RouteFrameMeta meta;
+      meta.timestamp_ns = 0xfedcba9876543210ull + i;
+      meta.pose = drivers::Pose{1234.567, -89.001, 1.25, 3.3, -2.2, 179.9};
+      ASSERT_TRUE(w.Append(meta, d).ok());
+      taught.push_back(d);
+    }
+    ASSERT_TRUE(w.Commit().ok());
+  }
+  const RouteDbSettings want = Settings();
+  ASSERT_TRUE(
+      LoadRouteDb(path_.c_str(), &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr).ok());
+  ASSERT_EQ(frames_.size(), 40u);
+  for (std::size_t i = 0; i < 40; ++i) {
+    float max = 0;
+    for (const float v : taught[i])
+      max = std::max(max, v);
+    for (std::size_t k = 0; k < kDim; ++k) {
+      const double v = static_cast<double>(taught[i][k]), m = static_cast<double>(max);
+      EXPECT_LE(std::fabs(static_cast<double>(frames_.descriptor(i)[k]) - v), m / 65535)
+          << i << "," << k;
+    }
+    EXPECT_EQ(frames_.meta(i).timestamp_ns, 0xfedcba9876543210ull + i);
+    ASSERT_TRUE(frames_.meta(i).pose.has_value());
+    EXPECT_EQ(frames_.meta(i).pose->x_m, static_cast<double>(1234.567f));
+    EXPECT_EQ(frames_.meta(i).pose->yaw_deg, static_cast<double>(179.9f));
+  }
+}
+
+// Same bits on every target (tests/sim/same_bits_test.cpp): the bytes of a taught route,
+// codes, exponents, float poses and checksums, hash to the value computed on x86-64. The
+// aarch64 and armhf builds run this test too.
+TEST_F(RouteDbTest, SameBitsOfATaughtRoute) {
+  std::mt19937 rng(11u);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), Settings(), 8, true).ok());
+    for (std::size_t i = 0; i < 30; ++i) {
+      float d[kDim];
+      for (float& v : d)
+        v = unit(rng) * unit(rng);
+      RouteFrameMeta meta;
+      meta.timestamp_ns = 33333333ull * i;
+      meta.pose = drivers::Pose{0.1 * static_cast<double>(i), -0.3, 1, 0.5, -1.5, 2.5};
+      ASSERT_TRUE(w.Append(meta, d).ok());
+    }
+    ASSERT_TRUE(w.Commit().ok());
+  }
+  char crc[11];
+  std::snprintf(crc, sizeof crc, "0x%08x", Crc32(Bytes()));
+  EXPECT_EQ(std::string(crc), "0x610deb7c") << "the value is x86-64's";
 }
 
 }  // namespace

@@ -102,7 +102,7 @@ for ((round = 1; round <= ROUNDS; round++)); do
     same_count "$said" "$held"
 
   # --- 2. a teach --force that commits nothing: a full disk before the first chunk (4 KiB:
-  # the 240-byte header fits, a chunk of 10 frames, 5232 bytes, does not; stderr is
+  # the 240-byte header fits, a chunk of 10 frames, 4452 bytes in format 5, does not; stderr is
   # limited too, and its lines fit) ...
   fresh_route 30
   (ulimit -f 4 && exec "${RUN[@]}" teach --force --route "$DB" --config "$CONFIG" --frames 50) \

@@ -125,6 +125,47 @@ void DifferenceColumnBFloat16(std::span<const std::uint16_t> database, int dim,
 std::uint16_t ToBFloat16(float value);
 float FromBFloat16(std::uint16_t value);
 
+// A descriptor row as unsigned integer codes with one power-of-two scale 2^e for the row
+// (ReferenceStorage::kCodes8, kCodes16). The exponent e is the smallest that fits the
+// row's largest value in the codes.
+//  - 16 bits, linear: value = code * 2^e, code = round(v / 2^e); the largest value's code
+//    is 32768..65535, and |v - code 2^e| <= 2^(e-1) < max(row) / 65535.
+//  - 8 bits, square law: value = code^2 * 2^e, code = round(sqrt(v / 2^e)); the largest
+//    value's code is 181..255 and 2^e <= max(row) / 32640, so
+//    |v - code^2 2^e| <= (sqrt(v / 2^e) + 1/4) 2^e: about max / 181 at the largest value
+//    and sqrt(v max / 32640) below it, a relative error that grows only as 1/sqrt(v)
+//    where a linear 8-bit code's grows as 1/v. Amplitude spectra hold a few large and many
+//    small values, and the small ones (fine detail) are what tells similar places apart.
+// A power of two (and code^2 <= 65025 < 2^24) makes the decoded value exact in float (no
+// rounding on any machine) and the encoding idempotent: a decoded row encodes to the same
+// codes and exponent, so a route read back from its file and stored again is bit for bit
+// the same.
+// Amplitude spectra are >= 0: a negative or NaN value is stored as code 0. The exponent
+// stays in kCodeMinExponent..kCodeMaxExponent, so every decoded value is a normal float or
+// zero (a row whose largest value is below 2^-110 has codes of 0 and small integers).
+inline constexpr int kCodeMinExponent = -118;
+inline constexpr int kCodeMaxExponent = 100;
+template <typename Code>
+std::int8_t EncodeCodes(std::span<const float> row, std::span<Code> codes);
+template <typename Code>
+void DecodeCodes(std::span<const Code> codes, std::int8_t exponent, std::span<float> out);
+extern template std::int8_t EncodeCodes(std::span<const float>, std::span<std::uint8_t>);
+extern template std::int8_t EncodeCodes(std::span<const float>, std::span<std::uint16_t>);
+extern template void DecodeCodes(std::span<const std::uint8_t>, std::int8_t, std::span<float>);
+extern template void DecodeCodes(std::span<const std::uint16_t>, std::int8_t, std::span<float>);
+
+// DifferenceColumn over a database of code rows (row r: codes[r * dim ..], exponents[r]).
+// Bit for bit equal to DifferenceColumn over the rows decoded with DecodeCodes.
+template <typename Code>
+void DifferenceColumnCodes(std::span<const Code> codes, std::span<const std::int8_t> exponents,
+                           int dim, std::span<const float> query, std::span<float> out);
+extern template void DifferenceColumnCodes(std::span<const std::uint8_t>,
+                                           std::span<const std::int8_t>, int,
+                                           std::span<const float>, std::span<float>);
+extern template void DifferenceColumnCodes(std::span<const std::uint16_t>,
+                                           std::span<const std::int8_t>, int,
+                                           std::span<const float>, std::span<float>);
+
 // Local contrast enhancement of one column of D: out[r] = (d[r] - mean) / std over rows
 // max(0, r - R/2) .. min(N - 1, r + R/2) (sample std, as MATLAB's std), plus the shift of
 // note 4 above; 0 + shift where the std is 0. O(N) with running sums.
@@ -233,7 +274,19 @@ enum class ReferenceStorage : std::uint8_t {
   kFloat32,   // exact: 4 bytes per element
   kBFloat16,  // rounded to 8 significant bits (relative error <= 2^-9): half the memory and
               // the memory traffic; far below the noise of any image descriptor
+  // Codes with a power-of-two scale per row (EncodeCodes): dim + 1 bytes a row for kCodes8
+  // (square law, error about sqrt(v max(row)) / 181), 2 dim + 1 for kCodes16 (linear,
+  // <= max(row) / 65535). The route database stores the descriptors as 16-bit codes
+  // (format version 5), so a route loads into kCodes16 exactly as it was taught. For
+  // amplitude spectra (values >= 0).
+  kCodes8,
+  kCodes16,
 };
+
+// "float32", "bfloat16", "codes8", "codes16".
+const char* ReferenceStorageName(ReferenceStorage storage);
+// Bytes a row of `dim` elements takes in `storage`.
+std::size_t ReferenceRowBytes(ReferenceStorage storage, int dim);
 
 // The taught route's descriptors as a matcher holds them (float32 or bfloat16), one row
 // per frame; shared by StreamingSeqSlam and RouteFilter. Allocate is the only allocation;
@@ -241,7 +294,8 @@ enum class ReferenceStorage : std::uint8_t {
 class ReferenceRows {
  public:
   void Allocate(int dim, int capacity, ReferenceStorage storage);
-  // Row `row` becomes `descriptor` (dim floats; rounded to bfloat16 when stored so).
+  // Row `row` becomes `descriptor` (dim floats; rounded to bfloat16 or encoded as codes
+  // when stored so).
   void Store(int row, std::span<const float> descriptor);
   // Row `to` becomes a copy of row `from`.
   void Copy(int from, int to);
@@ -259,6 +313,9 @@ class ReferenceRows {
   ReferenceStorage storage_ = ReferenceStorage::kFloat32;
   std::vector<float> float32_;           // capacity x dim (kFloat32)
   std::vector<std::uint16_t> bfloat16_;  // capacity x dim (kBFloat16)
+  std::vector<std::uint8_t> codes8_;     // capacity x dim (kCodes8)
+  std::vector<std::uint16_t> codes16_;   // capacity x dim (kCodes16)
+  std::vector<std::int8_t> exponents_;   // capacity (kCodes8, kCodes16)
 };
 
 class StreamingSeqSlam {
