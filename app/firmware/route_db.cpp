@@ -28,14 +28,16 @@ namespace skyloc::firmware {
 
 namespace {
 
-// A version 1-4 frame record's pose: six little-endian doubles, x, y, z (m), roll, pitch,
-// yaw (deg), zero when the camera did not know it (docs/ROUTE_DB.md).
+// A frame record's pose: six little-endian values of T, x, y, z (m), roll, pitch, yaw
+// (deg): doubles in versions 1-4, zero when the camera did not know it, floats in version 5
+// (docs/ROUTE_DB.md).
+template <typename T>
 drivers::Pose LoadPose(const std::uint8_t* p) {
   drivers::Pose pose;
   double* const fields[6] = {&pose.x_m,      &pose.y_m,       &pose.z_m,
                              &pose.roll_deg, &pose.pitch_deg, &pose.yaw_deg};
-  for (int i = 0; i < 6; ++i)
-    *fields[i] = LoadBytes<double>(p + 8 * i);
+  for (std::size_t i = 0; i < 6; ++i)
+    *fields[i] = static_cast<double>(LoadBytes<T>(p + sizeof(T) * i));
   return pose;
 }
 
@@ -47,15 +49,6 @@ void StorePoseFloats(const drivers::Pose& pose, std::uint8_t* p) {
                             pose.roll_deg, pose.pitch_deg, pose.yaw_deg};
   for (int i = 0; i < 6; ++i)
     StoreBytes<float>(p + 4 * i, static_cast<float>(values[i]));
-}
-
-drivers::Pose LoadPoseFloats(const std::uint8_t* p) {
-  drivers::Pose pose;
-  double* const fields[6] = {&pose.x_m,      &pose.y_m,       &pose.z_m,
-                             &pose.roll_deg, &pose.pitch_deg, &pose.yaw_deg};
-  for (int i = 0; i < 6; ++i)
-    *fields[i] = static_cast<double>(LoadBytes<float>(p + 4 * i));
-  return pose;
 }
 
 constexpr char kMagic[8] = {'S', 'K', 'Y', 'L', 'O', 'C', 'R', 'T'};
@@ -368,9 +361,9 @@ Status AppendRecords(const std::uint8_t* payload, std::uint32_t count, std::size
     meta.timestamp_ns = LoadBytes<std::uint64_t>(rec);
     if (version >= 5) {
       if ((rec[8] & kHasPose) != 0)
-        meta.pose = LoadPoseFloats(rec + 10);
+        meta.pose = LoadPose<float>(rec + 10);
     } else if ((LoadBytes<std::uint32_t>(rec + 8) & kHasPose) != 0) {
-      meta.pose = LoadPose(rec + 16);
+      meta.pose = LoadPose<double>(rec + 16);
     }
     const RouteFrames::Slot slot = out->Emplace(meta, keep_strips);
     if (slot.descriptor.size() != dim)
@@ -460,6 +453,7 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   // without them loads the descriptors only (CheckSettings refuses two different strips).
   const bool keep_strips =
       out != nullptr && s.strip.columns != 0 && out->strip_columns() == s.strip.columns;
+  const std::uint32_t version = r.version;
   const std::size_t record_bytes = RouteDbRecordBytes(version, s.dim, s.strip.columns);
   std::vector<std::uint16_t> codes(version >= 5 ? s.dim : 0);  // a version-5 record's codes
 
