@@ -172,6 +172,13 @@ ensure_sysroot() {
 # deps demo: the skyloc executable only. Every build kind: all the host build's packages
 # (its tests, tools, fuzz targets and package test), and for host and aarch64 the VM
 # tests', for the ARM kinds the cross compilers and the sysroot.
+# Everything ./skyloc.sh test builds: the host's packages, both ARM sysroots.
+deps_for_test() {
+  deps host
+  deps aarch64
+  deps armhf
+}
+
 deps() {
   local kind=${1:-host}
   mkdir -p "$BUILD_ROOT"
