@@ -315,32 +315,42 @@ TEST(SeqSlamStreaming, LongRouteEqualsBatchAcrossChunks) {
   }
 }
 
+// A streaming engine holding `route` as `storage`, stepped over its 40 queries: every match
+// must equal the batch engine's on `held` (the route as that storage holds it), with
+// nothing allocated. Returns how many matches are right within one frame.
+int StreamingMatchesBatchOnHeldRoute(const PlantedRoute& route, const std::vector<float>& held,
+                                     ReferenceStorage storage) {
+  SeqSlamParams p;
+  std::vector<SeqSlamMatch> batch(40);
+  EXPECT_EQ(BatchSeqSlam(held, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
+            SeqSlamError::kOk);
+  StreamingSeqSlam s;
+  EXPECT_EQ(s.Init(p, route.dim, 150, storage), SeqSlamError::kOk);
+  EXPECT_TRUE(AddRoute(s, route));
+  AllocationScope scope;
+  int correct = 0;
+  for (int t = 0; t < 40; ++t) {
+    SeqSlamMatch m;
+    EXPECT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
+    const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
+    EXPECT_EQ(m.valid, b.valid) << "t " << t;
+    EXPECT_EQ(m.reference, b.reference) << "t " << t;
+    EXPECT_EQ(m.score, b.score) << "t " << t;
+    EXPECT_EQ(m.uniqueness, b.uniqueness) << "t " << t;
+    correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  return correct;
+}
+
 TEST(SeqSlamStreaming, BFloat16StorageEqualsBatchOnRoundedDescriptors) {
   const PlantedRoute route = MakeRoute(150, 40, 20.0, 1.1, 0.3f, 17u);
   SeqSlamParams p;
   std::vector<float> rounded = route.reference;
   for (float& x : rounded)
     x = FromBFloat16(ToBFloat16(x));
-  std::vector<SeqSlamMatch> batch(40);
-  ASSERT_EQ(BatchSeqSlam(rounded, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
-            SeqSlamError::kOk);
-  StreamingSeqSlam s;
-  ASSERT_EQ(s.Init(p, route.dim, 150, ReferenceStorage::kBFloat16), SeqSlamError::kOk);
-  ASSERT_TRUE(AddRoute(s, route));
-  AllocationScope scope;
-  int correct = 0;
-  for (int t = 0; t < 40; ++t) {
-    SeqSlamMatch m;
-    ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
-    const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
-    ASSERT_EQ(m.valid, b.valid);
-    EXPECT_EQ(m.reference, b.reference);
-    EXPECT_EQ(m.score, b.score);
-    EXPECT_EQ(m.uniqueness, b.uniqueness);
-    correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
-  }
-  EXPECT_EQ(scope.allocations(), 0u);
-  EXPECT_EQ(correct, 31);  // the rounding costs nothing here
+  // The rounding costs nothing here.
+  EXPECT_EQ(StreamingMatchesBatchOnHeldRoute(route, rounded, ReferenceStorage::kBFloat16), 31);
   EXPECT_EQ(StreamingSeqSlam::BytesPerReference(p, 120, ReferenceStorage::kBFloat16),
             2u * 120 + 4u * (10 + 2));
 }
@@ -485,7 +495,6 @@ TEST(SeqSlamStreaming, CodeStorageEqualsBatchOnDecodedDescriptors) {
   for (float& x : route.query)
     x += 3.0f;
   for (const ReferenceStorage storage : {ReferenceStorage::kCodes8, ReferenceStorage::kCodes16}) {
-    SeqSlamParams p;
     std::vector<float> decoded = route.reference;
     const auto d = static_cast<std::size_t>(route.dim);
     for (std::size_t r = 0; r < 150; ++r) {
@@ -498,26 +507,8 @@ TEST(SeqSlamStreaming, CodeStorageEqualsBatchOnDecodedDescriptors) {
         DecodeCodes<std::uint16_t>(c, EncodeCodes<std::uint16_t>(row, c), row);
       }
     }
-    std::vector<SeqSlamMatch> batch(40);
-    ASSERT_EQ(BatchSeqSlam(decoded, route.query, route.dim, p, SeqSlamWindow::kTrailing, batch),
-              SeqSlamError::kOk);
-    StreamingSeqSlam s;
-    ASSERT_EQ(s.Init(p, route.dim, 150, storage), SeqSlamError::kOk);
-    ASSERT_TRUE(AddRoute(s, route));
-    AllocationScope scope;
-    int correct = 0;
-    for (int t = 0; t < 40; ++t) {
-      SeqSlamMatch m;
-      ASSERT_EQ(s.Step(route.Query(t), &m), SeqSlamError::kOk);
-      const SeqSlamMatch& b = batch[static_cast<std::size_t>(t)];
-      ASSERT_EQ(m.valid, b.valid);
-      EXPECT_EQ(m.reference, b.reference);
-      EXPECT_EQ(m.score, b.score);
-      EXPECT_EQ(m.uniqueness, b.uniqueness);
-      correct += m.valid && std::abs(m.reference - route.truth[static_cast<std::size_t>(t)]) <= 1;
-    }
-    EXPECT_EQ(scope.allocations(), 0u);
-    EXPECT_EQ(correct, 31) << ReferenceStorageName(storage);  // as float32 and bfloat16
+    EXPECT_EQ(StreamingMatchesBatchOnHeldRoute(route, decoded, storage), 31)
+        << ReferenceStorageName(storage);  // as float32 and bfloat16
   }
   EXPECT_EQ(StreamingSeqSlam::BytesPerReference(SeqSlamParams{}, 64, ReferenceStorage::kCodes8),
             64u + 1 + 4u * (10 + 2));
