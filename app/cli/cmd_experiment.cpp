@@ -78,14 +78,18 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   t.Int("--bands", "N", "SH bands of the sky descriptor (default 64, the robot's; the paper 120)",
         2, 200, &descriptor.bands);
   AddDescriptorChoices(&t, &descriptor.grid, &descriptor.normalisation);
-  t.Choice("--route-storage",
-           "how the route filter holds the taught descriptors, as [capacities] route_storage: "
-           "codes8, codes16, bfloat16 or float32 (default: the firmware's default)",
-           {{"float32", dsp::ReferenceStorage::kFloat32},
-            {"bfloat16", dsp::ReferenceStorage::kBFloat16},
-            {"codes8", dsp::ReferenceStorage::kCodes8},
-            {"codes16", dsp::ReferenceStorage::kCodes16}},
-           &e.config.capacities.route_storage);
+  t.Choice(
+      "--route-storage",
+      "how the route filter holds the taught descriptors, as [capacities] route_storage: "
+      "codes8, codes16, bfloat16 or float32 (default: the firmware's default)",
+      {{dsp::ReferenceStorageName(dsp::ReferenceStorage::kFloat32),
+        dsp::ReferenceStorage::kFloat32},
+       {dsp::ReferenceStorageName(dsp::ReferenceStorage::kBFloat16),
+        dsp::ReferenceStorage::kBFloat16},
+       {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes8), dsp::ReferenceStorage::kCodes8},
+       {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes16),
+        dsp::ReferenceStorage::kCodes16}},
+      &e.config.capacities.route_storage);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
            &e.spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,

@@ -64,10 +64,10 @@ constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNon
                                                      {"dataset", AttitudeKind::kDataset},
                                                      {"sim", AttitudeKind::kSim}};
 constexpr EnumName<dsp::ReferenceStorage> kRouteStorages[] = {
-    {"float32", dsp::ReferenceStorage::kFloat32},
-    {"bfloat16", dsp::ReferenceStorage::kBFloat16},
-    {"codes8", dsp::ReferenceStorage::kCodes8},
-    {"codes16", dsp::ReferenceStorage::kCodes16}};
+    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kFloat32), dsp::ReferenceStorage::kFloat32},
+    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kBFloat16), dsp::ReferenceStorage::kBFloat16},
+    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes8), dsp::ReferenceStorage::kCodes8},
+    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes16), dsp::ReferenceStorage::kCodes16}};
 
 // Every table above, found by its enum's type (NameOf, SectionReader::Enum).
 template <typename E, std::size_t N>

@@ -9,14 +9,7 @@
 #include "skyloc/dsp/seqslam.h"
 
 namespace skyloc::dsp {
-namespace {
-
-// 2^e as a float, exact for kCodeMinExponent..kCodeMaxExponent (normal floats).
-float PowerOfTwo(int e) {
-  return std::bit_cast<float>(static_cast<std::uint32_t>(e + 127) << 23);
-}
-
-}  // namespace
+namespace {}  // namespace
 
 template <typename Code>
 std::int8_t EncodeCodes(std::span<const float> row, std::span<Code> codes) {
@@ -56,7 +49,7 @@ std::int8_t EncodeCodes(std::span<const float> row, std::span<Code> codes) {
 
 template <typename Code>
 void DecodeCodes(std::span<const Code> codes, std::int8_t exponent, std::span<float> out) {
-  const float scale = PowerOfTwo(exponent);
+  const float scale = CodeScale(exponent);
   for (std::size_t i = 0; i < codes.size(); ++i) {
     const float c = static_cast<float>(codes[i]);
     out[i] = (sizeof(Code) == 1 ? c * c : c) * scale;

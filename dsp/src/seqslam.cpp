@@ -175,11 +175,6 @@ struct BFloat16Rows {
   }
 };
 
-// 2^e as a float, exact for kCodeMinExponent..kCodeMaxExponent (normal floats).
-float PowerOfTwo(int e) {
-  return std::bit_cast<float>(static_cast<std::uint32_t>(e + 127) << 23);
-}
-
 // Codes with a power-of-two scale per row: element = code * 2^exponent (16 bits) or
 // code^2 * 2^exponent (8 bits, square law), exact in float (at most 16 significant bits
 // times a power of two), so the differences are those of the decoded floats.
@@ -191,7 +186,7 @@ struct CodeRows {
   static constexpr bool kSquareLaw = sizeof(Code) == 1;
   float At(std::size_t r, std::size_t i) const {
     const float c = static_cast<float>(data[r * dim + i]);
-    return (kSquareLaw ? c * c : c) * PowerOfTwo(exponents[r]);
+    return (kSquareLaw ? c * c : c) * CodeScale(exponents[r]);
   }
   void Load8(std::size_t r, std::size_t i, Float4* lo, Float4* hi) const {
     using Byte4 = std::uint8_t __attribute__((vector_size(4)));
@@ -201,7 +196,7 @@ struct CodeRows {
     const Code* p = data + r * dim + i;
     std::memcpy(&a, p, sizeof a);
     std::memcpy(&b, p + 4, sizeof b);
-    const float scale = PowerOfTwo(exponents[r]);
+    const float scale = CodeScale(exponents[r]);
     Float4 c_lo = __builtin_convertvector(a, Float4), c_hi = __builtin_convertvector(b, Float4);
     if constexpr (kSquareLaw) {
       c_lo *= c_lo;
@@ -246,20 +241,6 @@ template void DifferenceColumnCodes(std::span<const std::uint8_t>, std::span<con
                                     int, std::span<const float>, std::span<float>);
 template void DifferenceColumnCodes(std::span<const std::uint16_t>, std::span<const std::int8_t>,
                                     int, std::span<const float>, std::span<float>);
-
-const char* ReferenceStorageName(ReferenceStorage storage) {
-  switch (storage) {
-    case ReferenceStorage::kFloat32:
-      return "float32";
-    case ReferenceStorage::kBFloat16:
-      return "bfloat16";
-    case ReferenceStorage::kCodes8:
-      return "codes8";
-    case ReferenceStorage::kCodes16:
-      return "codes16";
-  }
-  return "?";
-}
 
 std::size_t ReferenceRowBytes(ReferenceStorage storage, int dim) {
   switch (storage) {

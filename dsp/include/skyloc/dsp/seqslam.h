@@ -38,6 +38,7 @@
 //     window) the uniqueness is 1 ("not distinctive"); OpenSeqSLAM fails on an empty min.
 #pragma once
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -145,6 +146,10 @@ float FromBFloat16(std::uint16_t value);
 // zero (a row whose largest value is below 2^-110 has codes of 0 and small integers).
 inline constexpr int kCodeMinExponent = -118;
 inline constexpr int kCodeMaxExponent = 100;
+// The scale 2^e of a code row, exact for kCodeMinExponent..kCodeMaxExponent (normal floats).
+inline float CodeScale(int exponent) {
+  return std::bit_cast<float>(static_cast<std::uint32_t>(exponent + 127) << 23);
+}
 template <typename Code>
 std::int8_t EncodeCodes(std::span<const float> row, std::span<Code> codes);
 template <typename Code>
@@ -283,8 +288,21 @@ enum class ReferenceStorage : std::uint8_t {
   kCodes16,
 };
 
-// "float32", "bfloat16", "codes8", "codes16".
-const char* ReferenceStorageName(ReferenceStorage storage);
+// "float32", "bfloat16", "codes8", "codes16": the one spelling ([capacities] route_storage,
+// experiment --route-storage, reports).
+constexpr const char* ReferenceStorageName(ReferenceStorage storage) {
+  switch (storage) {
+    case ReferenceStorage::kFloat32:
+      return "float32";
+    case ReferenceStorage::kBFloat16:
+      return "bfloat16";
+    case ReferenceStorage::kCodes8:
+      return "codes8";
+    case ReferenceStorage::kCodes16:
+      return "codes16";
+  }
+  return "?";
+}
 // Bytes a row of `dim` elements takes in `storage`.
 std::size_t ReferenceRowBytes(ReferenceStorage storage, int dim);
 
