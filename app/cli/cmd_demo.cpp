@@ -69,12 +69,12 @@ Config DemoConfig(const char* world, bool quick) {
   c.camera.width = quick ? 96 : 320;
   c.camera.height = quick ? 96 : 240;
   c.camera.fps = 10;
-  c.camera.sim.sampling = SimSampling::kTime;
-  c.camera.sim.speed.cruise_mps = quick ? 3.0 : 2.0;
-  c.camera.sim.speed.start_stop_s = 2;
-  c.camera.sim.speed.stops = quick ? 1 : 2;
-  c.camera.sim.speed.stop_min_s = 2;
-  c.camera.sim.speed.stop_max_s = 3;
+  c.camera.sim.frames.sampling = sim::Sampling::kTime;
+  c.camera.sim.frames.speed.cruise_mps = quick ? 3.0 : 2.0;
+  c.camera.sim.frames.speed.start_stop_s = 2;
+  c.camera.sim.frames.speed.stops = quick ? 1 : 2;
+  c.camera.sim.frames.speed.stop_min_s = 2;
+  c.camera.sim.frames.speed.stop_max_s = 3;
   c.descriptor.bands = quick ? 24 : 64;
   ResolveDescriptorGrid(&c.descriptor);  // the grid follows the bands
   c.source = "the demo's own settings";

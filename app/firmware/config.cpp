@@ -34,8 +34,8 @@ constexpr EnumName<CameraKind> kCameraKinds[] = {{"sim", CameraKind::kSim},
                                                  {"v4l2", CameraKind::kV4l2},
                                                  {"libcamera", CameraKind::kLibcamera},
                                                  {"dataset", CameraKind::kDataset}};
-constexpr EnumName<SimSampling> kSimSamplings[] = {{"distance", SimSampling::kDistance},
-                                                   {"time", SimSampling::kTime}};
+constexpr EnumName<sim::Sampling> kSimSamplings[] = {{"distance", sim::Sampling::kDistance},
+                                                     {"time", sim::Sampling::kTime}};
 constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
     {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
 constexpr EnumName<GridPreset> kGridPresets[] = {{"oversampled", GridPreset::kOversampled},
@@ -221,15 +221,15 @@ void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c
   std::int64_t seed = static_cast<std::int64_t>(sim.seed);
   r.Int64("sim_seed", &seed, 0, INT64_MAX);
   sim.seed = static_cast<std::uint64_t>(seed);
-  r.Enum("sim_sampling", &sim.sampling);
-  r.Double("sim_speed_mps", &sim.speed.cruise_mps, 0.01, 100.0);
-  r.Double("sim_speed_band", &sim.speed.band, 0.0, 0.99);
-  r.Double("sim_accel_mps2", &sim.speed.accel_mps2, 0.01, 100.0);
-  r.Double("sim_start_stop_s", &sim.speed.start_stop_s, 0.0, 3600.0);
-  r.Int("sim_stops", &sim.speed.stops, 0, 1000);
-  r.Double("sim_stop_min_s", &sim.speed.stop_min_s, 0.0, 3600.0);
-  r.Double("sim_stop_max_s", &sim.speed.stop_max_s, 0.0, 3600.0);
-  if (r.ok() && sim.speed.stop_min_s > sim.speed.stop_max_s)
+  r.Enum("sim_sampling", &sim.frames.sampling);
+  r.Double("sim_speed_mps", &sim.frames.speed.cruise_mps, 0.01, 100.0);
+  r.Double("sim_speed_band", &sim.frames.speed.band, 0.0, 0.99);
+  r.Double("sim_accel_mps2", &sim.frames.speed.accel_mps2, 0.01, 100.0);
+  r.Double("sim_start_stop_s", &sim.frames.speed.start_stop_s, 0.0, 3600.0);
+  r.Int("sim_stops", &sim.frames.speed.stops, 0, 1000);
+  r.Double("sim_stop_min_s", &sim.frames.speed.stop_min_s, 0.0, 3600.0);
+  r.Double("sim_stop_max_s", &sim.frames.speed.stop_max_s, 0.0, 3600.0);
+  if (r.ok() && sim.frames.speed.stop_min_s > sim.frames.speed.stop_max_s)
     r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
   r.Int("width", &c.camera.width, 16, 8192);
   r.Int("height", &c.camera.height, 16, 8192);
@@ -399,7 +399,7 @@ void ReadAttitudeSection(SectionReader& r, const toml::table* /*table*/, Config&
   // tilt (pitch up to 10 degrees at 10 fps, 39 at 30 fps, on a level run). Time sampling
   // drives a speed profile with bounded acceleration.
   if (r.ok() && a.kind == AttitudeKind::kSim && c.camera.kind == CameraKind::kSim &&
-      c.camera.sim.sampling == SimSampling::kDistance)
+      c.camera.sim.frames.sampling == sim::Sampling::kDistance)
     r.Invalid("kind",
               "\"sim\" needs [camera] sim_sampling = \"time\": distance sampling steps the "
               "simulated robot's speed at every frame, which its IMU reads as tilts of tens "
