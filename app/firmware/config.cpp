@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <toml++/toml.h>
 
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -30,6 +31,7 @@ struct EnumName {
   E value;
 };
 
+// Spelled here: the configuration's own enums and the simulator's sampling.
 constexpr EnumName<CameraKind> kCameraKinds[] = {{"sim", CameraKind::kSim},
                                                  {"v4l2", CameraKind::kV4l2},
                                                  {"libcamera", CameraKind::kLibcamera},
@@ -42,36 +44,39 @@ constexpr EnumName<GridPreset> kGridPresets[] = {{"oversampled", GridPreset::kOv
                                                  {"auto", GridPreset::kAuto},
                                                  {"paper", GridPreset::kPaper},
                                                  {"custom", GridPreset::kCustom}};
-constexpr EnumName<dsp::AmplitudeNormalisation> kNormalisations[] = {
-    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kNone),
-     dsp::AmplitudeNormalisation::kNone},
-    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kDivideByA0),
-     dsp::AmplitudeNormalisation::kDivideByA0},
-    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kUnitL2),
-     dsp::AmplitudeNormalisation::kUnitL2}};
 constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
                                                              {"sim", StatusOutputKind::kSim},
                                                              {"gpio", StatusOutputKind::kGpio}};
-constexpr EnumName<drivers::StatusLineMode> kStatusLineModes[] = {
-    {drivers::StatusLineModeName(drivers::StatusLineMode::kLinePerState),
-     drivers::StatusLineMode::kLinePerState},
-    {drivers::StatusLineModeName(drivers::StatusLineMode::kBlink),
-     drivers::StatusLineMode::kBlink}};
 constexpr EnumName<Matcher> kMatchers[] = {{"filter", Matcher::kRouteFilter},
                                            {"openseqslam", Matcher::kOpenSeqSlam}};
 constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNone},
                                                      {"iio", AttitudeKind::kIio},
                                                      {"dataset", AttitudeKind::kDataset},
                                                      {"sim", AttitudeKind::kSim}};
-constexpr EnumName<dsp::ReferenceStorage> kRouteStorages[] = {
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kFloat32), dsp::ReferenceStorage::kFloat32},
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kBFloat16), dsp::ReferenceStorage::kBFloat16},
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes8), dsp::ReferenceStorage::kCodes8},
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes16), dsp::ReferenceStorage::kCodes16}};
+
+// The table of an enum whose own layer spells its values (`name`, e.g.
+// dsp::AmplitudeNormalisationName): each value listed once, its name the layer's.
+template <auto name, typename E, typename... More>
+constexpr std::array<EnumName<E>, 1 + sizeof...(More)> SpelledBy(E first, More... more) {
+  return {{{name(first), first}, {name(more), more}...}};
+}
+
+constexpr auto kNormalisations = SpelledBy<dsp::AmplitudeNormalisationName>(
+    dsp::AmplitudeNormalisation::kNone, dsp::AmplitudeNormalisation::kDivideByA0,
+    dsp::AmplitudeNormalisation::kUnitL2);
+constexpr auto kStatusLineModes = SpelledBy<drivers::StatusLineModeName>(
+    drivers::StatusLineMode::kLinePerState, drivers::StatusLineMode::kBlink);
+constexpr auto kRouteStorages = SpelledBy<dsp::ReferenceStorageName>(
+    dsp::ReferenceStorage::kFloat32, dsp::ReferenceStorage::kBFloat16,
+    dsp::ReferenceStorage::kCodes8, dsp::ReferenceStorage::kCodes16);
 
 // Every table above, found by its enum's type (NameOf, SectionReader::Enum).
 template <typename E, std::size_t N>
 constexpr std::span<const EnumName<E>> Names(const EnumName<E> (&names)[N]) {
+  return names;
+}
+template <typename E, std::size_t N>
+constexpr std::span<const EnumName<E>> Names(const std::array<EnumName<E>, N>& names) {
   return names;
 }
 constexpr std::tuple kNameTables{Names(kCameraKinds),         Names(kSimSamplings),
