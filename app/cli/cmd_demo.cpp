@@ -69,35 +69,26 @@ Config DemoConfig(const char* world, bool quick) {
   c.camera.width = quick ? 96 : 320;
   c.camera.height = quick ? 96 : 240;
   c.camera.fps = 10;
-  c.camera.sim.sampling = SimSampling::kTime;
-  c.camera.sim.speed.cruise_mps = quick ? 3.0 : 2.0;
-  c.camera.sim.speed.start_stop_s = 2;
-  c.camera.sim.speed.stops = quick ? 1 : 2;
-  c.camera.sim.speed.stop_min_s = 2;
-  c.camera.sim.speed.stop_max_s = 3;
+  c.camera.sim.frames.sampling = sim::Sampling::kTime;
+  c.camera.sim.frames.speed.cruise_mps = quick ? 3.0 : 2.0;
+  c.camera.sim.frames.speed.start_stop_s = 2;
+  c.camera.sim.frames.speed.stops = quick ? 1 : 2;
+  c.camera.sim.frames.speed.stop_min_s = 2;
+  c.camera.sim.frames.speed.stop_max_s = 3;
   c.descriptor.bands = quick ? 24 : 64;
   ResolveDescriptorGrid(&c.descriptor);  // the grid follows the bands
   c.source = "the demo's own settings";
   return c;
 }
 
-// One of the demo's two simulated runs on the route database at ROUTE_PATH, with a progress
-// line on the terminal in place of JSON lines.
-int RunDemoSession(const Config& config, LoopMode mode, const std::string& route_path,
-                   const char* label, std::uint64_t max_frames, const SimRunConfig& sim,
-                   SessionReport* report) {
-  SessionArgs args;
-  args.mode = mode;
-  args.route_path = route_path;
-  args.json = nullptr;
-  args.label = label;
-  args.simulation_expected = true;
-  args.max_frames = max_frames;
-  args.sim = sim;
-  args.tolerance_m = 2.0;
-  ProgressLine progress(label);
-  args.extra_sink = &progress;
-  const int rc = RunSession(config, args, report);
+// One of the demo's two simulated runs (`run`: its mode, route, frames, label and motion),
+// with a progress line on the terminal in place of JSON lines.
+int RunDemoSession(const Config& config, SessionArgs run, SessionReport* report) {
+  ProgressLine progress(run.label);
+  run.json = nullptr;
+  run.extra_sink = &progress;
+  run.simulation_expected = true;
+  const int rc = RunSession(config, run, report);
   progress.Finish();
   return rc;
 }
@@ -138,8 +129,12 @@ int RunDemo(std::span<char* const> args) {
       "1. teach: drive the route once at noon, 10 frames a second, standing at the start and "
       "stopping on the way, and record its sky descriptors\n");
   SessionReport taught;
-  const int teach_rc = RunDemoSession(config, LoopMode::kTeach, route_path, "teach",
-                                      quick ? 300 : 1200, SimRunConfig{}, &taught);
+  const int teach_rc = RunDemoSession(config,
+                                      {.mode = LoopMode::kTeach,
+                                       .route_path = route_path,
+                                       .max_frames = quick ? 300u : 1200u,
+                                       .label = "teach"},
+                                      &taught);
 
   int rc = teach_rc;
   SessionReport repeated;
@@ -154,7 +149,12 @@ int RunDemo(std::span<char* const> args) {
     sim.lighting = "dawn";
     sim.run_seed = 2;
     // Within the stretch the teach run covered (1.5x faster, so fewer frames).
-    rc = RunDemoSession(config, LoopMode::kRepeat, route_path, "repeat", quick ? 160 : 700, sim,
+    rc = RunDemoSession(config,
+                        {.mode = LoopMode::kRepeat,
+                         .route_path = route_path,
+                         .max_frames = quick ? 160u : 700u,
+                         .label = "repeat",
+                         .sim = sim},
                         &repeated);
   }
   if (rc == 0) {

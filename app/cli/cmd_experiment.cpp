@@ -91,7 +91,7 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
         dsp::ReferenceStorage::kCodes16}},
       &e.config.capacities.route_storage);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
-           &e.spacing_m);
+           &e.frames.frame_spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,
         &e.max_frames);
   t.Count("--seed", "N", "procedural world seed (default 1)", &e.world_seed);
@@ -278,17 +278,17 @@ void PrintProgress(const char* what) {
 
 std::string CommonNotes(const tools::ExperimentOptions& e) {
   const std::string sampling =
-      e.sampling == sim::Sampling::kTime
+      e.frames.sampling == sim::Sampling::kTime
           ? Format(
                 "frames at %.3g fps along a speed profile (cruise %.3g m/s x the run's speed "
                 "ratio, a %.3g s stop at the start and %d more of %.3g-%.3g s unless stated)",
-                e.fps, e.speed.cruise_mps, e.speed.start_stop_s, e.speed.stops, e.speed.stop_min_s,
-                e.speed.stop_max_s) +
+                e.fps, e.frames.speed.cruise_mps, e.frames.speed.start_stop_s, e.frames.speed.stops,
+                e.frames.speed.stop_min_s, e.frames.speed.stop_max_s) +
                 (e.lateral_m > 0
                      ? Format("; every repeat wanders sideways off the taught line within +-%.3g m",
                               e.lateral_m)
                      : std::string())
-          : Format("frames every %.3g m with +-20 %% speed jitter", e.spacing_m);
+          : Format("frames every %.3g m with +-20 %% speed jitter", e.frames.frame_spacing_m);
   return Format(
              "Images %dx%d (equidistant 185 degrees), sky descriptor %d SH bands on the "
              "\"%s\" grid, normalisation %s, ",
@@ -466,7 +466,7 @@ Status RunManoeuvreTable(const Options& o, Table* t) {
 }
 
 Status RunSpeedTable(Options* o, Table* t) {
-  o->experiment.sampling = sim::Sampling::kTime;
+  o->experiment.frames.sampling = sim::Sampling::kTime;
   const int ds[] = {1, 5, 10, 20};
   SKYLOC_TRY(tools::RunSpeedExperiment(o->experiment, ds, &t->speed, PrintProgress));
   t->methods.assign(std::begin(kMatcherMethods), std::end(kMatcherMethods));
@@ -497,7 +497,7 @@ Status RunSpeedTable(Options* o, Table* t) {
 
 Status RunAntsTable(Options* o, Table* t) {
   if (!o->spacing_given)
-    o->experiment.spacing_m = 0.05;
+    o->experiment.frames.frame_spacing_m = 0.05;
   o->experiment.max_offset_m = 0.25;
   const double heights[] = {0.01, 0.1};
   SKYLOC_TRY(

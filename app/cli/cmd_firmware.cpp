@@ -86,9 +86,7 @@ void PrintTeachState(const char* path, std::FILE* out) {
 // may replace the route.
 int RunOnRoute(std::span<char* const> args, LoopMode mode) {
   const bool teach = mode == LoopMode::kTeach;
-  SessionArgs s;
-  s.mode = mode;
-  s.label = teach ? "skyloc teach" : "skyloc repeat";
+  SessionArgs s{.mode = mode, .label = teach ? "skyloc teach" : "skyloc repeat"};
   OptionTable t(teach ? "teach" : "repeat", "--route FILE.db [options]",
                 teach ? kTeachDescription : kRepeatDescription);
   t.Text("--route", "FILE.db", teach ? "the route database to write" : "the taught route database",
@@ -118,9 +116,7 @@ int RunRepeat(std::span<char* const> args) {
 }
 
 int RunRecord(std::span<char* const> args) {
-  SessionArgs s;
-  s.mode = LoopMode::kRecord;
-  s.label = "skyloc record";
+  SessionArgs s{.mode = LoopMode::kRecord, .label = "skyloc record"};
   OptionTable t("record", "DIR [options]", kRecordDescription);
   std::vector<std::string> dir;
   t.Positional("DIR", "the dataset folder to record into", 1, 1, &dir);
@@ -133,9 +129,7 @@ int RunRecord(std::span<char* const> args) {
 }
 
 int RunReplay(std::span<char* const> args) {
-  SessionArgs s;
-  s.mode = LoopMode::kRepeat;
-  s.label = "skyloc replay";
+  SessionArgs s{.mode = LoopMode::kRepeat, .label = "skyloc replay"};
   OptionTable t("replay", "DATASET --route FILE.db [options]", kReplayDescription);
   std::vector<std::string> dataset;
   t.Positional("DATASET", "the recorded dataset folder", 1, 1, &dataset);

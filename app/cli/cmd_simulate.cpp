@@ -119,11 +119,11 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
         "--width/--height and --camera both give the image size: use one (the camera file's "
         "[image] table)");
   if (spacing)
-    o->run.world.sampling = firmware::SimSampling::kDistance;
+    o->run.world.frames.sampling = sim::Sampling::kDistance;
   if (o->run.world.name == "seville") {  // an ant's run unless told otherwise
     const firmware::SimRunConfig ant = firmware::SimulateDefaults(/*seville=*/true);
     if (!t.Given("--speed"))
-      o->run.world.speed.cruise_mps = ant.world.speed.cruise_mps;
+      o->run.world.frames.speed.cruise_mps = ant.world.frames.speed.cruise_mps;
     if (!t.Given("--camera-height"))
       o->run.camera_height_m = ant.camera_height_m;
   }

@@ -31,25 +31,26 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
   if (which == SimRunOptions::kWorldAndRun) {
     constexpr NumberRange kFraction{0, 1, false, true};
     t->Number("--speed", "M/S", "mean cruise speed (default 1; seville 0.5)", {0, 100, true},
-              &run->world.speed.cruise_mps);
+              &run->world.frames.speed.cruise_mps);
     t->Number("--speed-band", "F", "cruise speed varies within (1 +- F) (default 0.3)", kFraction,
-              &run->world.speed.band);
+              &run->world.frames.speed.band);
     t->Number("--accel", "A", "acceleration and braking, m/s^2 (default 0.5)", {0, 100, true},
-              &run->world.speed.accel_mps2);
+              &run->world.frames.speed.accel_mps2);
     t->Number("--start-stop", "S", "seconds standing before the start (default 2)", {0, 3600},
-              &run->world.speed.start_stop_s);
-    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000, &run->world.speed.stops);
+              &run->world.frames.speed.start_stop_s);
+    t->Int("--stops", "N", "stops along the route (default 2)", 0, 1000,
+           &run->world.frames.speed.stops);
     t->NumberPair(
         "--stop-seconds", "MIN,MAX", "each stop's length, seconds (default 2,6)",
         "MIN,MAX seconds with 0 <= MIN <= MAX <= 3600",
         [](double lo, double hi) { return lo >= 0 && lo <= hi && hi <= 3600; },
-        &run->world.speed.stop_min_s, &run->world.speed.stop_max_s);
+        &run->world.frames.speed.stop_min_s, &run->world.frames.speed.stop_max_s);
     t->Number("--spacing", "M",
               "distance sampling instead: a frame every M metres on average (seville: 0.05); "
               "not with the time-sampling options",
-              kPositive, &run->world.spacing_m);
+              kPositive, &run->world.frames.frame_spacing_m);
     t->Number("--jitter", "F", "with --spacing: speed varies within (1 +- F) (default 0.2)",
-              kFraction, &run->world.speed_jitter);
+              kFraction, &run->world.frames.speed_jitter);
     t->Number("--camera-height", "M", "camera above the ground (default 1, seville 0.01: an ant)",
               kPositive, &run->camera_height_m);
   }

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <toml++/toml.h>
 
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -30,48 +31,52 @@ struct EnumName {
   E value;
 };
 
+// Spelled here: the configuration's own enums and the simulator's sampling.
 constexpr EnumName<CameraKind> kCameraKinds[] = {{"sim", CameraKind::kSim},
                                                  {"v4l2", CameraKind::kV4l2},
                                                  {"libcamera", CameraKind::kLibcamera},
                                                  {"dataset", CameraKind::kDataset}};
-constexpr EnumName<SimSampling> kSimSamplings[] = {{"distance", SimSampling::kDistance},
-                                                   {"time", SimSampling::kTime}};
+constexpr EnumName<sim::Sampling> kSimSamplings[] = {{"distance", sim::Sampling::kDistance},
+                                                     {"time", sim::Sampling::kTime}};
 constexpr EnumName<SegmentationMethod> kSegmentationMethods[] = {
     {"otsu", SegmentationMethod::kOtsu}, {"fixed", SegmentationMethod::kFixed}};
 constexpr EnumName<GridPreset> kGridPresets[] = {{"oversampled", GridPreset::kOversampled},
                                                  {"auto", GridPreset::kAuto},
                                                  {"paper", GridPreset::kPaper},
                                                  {"custom", GridPreset::kCustom}};
-constexpr EnumName<dsp::AmplitudeNormalisation> kNormalisations[] = {
-    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kNone),
-     dsp::AmplitudeNormalisation::kNone},
-    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kDivideByA0),
-     dsp::AmplitudeNormalisation::kDivideByA0},
-    {dsp::AmplitudeNormalisationName(dsp::AmplitudeNormalisation::kUnitL2),
-     dsp::AmplitudeNormalisation::kUnitL2}};
 constexpr EnumName<StatusOutputKind> kStatusOutputKinds[] = {{"none", StatusOutputKind::kNone},
                                                              {"sim", StatusOutputKind::kSim},
                                                              {"gpio", StatusOutputKind::kGpio}};
-constexpr EnumName<drivers::StatusLineMode> kStatusLineModes[] = {
-    {drivers::StatusLineModeName(drivers::StatusLineMode::kLinePerState),
-     drivers::StatusLineMode::kLinePerState},
-    {drivers::StatusLineModeName(drivers::StatusLineMode::kBlink),
-     drivers::StatusLineMode::kBlink}};
 constexpr EnumName<Matcher> kMatchers[] = {{"filter", Matcher::kRouteFilter},
                                            {"openseqslam", Matcher::kOpenSeqSlam}};
 constexpr EnumName<AttitudeKind> kAttitudeKinds[] = {{"none", AttitudeKind::kNone},
                                                      {"iio", AttitudeKind::kIio},
                                                      {"dataset", AttitudeKind::kDataset},
                                                      {"sim", AttitudeKind::kSim}};
-constexpr EnumName<dsp::ReferenceStorage> kRouteStorages[] = {
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kFloat32), dsp::ReferenceStorage::kFloat32},
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kBFloat16), dsp::ReferenceStorage::kBFloat16},
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes8), dsp::ReferenceStorage::kCodes8},
-    {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes16), dsp::ReferenceStorage::kCodes16}};
+
+// The table of an enum whose own layer spells its values (`name`, e.g.
+// dsp::AmplitudeNormalisationName): each value listed once, its name the layer's.
+template <auto name, typename E, typename... More>
+constexpr std::array<EnumName<E>, 1 + sizeof...(More)> SpelledBy(E first, More... more) {
+  return {{{name(first), first}, {name(more), more}...}};
+}
+
+constexpr auto kNormalisations = SpelledBy<dsp::AmplitudeNormalisationName>(
+    dsp::AmplitudeNormalisation::kNone, dsp::AmplitudeNormalisation::kDivideByA0,
+    dsp::AmplitudeNormalisation::kUnitL2);
+constexpr auto kStatusLineModes = SpelledBy<drivers::StatusLineModeName>(
+    drivers::StatusLineMode::kLinePerState, drivers::StatusLineMode::kBlink);
+constexpr auto kRouteStorages = SpelledBy<dsp::ReferenceStorageName>(
+    dsp::ReferenceStorage::kFloat32, dsp::ReferenceStorage::kBFloat16,
+    dsp::ReferenceStorage::kCodes8, dsp::ReferenceStorage::kCodes16);
 
 // Every table above, found by its enum's type (NameOf, SectionReader::Enum).
 template <typename E, std::size_t N>
 constexpr std::span<const EnumName<E>> Names(const EnumName<E> (&names)[N]) {
+  return names;
+}
+template <typename E, std::size_t N>
+constexpr std::span<const EnumName<E>> Names(const std::array<EnumName<E>, N>& names) {
   return names;
 }
 constexpr std::tuple kNameTables{Names(kCameraKinds),         Names(kSimSamplings),
@@ -221,15 +226,15 @@ void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c
   std::int64_t seed = static_cast<std::int64_t>(sim.seed);
   r.Int64("sim_seed", &seed, 0, INT64_MAX);
   sim.seed = static_cast<std::uint64_t>(seed);
-  r.Enum("sim_sampling", &sim.sampling);
-  r.Double("sim_speed_mps", &sim.speed.cruise_mps, 0.01, 100.0);
-  r.Double("sim_speed_band", &sim.speed.band, 0.0, 0.99);
-  r.Double("sim_accel_mps2", &sim.speed.accel_mps2, 0.01, 100.0);
-  r.Double("sim_start_stop_s", &sim.speed.start_stop_s, 0.0, 3600.0);
-  r.Int("sim_stops", &sim.speed.stops, 0, 1000);
-  r.Double("sim_stop_min_s", &sim.speed.stop_min_s, 0.0, 3600.0);
-  r.Double("sim_stop_max_s", &sim.speed.stop_max_s, 0.0, 3600.0);
-  if (r.ok() && sim.speed.stop_min_s > sim.speed.stop_max_s)
+  r.Enum("sim_sampling", &sim.frames.sampling);
+  r.Double("sim_speed_mps", &sim.frames.speed.cruise_mps, 0.01, 100.0);
+  r.Double("sim_speed_band", &sim.frames.speed.band, 0.0, 0.99);
+  r.Double("sim_accel_mps2", &sim.frames.speed.accel_mps2, 0.01, 100.0);
+  r.Double("sim_start_stop_s", &sim.frames.speed.start_stop_s, 0.0, 3600.0);
+  r.Int("sim_stops", &sim.frames.speed.stops, 0, 1000);
+  r.Double("sim_stop_min_s", &sim.frames.speed.stop_min_s, 0.0, 3600.0);
+  r.Double("sim_stop_max_s", &sim.frames.speed.stop_max_s, 0.0, 3600.0);
+  if (r.ok() && sim.frames.speed.stop_min_s > sim.frames.speed.stop_max_s)
     r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
   r.Int("width", &c.camera.width, 16, 8192);
   r.Int("height", &c.camera.height, 16, 8192);
@@ -399,7 +404,7 @@ void ReadAttitudeSection(SectionReader& r, const toml::table* /*table*/, Config&
   // tilt (pitch up to 10 degrees at 10 fps, 39 at 30 fps, on a level run). Time sampling
   // drives a speed profile with bounded acceleration.
   if (r.ok() && a.kind == AttitudeKind::kSim && c.camera.kind == CameraKind::kSim &&
-      c.camera.sim.sampling == SimSampling::kDistance)
+      c.camera.sim.frames.sampling == sim::Sampling::kDistance)
     r.Invalid("kind",
               "\"sim\" needs [camera] sim_sampling = \"time\": distance sampling steps the "
               "simulated robot's speed at every frame, which its IMU reads as tilts of tens "

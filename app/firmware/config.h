@@ -32,20 +32,14 @@ enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 template <typename E>
 const char* NameOf(E value);
 
-// How a simulated run samples its route: a frame every spacing_m metres on average, or a
-// frame every 1/fps seconds along a speed profile with stops (docs/SIMULATOR.md).
-enum class SimSampling : std::uint8_t { kDistance, kTime };
-
 // The world of a simulated run and how a run through it is sampled: what the
 // configuration's [camera] sim_* keys own (and `skyloc simulate`'s --world, --seed and
-// sampling options).
+// sampling options). The sampling: a frame every frame_spacing_m metres on average, or a
+// frame every 1/fps seconds along a speed profile with stops (docs/SIMULATOR.md).
 struct SimWorldConfig {
   std::string name = "city";  // city | forest | repetitive; config: street; simulate: seville
   std::uint64_t seed = 1;     // the procedural world's seed
-  SimSampling sampling = SimSampling::kDistance;
-  double spacing_m = 1.0;     // kDistance: mean distance between frames
-  double speed_jitter = 0.2;  // kDistance: speed varies within (1 +- jitter)
-  sim::SpeedProfile speed;    // kTime: the cruise speed, its band, and the stops
+  sim::FrameSampling frames;
 
   bool operator==(const SimWorldConfig&) const = default;
 };

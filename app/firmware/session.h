@@ -14,15 +14,16 @@
 
 namespace skyloc::firmware {
 
+// Every member has a default, so a caller names only what it sets ({.mode = ..., ...}).
 struct SessionArgs {
   LoopMode mode = LoopMode::kRepeat;
-  std::string route_path;
+  std::string route_path{};
   // --config: the command reads it (LoadConfigFile) and hands RunSession the Config;
   // empty: the built-in defaults (config/skyloc.toml's values).
-  std::string config_path;
-  std::string dataset;  // replay: frames from this dataset folder
-  bool paced = false;   // replay at the recorded pace
-  bool force = false;   // teach: replace an existing route database
+  std::string config_path{};
+  std::string dataset{};  // replay: frames from this dataset folder
+  bool paced = false;     // replay at the recorded pace
+  bool force = false;     // teach: replace an existing route database
   // The demo: a simulated camera and status output are the point, not a mistake to warn of.
   bool simulation_expected = false;
   std::uint64_t max_frames = 0;
@@ -30,11 +31,11 @@ struct SessionArgs {
   FrameSink* extra_sink = nullptr;
   double tolerance_m = 2.0;  // replay/demo: a match within this distance is correct
   // --record DIR (teach, repeat) and `skyloc record DIR`: the frames into this dataset folder.
-  std::string record_dir;
+  std::string record_dir{};
   const char* label = "skyloc";
   // camera.kind = "sim": how this run moves and what the light is like (the world and
   // its sampling come from the configuration: ConfiguredSimRun, sim_run.h).
-  SimRunConfig sim;
+  SimRunConfig sim{};
 };
 
 struct SessionReport {

@@ -41,8 +41,8 @@ Status MakeSimSource(const Config& config, const SimRunConfig& command_line, Cam
     o.seed = run.world.seed;
     o.fps = config.camera.fps;
     o.paced = true;  // a live run: frames come at the camera's rate
-    o.step_m = run.world.spacing_m;
-    o.speed_jitter = std::min(run.world.speed_jitter, 0.5);
+    o.step_m = run.world.frames.frame_spacing_m;
+    o.speed_jitter = std::min(run.world.frames.speed_jitter, 0.5);
     o.tilt_deg = run.tilt_deg;
     o.zigzag_deg = run.zigzag_deg;
     o.brightness = run.lighting == "dawn" ? 0.6 : run.lighting == "overcast" ? 0.8 : 1.0;

@@ -4,9 +4,9 @@ namespace skyloc::firmware {
 
 SimRunConfig SimulateDefaults(bool seville) {
   SimRunConfig run;
-  run.world.sampling = SimSampling::kTime;
+  run.world.frames.sampling = sim::Sampling::kTime;
   if (seville) {
-    run.world.speed.cruise_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
+    run.world.frames.speed.cruise_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
     run.camera_height_m = 0.01;
   }
   return run;
@@ -21,11 +21,7 @@ SimRunConfig ConfiguredSimRun(const SimWorldConfig& configured, const SimRunConf
 sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps,
                                   const sim::MotionConfig& base) {
   sim::MotionConfig motion = base;
-  motion.sampling =
-      run.world.sampling == SimSampling::kTime ? sim::Sampling::kTime : sim::Sampling::kDistance;
-  motion.frame_spacing_m = run.world.spacing_m;
-  motion.speed_jitter = run.world.speed_jitter;
-  motion.speed = run.world.speed;
+  motion.Resample(run.world.frames);
   motion.speed_ratio = run.speed_ratio;
   motion.fps = fps;
   motion.height_m = run.camera_height_m;

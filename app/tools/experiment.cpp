@@ -124,10 +124,8 @@ ExperimentOptions WithCapFor(const ExperimentOptions& options, double max_tilt_d
 // say: sampling, spacing or speed profile, frame rate, camera height and frame limit.
 MotionConfig RowMotion(const RunSpec& spec, const ExperimentOptions& options) {
   MotionConfig motion = spec.motion;
-  motion.sampling = options.sampling;
-  motion.frame_spacing_m = options.spacing_m;
+  motion.Resample(options.frames);
   motion.fps = options.fps;
-  motion.speed = options.speed;
   motion.height_m = options.camera_height_m;
   motion.max_frames = options.max_frames;
   return motion;
@@ -543,7 +541,7 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
   const ExperimentOptions options = WithCapFor(speed_options, LargestTiltDeg(0, kBumpsDeg));
   rows->clear();
   ExperimentOptions base = options;
-  base.sampling = Sampling::kTime;
+  base.frames.sampling = Sampling::kTime;
   base.vanilla = false;  // the matchers are compared on the sky descriptor
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kCity}) {
     World world;
@@ -565,8 +563,8 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
           if (options.max_frames > 0)
             o.max_frames = static_cast<int>(0.9 * options.max_frames / ratio);
           if (!stops) {
-            o.speed.stops = 0;
-            o.speed.start_stop_s = 0;
+            o.frames.speed.stops = 0;
+            o.frames.speed.start_stop_s = 0;
           }
           char label[160];
           std::snprintf(label, sizeof label, "%s repeat %.1fx, %s, %s", WorldKindName(kind), ratio,

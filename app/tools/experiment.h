@@ -54,13 +54,11 @@ struct ExperimentOptions {
   // [attitude] max_tilt_deg is replaced by each experiment's own largest tilt. After
   // changing the bands or the grid, firmware::ResolveDescriptorGrid.
   firmware::Config config = firmware::DefaultConfig();
-  // Distance sampling (every existing experiment): a frame every spacing_m. Time sampling:
-  // a frame every 1/fps seconds along `speed` (each run's seed places its stops and its
+  // Distance sampling: a frame every frame_spacing_m. Time sampling: a frame every 1/fps
+  // seconds along `speed` (each run's seed places its stops and its
   // RunSpec::motion.speed_ratio scales its cruise speed).
-  sim::Sampling sampling = sim::Sampling::kDistance;
-  double spacing_m = 1.0;  // frame spacing along the route
+  sim::FrameSampling frames;
   double fps = 10;
-  sim::SpeedProfile speed;
   double camera_height_m = 1.0;
   int max_frames = 0;  // 0: the whole route
   // Speed: every repeat wanders sideways off the taught line within +-lateral_m

@@ -53,21 +53,21 @@ TEST(SimRunOptions, SimulateFillsTheWorldAndTheSampling) {
   ASSERT_EQ(t.Parse(a.span()), ParseOutcome::kRun);
   EXPECT_EQ(run.world.name, "repetitive");
   EXPECT_EQ(run.world.seed, 4u);
-  EXPECT_EQ(run.world.speed.cruise_mps, 2.5);
-  EXPECT_EQ(run.world.speed.band, 0.1);
-  EXPECT_EQ(run.world.speed.accel_mps2, 1.5);
-  EXPECT_EQ(run.world.speed.start_stop_s, 0.0);
-  EXPECT_EQ(run.world.speed.stops, 3);
-  EXPECT_EQ(run.world.speed.stop_min_s, 1.0);
-  EXPECT_EQ(run.world.speed.stop_max_s, 4.0);
+  EXPECT_EQ(run.world.frames.speed.cruise_mps, 2.5);
+  EXPECT_EQ(run.world.frames.speed.band, 0.1);
+  EXPECT_EQ(run.world.frames.speed.accel_mps2, 1.5);
+  EXPECT_EQ(run.world.frames.speed.start_stop_s, 0.0);
+  EXPECT_EQ(run.world.frames.speed.stops, 3);
+  EXPECT_EQ(run.world.frames.speed.stop_min_s, 1.0);
+  EXPECT_EQ(run.world.frames.speed.stop_max_s, 4.0);
   EXPECT_EQ(run.camera_height_m, 0.5);
 
   firmware::SimRunConfig distance;
   OptionTable d("simulate", "[options]", "");
   AddSimRunOptions(&d, SimRunOptions::kWorldAndRun, &distance);
   ASSERT_EQ(d.Parse(Args({"--spacing", "0.05", "--jitter", "0.3"}).span()), ParseOutcome::kRun);
-  EXPECT_EQ(distance.world.spacing_m, 0.05);
-  EXPECT_EQ(distance.world.speed_jitter, 0.3);
+  EXPECT_EQ(distance.world.frames.frame_spacing_m, 0.05);
+  EXPECT_EQ(distance.world.frames.speed_jitter, 0.3);
 }
 
 TEST(SimRunOptions, RefusesOutOfRangeNamingTheOptionAndWhatIsExpected) {

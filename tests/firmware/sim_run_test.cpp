@@ -15,16 +15,16 @@ SimRunConfig EveryFieldSet() {
   r.world.name = "forest";
   r.world.seed = 7;
   r.run_seed = 9;
-  r.world.sampling = SimSampling::kTime;
-  r.world.spacing_m = 0.5;
-  r.world.speed_jitter = 0.1;
-  r.world.speed.cruise_mps = 2.5;
-  r.world.speed.band = 0.2;
-  r.world.speed.accel_mps2 = 0.75;
-  r.world.speed.start_stop_s = 3;
-  r.world.speed.stops = 4;
-  r.world.speed.stop_min_s = 1;
-  r.world.speed.stop_max_s = 5;
+  r.world.frames.sampling = sim::Sampling::kTime;
+  r.world.frames.frame_spacing_m = 0.5;
+  r.world.frames.speed_jitter = 0.1;
+  r.world.frames.speed.cruise_mps = 2.5;
+  r.world.frames.speed.band = 0.2;
+  r.world.frames.speed.accel_mps2 = 0.75;
+  r.world.frames.speed.start_stop_s = 3;
+  r.world.frames.speed.stops = 4;
+  r.world.frames.speed.stop_min_s = 1;
+  r.world.frames.speed.stop_max_s = 5;
   r.speed_ratio = 1.5;
   r.camera_height_m = 2;
   r.tilt_deg = 10;
@@ -103,10 +103,10 @@ TEST(SimRun, DefaultsAreTheSimulatorsDefaults) {
 }
 
 TEST(SimRun, SimulateStartsInTimeAndSevilleIsAnAnt) {
-  EXPECT_EQ(SimulateDefaults(false).world.sampling, SimSampling::kTime);
-  EXPECT_EQ(SimulateDefaults(false).world.speed.cruise_mps, 1.0);
+  EXPECT_EQ(SimulateDefaults(false).world.frames.sampling, sim::Sampling::kTime);
+  EXPECT_EQ(SimulateDefaults(false).world.frames.speed.cruise_mps, 1.0);
   EXPECT_EQ(SimulateDefaults(false).camera_height_m, 1.0);
-  EXPECT_EQ(SimulateDefaults(true).world.speed.cruise_mps, 0.5);
+  EXPECT_EQ(SimulateDefaults(true).world.frames.speed.cruise_mps, 0.5);
   EXPECT_EQ(SimulateDefaults(true).camera_height_m, 0.01);
 }
 
@@ -115,7 +115,7 @@ TEST(SimRun, ConfiguredRunTakesTheWorldFromTheConfigAndTheRunFromTheFlags) {
   const SimWorldConfig configured = EveryFieldSet().world;
   SimRunConfig flags;
   flags.world.name = "repetitive";  // not a flag: ignored
-  flags.world.sampling = SimSampling::kDistance;
+  flags.world.frames.sampling = sim::Sampling::kDistance;
   flags.run_seed = 3;
   flags.tilt_deg = -5;
   flags.lighting = "overcast";
@@ -123,7 +123,7 @@ TEST(SimRun, ConfiguredRunTakesTheWorldFromTheConfigAndTheRunFromTheFlags) {
   const SimRunConfig run = ConfiguredSimRun(configured, flags);
   EXPECT_EQ(run.world, configured);
   EXPECT_EQ(run.world.name, "forest");
-  EXPECT_EQ(run.world.sampling, SimSampling::kTime);
+  EXPECT_EQ(run.world.frames.sampling, sim::Sampling::kTime);
   EXPECT_EQ(run.run_seed, 3u);
   EXPECT_EQ(run.tilt_deg, -5.0);
   EXPECT_EQ(run.zigzag_deg, 0.0);
@@ -153,14 +153,14 @@ TEST(SimRun, ConfigKeysFillTheRun) {
   const SimWorldConfig& s = c->camera.sim;
   EXPECT_EQ(s.name, "forest");
   EXPECT_EQ(s.seed, 5u);
-  EXPECT_EQ(s.sampling, SimSampling::kTime);
-  EXPECT_EQ(s.speed.cruise_mps, 2.0);
-  EXPECT_EQ(s.speed.band, 0.1);
-  EXPECT_EQ(s.speed.accel_mps2, 1.5);
-  EXPECT_EQ(s.speed.start_stop_s, 0.0);
-  EXPECT_EQ(s.speed.stops, 3);
-  EXPECT_EQ(s.speed.stop_min_s, 1.0);
-  EXPECT_EQ(s.speed.stop_max_s, 2.0);
+  EXPECT_EQ(s.frames.sampling, sim::Sampling::kTime);
+  EXPECT_EQ(s.frames.speed.cruise_mps, 2.0);
+  EXPECT_EQ(s.frames.speed.band, 0.1);
+  EXPECT_EQ(s.frames.speed.accel_mps2, 1.5);
+  EXPECT_EQ(s.frames.speed.start_stop_s, 0.0);
+  EXPECT_EQ(s.frames.speed.stops, 3);
+  EXPECT_EQ(s.frames.speed.stop_min_s, 1.0);
+  EXPECT_EQ(s.frames.speed.stop_max_s, 2.0);
   EXPECT_EQ(DefaultConfig().camera.sim, SimRunConfig{}.world);
 }
 

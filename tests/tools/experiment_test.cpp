@@ -17,7 +17,7 @@ TEST(Experiment, SkyBeatsVanillaAtFortyDegreesTiltDifference) {
   options.config.descriptor.bands = 16;
   options.config.descriptor.grid = firmware::GridPreset::kAuto;  // the paper's grid
   firmware::ResolveDescriptorGrid(&options.config.descriptor);
-  options.spacing_m = 5.0;  // ~100 frames a lap
+  options.frames.frame_spacing_m = 5.0;  // ~100 frames a lap
   options.max_offset_m = 6.0;
   const int differences[] = {0, 40};
   std::vector<TiltRow> rows;

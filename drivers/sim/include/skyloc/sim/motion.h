@@ -40,23 +40,34 @@ struct SpeedProfile {
   bool operator==(const SpeedProfile&) const = default;
 };
 
-struct MotionConfig {
+// How a run is cut into frames. The configuration's [camera] sim_* keys and the
+// experiments' options hold one; a MotionConfig is one with the ride on top.
+struct FrameSampling {
   Sampling sampling = Sampling::kDistance;
   double frame_spacing_m = 1.0;  // kDistance: mean distance between frames
   double speed_jitter = 0.2;     // kDistance: speed wanders within (1 +- jitter) x nominal
   SpeedProfile speed;            // kTime
-  double speed_ratio = 1.0;      // kTime: scales every cruise speed (a faster repeat run)
-  double height_m = 1.0;         // camera above the ground
-  double tilt_deg = 0;           // constant pitch (the paper's alpha), nose up positive
-  double zigzag_deg = 0;         // yaw amplitude of a sinusoidal weave about the route
-  double zigzag_period_m = 20;   // route distance of one full weave
-  double bumps_deg = 0;          // roll/pitch random walk bound (0: smooth ride)
-  double yaw_offset_deg = 0;     // constant heading offset (full yaw change between runs)
-  double lateral_m = 0;          // sideways wander off the route within +-lateral_m (0: on it)
-  double fps = 10;               // frames per second: kTime samples at it; timestamps i / fps
-  double start_m = 0;            // where along the route the run starts
-  int max_frames = 0;            // 0: until the end of the route (one lap of a loop)
-  std::uint64_t seed = 1;        // speed jitter or profile (targets, stops), and bumps
+
+  bool operator==(const FrameSampling&) const = default;
+};
+
+// A run: how it is sampled into frames, and the ride (camera height, manoeuvres, seed).
+struct MotionConfig : FrameSampling {
+  // The same ride sampled as `frames` says.
+  void Resample(const FrameSampling& frames) { static_cast<FrameSampling&>(*this) = frames; }
+
+  double speed_ratio = 1.0;     // kTime: scales every cruise speed (a faster repeat run)
+  double height_m = 1.0;        // camera above the ground
+  double tilt_deg = 0;          // constant pitch (the paper's alpha), nose up positive
+  double zigzag_deg = 0;        // yaw amplitude of a sinusoidal weave about the route
+  double zigzag_period_m = 20;  // route distance of one full weave
+  double bumps_deg = 0;         // roll/pitch random walk bound (0: smooth ride)
+  double yaw_offset_deg = 0;    // constant heading offset (full yaw change between runs)
+  double lateral_m = 0;         // sideways wander off the route within +-lateral_m (0: on it)
+  double fps = 10;              // frames per second: kTime samples at it; timestamps i / fps
+  double start_m = 0;           // where along the route the run starts
+  int max_frames = 0;           // 0: until the end of the route (one lap of a loop)
+  std::uint64_t seed = 1;       // speed jitter or profile (targets, stops), and bumps
 };
 
 struct TrajectoryPoint {
