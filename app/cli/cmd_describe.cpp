@@ -207,19 +207,15 @@ int RunDescribe(std::span<char* const> args) {
   std::optional<dsp::LensParams> camera;
   if (!o.camera.empty()) {
     Result<dsp::LensParams> loaded = drivers::LoadCameraFile(o.camera.c_str());
-    if (!loaded.ok()) {
-      std::fprintf(stderr, "skyloc describe: %s\n", loaded.status().message());
-      return kExitFailure;
-    }
+    if (!loaded.ok())
+      return Failed("describe", loaded.status());
     camera = *loaded;
   }
   firmware::Config base = firmware::DefaultConfig();
   if (!o.config_path.empty()) {
     Result<firmware::Config> loaded = firmware::LoadConfigFile(o.config_path.c_str());
-    if (!loaded.ok()) {
-      std::fprintf(stderr, "skyloc describe: %s\n", loaded.status().message());
-      return kExitFailure;
-    }
+    if (!loaded.ok())
+      return Failed("describe", loaded.status());
     base = *std::move(loaded);
   }
   const firmware::Config config = DescribeConfig(base, o.descriptor);

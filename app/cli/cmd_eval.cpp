@@ -580,10 +580,8 @@ int RunEval(std::span<char* const> args) {
     return kExitUsage;
   }
   const Status s = Evaluate(options);
-  if (!s.ok()) {
-    std::fprintf(stderr, "skyloc eval: %s\n", s.message());
-    return kExitFailure;
-  }
+  if (!s.ok())
+    return Failed("eval", s);
   return kExitOk;
 }
 

@@ -321,8 +321,7 @@ std::string HeadingCell(const dsp::HeadingErrorSummary& e) {
 int RunHeading(const Options& o, const std::string& command) {
   std::vector<tools::HeadingRow> rows;
   if (Status s = tools::RunHeadingExperiment(o.experiment, &rows, PrintProgress); !s.ok()) {
-    std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
-    return kExitFailure;
+    return Failed("experiment heading", s);
   }
   // All worlds together: the done-when figure.
   std::vector<double> pooled_correlation, pooled_surf, pooled_answer;
@@ -393,8 +392,7 @@ int RunHeading(const Options& o, const std::string& command) {
   }
   for (const auto& [name, text] : {std::pair{"/results.md", &md}, {"/metrics.json", &json}}) {
     if (Status s = WriteText(o.out + name, *text); !s.ok()) {
-      std::fprintf(stderr, "skyloc experiment heading: %s\n", s.message());
-      return kExitFailure;
+      return Failed("experiment heading", s);
     }
   }
   std::fputs(md.c_str(), stdout);

@@ -102,8 +102,7 @@ int RunSurf1dExperiment(std::span<char* const> args) {
         t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)"));
   tools::Surf1dCameraResult forward, fisheye;
   if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress); !s.ok()) {
-    std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());
-    return kExitFailure;
+    return Failed("experiment surf1d", s);
   }
   std::string md = "# skyloc experiment surf1d\n\n```\n" + command +
                    "\n```\n\n| camera | strip columns | features / image | matched / unmatched "
@@ -159,8 +158,7 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   for (const auto& [name, text] :
        {Output{"/results.md", &md}, Output{"/metrics.json", &json}, Output{"/roc.svg", &svg}}) {
     if (Status s = WriteText(out + name, *text); !s.ok()) {
-      std::fprintf(stderr, "skyloc experiment surf1d: %s\n", s.message());
-      return kExitFailure;
+      return Failed("experiment surf1d", s);
     }
   }
   std::fputs(md.c_str(), stdout);

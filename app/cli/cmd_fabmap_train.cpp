@@ -46,10 +46,8 @@ int RunFabmapTrain(std::span<char* const> args) {
     return ExitCode(t.Refuse("--train DIR and --out VOCAB are required"));
   Result<tools::Vocabulary> v = tools::TrainVocabulary(o);
   Status s = v.ok() ? tools::SaveVocabulary(out, *v) : v.status();
-  if (!s.ok()) {
-    std::fprintf(stderr, "skyloc fabmap-train: %s\n", s.message());
-    return kExitFailure;
-  }
+  if (!s.ok())
+    return Failed("fabmap-train", s);
   std::printf("skyloc fabmap-train: %d words, %zu new-place samples, written to %s\n", v->words,
               v->samples.size(), out.c_str());
   return kExitOk;

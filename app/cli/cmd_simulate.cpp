@@ -248,11 +248,6 @@ Result<sim::Lighting> Lighting(const Options& o) {
   return lighting;
 }
 
-int Fail(const Status& s) {
-  std::fprintf(stderr, "skyloc simulate: %s\n", s.message());
-  return kExitFailure;
-}
-
 }  // namespace
 
 int RunSimulate(std::span<char* const> args) {
@@ -281,11 +276,11 @@ int RunSimulate(std::span<char* const> args) {
       o.route_file = o.data_dir + "/routes/ant1_route1.csv";
   } else if (const Status s = sim::MakeProceduralWorld(world_kind, o.run.world.seed, &world);
              !s.ok()) {
-    return Fail(s);
+    return Failed("simulate", s);
   }
   if (!o.route_file.empty()) {
     if (const Status s = sim::LoadRouteCsv(o.route_file.c_str(), &route); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
   } else {
     route = world.route;
     closed = world.route_closed;
@@ -294,11 +289,11 @@ int RunSimulate(std::span<char* const> args) {
   const sim::MotionConfig motion = firmware::SimMotionConfig(o.run, o.fps, o.motion);
   std::vector<sim::TrajectoryPoint> trajectory;
   if (const Status s = sim::BuildTrajectory(route, closed, motion, &trajectory); !s.ok())
-    return Fail(Status(s).AddContext("route"));
+    return Failed("simulate", Status(s).AddContext("route"));
 
   Result<sim::Lighting> lighting = Lighting(o);
   if (!lighting.ok())
-    return Fail(lighting.status());
+    return Failed("simulate", lighting.status());
 
   ManualClock clock;  // unused for stamps: the trajectory's times stamp the frames
   Output storage[2];
@@ -319,14 +314,14 @@ int RunSimulate(std::span<char* const> args) {
   if (!o.camera_file.empty()) {
     Result<dsp::LensParams> loaded = drivers::LoadCameraFile(o.camera_file.c_str());
     if (!loaded.ok())
-      return Fail(loaded.status());
+      return Failed("simulate", loaded.status());
     lens = *loaded;
     o.width = lens.width;
     o.height = lens.height;
   }
   for (Output& out : outputs) {
     if (Status s = out.writer.Open(out.dir, /*with_poses=*/true); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
     sim::RenderedSourceConfig config;
     config.lens = lens;
     config.spectrum = out.spectrum;
@@ -334,13 +329,13 @@ int RunSimulate(std::span<char* const> args) {
     out.source.emplace(&world, trajectory, config);
     out.camera.emplace(out.source->camera_config(), &*out.source, &clock);
     if (Status s = out.camera->Open(); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
     if (Status s = out.camera->Start(); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
     if (Status s = WriteCameraFile(out.dir, o, out.source->renderer().lens()); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
     if (Status s = WriteSimulationToml(out.dir, o, out.spectrum, *lighting, motion); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
   }
 
   std::fprintf(stderr,
@@ -356,16 +351,16 @@ int RunSimulate(std::span<char* const> args) {
       Result<drivers::Frame> frame = out.camera->Capture(Nanoseconds{0});
       render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (!frame.ok())
-        return Fail(frame.status());
+        return Failed("simulate", frame.status());
       if (Status s = out.writer.Append(frame->image, trajectory[i].time_s, frame->pose); !s.ok())
-        return Fail(s);
+        return Failed("simulate", s);
     }
     progress.Update(
         i + 1, std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count());
   }
   for (Output& out : outputs) {
     if (Status s = out.writer.Close(); !s.ok())
-      return Fail(s);
+      return Failed("simulate", s);
   }
   const double renders = static_cast<double>(trajectory.size() * outputs.size());
   std::printf("skyloc simulate: wrote %zu frames to %s (render %.1f ms/frame at %dx%d)\n",

@@ -200,8 +200,7 @@ int RunSurf1d(std::span<char* const> args) {
   for (auto [path, view] :
        {std::pair{o.images[0].c_str(), &a}, std::pair{o.images[1].c_str(), &b}}) {
     if (const Status s = Extract(o, path, &surf, view); !s.ok()) {
-      std::fprintf(stderr, "skyloc surf1d: %s\n", s.message());
-      return kExitFailure;
+      return Failed("surf1d", s);
     }
   }
   const int n = static_cast<int>(a.strip.size());
@@ -217,9 +216,7 @@ int RunSurf1d(std::span<char* const> args) {
   if (match_error == dsp::Surf1dError::kOk)
     match_error = matcher.Match(a.features, b.features, n, &m);
   if (match_error != dsp::Surf1dError::kOk) {
-    std::fprintf(stderr, "skyloc surf1d: %s\n",
-                 drivers::DspStatus(match_error, "1D SURF matching").message());
-    return kExitFailure;
+    return Failed("surf1d", drivers::DspStatus(match_error, "1D SURF matching"));
   }
   std::printf("matches: %d pass the ratio test, score (sum of 1/distance) %.3f\n", m.matches,
               m.score);

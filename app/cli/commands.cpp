@@ -10,6 +10,11 @@
 
 namespace skyloc::cli {
 
+int Failed(const char* command, const Status& status) {
+  std::fprintf(stderr, "skyloc %s: %s\n", command, status.message());
+  return kExitFailure;
+}
+
 void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfig* run) {
   if (which == SimRunOptions::kWorldAndRun) {
     t->Custom("--world", "NAME", "seville (needs the shared data folder) or a procedural world",

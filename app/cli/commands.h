@@ -8,6 +8,7 @@
 
 #include "cli/options.h"
 #include "firmware/config.h"
+#include "skyloc/platform/status.h"
 
 namespace skyloc::cli {
 
@@ -51,5 +52,9 @@ void AddDescriptorChoices(OptionTable* table, Grid* grid, Normalisation* normali
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;  // a runtime error (device, file contents)
 inline constexpr int kExitUsage = 2;    // bad command line
+
+// A command's runtime failure: prints "skyloc COMMAND: message" on stderr and returns
+// kExitFailure, the one way every command reports one.
+int Failed(const char* command, const Status& status);
 
 }  // namespace skyloc::cli
