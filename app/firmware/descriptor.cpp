@@ -1,10 +1,11 @@
 #include "firmware/descriptor.h"
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::firmware {
 
 double LensFieldOfViewDeg(const dsp::Lens& lens) {
-  constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-  return 2 * lens.max_theta() * kRadToDeg;
+  return 2 * lens.max_theta() * dsp::kRadToDeg;
 }
 
 dsp::SkyDescriptorOptions SkyDescriptorOptionsFrom(const Config& config, const dsp::Lens& lens,

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::drivers {
 namespace {
 
@@ -19,9 +21,8 @@ void SinCosDeg(double deg, double* s, double* c) {
     *c = kCos[k];
     return;
   }
-  constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-  *s = std::sin(deg * kDegToRad);
-  *c = std::cos(deg * kDegToRad);
+  *s = std::sin(deg * dsp::kDegToRad);
+  *c = std::cos(deg * dsp::kDegToRad);
 }
 
 bool Finite(const ImuMounting& m) {
@@ -106,17 +107,16 @@ Result<ImuMounting> ImuMountingFromAxes(const char* axes) {
   }
   // R = Rz(yaw) Ry(pitch) Rx(roll): R[6] = -sin(pitch), R[7] = cos(pitch) sin(roll),
   // R[8] = cos(pitch) cos(roll), R[3] = sin(yaw) cos(pitch), R[0] = cos(yaw) cos(pitch).
-  constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
   ImuMounting m;
   if (r[6] == 1.0 || r[6] == -1.0) {
     // Pitch +-90 degrees (gimbal lock): roll 0, the yaw carries the rest.
     m.pitch_deg = r[6] < 0 ? 90.0 : -90.0;
     m.roll_deg = 0.0;
-    m.yaw_deg = std::atan2(-r[1], r[4]) * kRadToDeg;
+    m.yaw_deg = std::atan2(-r[1], r[4]) * dsp::kRadToDeg;
   } else {
-    m.pitch_deg = std::asin(-r[6]) * kRadToDeg;
-    m.roll_deg = std::atan2(r[7], r[8]) * kRadToDeg;
-    m.yaw_deg = std::atan2(r[3], r[0]) * kRadToDeg;
+    m.pitch_deg = std::asin(-r[6]) * dsp::kRadToDeg;
+    m.roll_deg = std::atan2(r[7], r[8]) * dsp::kRadToDeg;
+    m.yaw_deg = std::atan2(r[3], r[0]) * dsp::kRadToDeg;
   }
   return m;
 }

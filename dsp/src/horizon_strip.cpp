@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::dsp {
 
 const char* HorizonStripErrorMessage(HorizonStripError error) {
@@ -54,7 +56,6 @@ HorizonStripError HorizonStrip::Init(const Lens& lens, const HorizonStripOptions
   std::vector<std::uint32_t> column_end(n);
   std::vector<float> column_weight(n);
   int empty = 0;
-  constexpr double kDegToRad = std::numbers::pi / 180.0;
   for (std::size_t j = 0; j < n; ++j) {
     const double phi =
         2.0 * std::numbers::pi * static_cast<double>(j) / static_cast<double>(options.n_azimuth);

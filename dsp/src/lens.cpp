@@ -6,11 +6,10 @@
 #include <cstring>
 #include <numbers>
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::dsp {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-constexpr double kDegToRad = kPi / 180.0;
 
 // Solves f(t) = target for t in [lo, hi] where f increases monotonically: Newton steps
 // from `guess`, falling back to bisection whenever a step leaves the bracket. `f` returns

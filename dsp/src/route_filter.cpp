@@ -7,15 +7,10 @@
 #include <utility>
 
 #include "float4.h"
+#include "index_size.h"
 
 namespace skyloc::dsp {
 namespace {
-
-constexpr float kInf = std::numeric_limits<float>::infinity();
-
-std::size_t Sz(int v) {
-  return static_cast<std::size_t>(v);
-}
 
 // Rows per pass of the filter update: the band minimum works on a block of rows that
 // stays in L1 while it is read K + 1 times.

@@ -9,15 +9,10 @@
 #include <type_traits>
 
 #include "float4.h"
+#include "index_size.h"
 
 namespace skyloc::dsp {
 namespace {
-
-constexpr float kInf = std::numeric_limits<float>::infinity();
-
-std::size_t Sz(int v) {
-  return static_cast<std::size_t>(v);
-}
 
 // Number of velocities vmin, vmin + vstep, ... <= vmax (with a tolerance of a thousandth
 // of a step so 0.8 + 4 * 0.1 counts as <= 1.2 despite rounding).
@@ -103,10 +98,10 @@ template <typename Rows>
 void DifferenceRows(const Rows& rows, int dim, const float* q, std::span<float> out) {
   const std::size_t d = Sz(dim);
   const float inv_dim = 1.0f / static_cast<float>(dim);
-  constexpr std::size_t kLanes = 8;
-  const std::size_t whole = d - d % kLanes;
+  constexpr std::size_t kFloatsPerPass = 8;
+  const std::size_t whole = d - d % kFloatsPerPass;
   const auto finish = [&](Float4 lo, Float4 hi, std::size_t r) {
-    float lane[kLanes];
+    float lane[kFloatsPerPass];
     std::memcpy(lane, &lo, sizeof lo);
     std::memcpy(lane + 4, &hi, sizeof hi);
     for (std::size_t i = whole; i < d; ++i)
@@ -120,7 +115,7 @@ void DifferenceRows(const Rows& rows, int dim, const float* q, std::span<float> 
   std::size_t r = 0;
   for (; r + 2 <= out.size(); r += 2) {
     Float4 a_lo = {}, a_hi = {}, b_lo = {}, b_hi = {};
-    for (std::size_t i = 0; i < whole; i += kLanes) {
+    for (std::size_t i = 0; i < whole; i += kFloatsPerPass) {
       const Float4 q_lo = Load4(q + i), q_hi = Load4(q + i + 4);
       Float4 lo, hi;
       rows.Load8(r, i, &lo, &hi);
@@ -135,7 +130,7 @@ void DifferenceRows(const Rows& rows, int dim, const float* q, std::span<float> 
   }
   for (; r < out.size(); ++r) {
     Float4 acc_lo = {}, acc_hi = {};
-    for (std::size_t i = 0; i < whole; i += kLanes) {
+    for (std::size_t i = 0; i < whole; i += kFloatsPerPass) {
       Float4 lo, hi;
       rows.Load8(r, i, &lo, &hi);
       acc_lo += Abs4(lo - Load4(q + i));

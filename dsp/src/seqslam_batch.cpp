@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "float4.h"
+#include "index_size.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -14,10 +15,6 @@
 
 namespace skyloc::dsp {
 namespace {
-
-std::size_t Sz(int v) {
-  return static_cast<std::size_t>(v);
-}
 
 // Bytes of reference rows one tile holds: every query of the call passes over the tile,
 // so it should stay in L1 (32 KiB on the machines this runs on) next to the queries of

@@ -3,15 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::dsp {
 namespace {
 
 DescriptorError Fail(DescriptorError::Stage stage, const char* message) {
   return DescriptorError{stage, message};
 }
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 
 }  // namespace
 

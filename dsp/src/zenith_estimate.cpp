@@ -4,11 +4,11 @@
 #include <array>
 #include <cmath>
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::dsp {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 // Fewer skyline crossings (or less sky, in sample weight) than this: no estimate.
 constexpr int kMinCrossings = 8;
 constexpr double kMinSkyWeight = 1e-3;

@@ -5,14 +5,13 @@
 #include <cstddef>
 
 #include "skyloc/drivers/dsp_status.h"
+#include "skyloc/dsp/angles.h"
 #include "skyloc/sim/random.h"
 
 namespace skyloc::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 constexpr int kChannels = 6;  // x, y, z, roll, pitch, unwrapped yaw
 
 using Vec = std::array<double, 3>;
@@ -96,7 +95,8 @@ class Spline {
 // Specific force and body rate from the spline's value and derivatives.
 void Readings(const std::array<double, kChannels>& v, const std::array<double, kChannels>& d1,
               const std::array<double, kChannels>& d2, double gravity, Vec* force, Vec* rate) {
-  const double roll = v[3] * kDegToRad, pitch = v[4] * kDegToRad, yaw = v[5] * kDegToRad;
+  const double roll = v[3] * dsp::kDegToRad, pitch = v[4] * dsp::kDegToRad,
+               yaw = v[5] * dsp::kDegToRad;
   const double cy = std::cos(yaw), sy = std::sin(yaw);
   const double cp = std::cos(-pitch), sp = std::sin(-pitch);
   const double cr = std::cos(roll), sr = std::sin(roll);
@@ -110,7 +110,8 @@ void Readings(const std::array<double, kChannels>& v, const std::array<double, k
   for (std::size_t j = 0; j < 3; ++j)
     (*force)[j] = r[0][j] * world[0] + r[1][j] * world[1] + r[2][j] * world[2];
   // w = roll' x + pitch' (0, -cos roll, sin roll) + yaw' up, with up = R^T z.
-  const double droll = d1[3] * kDegToRad, dpitch = d1[4] * kDegToRad, dyaw = d1[5] * kDegToRad;
+  const double droll = d1[3] * dsp::kDegToRad, dpitch = d1[4] * dsp::kDegToRad,
+               dyaw = d1[5] * dsp::kDegToRad;
   *rate = {droll + dyaw * r[2][0], -dpitch * cr + dyaw * r[2][1], dpitch * sr + dyaw * r[2][2]};
 }
 
@@ -255,7 +256,7 @@ AttitudeErrorStats CompareAttitudes(std::span<const TrajectoryPoint> trajectory,
                 u[0] * e.up[1] - u[1] * e.up[0]};
     const double dt = std::atan2(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]),
                                  u[0] * e.up[0] + u[1] * e.up[1] + u[2] * e.up[2]) /
-                      kDegToRad;
+                      dsp::kDegToRad;
     roll2 += dr * dr;
     pitch2 += dp * dp;
     tilt2 += dt * dt;

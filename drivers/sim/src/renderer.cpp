@@ -6,12 +6,12 @@
 #include <numbers>
 
 #include "skyloc/drivers/dsp_status.h"
+#include "skyloc/dsp/angles.h"
 #include "skyloc/sim/random.h"
 
 namespace skyloc::sim {
 namespace {
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr float kFar = 20000.0f;  // metres: beyond any world
 
 struct Rgb {
@@ -240,11 +240,13 @@ bool LightingPreset(const char* name, std::uint64_t seed, Lighting* lighting) {
 }
 
 Rotation BodyToWorld(const drivers::Pose& pose) {
-  const double cy = std::cos(pose.yaw_deg * kDegToRad), sy = std::sin(pose.yaw_deg * kDegToRad);
+  const double cy = std::cos(pose.yaw_deg * dsp::kDegToRad),
+               sy = std::sin(pose.yaw_deg * dsp::kDegToRad);
   // Ry(-pitch): positive pitch lifts the nose.
-  const double cp = std::cos(-pose.pitch_deg * kDegToRad);
-  const double sp = std::sin(-pose.pitch_deg * kDegToRad);
-  const double cr = std::cos(pose.roll_deg * kDegToRad), sr = std::sin(pose.roll_deg * kDegToRad);
+  const double cp = std::cos(-pose.pitch_deg * dsp::kDegToRad);
+  const double sp = std::sin(-pose.pitch_deg * dsp::kDegToRad);
+  const double cr = std::cos(pose.roll_deg * dsp::kDegToRad),
+               sr = std::sin(pose.roll_deg * dsp::kDegToRad);
   // Rz(yaw) * Ry(p) * Rx(roll)
   const double m[3][3] = {
       {cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr},
@@ -316,8 +318,8 @@ Status Renderer::Render(const drivers::Pose& pose, const Lighting& lighting, Spe
   const auto materials = world_->materials();
 
   FrameLight fl;
-  const double az = lighting.sun_azimuth_deg * kDegToRad;
-  const double el = lighting.sun_elevation_deg * kDegToRad;
+  const double az = lighting.sun_azimuth_deg * dsp::kDegToRad;
+  const double el = lighting.sun_elevation_deg * dsp::kDegToRad;
   fl.sun = Vec3{static_cast<float>(std::cos(el) * std::cos(az)),
                 static_cast<float>(std::cos(el) * std::sin(az)), static_cast<float>(std::sin(el))};
   fl.cloud = static_cast<float>(std::clamp(lighting.cloud_cover, 0.0, 1.0));

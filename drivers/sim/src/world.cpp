@@ -12,10 +12,6 @@
 namespace skyloc::sim {
 namespace {
 
-Vec3 V(double x, double y, double z) {
-  return {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)};
-}
-
 struct NamedKind {
   const char* name;
   WorldKind kind;
@@ -87,8 +83,8 @@ void World::AddBox(double cx, double cy, double base_z, double size_x, double si
   for (int i = 0; i < 4; ++i) {
     const double x = cx + c * corners[i][0] - s * corners[i][1];
     const double y = cy + s * corners[i][0] + c * corners[i][1];
-    lo[i] = V(x, y, base_z);
-    hi[i] = V(x, y, base_z + height);
+    lo[i] = Vec3Of(x, y, base_z);
+    hi[i] = Vec3Of(x, y, base_z + height);
   }
   for (int i = 0; i < 4; ++i) {
     const int j = (i + 1) % 4;
@@ -99,13 +95,13 @@ void World::AddBox(double cx, double cy, double base_z, double size_x, double si
 
 void World::AddCylinder(double cx, double cy, double base_z, double radius, double height,
                         int segments, const Material& m) {
-  const Vec3 top_centre = V(cx, cy, base_z + height);
+  const Vec3 top_centre = Vec3Of(cx, cy, base_z + height);
   for (int i = 0; i < segments; ++i) {
     const double a0 = 2 * std::numbers::pi * i / segments;
     const double a1 = 2 * std::numbers::pi * (i + 1) / segments;
-    const Vec3 p0 = V(cx + radius * std::cos(a0), cy + radius * std::sin(a0), base_z);
-    const Vec3 p1 = V(cx + radius * std::cos(a1), cy + radius * std::sin(a1), base_z);
-    const Vec3 q0 = V(p0.x, p0.y, base_z + height), q1 = V(p1.x, p1.y, base_z + height);
+    const Vec3 p0 = Vec3Of(cx + radius * std::cos(a0), cy + radius * std::sin(a0), base_z);
+    const Vec3 p1 = Vec3Of(cx + radius * std::cos(a1), cy + radius * std::sin(a1), base_z);
+    const Vec3 q0 = Vec3Of(p0.x, p0.y, base_z + height), q1 = Vec3Of(p1.x, p1.y, base_z + height);
     AddQuad(p0, p1, q1, q0, m);
     AddTriangle(q0, q1, top_centre, m);
   }
@@ -192,7 +188,8 @@ Status LoadSevilleWorld(const char* csv_path, World* world) {
     // Tussock grass: greenish in the visible, dark in the UV like all vegetation.
     const Material m{0.55f * grey, 0.75f * grey, 0.35f * grey, 0.02f + 0.03f * grey,
                      Texture::kFoliage};
-    world->AddTriangle(V(v[0], v[1], v[2]), V(v[3], v[4], v[5]), V(v[6], v[7], v[8]), m);
+    world->AddTriangle(Vec3Of(v[0], v[1], v[2]), Vec3Of(v[3], v[4], v[5]), Vec3Of(v[6], v[7], v[8]),
+                       m);
   }
   std::fclose(f);
   SKYLOC_TRY(status);

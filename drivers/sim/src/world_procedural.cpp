@@ -12,17 +12,12 @@
 #include <numbers>
 #include <vector>
 
+#include "skyloc/dsp/angles.h"
 #include "skyloc/sim/random.h"
 #include "skyloc/sim/world.h"
 
 namespace skyloc::sim {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-
-Vec3 V(double x, double y, double z) {
-  return {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)};
-}
 
 // Arc-length access to a polyline.
 class Polyline {
@@ -106,7 +101,7 @@ void AddTree(World& w, double x, double y, double trunk_radius, double crown_bas
              const Material& foliage) {
   const double crown_half_height = crown_radii.z;
   w.AddCylinder(x, y, 0, trunk_radius, crown_base + crown_half_height * 0.5, 6, kBark);
-  w.AddEllipsoid(V(x, y, crown_base + crown_half_height), crown_radii, 1, foliage);
+  w.AddEllipsoid(Vec3Of(x, y, crown_base + crown_half_height), crown_radii, 1, foliage);
 }
 
 // House with a pitched roof, ridge along its local x axis.
@@ -115,7 +110,7 @@ void AddHouse(World& w, double cx, double cy, double size_x, double size_y, doub
   w.AddBox(cx, cy, 0, size_x, size_y, wall_h, yaw, facade);
   const double c = std::cos(yaw), s = std::sin(yaw);
   auto at = [&](double lx, double ly, double z) {
-    return V(cx + c * lx - s * ly, cy + s * lx + c * ly, z);
+    return Vec3Of(cx + c * lx - s * ly, cy + s * lx + c * ly, z);
   };
   const double hx = size_x / 2 + 0.3, hy = size_y / 2 + 0.3;
   const Vec3 r0 = at(-hx, 0, wall_h + roof_h), r1 = at(hx, 0, wall_h + roof_h);
@@ -143,7 +138,7 @@ void AddLampPost(World& w, const Polyline& route, double s, double offset) {
   const Point2 base = route.Side(s, offset, &heading);
   const Point2 arm = route.Side(s, offset + (offset > 0 ? -1.8 : 1.8), nullptr);
   w.AddCylinder(base.x, base.y, 0, 0.09, 7.0, 6, kMetal);
-  w.AddBar(V(base.x, base.y, 6.9), V(arm.x, arm.y, 6.9), 0.08, kMetal);
+  w.AddBar(Vec3Of(base.x, base.y, 6.9), Vec3Of(arm.x, arm.y, 6.9), 0.08, kMetal);
   w.AddBox(arm.x, arm.y, 6.7, 0.6, 0.3, 0.2, heading, kMetal);
 }
 
@@ -185,10 +180,10 @@ void MakeCity(World& w, Rng& rng) {
     AddLampPost(w, route, s, -6.0);
     AddLampPost(w, route, s, 6.0);
     const Point2 l = route.Side(s, 6.0, nullptr), r = route.Side(s, -6.0, nullptr);
-    w.AddBar(V(l.x, l.y, 7.4), V(r.x, r.y, 7.4), 0.04, kWire);
+    w.AddBar(Vec3Of(l.x, l.y, 7.4), Vec3Of(r.x, r.y, 7.4), 0.04, kWire);
     const Point2 mid = route.Side(s, 0, nullptr);
     if (have_previous)
-      w.AddBar(V(previous.x, previous.y, 7.4), V(mid.x, mid.y, 7.4), 0.04, kWire);
+      w.AddBar(Vec3Of(previous.x, previous.y, 7.4), Vec3Of(mid.x, mid.y, 7.4), 0.04, kWire);
     previous = mid;
     have_previous = true;
   }
@@ -196,7 +191,7 @@ void MakeCity(World& w, Rng& rng) {
   for (double s = 20; s < length; s += rng.Uniform(40, 90)) {
     const Point2 p = route.Side(s, rng.Uniform() < 0.5 ? 5.0 : -5.0, nullptr);
     const double r = rng.Uniform(2, 3);
-    AddTree(w, p.x, p.y, 0.2, 3, V(r, r, r * 1.2), Foliage(rng));
+    AddTree(w, p.x, p.y, 0.2, 3, Vec3Of(r, r, r * 1.2), Foliage(rng));
   }
 }
 
@@ -248,7 +243,7 @@ void MakeForest(World& w, Rng& rng) {
       const double crown_aspect = rng.Uniform(0.8, 1.2);
       const double crown_base = rng.Uniform(3, 7);
       const double trunk_radius = rng.Uniform(0.15, 0.35);
-      AddTree(w, c.x, c.y, trunk_radius, crown_base, V(r, r * crown_aspect, crown_half_height),
+      AddTree(w, c.x, c.y, trunk_radius, crown_base, Vec3Of(r, r * crown_aspect, crown_half_height),
               foliage);
     }
   }
@@ -264,7 +259,7 @@ void MakeForest(World& w, Rng& rng) {
     if (rng.Uniform() < 0.6) {
       const Point2 t = route.Side(s + 9, rng.Uniform(7, 10), nullptr);
       const double r = rng.Uniform(1.5, 2.5);
-      AddTree(w, t.x, t.y, 0.15, 2, V(r, r, r), Foliage(rng));
+      AddTree(w, t.x, t.y, 0.15, 2, Vec3Of(r, r, r), Foliage(rng));
     }
   }
   // Suburban street: houses both sides, street trees, lamp posts.
@@ -276,7 +271,7 @@ void MakeForest(World& w, Rng& rng) {
       if (rng.Uniform() < 0.5) {
         const Point2 t = route.Side(s + 8, side * 5.0, nullptr);
         const double r = rng.Uniform(1.8, 3);
-        AddTree(w, t.x, t.y, 0.18, 2.5, V(r, r, r * 1.1), Foliage(rng));
+        AddTree(w, t.x, t.y, 0.18, 2.5, Vec3Of(r, r, r * 1.1), Foliage(rng));
       }
     }
   }
@@ -298,7 +293,7 @@ void MakeRepetitive(World& w, Rng& rng) {
     const double j = rng.Uniform(0.97, 1.03);  // near-identical on purpose
     const double dy = rng.Uniform(-0.3, 0.3);
     const double dx = rng.Uniform(-0.3, 0.3);
-    AddTree(w, p.x + dx, p.y + dy, 0.25, 4.5 * j, V(3.0 * j, 3.0 * j, 4.0 * j), foliage);
+    AddTree(w, p.x + dx, p.y + dy, 0.25, 4.5 * j, Vec3Of(3.0 * j, 3.0 * j, 4.0 * j), foliage);
   };
   for (double s = -20; s < route.length() + 20; s += 7) {
     for (double offset : {5.5, 12.5, 19.5, -5.5, -12.5, -19.5}) {
@@ -315,7 +310,7 @@ void MakeRepetitive(World& w, Rng& rng) {
   // Trees along the side road (going left from the junction).
   double heading;
   route.Side(junction_s, 0, &heading);
-  const double sx = std::cos(heading + kPi / 2), sy = std::sin(heading + kPi / 2);
+  const double sx = std::cos(heading + dsp::kPi / 2), sy = std::sin(heading + dsp::kPi / 2);
   const double fx = std::cos(heading), fy = std::sin(heading);
   const Point2 j = route.Side(junction_s, 0, nullptr);
   for (double d = 12; d < 80; d += 7) {
@@ -327,7 +322,7 @@ void MakeRepetitive(World& w, Rng& rng) {
   for (int i = 0; i < 6; ++i) {
     const double offset = -rng.Uniform(9, 25);
     const Point2 p = route.Side(disposal_s + rng.Uniform(-10, 35), offset, nullptr);
-    const double yaw = rng.Uniform(0, kPi);
+    const double yaw = rng.Uniform(0, dsp::kPi);
     const double height = rng.Uniform(1.5, 3);
     const double size_y = rng.Uniform(3, 6);
     const double size_x = rng.Uniform(3, 6);

@@ -116,13 +116,6 @@ bool IsDeviceGoneErrno(int e) {
   return e == ENODEV || e == ENXIO || e == EIO || e == ENOENT || e == ESHUTDOWN || e == EBADF;
 }
 
-int PollTimeoutMs(Nanoseconds remaining) {
-  if (remaining <= Nanoseconds(0))
-    return 0;
-  const auto ms = (remaining.count() + 999'999) / 1'000'000;
-  return ms > 60'000 ? 60'000 : static_cast<int>(ms);
-}
-
 }  // namespace
 
 Result<IioScanType> ParseIioScanType(const char* text) {

@@ -20,13 +20,13 @@
 namespace skyloc::drivers {
 namespace {
 
-struct FormatChoice {
+struct LibcameraFormatChoice {
   libcamera::PixelFormat pixel_format;
   dsp::PixelFormat format;
 };
 
 // Greyscale first (monochrome UV sensors), then YUYV, then packed RGB.
-const FormatChoice kFormats[] = {
+const LibcameraFormatChoice kLibcameraFormats[] = {
     {libcamera::formats::R8, dsp::PixelFormat::kGrey8},
     {libcamera::formats::YUYV, dsp::PixelFormat::kYuyv},
     {libcamera::formats::BGR888, dsp::PixelFormat::kRgb24},
@@ -114,8 +114,8 @@ Status LibcameraCamera::Configure() {
                          info_.name, config_.raw ? "Raw" : "Viewfinder");
   }
   libcamera::StreamConfiguration& stream_config = configuration_->at(0);
-  const FormatChoice* choice = nullptr;
-  for (const FormatChoice& f : kFormats) {
+  const LibcameraFormatChoice* choice = nullptr;
+  for (const LibcameraFormatChoice& f : kLibcameraFormats) {
     for (const libcamera::PixelFormat& offered : stream_config.formats().pixelformats()) {
       if (offered == f.pixel_format && choice == nullptr)
         choice = &f;

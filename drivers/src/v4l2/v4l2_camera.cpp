@@ -73,13 +73,6 @@ bool IsCaptureDevice(const v4l2_capability& cap) {
   return (caps & V4L2_CAP_VIDEO_CAPTURE) != 0 && (caps & V4L2_CAP_STREAMING) != 0;
 }
 
-int PollTimeoutMs(Nanoseconds remaining) {
-  if (remaining <= Nanoseconds(0))
-    return 0;
-  const auto ms = (remaining.count() + 999'999) / 1'000'000;
-  return ms > 60'000 ? 60'000 : static_cast<int>(ms);
-}
-
 }  // namespace
 
 V4l2Io& SystemV4l2Io() {

@@ -20,6 +20,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "skyloc/dsp/angles.h"
+
 namespace skyloc::dsp {
 
 inline constexpr double kStandardGravity = 9.80665;  // m/s^2
@@ -40,7 +42,6 @@ struct Attitude {
 };
 
 inline std::array<double, 3> UpFromRollPitch(double roll_deg, double pitch_deg) {
-  constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
   const double r = roll_deg * kDegToRad, p = pitch_deg * kDegToRad;
   return {std::sin(p), std::cos(p) * std::sin(r), std::cos(p) * std::cos(r)};
 }
@@ -52,7 +53,6 @@ inline Attitude AttitudeFromRollPitch(std::int64_t timestamp_ns, double roll_deg
 
 // `up` need not be unit length (e.g. an accelerometer reading); it must not be zero.
 inline Attitude AttitudeFromUp(std::int64_t timestamp_ns, const std::array<double, 3>& up) {
-  constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
   const double n = std::sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
   const std::array<double, 3> u{up[0] / n, up[1] / n, up[2] / n};
   return {timestamp_ns, std::atan2(u[1], u[2]) * kRadToDeg,

@@ -29,6 +29,15 @@ class MonotonicClock final : public Clock {
 // The process's MonotonicClock, for a driver constructed without a clock.
 const Clock& SystemMonotonicClock();
 
+// poll(2)'s timeout for a wait of at most `remaining`: whole milliseconds rounded up (a
+// wait with time left never polls with 0, which would spin), at most a minute.
+inline int PollTimeoutMs(Nanoseconds remaining) {
+  if (remaining <= Nanoseconds(0))
+    return 0;
+  const auto ms = (remaining.count() + 999'999) / 1'000'000;
+  return ms > 60'000 ? 60'000 : static_cast<int>(ms);
+}
+
 // A clock that moves only when told to (tests, replay at simulated pace).
 class ManualClock final : public Clock {
  public:

@@ -17,6 +17,11 @@ struct Vec3 {
   float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
 };
 
+// A Vec3 from doubles: the worlds lay out their geometry in double and store it in float.
+inline Vec3 Vec3Of(double x, double y, double z) {
+  return {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)};
+}
+
 inline Vec3 operator+(Vec3 a, Vec3 b) {
   return {a.x + b.x, a.y + b.y, a.z + b.z};
 }
