@@ -325,10 +325,12 @@ int RunHeading(const Options& o, const std::string& command) {
   }
   // All worlds together: the done-when figure.
   std::vector<double> pooled_correlation, pooled_surf, pooled_answer;
-  int pooled_frames = 0, pooled_uncertain = 0;
+  int pooled_frames = 0, pooled_uncertain = 0, pooled_wrong = 0, pooled_wrong_certain = 0;
   for (const tools::HeadingRow& r : rows) {
     pooled_frames += r.correlation.frames;
     pooled_uncertain += r.uncertain_frames;
+    pooled_wrong += r.wrong_frames;
+    pooled_wrong_certain += r.wrong_certain_frames;
     pooled_answer.insert(pooled_answer.end(), r.answer_errors_deg.begin(),
                          r.answer_errors_deg.end());
     pooled_correlation.insert(pooled_correlation.end(), r.correlation_errors_deg.begin(),
@@ -345,8 +347,9 @@ int RunHeading(const Options& o, const std::string& command) {
                    "with an estimate of the correctly matched ones):\n\n"
                    "| world | query frames | correctly matched | (b) cross-correlation | "
                    "(a) 1D SURF + RANSAC | heading_deg (the firmware's answer) | "
-                   "(b) uncertain: (a) run | (b) tilt <= 10° | (b) tilt > 10° |\n"
-                   "|---|---|---|---|---|---|---|---|---|\n";
+                   "(b) uncertain: (a) run | (a) where run | (b) wrong (> 10°): called certain | "
+                   "(b) tilt <= 10° | (b) tilt > 10° |\n"
+                   "|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::string json =
       tools::MetricsJsonHead("experiment") +
       "  \"experiment\": \"heading\",\n  \"command\": " + tools::JsonString(command) +
@@ -354,9 +357,11 @@ int RunHeading(const Options& o, const std::string& command) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const tools::HeadingRow& r = rows[i];
     md +=
-        Format("| %s | %d | %d | %s | %s | %s | %d | %s | %s |\n", sim::WorldKindName(r.world),
-               r.query_frames, r.match.summary.correct, HeadingCell(r.correlation).c_str(),
-               HeadingCell(r.surf).c_str(), HeadingCell(r.answer).c_str(), r.uncertain_frames,
+        Format("| %s | %d | %d | %s | %s | %s | %d | %s | %d: %d | %s | %s |\n",
+               sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct,
+               HeadingCell(r.correlation).c_str(), HeadingCell(r.surf).c_str(),
+               HeadingCell(r.answer).c_str(), r.uncertain_frames,
+               HeadingCell(r.surf_where_uncertain).c_str(), r.wrong_frames, r.wrong_certain_frames,
                HeadingCell(r.correlation_level).c_str(), HeadingCell(r.correlation_tilted).c_str());
     json += Format("    {\"world\": \"%s\", \"query_frames\": %d, \"correct_matches\": %d, ",
                    sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct) +
@@ -364,16 +369,23 @@ int RunHeading(const Options& o, const std::string& command) {
             ", \"surf\": " + tools::HeadingSummaryJson(r.surf) +
             ", \"answer\": " + tools::HeadingSummaryJson(r.answer) +
             Format(", \"uncertain_frames\": %d", r.uncertain_frames) +
+            ", \"surf_where_uncertain\": " + tools::HeadingSummaryJson(r.surf_where_uncertain) +
+            Format(", \"wrong_frames\": %d, \"wrong_certain_frames\": %d", r.wrong_frames,
+                   r.wrong_certain_frames) +
             ", \"correlation_level\": " + tools::HeadingSummaryJson(r.correlation_level) +
             ", \"correlation_tilted\": " + tools::HeadingSummaryJson(r.correlation_tilted) + "}" +
             (i + 1 < rows.size() ? ",\n" : "\n");
   }
-  md += Format("| all | | | %s | %s | %s | %d | | |\n", HeadingCell(all_correlation).c_str(),
-               HeadingCell(all_surf).c_str(), HeadingCell(all_answer).c_str(), pooled_uncertain);
+  md +=
+      Format("| all | | | %s | %s | %s | %d | | %d: %d | | |\n",
+             HeadingCell(all_correlation).c_str(), HeadingCell(all_surf).c_str(),
+             HeadingCell(all_answer).c_str(), pooled_uncertain, pooled_wrong, pooled_wrong_certain);
   json += "  ],\n  \"all\": {\"correlation\": " + tools::HeadingSummaryJson(all_correlation) +
           ", \"surf\": " + tools::HeadingSummaryJson(all_surf) +
           ", \"answer\": " + tools::HeadingSummaryJson(all_answer) +
-          Format(", \"uncertain_frames\": %d", pooled_uncertain) + "}\n}\n";
+          Format(", \"uncertain_frames\": %d, \"wrong_frames\": %d, \"wrong_certain_frames\": %d",
+                 pooled_uncertain, pooled_wrong, pooled_wrong_certain) +
+          "}\n}\n";
   const dsp::HorizonStripOptions& strip = o.experiment.config.heading.strip;
   md += Format(
       "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "

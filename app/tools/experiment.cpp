@@ -437,8 +437,9 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
     row.query_frames = static_cast<int>(query.trajectory.size());
     SKYLOC_TRY(ScoreRuns(reference, query, ScoredDescriptor::kSky, Matcher::kRouteFilter, options,
                          &row.match));
-    std::vector<double> correlation, surf, answer, level, tilted;  // signed errors, degrees
-    int frames = 0, level_frames = 0;
+    // Signed errors, degrees.
+    std::vector<double> correlation, surf, answer, level, tilted, surf_where_uncertain;
+    int frames = 0, level_frames = 0, uncertain_frames = 0;
     for (std::size_t q = 0; q < query.trajectory.size(); ++q) {
       if (!row.match.correct[q])
         continue;
@@ -461,9 +462,17 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
         const double error = dsp::WrapDegrees(estimate.correlation_deg - truth);
         correlation.push_back(error);
         (is_level ? level : tilted).push_back(error);
+        if (std::fabs(error) > kWrongHeadingDeg) {
+          ++row.wrong_frames;
+          row.wrong_certain_frames += estimate.uncertain ? 0 : 1;
+        }
       }
-      if (estimate.has_surf)
+      uncertain_frames += estimate.uncertain ? 1 : 0;
+      if (estimate.has_surf) {
         surf.push_back(dsp::WrapDegrees(estimate.surf_deg - truth));
+        if (estimate.uncertain)
+          surf_where_uncertain.push_back(surf.back());
+      }
       if (estimate.has_heading)
         answer.push_back(dsp::WrapDegrees(estimate.heading_deg - truth));
       row.uncertain_frames += estimate.uncertain ? 1 : 0;
@@ -474,6 +483,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
     row.answer = dsp::SummariseHeadingErrors(answer, frames);
     row.correlation = dsp::SummariseHeadingErrors(correlation, frames);
     row.surf = dsp::SummariseHeadingErrors(surf, frames);
+    row.surf_where_uncertain = dsp::SummariseHeadingErrors(surf_where_uncertain, uncertain_frames);
     row.correlation_level = dsp::SummariseHeadingErrors(level, level_frames);
     row.correlation_tilted = dsp::SummariseHeadingErrors(tilted, frames - level_frames);
     rows->push_back(std::move(row));

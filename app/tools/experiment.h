@@ -195,12 +195,20 @@ struct HeadingRow {
   // (heading_deg, dsp/heading.h: (b)'s).
   dsp::HeadingErrorSummary correlation, surf, answer;
   int uncertain_frames = 0;  // where the firmware runs (a): its share of the heading's cost
+  // Frames where (b) is wrong (absolute error above kWrongHeadingDeg) and, of those, the
+  // ones the rule calls certain: there the firmware would not ask (a) for a second opinion.
+  int wrong_frames = 0, wrong_certain_frames = 0;
+  // (a) on the uncertain frames only: its accuracy where the firmware runs it.
+  dsp::HeadingErrorSummary surf_where_uncertain;
   // The same frames split by the query's tilt (angle of body z from the zenith) at or
   // below / above 10 degrees, correlation only: what the bumps do to the strip.
   dsp::HeadingErrorSummary correlation_level, correlation_tilted;
   // Signed errors (estimate - truth, degrees) of the estimated frames, for pooling worlds.
   std::vector<double> correlation_errors_deg, surf_errors_deg, answer_errors_deg;
 };
+
+// (b)'s error above which a frame counts as wrong in HeadingRow.
+inline constexpr double kWrongHeadingDeg = 10.0;
 
 Status RunHeadingExperiment(const ExperimentOptions& options, std::vector<HeadingRow>* rows,
                             ProgressFn progress = nullptr);
