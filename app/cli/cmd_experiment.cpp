@@ -347,7 +347,7 @@ int RunHeading(const Options& o, const std::string& command) {
                    "with an estimate of the correctly matched ones):\n\n"
                    "| world | query frames | correctly matched | (b) cross-correlation | "
                    "(a) 1D SURF + RANSAC | heading_deg (the firmware's answer) | "
-                   "(b) uncertain: (a) run | (a) where run | (b) wrong (> 10°): called certain | "
+                   "(b) uncertain: (a) run | (a) where run | (b) wrong (> 10°): of them certain | "
                    "(b) tilt <= 10° | (b) tilt > 10° |\n"
                    "|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::string json =
@@ -357,11 +357,11 @@ int RunHeading(const Options& o, const std::string& command) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const tools::HeadingRow& r = rows[i];
     md +=
-        Format("| %s | %d | %d | %s | %s | %s | %d | %s | %d: %d | %s | %s |\n",
+        Format("| %s | %d | %d | %s | %s | %s | %d | %s | %d of %d | %s | %s |\n",
                sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct,
                HeadingCell(r.correlation).c_str(), HeadingCell(r.surf).c_str(),
                HeadingCell(r.answer).c_str(), r.uncertain_frames,
-               HeadingCell(r.surf_where_uncertain).c_str(), r.wrong_frames, r.wrong_certain_frames,
+               HeadingCell(r.surf_where_uncertain).c_str(), r.wrong_certain_frames, r.wrong_frames,
                HeadingCell(r.correlation_level).c_str(), HeadingCell(r.correlation_tilted).c_str());
     json += Format("    {\"world\": \"%s\", \"query_frames\": %d, \"correct_matches\": %d, ",
                    sim::WorldKindName(r.world), r.query_frames, r.match.summary.correct) +
@@ -377,9 +377,9 @@ int RunHeading(const Options& o, const std::string& command) {
             (i + 1 < rows.size() ? ",\n" : "\n");
   }
   md +=
-      Format("| all | | | %s | %s | %s | %d | | %d: %d | | |\n",
+      Format("| all | | | %s | %s | %s | %d | | %d of %d | | |\n",
              HeadingCell(all_correlation).c_str(), HeadingCell(all_surf).c_str(),
-             HeadingCell(all_answer).c_str(), pooled_uncertain, pooled_wrong, pooled_wrong_certain);
+             HeadingCell(all_answer).c_str(), pooled_uncertain, pooled_wrong_certain, pooled_wrong);
   json += "  ],\n  \"all\": {\"correlation\": " + tools::HeadingSummaryJson(all_correlation) +
           ", \"surf\": " + tools::HeadingSummaryJson(all_surf) +
           ", \"answer\": " + tools::HeadingSummaryJson(all_answer) +

@@ -30,4 +30,14 @@ if(frames LESS 100 OR median GREATER_EQUAL 3 OR p90 GREATER_EQUAL 30)
   message(FATAL_ERROR "heading (cross-correlation) over ${frames} frames: median ${median}, "
                       "p90 ${p90} degrees; expected >= 100 frames, < 3 and < 30")
 endif()
+# Where the correlation is wrong (off by more than 10 degrees) the firmware must still ask
+# 1D SURF: none of those frames may be called certain (this run has 8 of them).
+string(JSON wrong GET "${json}" all wrong_frames)
+string(JSON wrong_certain GET "${json}" all wrong_certain_frames)
+string(JSON uncertain GET "${json}" all uncertain_frames)
+if(wrong LESS 1 OR NOT wrong_certain EQUAL 0 OR uncertain LESS wrong)
+  message(FATAL_ERROR "of ${wrong} frames whose correlation heading is wrong, "
+                      "${wrong_certain} were called certain (expected some wrong, none certain; "
+                      "${uncertain} uncertain in all)")
+endif()
 file(REMOVE_RECURSE ${dir})
