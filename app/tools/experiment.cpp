@@ -9,6 +9,7 @@
 
 #include "firmware/descriptor.h"
 #include "skyloc/drivers/dsp_status.h"
+#include "skyloc/dsp/angles.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/sky_descriptor.h"
 #include "skyloc/dsp/vanilla_descriptor.h"
@@ -70,10 +71,9 @@ Status RunAttitudes(const std::vector<TrajectoryPoint>& trajectory, AttitudeInpu
 // The largest tilt (angle between body z and the world zenith) a run with these manoeuvres
 // reaches: a constant pitch plus roll and pitch bumps, each up to bumps_deg.
 double LargestTiltDeg(double tilt_deg, double bumps_deg) {
-  constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-  const double pitch = (std::fabs(tilt_deg) + bumps_deg) * kDegToRad;
-  const double roll = bumps_deg * kDegToRad;
-  return std::acos(std::cos(pitch) * std::cos(roll)) / kDegToRad;
+  const double pitch = (std::fabs(tilt_deg) + bumps_deg) * dsp::kDegToRad;
+  const double roll = bumps_deg * dsp::kDegToRad;
+  return std::acos(std::cos(pitch) * std::cos(roll)) / dsp::kDegToRad;
 }
 
 // The options with the cap on (when attitude is) at the elevation a user expecting tilts up
@@ -402,10 +402,10 @@ namespace {
 
 // Angle of the body's z axis from the world zenith, degrees (roll then pitch).
 double TiltDeg(const drivers::Pose& pose) {
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
-  return std::acos(std::clamp(std::cos(pose.roll_deg * kDeg) * std::cos(pose.pitch_deg * kDeg),
-                              -1.0, 1.0)) /
-         kDeg;
+  return std::acos(std::clamp(
+             std::cos(pose.roll_deg * dsp::kDegToRad) * std::cos(pose.pitch_deg * dsp::kDegToRad),
+             -1.0, 1.0)) /
+         dsp::kDegToRad;
 }
 
 }  // namespace

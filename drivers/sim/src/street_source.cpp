@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "skyloc/dsp/angles.h"
 #include "skyloc/sim/random.h"
 
 namespace skyloc::sim {
@@ -13,7 +14,6 @@ namespace {
 constexpr double kStreetHalfWidth = 6.0;  // m, camera to the building fronts
 constexpr double kCameraHeight = 0.3;     // m, a small robot
 constexpr double kBlockLength = 7.0;      // m of street per building
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Height of the building at street position x on one side (0 = left, 1 = right).
 double BuildingHeight(std::uint64_t seed, int side, double x) {
@@ -59,7 +59,7 @@ Status StreetSource::Prepare(int width, int height, dsp::PixelFormat format) {
   // The lens of LensFromConfig: equidistant, 185 degrees across the inscribed circle.
   const double cx = (w - 1) / 2.0, cy = (h - 1) / 2.0;
   const double radius = std::min(w, h) / 2.0;
-  const double max_theta = 185.0 / 2.0 * kDeg;
+  const double max_theta = 185.0 / 2.0 * dsp::kDegToRad;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = 3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
@@ -108,8 +108,8 @@ Status StreetSource::Render(std::uint64_t index, dsp::MutableImageView out,
     Step();  // frames the camera dropped: the robot drove on all the same
 
   const double phase = 2.0 * std::numbers::pi * static_cast<double>(index) / 40.0;
-  const double yaw = (options_.yaw_deg + options_.zigzag_deg * std::sin(phase)) * kDeg;
-  const double pitch = options_.tilt_deg * kDeg;
+  const double yaw = (options_.yaw_deg + options_.zigzag_deg * std::sin(phase)) * dsp::kDegToRad;
+  const double pitch = options_.tilt_deg * dsp::kDegToRad;
   const double cy = std::cos(yaw), sy = std::sin(yaw), cp = std::cos(pitch), sp = std::sin(pitch);
   const double sky = std::min(255.0, 210.0 * options_.brightness);
   const double wall = 45.0 * options_.brightness;
@@ -155,7 +155,7 @@ Status StreetSource::Render(std::uint64_t index, dsp::MutableImageView out,
     p.x_m = x_m_;
     p.z_m = kCameraHeight;
     p.pitch_deg = options_.tilt_deg;
-    p.yaw_deg = yaw / kDeg;
+    p.yaw_deg = yaw / dsp::kDegToRad;
     *pose = p;
   }
   return Status::Ok();

@@ -1,5 +1,7 @@
-// The circle's constants, once: every degree-radian conversion in skyloc uses these (the
-// same doubles as std::numbers::pi and 3.14159265358979323846, so no result moves).
+// The circle's constants, once: a named degree-radian factor anywhere in skyloc is one of
+// these (the same doubles as std::numbers::pi and 3.14159265358979323846). An expression
+// written as x * 180.0 / pi rounds differently from x * kRadToDeg, so such expressions stay
+// as written: rewriting them would move results.
 #pragma once
 
 #include <numbers>
