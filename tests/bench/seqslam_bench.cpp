@@ -60,20 +60,21 @@ void StreamingStep(benchmark::State& state, skyloc::dsp::ReferenceStorage storag
       static_cast<double>(StreamingSeqSlam::BytesPerReference(p, kDim, storage));
 }
 
+// Routes of 1,000, 10,000 and 100,000 places, timed in microseconds.
+void RouteLengths(benchmark::internal::Benchmark* b) {
+  b->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+}
+
 void BM_StreamingStep(benchmark::State& state) {
   StreamingStep(state, skyloc::dsp::ReferenceStorage::kFloat32);
 }
-BENCHMARK(BM_StreamingStep)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StreamingStep)->Apply(RouteLengths);
 
 // The database stored as bfloat16: half the bytes the difference column reads.
 void BM_StreamingStepBFloat16(benchmark::State& state) {
   StreamingStep(state, skyloc::dsp::ReferenceStorage::kBFloat16);
 }
-BENCHMARK(BM_StreamingStepBFloat16)
-    ->Arg(1000)
-    ->Arg(10000)
-    ->Arg(100000)
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StreamingStepBFloat16)->Apply(RouteLengths);
 
 // The parts of a step, to see where the time goes.
 // The route filter (the firmware's default matcher) on the same routes and queries: one
@@ -112,27 +113,19 @@ void RouteFilterStep(benchmark::State& state, skyloc::dsp::ReferenceStorage stor
 void BM_RouteFilterStep(benchmark::State& state) {
   RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kFloat32);
 }
-BENCHMARK(BM_RouteFilterStep)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RouteFilterStep)->Apply(RouteLengths);
 
 void BM_RouteFilterStepBFloat16(benchmark::State& state) {
   RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kBFloat16);
 }
-BENCHMARK(BM_RouteFilterStepBFloat16)
-    ->Arg(1000)
-    ->Arg(10000)
-    ->Arg(100000)
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RouteFilterStepBFloat16)->Apply(RouteLengths);
 
 // The route held as 8-bit square-law codes with a power-of-two scale per row: a quarter
 // of the float route's bytes.
 void BM_RouteFilterStepCodes8(benchmark::State& state) {
   RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kCodes8);
 }
-BENCHMARK(BM_RouteFilterStepCodes8)
-    ->Arg(1000)
-    ->Arg(10000)
-    ->Arg(100000)
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RouteFilterStepCodes8)->Apply(RouteLengths);
 
 void BM_DifferenceColumn(benchmark::State& state) {
   const std::size_t n = static_cast<std::size_t>(state.range(0));
@@ -190,6 +183,6 @@ void BM_ReadDatabase(benchmark::State& state) {
     benchmark::DoNotOptimize(lanes);
   }
 }
-BENCHMARK(BM_ReadDatabase)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ReadDatabase)->Apply(RouteLengths);
 
 }  // namespace
