@@ -311,6 +311,23 @@ failed_runs() {
   done
 }
 
+# The failed tests of every run and the first lines of what each printed, from its ctest
+# log: CI keeps only the end of the output, and a failure far above must be told there.
+report_failed_tests() {
+  local f name log passed failed skipped verdict
+  for f in "$RESULTS_DIR"/*; do
+    name=$(basename "$f")
+    [ "$name" = phases ] && continue
+    read -r passed failed skipped verdict <"$f"
+    log="$BUILD_ROOT/ctest-$name.log"
+    if [ "$verdict" = ok ] || ! grep -qs '^The following tests FAILED:' "$log"; then continue; fi
+    echo "failed in $name:"
+    sed -n '/^The following tests FAILED:/,/^$/p' "$log" | sed '1d;/^$/d'
+    grep -E -A 30 '^ *[0-9]+/[0-9]+ Test +#[0-9]+: .*[*][*][*](Failed|Timeout|Exception)' "$log" |
+      head -120 | sed 's/^/    | /'
+  done
+}
+
 # phase NAME COMMAND...: runs COMMAND and notes its wall time for the closing table.
 phase() {
   local name=$1 start=$SECONDS
@@ -420,6 +437,7 @@ summarise_results() {
   local failing
   failing=$(failed_runs)
   [ -z "$failing" ] || echo "failing runs: $failing"
+  report_failed_tests
   # CI reads this closing line.
   echo "total: ${total_passed} passed, ${total_failed} failed, ${total_skipped} skipped"
   [ -z "$failing" ]
