@@ -1,6 +1,7 @@
 # The `skyloc eval` integration test: generate two small dataset folders, evaluate the
 # query run against the reference run, and check the outputs a person would open.
 #   -DGEN=make_eval_datasets -DCMD=skyloc -DWORK=dir -DMODE=batch|streaming -DEMULATOR=...
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 file(REMOVE_RECURSE ${WORK})
 execute_process(COMMAND ${EMULATOR} ${GEN} ${WORK} RESULT_VARIABLE rc ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
@@ -30,7 +31,7 @@ foreach(f matches.csv metrics.json pr.svg correspondence.svg)
     message(FATAL_ERROR "skyloc eval did not write ${f}")
   endif()
 endforeach()
-file(READ ${WORK}/out/metrics.json json)
+read_metrics(${WORK}/out/metrics.json json)
 string(JSON runs LENGTH "${json}" runs)
 # Runs are method-major (sky before vanilla), then in --ds order.
 if(MODE STREQUAL "streaming")

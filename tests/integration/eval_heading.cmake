@@ -3,6 +3,7 @@
 # 30 degrees. The truth is the simulator's yaw difference (30 degrees), not the strip code;
 # measured at 160x120 over 60 frames: median 0.2, p90 0.6 degrees (both ways).
 #   -DCMD=skyloc -DWORK=dir -DEMULATOR=...
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 file(REMOVE_RECURSE ${WORK})
 foreach(run "ref;--run;1" "query;--run;2;--yaw;30;--lighting;dawn")
   list(GET run 0 name)
@@ -23,7 +24,7 @@ execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/ref --query 
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval failed (${rc}):\n${out}\n${err}")
 endif()
-file(READ ${WORK}/out/metrics.json json)
+read_metrics(${WORK}/out/metrics.json json)
 foreach(way correlation surf)
   string(JSON estimated GET "${json}" runs 0 heading ${way} estimated)
   string(JSON median GET "${json}" runs 0 heading ${way} median_deg)

@@ -9,6 +9,7 @@
 #     to sky and vanilla, with most matches correct (measured at 160x120 over 40 frames:
 #     40 of 40 single, 36 of 36 with OpenSeqSLAM ds 5).
 #   -DCMD=skyloc -DWORK=dir -DEMULATOR=...
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 cmake_policy(SET CMP0057 NEW)  # if(... IN_LIST ...)
 file(REMOVE_RECURSE ${WORK})
 foreach(run "ref;--run;1" "query;--run;2;--yaw;30;--lighting;dawn")
@@ -62,7 +63,7 @@ execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/ref --query 
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval failed (${rc}):\n${out}\n${err}")
 endif()
-file(READ ${WORK}/out/metrics.json json)
+read_metrics(${WORK}/out/metrics.json json)
 string(JSON runs LENGTH "${json}" runs)
 set(found "")
 math(EXPR last "${runs} - 1")

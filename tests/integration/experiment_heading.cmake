@@ -5,6 +5,7 @@
 # on the tail is loose here (the experiments are host_eval code now, so the test runs in
 # native builds only; the bound stays what both targets passed); the heading goal's bar (median < 3, p90 < 10) is checked on the
 # full-size run in docs/RESULTS.md. The truth is the simulator's poses, not the strip code.
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 set(dir ${WORK_DIR}/experiment_heading)
 file(REMOVE_RECURSE ${dir})
 execute_process(COMMAND ${EMULATOR} ${CMD} experiment heading --frames 150 --width 160
@@ -18,7 +19,7 @@ foreach(f results.md metrics.json)
     message(FATAL_ERROR "missing ${dir}/${f}")
   endif()
 endforeach()
-file(READ ${dir}/metrics.json json)
+read_metrics(${dir}/metrics.json json)
 string(JSON n LENGTH "${json}" rows)
 if(NOT n EQUAL 2)
   message(FATAL_ERROR "metrics.json has ${n} rows, expected 2 (forest, repetitive)")

@@ -1,4 +1,5 @@
 # A tiny `skyloc experiment tilt` writes its table, metrics and plots.
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 set(dir ${WORK_DIR}/experiment_outputs)
 file(REMOVE_RECURSE ${dir})
 execute_process(COMMAND ${EMULATOR} ${CMD} experiment tilt --frames 20 --width 48 --height 36
@@ -16,7 +17,7 @@ file(READ ${dir}/results.md md)
 if(NOT md MATCHES "\\| 60° \\| \\+30° / -30° \\|")
   message(FATAL_ERROR "results.md has no 60 degree row:\n${md}")
 endif()
-file(READ ${dir}/metrics.json json)
+read_metrics(${dir}/metrics.json json)
 string(JSON n LENGTH "${json}" rows)
 if(NOT n EQUAL 7)
   message(FATAL_ERROR "metrics.json has ${n} rows, expected 7")

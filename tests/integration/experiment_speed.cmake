@@ -1,6 +1,7 @@
 # A tiny `skyloc experiment speed` writes its table, metrics and plots, and on the level
 # runs the route filter is at least as precise as OpenSeqSLAM at ds 10 on 9 of the 12
 # (measured: 10; it loses by 1-2 % where the repeat runs at the taught speed with no stops).
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 set(dir ${WORK_DIR}/experiment_speed)
 file(REMOVE_RECURSE ${dir})
 execute_process(COMMAND ${EMULATOR} ${CMD} experiment speed --frames 300 --width 64 --height 48
@@ -14,7 +15,7 @@ foreach(f results.md metrics.json pr_openseqslam.svg pr_filter.svg correspondenc
     message(FATAL_ERROR "missing ${dir}/${f}")
   endif()
 endforeach()
-file(READ ${dir}/metrics.json json)
+read_metrics(${dir}/metrics.json json)
 string(JSON n LENGTH "${json}" rows)
 # 2 worlds x (0.5x, 1x, 2x) x (stops, none) x (level, bumps) x ds (1, 5, 10, 20)
 if(NOT n EQUAL 96)

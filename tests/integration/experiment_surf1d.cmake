@@ -3,6 +3,7 @@
 # the protocol's (only neighbours are under 20 degrees apart), and the scores separate
 # matching pairs from the rest better than chance on both cameras (AUC > 0.6; the
 # full-size run is in docs/RESULTS.md).
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 set(dir ${WORK_DIR}/experiment_surf1d)
 file(REMOVE_RECURSE ${dir})
 execute_process(COMMAND ${EMULATOR} ${CMD} experiment surf1d --images 24 --width 320 --height 240
@@ -16,7 +17,7 @@ foreach(f results.md metrics.json roc.svg)
     message(FATAL_ERROR "missing ${dir}/${f}")
   endif()
 endforeach()
-file(READ ${dir}/metrics.json json)
+read_metrics(${dir}/metrics.json json)
 # Forward: 2 places x 24 matched pairs (each image and the next, round the circle) and
 # 2 x (276 - 24) unmatched. Fisheye: 2 x 276 same-place pairs, 24 x 24 across places.
 foreach(check "forward;matched_pairs;48" "forward;unmatched_pairs;504"

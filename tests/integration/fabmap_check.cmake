@@ -1,6 +1,7 @@
 # `skyloc fabmap-train` + `skyloc eval --method fabmap` end to end on small simulated
 # visible-light runs: the vocabulary from a forest run, evaluated on two city runs.
 #   -DCMD=skyloc -DWORK=dir
+include(${CMAKE_CURRENT_LIST_DIR}/metrics_json.cmake)
 file(REMOVE_RECURSE ${WORK})
 function(run)
   execute_process(COMMAND ${CMD} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out
@@ -17,7 +18,7 @@ run(fabmap-train --train ${WORK}/train --out ${WORK}/v.fabmap --words 150 --max-
 run(eval --reference ${WORK}/ref --query ${WORK}/query --vocab ${WORK}/v.fabmap
     --method fabmap --out ${WORK}/out)
 message(STATUS "${last_out}")
-file(READ ${WORK}/out/metrics.json json)
+read_metrics(${WORK}/out/metrics.json json)
 string(JSON method GET "${json}" runs 0 method)
 string(JSON matcher GET "${json}" runs 0 matcher)
 string(JSON correct GET "${json}" runs 0 correct)
@@ -49,7 +50,7 @@ endif()
 if(NOT EXISTS ${WORK}/tilt/pr_fabmap.svg)
   message(FATAL_ERROR "experiment tilt --vocab did not write pr_fabmap.svg")
 endif()
-file(READ ${WORK}/tilt/metrics.json json)
+read_metrics(${WORK}/tilt/metrics.json json)
 string(JSON rows LENGTH "${json}" rows)
 math(EXPR last "${rows} - 1")
 foreach(i RANGE ${last})
