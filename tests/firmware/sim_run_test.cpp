@@ -14,7 +14,6 @@ SimRunConfig EveryFieldSet() {
   SimRunConfig r;
   r.world.name = "forest";
   r.world.seed = 7;
-  r.ride.seed = 9;
   r.world.frames.sampling = sim::Sampling::kTime;
   r.world.frames.frame_spacing_m = 0.5;
   r.world.frames.speed_jitter = 0.1;
@@ -25,12 +24,13 @@ SimRunConfig EveryFieldSet() {
   r.world.frames.speed.stops = 4;
   r.world.frames.speed.stop_min_s = 1;
   r.world.frames.speed.stop_max_s = 5;
-  r.ride.speed_ratio = 1.5;
-  r.ride.height_m = 2;
-  r.ride.tilt_deg = 10;
-  r.ride.zigzag_deg = 20;
-  r.ride.bumps_deg = 3;
-  r.ride.yaw_offset_deg = 45;
+  r.ride = {.speed_ratio = 1.5,
+            .height_m = 2,
+            .tilt_deg = 10,
+            .zigzag_deg = 20,
+            .bumps_deg = 3,
+            .yaw_offset_deg = 45,
+            .seed = 9};
   r.lighting = "dawn";
   return r;
 }
