@@ -143,11 +143,11 @@ int RunDemo(std::span<char* const> args) {
         "\n2. repeat: drive it again 1.5x faster with its own stops, tilted 10 deg, "
         "zig-zagging +-20 deg, at dawn, with other clouds and noise\n");
     SimRunConfig sim;
-    sim.speed_ratio = 1.5;
-    sim.tilt_deg = 10;
-    sim.zigzag_deg = 20;
+    sim.ride.speed_ratio = 1.5;
+    sim.ride.tilt_deg = 10;
+    sim.ride.zigzag_deg = 20;
+    sim.ride.seed = 2;
     sim.lighting = "dawn";
-    sim.run_seed = 2;
     // Within the stretch the teach run covered (1.5x faster, so fewer frames).
     rc = RunDemoSession(config,
                         {.mode = LoopMode::kRepeat,

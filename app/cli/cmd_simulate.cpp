@@ -125,7 +125,7 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
     if (!t.Given("--speed"))
       o->run.world.frames.speed.cruise_mps = ant.world.frames.speed.cruise_mps;
     if (!t.Given("--camera-height"))
-      o->run.camera_height_m = ant.camera_height_m;
+      o->run.ride.height_m = ant.ride.height_m;
   }
   o->sun_given = t.Given("--sun");
   o->clouds_given = t.Given("--clouds");
@@ -191,7 +191,7 @@ Status WriteSimulationToml(const std::string& dir, const Options& o, sim::Spectr
       "flare = %.6f\n",
       o.run.world.name.c_str(), static_cast<unsigned long long>(o.run.world.seed),
       o.route_file.empty() ? "(the world's own)" : o.route_file.c_str(),
-      static_cast<unsigned long long>(o.run.run_seed), sim::SpectrumName(spectrum), sampling,
+      static_cast<unsigned long long>(o.run.ride.seed), sim::SpectrumName(spectrum), sampling,
       motion.height_m, motion.start_m, motion.tilt_deg, motion.zigzag_deg, motion.zigzag_period_m,
       motion.bumps_deg, motion.yaw_offset_deg, motion.lateral_m, o.run.lighting.c_str(),
       lighting.sun_azimuth_deg, lighting.sun_elevation_deg, lighting.cloud_cover,

@@ -32,7 +32,7 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
   t->Count("--run", "N",
            "run seed: speed profile and stops (or speed jitter), bumps, clouds, sensor noise "
            "(default 1)",
-           &run->run_seed);
+           &run->ride.seed);
   if (which == SimRunOptions::kWorldAndRun) {
     constexpr NumberRange kFraction{0, 1, false, true};
     t->Number("--speed", "M/S", "mean cruise speed (default 1; seville 0.5)", {0, 100, true},
@@ -57,14 +57,14 @@ void AddSimRunOptions(OptionTable* t, SimRunOptions which, firmware::SimRunConfi
     t->Number("--jitter", "F", "with --spacing: speed varies within (1 +- F) (default 0.2)",
               kFraction, &run->world.frames.speed_jitter);
     t->Number("--camera-height", "M", "camera above the ground (default 1, seville 0.01: an ant)",
-              kPositive, &run->camera_height_m);
+              kPositive, &run->ride.height_m);
   }
   t->Number("--tilt", "DEG", "constant pitch, nose up positive (the paper's alpha)", {-90, 90},
-            &run->tilt_deg);
-  t->Number("--zigzag", "DEG", "yaw weave amplitude", {-180, 180}, &run->zigzag_deg);
+            &run->ride.tilt_deg);
+  t->Number("--zigzag", "DEG", "yaw weave amplitude", {-180, 180}, &run->ride.zigzag_deg);
   t->Number("--bumps", "DEG", "bounded random walk of roll and pitch, up to +-DEG", {0, 45},
-            &run->bumps_deg);
-  t->Number("--yaw", "DEG", "constant heading offset of the camera", {}, &run->yaw_deg);
+            &run->ride.bumps_deg);
+  t->Number("--yaw", "DEG", "constant heading offset of the camera", {}, &run->ride.yaw_offset_deg);
   t->Custom("--lighting", "NAME", "dawn, noon (default) or overcast",
             [run](const char* text, std::string* expected) {
               sim::Lighting probe;

@@ -50,13 +50,9 @@ struct SimWorldConfig {
 // (sim_run.h).
 struct SimRunConfig {
   SimWorldConfig world;
-  std::uint64_t run_seed = 1;  // speed jitter or profile and stops, bumps, clouds, noise
-  double speed_ratio = 1.0;    // kTime: scales the cruise speed (a faster repeat run)
-  double camera_height_m = 1.0;
-  double tilt_deg = 0;            // constant pitch, nose up positive (the paper's alpha)
-  double zigzag_deg = 0;          // yaw weave amplitude
-  double bumps_deg = 0;           // roll/pitch random walk bound
-  double yaw_deg = 0;             // constant heading offset
+  // The ride; its seed is the run's: it also seeds the clouds, the image noise and the
+  // simulated IMU.
+  sim::Ride ride;
   std::string lighting = "noon";  // noon, dawn, overcast
 
   bool operator==(const SimRunConfig&) const = default;

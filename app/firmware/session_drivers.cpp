@@ -43,8 +43,8 @@ Status MakeSimSource(const Config& config, const SimRunConfig& command_line, Cam
     o.paced = true;  // a live run: frames come at the camera's rate
     o.step_m = run.world.frames.frame_spacing_m;
     o.speed_jitter = std::min(run.world.frames.speed_jitter, 0.5);
-    o.tilt_deg = run.tilt_deg;
-    o.zigzag_deg = run.zigzag_deg;
+    o.tilt_deg = run.ride.tilt_deg;
+    o.zigzag_deg = run.ride.zigzag_deg;
     o.brightness = run.lighting == "dawn" ? 0.6 : run.lighting == "overcast" ? 0.8 : 1.0;
     auto street = std::make_unique<sim::StreetSource>(o);
     source->camera = std::make_unique<drivers::SimulatedCamera>(street->camera_config(),
@@ -59,7 +59,7 @@ Status MakeSimSource(const Config& config, const SimRunConfig& command_line, Cam
   source->world = std::make_unique<sim::World>();
   SKYLOC_TRY(sim::MakeProceduralWorld(kind, run.world.seed, source->world.get()));
   const sim::MotionConfig motion = SimMotionConfig(run, config.camera.fps);
-  source->run_seed = run.run_seed;
+  source->run_seed = run.ride.seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));
   sim::RenderedSourceConfig camera;

@@ -7,7 +7,7 @@ SimRunConfig SimulateDefaults(bool seville) {
   run.world.frames.sampling = sim::Sampling::kTime;
   if (seville) {
     run.world.frames.speed.cruise_mps = 0.5;  // an ant-sized run: 5 cm frames at 10 fps
-    run.camera_height_m = 0.01;
+    run.ride.height_m = 0.01;
   }
   return run;
 }
@@ -22,20 +22,14 @@ sim::MotionConfig SimMotionConfig(const SimRunConfig& run, double fps,
                                   const sim::MotionConfig& base) {
   sim::MotionConfig motion = base;
   motion.Resample(run.world.frames);
-  motion.speed_ratio = run.speed_ratio;
+  motion.SetRide(run.ride);
   motion.fps = fps;
-  motion.height_m = run.camera_height_m;
-  motion.tilt_deg = run.tilt_deg;
-  motion.zigzag_deg = run.zigzag_deg;
-  motion.bumps_deg = run.bumps_deg;
-  motion.yaw_offset_deg = run.yaw_deg;
-  motion.seed = run.run_seed;
   return motion;
 }
 
 Result<sim::Lighting> SimLighting(const SimRunConfig& run) {
   sim::Lighting lighting;
-  if (!sim::LightingPreset(run.lighting.c_str(), run.run_seed, &lighting))
+  if (!sim::LightingPreset(run.lighting.c_str(), run.ride.seed, &lighting))
     return Status::Error(StatusCode::kInvalidArgument,
                          "lighting \"%s\" is not dawn, noon or overcast", run.lighting.c_str());
   return lighting;

@@ -14,8 +14,8 @@ namespace skyloc::firmware {
 SimRunConfig SimulateDefaults(bool seville);
 
 // A firmware run on the simulated camera: the world and its sampling from the
-// configuration's [camera] sim_* keys, the rest (run seed, attitude, lighting, speed
-// ratio, camera height) from the command line's SIM flags.
+// configuration's [camera] sim_* keys, the rest (the ride: run seed, attitude, speed ratio,
+// camera height; the lighting) from the command line's SIM flags.
 SimRunConfig ConfiguredSimRun(const SimWorldConfig& configured, const SimRunConfig& command_line);
 
 // The motion of the run over `base`, which gives what a run does not describe (the zigzag

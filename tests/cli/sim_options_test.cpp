@@ -23,12 +23,12 @@ TEST(SimRunOptions, TheRunsOptionsFillTheRun) {
   const Args a({"--tilt", "-12.5", "--zigzag", "30", "--bumps", "4", "--yaw", "135", "--lighting",
                 "overcast", "--run", "17"});
   ASSERT_EQ(t.Parse(a.span()), ParseOutcome::kRun);
-  EXPECT_EQ(run.tilt_deg, -12.5);
-  EXPECT_EQ(run.zigzag_deg, 30.0);
-  EXPECT_EQ(run.bumps_deg, 4.0);
-  EXPECT_EQ(run.yaw_deg, 135.0);
+  EXPECT_EQ(run.ride.tilt_deg, -12.5);
+  EXPECT_EQ(run.ride.zigzag_deg, 30.0);
+  EXPECT_EQ(run.ride.bumps_deg, 4.0);
+  EXPECT_EQ(run.ride.yaw_offset_deg, 135.0);
   EXPECT_EQ(run.lighting, "overcast");
-  EXPECT_EQ(run.run_seed, 17u);
+  EXPECT_EQ(run.ride.seed, 17u);
   // The world is the configuration's: teach has no --world.
   EXPECT_EQ(run.world, firmware::SimRunConfig{}.world);
 }
@@ -60,7 +60,7 @@ TEST(SimRunOptions, SimulateFillsTheWorldAndTheSampling) {
   EXPECT_EQ(run.world.frames.speed.stops, 3);
   EXPECT_EQ(run.world.frames.speed.stop_min_s, 1.0);
   EXPECT_EQ(run.world.frames.speed.stop_max_s, 4.0);
-  EXPECT_EQ(run.camera_height_m, 0.5);
+  EXPECT_EQ(run.ride.height_m, 0.5);
 
   firmware::SimRunConfig distance;
   OptionTable d("simulate", "[options]", "");

@@ -14,7 +14,6 @@ SimRunConfig EveryFieldSet() {
   SimRunConfig r;
   r.world.name = "forest";
   r.world.seed = 7;
-  r.run_seed = 9;
   r.world.frames.sampling = sim::Sampling::kTime;
   r.world.frames.frame_spacing_m = 0.5;
   r.world.frames.speed_jitter = 0.1;
@@ -25,12 +24,13 @@ SimRunConfig EveryFieldSet() {
   r.world.frames.speed.stops = 4;
   r.world.frames.speed.stop_min_s = 1;
   r.world.frames.speed.stop_max_s = 5;
-  r.speed_ratio = 1.5;
-  r.camera_height_m = 2;
-  r.tilt_deg = 10;
-  r.zigzag_deg = 20;
-  r.bumps_deg = 3;
-  r.yaw_deg = 45;
+  r.ride = {.speed_ratio = 1.5,
+            .height_m = 2,
+            .tilt_deg = 10,
+            .zigzag_deg = 20,
+            .bumps_deg = 3,
+            .yaw_offset_deg = 45,
+            .seed = 9};
   r.lighting = "dawn";
   return r;
 }
@@ -105,9 +105,9 @@ TEST(SimRun, DefaultsAreTheSimulatorsDefaults) {
 TEST(SimRun, SimulateStartsInTimeAndSevilleIsAnAnt) {
   EXPECT_EQ(SimulateDefaults(false).world.frames.sampling, sim::Sampling::kTime);
   EXPECT_EQ(SimulateDefaults(false).world.frames.speed.cruise_mps, 1.0);
-  EXPECT_EQ(SimulateDefaults(false).camera_height_m, 1.0);
+  EXPECT_EQ(SimulateDefaults(false).ride.height_m, 1.0);
   EXPECT_EQ(SimulateDefaults(true).world.frames.speed.cruise_mps, 0.5);
-  EXPECT_EQ(SimulateDefaults(true).camera_height_m, 0.01);
+  EXPECT_EQ(SimulateDefaults(true).ride.height_m, 0.01);
 }
 
 // The world and its sampling are the configuration's; the run is the command line's.
@@ -116,19 +116,19 @@ TEST(SimRun, ConfiguredRunTakesTheWorldFromTheConfigAndTheRunFromTheFlags) {
   SimRunConfig flags;
   flags.world.name = "repetitive";  // not a flag: ignored
   flags.world.frames.sampling = sim::Sampling::kDistance;
-  flags.run_seed = 3;
-  flags.tilt_deg = -5;
+  flags.ride.seed = 3;
+  flags.ride.tilt_deg = -5;
   flags.lighting = "overcast";
-  flags.speed_ratio = 2;
+  flags.ride.speed_ratio = 2;
   const SimRunConfig run = ConfiguredSimRun(configured, flags);
   EXPECT_EQ(run.world, configured);
   EXPECT_EQ(run.world.name, "forest");
   EXPECT_EQ(run.world.frames.sampling, sim::Sampling::kTime);
-  EXPECT_EQ(run.run_seed, 3u);
-  EXPECT_EQ(run.tilt_deg, -5.0);
-  EXPECT_EQ(run.zigzag_deg, 0.0);
+  EXPECT_EQ(run.ride.seed, 3u);
+  EXPECT_EQ(run.ride.tilt_deg, -5.0);
+  EXPECT_EQ(run.ride.zigzag_deg, 0.0);
   EXPECT_EQ(run.lighting, "overcast");
-  EXPECT_EQ(run.speed_ratio, 2.0);
+  EXPECT_EQ(run.ride.speed_ratio, 2.0);
 }
 
 TEST(SimRun, LightingIsAPresetOrRefused) {

@@ -28,7 +28,7 @@ enum class Sampling : std::uint8_t {
 // Sampling::kTime: how the robot drives. Every speed is reached with at most accel_mps2;
 // a stop is a place where the speed is exactly 0 for its duration, so its frames repeat.
 struct SpeedProfile {
-  double cruise_mps = 1.0;     // mean cruise speed (times MotionConfig::speed_ratio)
+  double cruise_mps = 1.0;     // mean cruise speed (times Ride::speed_ratio)
   double band = 0.3;           // cruise targets are drawn within cruise x (1 +- band)
   double change_every_m = 30;  // mean route distance between new cruise targets
   double accel_mps2 = 0.5;     // acceleration and deceleration limit
@@ -51,23 +51,34 @@ struct FrameSampling {
   bool operator==(const FrameSampling&) const = default;
 };
 
-// A run: how it is sampled into frames, and the ride (camera height, manoeuvres, seed).
-struct MotionConfig : FrameSampling {
+// How the robot rides a run: its pace, the camera's height and manoeuvres, and the run's
+// seed. A simulated run's description (the firmware's SimRunConfig) holds one; a
+// MotionConfig is one.
+struct Ride {
+  double speed_ratio = 1.0;   // kTime: scales every cruise speed (a faster repeat run)
+  double height_m = 1.0;      // camera above the ground
+  double tilt_deg = 0;        // constant pitch (the paper's alpha), nose up positive
+  double zigzag_deg = 0;      // yaw amplitude of a sinusoidal weave about the route
+  double bumps_deg = 0;       // roll/pitch random walk bound (0: smooth ride)
+  double yaw_offset_deg = 0;  // constant heading offset (full yaw change between runs)
+  std::uint64_t seed = 1;     // speed jitter or profile (targets, stops), and bumps
+
+  bool operator==(const Ride&) const = default;
+};
+
+// A run: how it is sampled into frames, how the robot rides it, the weave's period, the
+// sideways wander, the frame rate, and where it starts and how long it goes.
+struct MotionConfig : FrameSampling, Ride {
   // The same ride sampled as `frames` says.
   void Resample(const FrameSampling& frames) { static_cast<FrameSampling&>(*this) = frames; }
+  // The same sampling with `ride` as its ride.
+  void SetRide(const Ride& ride) { static_cast<Ride&>(*this) = ride; }
 
-  double speed_ratio = 1.0;     // kTime: scales every cruise speed (a faster repeat run)
-  double height_m = 1.0;        // camera above the ground
-  double tilt_deg = 0;          // constant pitch (the paper's alpha), nose up positive
-  double zigzag_deg = 0;        // yaw amplitude of a sinusoidal weave about the route
   double zigzag_period_m = 20;  // route distance of one full weave
-  double bumps_deg = 0;         // roll/pitch random walk bound (0: smooth ride)
-  double yaw_offset_deg = 0;    // constant heading offset (full yaw change between runs)
   double lateral_m = 0;         // sideways wander off the route within +-lateral_m (0: on it)
   double fps = 10;              // frames per second: kTime samples at it; timestamps i / fps
   double start_m = 0;           // where along the route the run starts
   int max_frames = 0;           // 0: until the end of the route (one lap of a loop)
-  std::uint64_t seed = 1;       // speed jitter or profile (targets, stops), and bumps
 };
 
 struct TrajectoryPoint {
