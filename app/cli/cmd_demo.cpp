@@ -66,9 +66,9 @@ Config DemoConfig(const char* world, bool quick) {
   Config c = DefaultConfig();
   c.camera.kind = CameraKind::kSim;
   c.camera.sim.name = world;
-  c.camera.width = quick ? 96 : 320;
-  c.camera.height = quick ? 96 : 240;
-  c.camera.fps = 10;
+  c.camera.capture.width = quick ? 96 : 320;
+  c.camera.capture.height = quick ? 96 : 240;
+  c.camera.capture.fps = 10;
   c.camera.sim.frames.sampling = sim::Sampling::kTime;
   c.camera.sim.frames.speed.cruise_mps = quick ? 3.0 : 2.0;
   c.camera.sim.frames.speed.start_stop_s = 2;
