@@ -37,8 +37,8 @@ struct Frame {
   std::optional<dsp::Attitude> attitude;
 };
 
-// The frame size and rate a camera is asked for: the [camera] keys width, height and fps,
-// which every live camera's config holds as they are. What the camera granted is in
+// The frame size and rate a camera is asked for, held as it is by every live camera's
+// config (and by the configuration's [camera] section). What the camera granted is in
 // info() (the size) and the driver's fps().
 struct CaptureFormat {
   int width = 640;
