@@ -66,9 +66,9 @@ Config DemoConfig(const char* world, bool quick) {
   Config c = DefaultConfig();
   c.camera.kind = CameraKind::kSim;
   c.camera.sim.name = world;
-  c.camera.width = quick ? 96 : 320;
-  c.camera.height = quick ? 96 : 240;
-  c.camera.fps = 10;
+  c.camera.capture.width = quick ? 96 : 320;
+  c.camera.capture.height = quick ? 96 : 240;
+  c.camera.capture.fps = 10;
   c.camera.sim.frames.sampling = sim::Sampling::kTime;
   c.camera.sim.frames.speed.cruise_mps = quick ? 3.0 : 2.0;
   c.camera.sim.frames.speed.start_stop_s = 2;
@@ -93,19 +93,24 @@ int RunDemoSession(const Config& config, SessionArgs run, SessionReport* report)
   return rc;
 }
 
-}  // namespace
-
-int RunDemo(std::span<char* const> args) {
+struct DemoOptions {
   std::string world = "city";
   bool quick = false;
+};
+
+ParseOutcome ParseArgs(std::span<char* const> args, DemoOptions* o) {
   OptionTable t("demo", "[--world city|forest|repetitive] [--quick]", kDescription);
   t.Choice<std::string>("--world", "the procedural world (default city)",
                         {{"city", "city"}, {"forest", "forest"}, {"repetitive", "repetitive"}},
-                        &world);
-  t.Flag("--quick", "a short run on small frames (the test suite's)", &quick);
-  if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
-    return ExitCode(o);
+                        &o->world);
+  t.Flag("--quick", "a short run on small frames (the test suite's)", &o->quick);
+  return t.Parse(args);
+}
 
+// Teaches the world's route, repeats it and reports both.
+int TeachAndRepeat(const DemoOptions& o) {
+  const std::string& world = o.world;
+  const bool quick = o.quick;
   // The configuration is built in memory; the taught route is a real route database (teach
   // and repeat run exactly as on the robot), in a folder of its own under $TMPDIR (or
   // /tmp), removed at the end.
@@ -176,6 +181,12 @@ int RunDemo(std::span<char* const> args) {
   std::remove(route_path.c_str());
   ::rmdir(dir.c_str());
   return rc == 0 ? kExitOk : kExitFailure;
+}
+
+}  // namespace
+
+int RunDemo(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, TeachAndRepeat);
 }
 
 }  // namespace skyloc::cli

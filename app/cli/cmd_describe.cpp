@@ -199,11 +199,9 @@ Status InitDescribeDescriptor(const firmware::Config& config, const dsp::Lens& l
   return Status::Ok();
 }
 
-int RunDescribe(std::span<char* const> args) {
-  Options o;
-  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
-    return ExitCode(p);
+namespace {
 
+int DescribeImages(const Options& o) {
   std::optional<dsp::LensParams> camera;
   if (!o.camera.empty()) {
     Result<dsp::LensParams> loaded = drivers::LoadCameraFile(o.camera.c_str());
@@ -271,6 +269,12 @@ int RunDescribe(std::span<char* const> args) {
     return kExitFailure;
   }
   return kExitOk;
+}
+
+}  // namespace
+
+int RunDescribe(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, DescribeImages);
 }
 
 }  // namespace skyloc::cli

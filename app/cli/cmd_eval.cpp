@@ -172,6 +172,7 @@ void AddOptions(OptionTable* t, EvalOptions* o) {
 
 // Parses and checks the command line; kRun or the outcome to exit with.
 ParseOutcome ParseArgs(std::span<char* const> args, EvalOptions* o) {
+  o->describe.jobs = tools::DefaultJobs();  // --jobs replaces it
   OptionTable t("eval", "--reference DIR --query DIR --out DIR [options]", kDescription);
   AddOptions(&t, o);
   if (const ParseOutcome p = t.Parse(args); p != ParseOutcome::kRun)
@@ -565,13 +566,7 @@ Status Evaluate(EvalOptions o) {
   return Status::Ok();
 }
 
-}  // namespace
-
-int RunEval(std::span<char* const> args) {
-  EvalOptions options;
-  options.describe.jobs = tools::DefaultJobs();
-  if (const ParseOutcome p = ParseArgs(args, &options); p != ParseOutcome::kRun)
-    return ExitCode(p);
+int EvaluateRuns(const EvalOptions& options) {
   // A file past RLIMIT_FSIZE is then a write error (EFBIG) reported naming the file, not a
   // silent death by signal.
   std::signal(SIGXFSZ, SIG_IGN);
@@ -583,6 +578,12 @@ int RunEval(std::span<char* const> args) {
   if (!s.ok())
     return Failed("eval", s);
   return kExitOk;
+}
+
+}  // namespace
+
+int RunEval(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, EvaluateRuns);
 }
 
 }  // namespace skyloc::cli

@@ -591,14 +591,7 @@ int Fail(const Options& o, const Status& s) {
   return kExitFailure;
 }
 
-}  // namespace
-
-int RunExperiment(std::span<char* const> args) {
-  if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
-    return RunSurf1dExperiment(args);
-  Options o;
-  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
-    return ExitCode(p);
+int RunNamedExperiment(Options& o, std::span<char* const> args) {
   std::string command = "skyloc experiment";
   for (char* const a : args)
     command += std::string(" ") + a;
@@ -638,6 +631,14 @@ int RunExperiment(std::span<char* const> args) {
   std::printf("skyloc experiment %s: wrote %s/: %scorrespondence.svg\n", o.name.c_str(),
               o.out.c_str(), files.c_str());
   return kExitOk;
+}
+
+}  // namespace
+
+int RunExperiment(std::span<char* const> args) {
+  if (!args.empty() && std::strcmp(args[0], "surf1d") == 0)
+    return RunSurf1dExperiment(args);
+  return RunParsed(args, ParseArgs, [args](Options& o) { return RunNamedExperiment(o, args); });
 }
 
 }  // namespace skyloc::cli

@@ -72,17 +72,22 @@ std::string CameraJson(const char* key, const tools::Surf1dCameraResult& r) {
          ",\n    \"roc_ransac_thinned\": " + RocJson(r.roc_ransac) + "}";
 }
 
-}  // namespace
-
-int RunSurf1dExperiment(std::span<char* const> args) {
-  std::string command = "skyloc experiment";
-  for (char* const a : args)
-    command += std::string(" ") + a;
-  tools::Surf1dExperimentOptions o;
+// The experiment's command line; the words after "skyloc experiment" (args[0] "surf1d")
+// go into results.md as they were given.
+struct Surf1dExperimentArgs {
+  tools::Surf1dExperimentOptions experiment;
   std::string out;
+  std::string command = "skyloc experiment";
+};
+
+ParseOutcome ParseArgs(std::span<char* const> args, Surf1dExperimentArgs* options) {
+  for (char* const a : args)
+    options->command += std::string(" ") + a;
+  tools::Surf1dExperimentOptions& o = options->experiment;
   std::int64_t seed = 0;
   OptionTable t("experiment surf1d", "--out DIR [options]", kDescription);
-  t.Text("--out", "DIR", "where to write results.md, metrics.json, roc.svg (required)", &out);
+  t.Text("--out", "DIR", "where to write results.md, metrics.json, roc.svg (required)",
+         &options->out);
   t.Int("--images", "N", "images a place (default 88, the paper's)", 8, 1000, &o.images_per_place);
   t.Int("--places", "N", "places along the city route (default 2)", 2, 50, &o.places);
   t.Int("--width", "W", "forward camera width (default 640)", 64, 4096, &o.width);
@@ -94,12 +99,18 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   t.Int("--seed", "N", "city seed (default 1)", 0, 1000000000, &seed);
   // args[0] is "surf1d", the experiment's name.
   if (const ParseOutcome outcome = t.Parse(args.subspan(1)); outcome != ParseOutcome::kRun)
-    return ExitCode(outcome);
+    return outcome;
   if (t.Given("--seed"))
     o.world_seed = static_cast<std::uint64_t>(seed);
-  if (out.empty())
-    return ExitCode(
-        t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)"));
+  if (options->out.empty())
+    return t.Refuse("--out DIR is required (where to write results.md, metrics.json, roc.svg)");
+  return ParseOutcome::kRun;
+}
+
+int RunAndWrite(const Surf1dExperimentArgs& options) {
+  const tools::Surf1dExperimentOptions& o = options.experiment;
+  const std::string& out = options.out;
+  const std::string& command = options.command;
   tools::Surf1dCameraResult forward, fisheye;
   if (Status s = tools::RunSurf1dExperiment(o, &forward, &fisheye, PrintProgress); !s.ok()) {
     return Failed("experiment surf1d", s);
@@ -165,6 +176,12 @@ int RunSurf1dExperiment(std::span<char* const> args) {
   std::printf("skyloc experiment surf1d: wrote %s/: results.md, metrics.json, roc.svg\n",
               out.c_str());
   return kExitOk;
+}
+
+}  // namespace
+
+int RunSurf1dExperiment(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, RunAndWrite);
 }
 
 }  // namespace skyloc::cli

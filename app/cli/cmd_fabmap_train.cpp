@@ -21,14 +21,16 @@ constexpr const char* kDescription =
     "every frame at 480x270, k-means++ words, the Chow-Liu tree of word occurrences and\n"
     "the new-place samples. Writes VOCAB (docs/FABMAP.md, \"Vocabulary file\").\n";
 
-}  // namespace
-
-int RunFabmapTrain(std::span<char* const> args) {
-  tools::TrainOptions o;
+struct FabmapTrainOptions {
+  tools::TrainOptions train;
   std::string out;
+};
+
+ParseOutcome ParseArgs(std::span<char* const> args, FabmapTrainOptions* options) {
+  tools::TrainOptions& o = options->train;
   OptionTable t("fabmap-train", "--train DIR [--train DIR...] --out VOCAB [options]", kDescription);
   t.TextList("--train", "DIR", "a training dataset folder (repeat for more)", &o.datasets);
-  t.Text("--out", "VOCAB", "the vocabulary file to write", &out);
+  t.Text("--out", "VOCAB", "the vocabulary file to write", &options->out);
   t.Int("--words", "N", "vocabulary size (default 500)", 2, 20000, &o.words);
   t.Int("--max-features", "N", "strongest SIFT keypoints per frame (default 500)", 1, 100000,
         &o.features.max_features);
@@ -40,10 +42,16 @@ int RunFabmapTrain(std::span<char* const> args) {
   std::int64_t seed = static_cast<std::int64_t>(o.seed);
   t.Int("--seed", "N", "k-means++ seed (default 1)", 1, std::numeric_limits<int>::max(), &seed);
   if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
-    return ExitCode(outcome);
+    return outcome;
   o.seed = static_cast<std::uint64_t>(seed);
-  if (o.datasets.empty() || out.empty())
-    return ExitCode(t.Refuse("--train DIR and --out VOCAB are required"));
+  if (o.datasets.empty() || options->out.empty())
+    return t.Refuse("--train DIR and --out VOCAB are required");
+  return ParseOutcome::kRun;
+}
+
+int TrainAndSave(const FabmapTrainOptions& options) {
+  const tools::TrainOptions& o = options.train;
+  const std::string& out = options.out;
   Result<tools::Vocabulary> v = tools::TrainVocabulary(o);
   Status s = v.ok() ? tools::SaveVocabulary(out, *v) : v.status();
   if (!s.ok())
@@ -51,6 +59,12 @@ int RunFabmapTrain(std::span<char* const> args) {
   std::printf("skyloc fabmap-train: %d words, %zu new-place samples, written to %s\n", v->words,
               v->samples.size(), out.c_str());
   return kExitOk;
+}
+
+}  // namespace
+
+int RunFabmapTrain(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, TrainAndSave);
 }
 
 }  // namespace skyloc::cli

@@ -84,84 +84,95 @@ void PrintTeachState(const char* path, std::FILE* out) {
 
 // teach and repeat: one table over a route; teach also takes a dataset to teach from and
 // may replace the route.
-int RunOnRoute(std::span<char* const> args, LoopMode mode) {
+ParseOutcome ParseOnRoute(std::span<char* const> args, LoopMode mode, SessionArgs* s) {
   const bool teach = mode == LoopMode::kTeach;
-  SessionArgs s{.mode = mode, .label = teach ? "skyloc teach" : "skyloc repeat"};
+  *s = {.mode = mode, .label = teach ? "skyloc teach" : "skyloc repeat"};
   OptionTable t(teach ? "teach" : "repeat", "--route FILE.db [options]",
                 teach ? kTeachDescription : kRepeatDescription);
   t.Text("--route", "FILE.db", teach ? "the route database to write" : "the taught route database",
-         &s.route_path);
-  AddCommonOptions(t, &s);
+         &s->route_path);
+  AddCommonOptions(t, s);
   if (teach) {
-    t.Text("--dataset", "DIR", "teach from this recorded dataset folder", &s.dataset);
-    t.Flag("--force", "replace an existing route database", &s.force);
+    t.Text("--dataset", "DIR", "teach from this recorded dataset folder", &s->dataset);
+    t.Flag("--force", "replace an existing route database", &s->force);
   }
-  t.Text("--record", "DIR", "also write every frame into this dataset folder", &s.record_dir);
-  AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
+  t.Text("--record", "DIR", "also write every frame into this dataset folder", &s->record_dir);
+  AddSimRunOptions(&t, SimRunOptions::kRun, &s->sim);
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
-    return ExitCode(o);
-  if (s.route_path.empty())
-    return ExitCode(t.Refuse("--route FILE.db is required"));
-  return RunWithConfigFile(s);
+    return o;
+  if (s->route_path.empty())
+    return t.Refuse("--route FILE.db is required");
+  return ParseOutcome::kRun;
 }
 
-}  // namespace
-
-int RunTeach(std::span<char* const> args) {
-  return RunOnRoute(args, LoopMode::kTeach);
+ParseOutcome ParseTeachArgs(std::span<char* const> args, SessionArgs* s) {
+  return ParseOnRoute(args, LoopMode::kTeach, s);
 }
 
-int RunRepeat(std::span<char* const> args) {
-  return RunOnRoute(args, LoopMode::kRepeat);
+ParseOutcome ParseRepeatArgs(std::span<char* const> args, SessionArgs* s) {
+  return ParseOnRoute(args, LoopMode::kRepeat, s);
 }
 
-int RunRecord(std::span<char* const> args) {
-  SessionArgs s{.mode = LoopMode::kRecord, .label = "skyloc record"};
+ParseOutcome ParseRecordArgs(std::span<char* const> args, SessionArgs* s) {
+  *s = {.mode = LoopMode::kRecord, .label = "skyloc record"};
   OptionTable t("record", "DIR [options]", kRecordDescription);
   std::vector<std::string> dir;
   t.Positional("DIR", "the dataset folder to record into", 1, 1, &dir);
-  AddCommonOptions(t, &s);
-  AddSimRunOptions(&t, SimRunOptions::kRun, &s.sim);
+  AddCommonOptions(t, s);
+  AddSimRunOptions(&t, SimRunOptions::kRun, &s->sim);
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
-    return ExitCode(o);
-  s.record_dir = dir.front();
-  return RunWithConfigFile(s);
+    return o;
+  s->record_dir = dir.front();
+  return ParseOutcome::kRun;
 }
 
-int RunReplay(std::span<char* const> args) {
-  SessionArgs s{.mode = LoopMode::kRepeat, .label = "skyloc replay"};
+ParseOutcome ParseReplayArgs(std::span<char* const> args, SessionArgs* s) {
+  *s = {.mode = LoopMode::kRepeat, .label = "skyloc replay"};
   OptionTable t("replay", "DATASET --route FILE.db [options]", kReplayDescription);
   std::vector<std::string> dataset;
   t.Positional("DATASET", "the recorded dataset folder", 1, 1, &dataset);
-  t.Text("--route", "FILE.db", "the taught route database", &s.route_path);
-  AddCommonOptions(t, &s);
+  t.Text("--route", "FILE.db", "the taught route database", &s->route_path);
+  AddCommonOptions(t, s);
   t.Choice<bool>("--pace", "at the recorded frame times, or as fast as it runs (default fast)",
-                 {{"recorded", true}, {"fast", false}}, &s.paced);
+                 {{"recorded", true}, {"fast", false}}, &s->paced);
   t.Number("--tolerance-m", "X", "a match within X metres is correct (default 2)", kPositive,
-           &s.tolerance_m);
+           &s->tolerance_m);
   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
-    return ExitCode(o);
-  if (s.route_path.empty())
-    return ExitCode(t.Refuse("--route FILE.db is required"));
-  s.dataset = dataset.front();
-  return RunWithConfigFile(s);
+    return o;
+  if (s->route_path.empty())
+    return t.Refuse("--route FILE.db is required");
+  s->dataset = dataset.front();
+  return ParseOutcome::kRun;
 }
 
-int RunRoute(std::span<char* const> args) {
+// route's command line: what to do with which route database.
+struct RouteOptions {
+  bool recover = false;
+  bool salvage = false;
+  std::string path;
+};
+
+ParseOutcome ParseRouteArgs(std::span<char* const> args, RouteOptions* o) {
   OptionTable t("route", "info FILE.db | recover [--salvage] FILE.db", kRouteDescription);
   std::vector<std::string> words;
-  bool salvage = false;
   t.Positional("info|recover FILE.db", "what to do, and the route database", 2, 2, &words);
-  t.Flag("--salvage", "recover: also past damage in the middle of the file", &salvage);
-  if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun)
-    return ExitCode(o);
-  const bool recover = words[0] == "recover";
-  if (!recover && words[0] != "info")
-    return ExitCode(
-        t.Refuse("unknown route subcommand '" + words[0] + "': expected info or recover"));
-  if (salvage && !recover)
-    return ExitCode(t.Refuse("--salvage is for 'route recover' only"));
-  const char* path = words[1].c_str();
+  t.Flag("--salvage", "recover: also past damage in the middle of the file", &o->salvage);
+  if (const ParseOutcome outcome = t.Parse(args); outcome != ParseOutcome::kRun)
+    return outcome;
+  o->recover = words[0] == "recover";
+  if (!o->recover && words[0] != "info")
+    return t.Refuse("unknown route subcommand '" + words[0] + "': expected info or recover");
+  if (o->salvage && !o->recover)
+    return t.Refuse("--salvage is for 'route recover' only");
+  o->path = words[1];
+  return ParseOutcome::kRun;
+}
+
+// route info prints what the file holds; route recover makes it loadable.
+int InfoOrRecover(const RouteOptions& o) {
+  const bool recover = o.recover;
+  const bool salvage = o.salvage;
+  const char* path = o.path.c_str();
   RouteDbLoadReport report;
   Status s;
   if (recover) {
@@ -215,6 +226,28 @@ int RunRoute(std::span<char* const> args) {
   if (!recover)
     PrintTeachState(path, stdout);
   return kExitOk;
+}
+
+}  // namespace
+
+int RunTeach(std::span<char* const> args) {
+  return RunParsed(args, ParseTeachArgs, RunWithConfigFile);
+}
+
+int RunRepeat(std::span<char* const> args) {
+  return RunParsed(args, ParseRepeatArgs, RunWithConfigFile);
+}
+
+int RunRecord(std::span<char* const> args) {
+  return RunParsed(args, ParseRecordArgs, RunWithConfigFile);
+}
+
+int RunReplay(std::span<char* const> args) {
+  return RunParsed(args, ParseReplayArgs, RunWithConfigFile);
+}
+
+int RunRoute(std::span<char* const> args) {
+  return RunParsed(args, ParseRouteArgs, InfoOrRecover);
 }
 
 }  // namespace skyloc::cli

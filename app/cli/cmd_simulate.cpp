@@ -248,12 +248,7 @@ Result<sim::Lighting> Lighting(const Options& o) {
   return lighting;
 }
 
-}  // namespace
-
-int RunSimulate(std::span<char* const> args) {
-  Options o;
-  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
-    return ExitCode(p);
+int Simulate(Options& o) {
   sim::WorldKind world_kind{};
   sim::ParseWorldKind(o.run.world.name.c_str(), &world_kind);  // --world accepted only these
   const bool seville = world_kind == sim::WorldKind::kSeville;
@@ -366,6 +361,12 @@ int RunSimulate(std::span<char* const> args) {
   std::printf("skyloc simulate: wrote %zu frames to %s (render %.1f ms/frame at %dx%d)\n",
               trajectory.size(), o.out.c_str(), 1000.0 * render_s / renders, o.width, o.height);
   return kExitOk;
+}
+
+}  // namespace
+
+int RunSimulate(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, Simulate);
 }
 
 }  // namespace skyloc::cli

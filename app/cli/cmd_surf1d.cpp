@@ -189,12 +189,7 @@ std::string PlotSvg(const View& a, const View& b, const dsp::LandmarkMatcher& ma
   return svg;
 }
 
-}  // namespace
-
-int RunSurf1d(std::span<char* const> args) {
-  Options o;
-  if (const ParseOutcome p = ParseArgs(args, &o); p != ParseOutcome::kRun)
-    return ExitCode(p);
+int CompareImages(const Options& o) {
   dsp::Surf1d surf;
   View a, b;
   for (auto [path, view] :
@@ -256,6 +251,12 @@ int RunSurf1d(std::span<char* const> args) {
     std::printf("plot: %s\n", o.plot.c_str());
   }
   return kExitOk;
+}
+
+}  // namespace
+
+int RunSurf1d(std::span<char* const> args) {
+  return RunParsed(args, ParseArgs, CompareImages);
 }
 
 }  // namespace skyloc::cli

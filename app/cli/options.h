@@ -4,11 +4,19 @@
 // the help. Exit codes: kExitUsage (2) for a bad command line, kExitFailure (1) for a
 // failure after it parsed (commands.h).
 //
-//   OptionTable t("teach", "--route FILE.db [options]", "Records a route ...");
-//   t.Text("--route", "FILE.db", "the route database to write", &route);
-//   t.Count("--frames", "N", "stop after N frames (default: until a signal)", &frames);
-//   t.Number("--tilt", "DEG", "constant pitch of the simulated run", {-90, 90}, &tilt);
-//   if (const ParseOutcome o = t.Parse(args); o != ParseOutcome::kRun) return ExitCode(o);
+// Every command is a parser, which fills the command's options from the table and returns
+// the ParseOutcome, and a body, which runs on the options; RunParsed (below) joins them:
+//
+//   ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
+//     OptionTable t("teach", "--route FILE.db [options]", "Records a route ...");
+//     t.Text("--route", "FILE.db", "the route database to write", &o->route);
+//     t.Count("--frames", "N", "stop after N frames (default: until a signal)", &o->frames);
+//     t.Number("--tilt", "DEG", "constant pitch of the simulated run", {-90, 90}, &o->tilt);
+//     if (const ParseOutcome p = t.Parse(args); p != ParseOutcome::kRun) return p;
+//     if (o->route.empty()) return t.Refuse("--route FILE.db is required");
+//     return ParseOutcome::kRun;
+//   }
+//   int RunTeach(std::span<char* const> args) { return RunParsed(args, ParseArgs, Teach); }
 //
 // A bad value is told as "skyloc teach: --frames 'x': expected a whole number >= 0 (stop
 // after N frames ...)" followed by where the options are described.
@@ -33,6 +41,19 @@ namespace skyloc::cli {
 // was refused and the reason printed (exit 2).
 enum class ParseOutcome : std::uint8_t { kRun, kHelpPrinted, kRefused };
 int ExitCode(ParseOutcome outcome);  // kRun: 0 as well; the caller runs instead
+
+// How every command starts: `parse` fills a default Options from the command line (its
+// table, then the checks across options); after --help the command ends with 0, after a
+// refused command line with 2, else `run` does the command on the options and returns its
+// exit code.
+template <typename Options, typename Run>
+int RunParsed(std::span<char* const> args,
+              ParseOutcome (*parse)(std::span<char* const> args, Options* options), Run run) {
+  Options options;
+  if (const ParseOutcome outcome = parse(args, &options); outcome != ParseOutcome::kRun)
+    return ExitCode(outcome);
+  return run(options);
+}
 
 // A closed or open interval of real numbers for Number().
 struct NumberRange {

@@ -236,9 +236,9 @@ void ReadCameraSection(SectionReader& r, const toml::table* /*table*/, Config& c
   r.Double("sim_stop_max_s", &sim.frames.speed.stop_max_s, 0.0, 3600.0);
   if (r.ok() && sim.frames.speed.stop_min_s > sim.frames.speed.stop_max_s)
     r.Invalid("sim_stop_min_s", "must not exceed sim_stop_max_s");
-  r.Int("width", &c.camera.width, 16, 8192);
-  r.Int("height", &c.camera.height, 16, 8192);
-  r.Double("fps", &c.camera.fps, 0.1, 1000.0);
+  r.Int("width", &c.camera.capture.width, 16, 8192);
+  r.Int("height", &c.camera.capture.height, 16, 8192);
+  r.Double("fps", &c.camera.capture.fps, 0.1, 1000.0);
   r.Int("frame_timeout_ms", &c.camera.frame_timeout_ms, 1, 60000);
   r.Int("reconnect_timeout_ms", &c.camera.reconnect_timeout_ms, 0, 600000);
   if (r.ok() && c.camera.kind == CameraKind::kDataset && c.camera.dataset.empty())

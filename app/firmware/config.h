@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 
+#include "skyloc/drivers/camera.h"
 #include "skyloc/drivers/status_pattern.h"
 #include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
@@ -69,9 +70,9 @@ struct CameraConfig {
   // kind = sim: the world and how a run through it is sampled (the sim_* keys); the
   // command line's SIM flags give the rest of the run.
   SimWorldConfig sim;
-  int width = 640;
-  int height = 480;
-  double fps = 30.0;
+  // The keys width, height, fps: what a live camera is asked for (its driver's config holds
+  // this value as it is), and the simulated camera's frame size and rate.
+  drivers::CaptureFormat capture;
   int frame_timeout_ms = 1000;       // a Capture() waiting longer than this is a stall
   int reconnect_timeout_ms = 30000;  // an unplugged camera may take this long to return
 

@@ -41,25 +41,27 @@ Result<dsp::LensParams> LensFromConfig(const Config& config) {
       return s.AddContext("[camera] lens_file in %s",
                           config.source.empty() ? "the built-in defaults" : config.source.c_str());
     }
-    if (p->width != cam.width || p->height != cam.height) {
+    if (p->width != cam.capture.width || p->height != cam.capture.height) {
       if (cam.lens_file_from_dataset) {
         return Status::Error(StatusCode::kInvalidArgument,
                              "the dataset's camera file %s is for %dx%d images but its frames "
                              "are %dx%d: correct that camera.toml, or set [camera] lens_file",
-                             cam.lens_file.c_str(), p->width, p->height, cam.width, cam.height);
+                             cam.lens_file.c_str(), p->width, p->height, cam.capture.width,
+                             cam.capture.height);
       }
       return Status::Error(StatusCode::kInvalidArgument,
                            "%s: [camera] lens_file %s is for %dx%d images but the frames are "
                            "%dx%d: make them agree",
                            config.source.empty() ? "built-in defaults" : config.source.c_str(),
-                           cam.lens_file.c_str(), p->width, p->height, cam.width, cam.height);
+                           cam.lens_file.c_str(), p->width, p->height, cam.capture.width,
+                           cam.capture.height);
     }
     return p;
   }
   dsp::LensParams p;
   p.model = dsp::LensModel::kEquidistant;
-  p.width = config.camera.width;
-  p.height = config.camera.height;
+  p.width = config.camera.capture.width;
+  p.height = config.camera.capture.height;
   p.fov_deg = 185.0;
   return p;
 }

@@ -64,7 +64,7 @@ struct FrameResult {
 inline constexpr std::uint32_t kDescriptorSkyShAmplitudes = 1;
 
 // The lens the configuration describes: the lens file's, or a 185-degree equidistant
-// fisheye filling the image circle of a camera.width x camera.height frame.
+// fisheye filling the image circle of a camera.capture.width x camera.capture.height frame.
 Result<dsp::LensParams> LensFromConfig(const Config& config);
 // A hash of everything in the lens parameters that changes which pixel a sample reads, as
 // configured (unset values stay NaN). Only version-1/2 route files are checked with it.

@@ -151,18 +151,18 @@ Status OpenCamera(Session* s) {
   CameraConfig& cam = s->config.camera;
   if (cam.kind == CameraKind::kSim || !s->args.dataset.empty() ||
       cam.kind == CameraKind::kDataset) {
-    cam.width = info.width;  // a recorded or simulated source fixes the size
-    cam.height = info.height;
+    cam.capture.width = info.width;  // a recorded or simulated source fixes the size
+    cam.capture.height = info.height;
     // A dataset recorded with its camera file: use that lens unless the config names one.
     if (cam.lens_file.empty() && !s->source.camera_file.empty()) {
       cam.lens_file = s->source.camera_file;
       cam.lens_file_from_dataset = true;
     }
-  } else if (info.width != cam.width || info.height != cam.height) {
+  } else if (info.width != cam.capture.width || info.height != cam.capture.height) {
     return Status::Error(StatusCode::kInvalidArgument,
                          "camera %s delivers %dx%d, [camera] asks for %dx%d: set width and "
                          "height to what the camera supports",
-                         info.name, info.width, info.height, cam.width, cam.height);
+                         info.name, info.width, info.height, cam.capture.width, cam.capture.height);
   }
   return Status::Ok();
 }

@@ -36,10 +36,10 @@ Status MakeSimSource(const Config& config, const SimRunConfig& command_line, Cam
   const SimRunConfig run = ConfiguredSimRun(config.camera.sim, command_line);
   if (run.world.name == "street") {
     sim::StreetOptions o;
-    o.width = config.camera.width;
-    o.height = config.camera.height;
+    o.width = config.camera.capture.width;
+    o.height = config.camera.capture.height;
     o.seed = run.world.seed;
-    o.fps = config.camera.fps;
+    o.fps = config.camera.capture.fps;
     o.paced = true;  // a live run: frames come at the camera's rate
     o.step_m = run.world.frames.frame_spacing_m;
     o.speed_jitter = std::min(run.world.frames.speed_jitter, 0.5);
@@ -58,7 +58,7 @@ Status MakeSimSource(const Config& config, const SimRunConfig& command_line, Cam
                          run.world.name.c_str());
   source->world = std::make_unique<sim::World>();
   SKYLOC_TRY(sim::MakeProceduralWorld(kind, run.world.seed, source->world.get()));
-  const sim::MotionConfig motion = SimMotionConfig(run, config.camera.fps);
+  const sim::MotionConfig motion = SimMotionConfig(run, config.camera.capture.fps);
   source->run_seed = run.ride.seed;
   SKYLOC_TRY(sim::BuildTrajectory(source->world->route, source->world->route_closed, motion,
                                   &source->trajectory));
@@ -72,6 +72,35 @@ Status MakeSimSource(const Config& config, const SimRunConfig& command_line, Cam
   source->sim_source = std::move(rendered);
   source->frames = source->trajectory.size();
   return Status::Ok();
+}
+
+// A live camera, not yet opened: its driver's config is the device and the capture format
+// of [camera] (libcamera's camera id is the device key, the default device meaning the
+// first camera).
+Result<std::unique_ptr<drivers::Camera>> MakeLiveCamera(
+    [[maybe_unused]] const CameraConfig& camera) {
+#if SKYLOC_WITH_V4L2
+  if (camera.kind == CameraKind::kV4l2) {
+    drivers::V4l2CameraConfig c;
+    std::snprintf(c.device, sizeof c.device, "%s", camera.device.c_str());
+    c.capture = camera.capture;
+    return std::unique_ptr<drivers::Camera>(std::make_unique<drivers::V4l2Camera>(c));
+  }
+#endif
+#if SKYLOC_WITH_LIBCAMERA
+  if (camera.kind == CameraKind::kLibcamera) {
+    drivers::LibcameraCameraConfig c;
+    const bool first_camera = camera.device == "/dev/video0";
+    std::snprintf(c.camera_id, sizeof c.camera_id, "%s", first_camera ? "" : camera.device.c_str());
+    c.capture = camera.capture;
+    return std::unique_ptr<drivers::Camera>(std::make_unique<drivers::LibcameraCamera>(c));
+  }
+#endif
+  return Status::Error(StatusCode::kUnimplemented,
+                       "[camera] kind = \"%s\": this skyloc was built without that driver (its "
+                       "development package was missing at build time); use \"sim\" or "
+                       "\"dataset\", or rebuild",
+                       NameOf(camera.kind));
 }
 
 }  // namespace
@@ -148,44 +177,12 @@ Status MakeCamera(const Config& config, const SessionArgs& args, CameraSource* s
     source->camera = std::move(camera);
     return Status::Ok();
   }
-  switch (config.camera.kind) {
-    case CameraKind::kSim:
-      SKYLOC_TRY(MakeSimSource(config, args.sim, source));
-      return source->camera->Open();
-    case CameraKind::kV4l2: {
-#if SKYLOC_WITH_V4L2
-      drivers::V4l2CameraConfig c;
-      std::snprintf(c.device, sizeof c.device, "%s", config.camera.device.c_str());
-      c.width = config.camera.width;
-      c.height = config.camera.height;
-      c.fps = config.camera.fps;
-      source->camera = std::make_unique<drivers::V4l2Camera>(c);
-      return source->camera->Open();
-#else
-      break;
-#endif
-    }
-    case CameraKind::kLibcamera: {
-#if SKYLOC_WITH_LIBCAMERA
-      drivers::LibcameraCameraConfig c;
-      std::snprintf(c.camera_id, sizeof c.camera_id, "%s",
-                    config.camera.device == "/dev/video0" ? "" : config.camera.device.c_str());
-      c.width = config.camera.width;
-      c.height = config.camera.height;
-      source->camera = std::make_unique<drivers::LibcameraCamera>(c);
-      return source->camera->Open();
-#else
-      break;
-#endif
-    }
-    case CameraKind::kDataset:
-      break;
+  if (config.camera.kind == CameraKind::kSim) {
+    SKYLOC_TRY(MakeSimSource(config, args.sim, source));
+  } else {
+    SKYLOC_TRY_ASSIGN(source->camera, MakeLiveCamera(config.camera));
   }
-  return Status::Error(StatusCode::kUnimplemented,
-                       "[camera] kind = \"%s\": this skyloc was built without that driver (its "
-                       "development package was missing at build time); use \"sim\" or "
-                       "\"dataset\", or rebuild",
-                       NameOf(config.camera.kind));
+  return source->camera->Open();
 }
 
 Result<std::unique_ptr<drivers::StatusOutput>> MakeStatusOutput(const Config& config,

@@ -20,13 +20,13 @@ void PrintStartup(const SessionArgs& args, const Config& config, const drivers::
     std::snprintf(camera, sizeof camera,
                   "camera sim (SIMULATED world \"%s\", seed %llu), %s %dx%d @ %g fps",
                   cam.sim.name.c_str(), static_cast<unsigned long long>(cam.sim.seed), format,
-                  info.width, info.height, cam.fps);
+                  info.width, info.height, cam.capture.fps);
   } else {
     std::snprintf(camera, sizeof camera, "camera %s %s, %s %dx%d @ %g fps", NameOf(cam.kind),
                   cam.kind == CameraKind::kLibcamera && cam.device == "/dev/video0"
                       ? "(the first camera)"
                       : cam.device.c_str(),
-                  format, info.width, info.height, cam.fps);
+                  format, info.width, info.height, cam.capture.fps);
   }
   char status[200];
   switch (config.status.kind) {

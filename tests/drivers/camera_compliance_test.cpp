@@ -202,7 +202,7 @@ std::unique_ptr<CameraUnderTest> MakeV4l2(std::string* skip) {
   };
   V4l2CameraConfig config;
   std::snprintf(config.device, sizeof(config.device), "%s", device);
-  testing::EnvSize("SKYLOC_TEST_V4L2_SIZE", &config.width, &config.height);
+  testing::EnvSize("SKYLOC_TEST_V4L2_SIZE", &config.capture.width, &config.capture.height);
   return std::make_unique<Under>(config);
 #else
   *skip = "this build has no V4L2 driver (linux/videodev2.h missing)";

@@ -218,7 +218,7 @@ TEST(V4l2Unplug, CameraPulledMidStreamIsReportedStatusGoesSafeAndStreamRecovers)
   }
   V4l2CameraConfig config;
   std::snprintf(config.device, sizeof(config.device), "%s", device);
-  testing::EnvSize("SKYLOC_TEST_V4L2_SIZE", &config.width, &config.height);
+  testing::EnvSize("SKYLOC_TEST_V4L2_SIZE", &config.capture.width, &config.capture.height);
   config.recovery.backoff_max = std::chrono::milliseconds(500);
   V4l2Camera camera(config);
   PullAndPlugBack(camera, unbind, bind, platform_device, StatusCode::kUnavailable,

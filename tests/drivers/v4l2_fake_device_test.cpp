@@ -25,9 +25,9 @@ class V4l2FakeDeviceTest : public ::testing::Test {
   static V4l2CameraConfig Config() {
     V4l2CameraConfig c;
     std::strcpy(c.device, "/dev/video0");
-    c.width = 320;
-    c.height = 240;
-    c.fps = 25;
+    c.capture.width = 320;
+    c.capture.height = 240;
+    c.capture.fps = 25;
     c.recovery.stall_timeout = seconds(2);
     c.recovery.backoff_initial = milliseconds(100);
     c.recovery.backoff_max = milliseconds(400);

@@ -109,7 +109,7 @@ stale_ms = 100
   ASSERT_TRUE(c.ok()) << c.status().message();
   EXPECT_EQ(c->camera.kind, CameraKind::kV4l2);
   EXPECT_EQ(c->camera.device, "uvcvideo:UV cam");
-  EXPECT_DOUBLE_EQ(c->camera.fps, 15.0);
+  EXPECT_DOUBLE_EQ(c->camera.capture.fps, 15.0);
   EXPECT_EQ(c->segmentation.method, SegmentationMethod::kFixed);
   EXPECT_EQ(c->segmentation.threshold, 90);
   EXPECT_EQ(c->descriptor.rings, 12);
@@ -409,8 +409,8 @@ TEST(Config, AMissingDatasetIsNamedByItsKey) {
 // "[camera] width x height" (which the dataset overrides).
 TEST(Config, ADatasetCameraFileOfAnotherSizeIsNamed) {
   Config c = DefaultConfig();
-  c.camera.width = 96;
-  c.camera.height = 96;
+  c.camera.capture.width = 96;
+  c.camera.capture.height = 96;
   c.camera.lens_file = std::string(SKYLOC_SOURCE_DIR) + "/config/camera-equidistant-185.toml";
   c.camera.lens_file_from_dataset = true;
   Result<dsp::LensParams> lens = LensFromConfig(c);

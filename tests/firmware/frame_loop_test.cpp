@@ -420,7 +420,7 @@ TEST(RouteLens, DefaultLensAndTheSameLensFromACameraFileAgree) {
   };
   auto load_with = [&](const std::string& camera_file, int size, RouteDbSettings* settings) {
     Config c = SmallConfig();
-    c.camera.width = c.camera.height = size;
+    c.camera.capture.width = c.camera.capture.height = size;
     c.camera.lens_file = camera_file;
     Pipeline now(kMonotonic);
     const Status init = now.Init(c);

@@ -12,8 +12,8 @@ namespace skyloc::firmware::testing {
 
 inline Config SmallConfig() {
   Config c = DefaultConfig();
-  c.camera.width = 64;
-  c.camera.height = 64;
+  c.camera.capture.width = 64;
+  c.camera.capture.height = 64;
   c.descriptor.bands = 16;
   c.descriptor.rings = 8;
   c.descriptor.longitudes = 32;

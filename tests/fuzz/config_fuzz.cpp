@@ -23,9 +23,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Require(c.status().message()[0] != '\0');
     return 0;
   }
-  Require(c->camera.width >= 16 && c->camera.width <= 8192);
-  Require(c->camera.height >= 16 && c->camera.height <= 8192);
-  Require(c->camera.fps >= 0.1 && c->camera.fps <= 1000.0);
+  Require(c->camera.capture.width >= 16 && c->camera.capture.width <= 8192);
+  Require(c->camera.capture.height >= 16 && c->camera.capture.height <= 8192);
+  Require(c->camera.capture.fps >= 0.1 && c->camera.capture.fps <= 1000.0);
   Require(!c->camera.device.empty());
   Require(c->segmentation.threshold >= 0 && c->segmentation.threshold <= 254);
   Require(c->descriptor.bands >= 1 && c->descriptor.bands <= 256);

@@ -19,8 +19,8 @@ namespace {
 TEST(Soak, HundredThousandFramesKeepMemoryFlat) {
   ClearSignalFlags();
   Config config = DefaultConfig();
-  config.camera.width = 64;
-  config.camera.height = 64;
+  config.camera.capture.width = 64;
+  config.camera.capture.height = 64;
   config.descriptor.bands = 16;
   config.descriptor.rings = 8;
   config.descriptor.longitudes = 32;

@@ -55,8 +55,8 @@ struct Case {
 
 std::vector<Case> Cases(const std::string& camera_file) {
   firmware::Config robot = firmware::DefaultConfig();
-  robot.camera.width = kWidth;
-  robot.camera.height = kHeight;
+  robot.camera.capture.width = kWidth;
+  robot.camera.capture.height = kHeight;
   robot.camera.lens_file = camera_file;
   firmware::Config changed = robot;
   changed.segmentation.method = firmware::SegmentationMethod::kFixed;

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 
@@ -49,8 +50,8 @@ LibcameraCamera::LibcameraCamera(const LibcameraCameraConfig& config, const Cloc
   config_.camera_id[sizeof(config_.camera_id) - 1] = '\0';
   std::snprintf(info_.name, sizeof(info_.name), "libcamera:%.53s",
                 config_.camera_id[0] != '\0' ? config_.camera_id : "first");
-  info_.width = config.width;
-  info_.height = config.height;
+  info_.width = config.capture.width;
+  info_.height = config.capture.height;
 }
 
 LibcameraCamera::~LibcameraCamera() {
@@ -128,13 +129,13 @@ Status LibcameraCamera::Configure() {
                          info_.name, config_.raw ? "Raw" : "Viewfinder");
   }
   stream_config.pixelFormat = choice->pixel_format;
-  stream_config.size = libcamera::Size(static_cast<unsigned int>(config_.width),
-                                       static_cast<unsigned int>(config_.height));
+  stream_config.size = libcamera::Size(static_cast<unsigned int>(config_.capture.width),
+                                       static_cast<unsigned int>(config_.capture.height));
   stream_config.bufferCount = config_.buffer_count;
   if (configuration_->validate() == libcamera::CameraConfiguration::Invalid) {
-    return Status::Error(StatusCode::kInvalidArgument,
-                         "camera %s: configuration %dx%d %s is invalid", info_.name, config_.width,
-                         config_.height, choice->pixel_format.toString().c_str());
+    return Status::Error(
+        StatusCode::kInvalidArgument, "camera %s: configuration %dx%d %s is invalid", info_.name,
+        config_.capture.width, config_.capture.height, choice->pixel_format.toString().c_str());
   }
   if (stream_config.pixelFormat != choice->pixel_format) {
     return Status::Error(StatusCode::kUnimplemented, "camera %s: the pipeline changed %s to %s",
@@ -218,8 +219,26 @@ Status LibcameraCamera::QueueRequest(libcamera::Request* request) {
 Status LibcameraCamera::DoStart() {
   stopping_.store(false, std::memory_order_release);
   libcamera::ControlList controls(camera_->controls());
+  const libcamera::ControlInfoMap& available = camera_->controls();
+  fps_ = 0;
+  if (config_.capture.fps > 0) {
+    if (available.find(&libcamera::controls::FrameDurationLimits) != available.end()) {
+      // The shortest and the longest frame duration both one frame at this rate: the
+      // control's way to fix the rate (control_ids.h, FrameDurationLimits).
+      const std::int64_t frame_us = std::llround(1e6 / config_.capture.fps);
+      controls.set(libcamera::controls::FrameDurationLimits, {frame_us, frame_us});
+      fps_ = config_.capture.fps;
+    } else if (!told_rate_not_set_) {
+      // Not an error: a camera without the control still streams, at its own rate. Said
+      // once, on stderr, as the IIO IMU says its fallback to polling.
+      std::fprintf(stderr,
+                   "camera %s: fps %g not set: the camera has no FrameDurationLimits control, "
+                   "so it runs at its own rate\n",
+                   info_.name, config_.capture.fps);
+      told_rate_not_set_ = true;
+    }
+  }
   if (config_.exposure_us > 0) {
-    const libcamera::ControlInfoMap& available = camera_->controls();
     if (available.find(&libcamera::controls::ExposureTime) == available.end()) {
       return Status::Error(StatusCode::kUnimplemented,
                            "camera %s: exposure_us is set but the camera has no ExposureTime "

@@ -93,8 +93,8 @@ V4l2Camera::V4l2Camera(const V4l2CameraConfig& config, V4l2Io* io)
     : config_(config), io_(io != nullptr ? io : &SystemV4l2Io()), recovery_(config.recovery) {
   config_.device[sizeof(config_.device) - 1] = '\0';
   std::snprintf(info_.name, sizeof(info_.name), "v4l2:%.58s", config_.device);
-  info_.width = config.width;
-  info_.height = config.height;
+  info_.width = config.capture.width;
+  info_.height = config.capture.height;
 }
 
 Status V4l2Camera::DoOpen() {
@@ -114,9 +114,9 @@ Status V4l2Camera::OpenDevice() {
                          "camera %s: buffer_count %u is outside 2..%u", info_.name,
                          config_.buffer_count, kMaxBuffers);
   }
-  if (config_.width <= 0 || config_.height <= 0) {
+  if (config_.capture.width <= 0 || config_.capture.height <= 0) {
     return Status::Error(StatusCode::kInvalidArgument, "camera %s: invalid frame size %dx%d",
-                         info_.name, config_.width, config_.height);
+                         info_.name, config_.capture.width, config_.capture.height);
   }
 
   // Find and open the node.
@@ -210,14 +210,15 @@ Status V4l2Camera::OpenDevice() {
   }
   v4l2_format fmt{};
   fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  fmt.fmt.pix.width = static_cast<std::uint32_t>(config_.width);
-  fmt.fmt.pix.height = static_cast<std::uint32_t>(config_.height);
+  fmt.fmt.pix.width = static_cast<std::uint32_t>(config_.capture.width);
+  fmt.fmt.pix.height = static_cast<std::uint32_t>(config_.capture.height);
   fmt.fmt.pix.pixelformat = choice->fourcc;
   fmt.fmt.pix.field = V4L2_FIELD_NONE;
   if (Xioctl(fd_.get(), VIDIOC_S_FMT, &fmt) != 0) {
     const int saved = errno;
     return Status::FromErrno(saved, "camera %s: VIDIOC_S_FMT %s %dx%d", info_.name,
-                             FourccToText(choice->fourcc).text, config_.width, config_.height);
+                             FourccToText(choice->fourcc).text, config_.capture.width,
+                             config_.capture.height);
   }
   if (fmt.fmt.pix.pixelformat != choice->fourcc) {
     return Status::Error(StatusCode::kUnimplemented, "camera %s: asked for %s, the driver chose %s",
@@ -240,14 +241,14 @@ Status V4l2Camera::OpenDevice() {
   parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (Xioctl(fd_.get(), VIDIOC_G_PARM, &parm) == 0 &&
       (parm.parm.capture.capability & V4L2_CAP_TIMEPERFRAME) != 0) {
-    if (config_.fps > 0) {
+    if (config_.capture.fps > 0) {
       parm.parm.capture.timeperframe.numerator = 1000;
       parm.parm.capture.timeperframe.denominator =
-          static_cast<std::uint32_t>(std::lround(config_.fps * 1000.0));
+          static_cast<std::uint32_t>(std::lround(config_.capture.fps * 1000.0));
       if (Xioctl(fd_.get(), VIDIOC_S_PARM, &parm) != 0) {
         const int saved = errno;
         return Status::FromErrno(saved, "camera %s: VIDIOC_S_PARM %.2f fps", info_.name,
-                                 config_.fps);
+                                 config_.capture.fps);
       }
     }
     const v4l2_fract& tpf = parm.parm.capture.timeperframe;

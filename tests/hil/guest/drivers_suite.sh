@@ -48,8 +48,8 @@ fi
 unset SKYLOC_TEST_V4L2_DEVICE SKYLOC_TEST_V4L2_SIZE
 
 if [ -n "$SKYLOC_TEST_LIBCAMERA_CAMERA" ]; then
-  echo "libcamera camera on vimc"
-  run_suite vimc-libcamera '*/Libcamera' Libcamera
+  echo "libcamera camera on vimc (and [camera] fps through FrameDurationLimits)"
+  run_suite vimc-libcamera '*/Libcamera:LibcameraFrameRate.*' Libcamera
 fi
 
 echo "GPIO status output on gpio-sim"
@@ -64,7 +64,7 @@ export SKYLOC_TEST_V4L2_DEVICE="$HIL_VIVID_VIDEO" SKYLOC_TEST_V4L2_SIZE=640x480
 # Left out: the device instances (run above; the IIO IMU ones in the imu_iio scenario) and
 # the one test that reads a file from the source tree (config/), which the guest does not
 # have; the host build runs it.
-rest='-*/V4l2:*/Libcamera:*/Gpiod*:*/Iio:*/IioPolling:V4l2Unplug.*:LibcameraUnplug.*:CameraFile.ShippedExampleLoads'
+rest='-*/V4l2:*/Libcamera:LibcameraFrameRate.*:*/Gpiod*:*/Iio:*/IioPolling:V4l2Unplug.*:LibcameraUnplug.*:CameraFile.ShippedExampleLoads'
 "$T" --gtest_filter="$rest" --gtest_color=no >/tmp/suite-rest.log 2>&1
 rc=$?
 if [ "$rc" -eq 0 ]; then ok "rest of the suite exited 0 ($(grep -c '^\[       OK \]' /tmp/suite-rest.log) passed)"; else

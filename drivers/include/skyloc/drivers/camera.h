@@ -37,6 +37,17 @@ struct Frame {
   std::optional<dsp::Attitude> attitude;
 };
 
+// The frame size and rate a camera is asked for, held as it is by every live camera's
+// config (and by the configuration's [camera] section). What the camera granted is in
+// info() (the size) and the driver's fps().
+struct CaptureFormat {
+  int width = 640;
+  int height = 480;
+  double fps = 30.0;  // 0: leave the camera's frame rate alone
+
+  bool operator==(const CaptureFormat&) const = default;
+};
+
 struct CameraInfo {
   char name[64] = {};  // e.g. "v4l2:/dev/video0", "sim:city"
   int width = 0;

@@ -6,7 +6,9 @@
 //          configures one stream (Viewfinder, or Raw) in the first format skyloc reads
 //          (R8, YUYV, RGB888/BGR888), allocates the buffers with a FrameBufferAllocator,
 //          mmaps every dmabuf plane once and creates one Request per buffer.
-// Start(): camera->start(), queues every request.
+// Start(): camera->start() with the frame rate (FrameDurationLimits, when the camera lists
+//          that control; otherwise it says so once on stderr and streams at the camera's
+//          own rate) and the exposure, queues every request.
 // Capture(): requeues the request handed out last time (Request::ReuseBuffers), waits on
 //          an eventfd (poll with the timeout) for a completed request, which libcamera's
 //          thread put into a fixed-size SPSC queue (the callback does nothing else:
@@ -54,8 +56,8 @@ namespace skyloc::drivers {
 
 struct LibcameraCameraConfig {
   char camera_id[128] = "";  // as `cam -l` prints it; empty or "first": the first camera
-  int width = 640;
-  int height = 480;
+  // The rate through the FrameDurationLimits control, when the camera lists it.
+  CaptureFormat capture;
   bool raw = false;                // StreamRole::Raw instead of Viewfinder
   std::uint32_t buffer_count = 4;  // 1..kMaxRequests (the pipeline may raise its minimum)
   std::int32_t exposure_us = 0;    // > 0: manual exposure (AeEnable off), if supported
@@ -72,6 +74,9 @@ class LibcameraCamera final : public Camera {
   explicit LibcameraCamera(const LibcameraCameraConfig& config, const Clock* clock = nullptr);
   ~LibcameraCamera() override;
 
+  // The frame rate set at Start() (0 when fps is 0 or the camera has no
+  // FrameDurationLimits control).
+  double fps() const { return fps_; }
   // Completed requests that did not fit the queue (cannot happen while the queue holds
   // every request; counted so a test can prove it).
   std::uint64_t queue_overflows() const { return overflows_.load(std::memory_order_relaxed); }
@@ -105,6 +110,8 @@ class LibcameraCamera final : public Camera {
   std::size_t request_count_ = 0;
   std::size_t stride_ = 0;
   std::size_t frame_bytes_ = 0;
+  double fps_ = 0;
+  bool told_rate_not_set_ = false;
   bool acquired_ = false;
   bool started_ = false;
   bool lost_ = false;

@@ -33,10 +33,8 @@ namespace skyloc::drivers {
 
 struct V4l2CameraConfig {
   char device[128] = "/dev/video0";  // "/dev/videoN", or "driver:card" (e.g. "vivid:vivid")
-  int width = 640;
-  int height = 480;
-  double fps = 30.0;               // 0: leave the driver's frame rate alone
-  std::uint32_t buffer_count = 4;  // 2..kMaxBuffers
+  CaptureFormat capture;             // the rate through VIDIOC_S_PARM, when the driver allows it
+  std::uint32_t buffer_count = 4;    // 2..kMaxBuffers
   StreamRecoveryConfig recovery;
 };
 
