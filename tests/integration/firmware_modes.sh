@@ -26,6 +26,16 @@ expect_rc() {  # expect_rc WANT DESCRIPTION -- command...
 frame_lines() {
   grep -c '^{"schema":1,"frame":' "$1"
 }
+# Waits (at most 60 s) until FILE holds a frame's JSON line: the program is in its loop, its
+# signal handlers installed. A fixed sleep raced a slow start (a loaded machine, a sanitizer,
+# qemu-user): a signal sent before the handlers are in kills with the default action.
+wait_for_frames() {  # wait_for_frames FILE
+  for _ in $(seq 600); do
+    grep -q '^{"schema":1,"frame":' "$1" 2>/dev/null && return 0
+    sleep 0.1
+  done
+  fail "no frame line in $1 within 60 s"
+}
 expect_err() {  # expect_err PATTERN DESCRIPTION
   grep -q -- "$1" "$WORK/err" || fail "$2: stderr lacks '$1': $(cat "$WORK/err")"
 }
@@ -116,7 +126,8 @@ expect_err "config $WORK is a directory" "--config DIR"
 # 6. SIGTERM during an endless teach: exit 0, every frame so far committed.
 "${RUN[@]}" teach --route "$WORK/term.db" --config "$CONFIG" >"$WORK/term.out" 2>"$WORK/term.err" &
 pid=$!
-sleep 1.5
+wait_for_frames "$WORK/term.out"
+sleep 1
 kill -TERM $pid
 wait $pid
 rc=$?
@@ -128,9 +139,9 @@ lines=$(frame_lines "$WORK/term.out")
 grep -q "$lines frames in" "$WORK/out" || fail "SIGTERM teach printed $lines lines but $(cat "$WORK/out")"
 
 # 7. SIGUSR1 prints the latency table and the run goes on.
-"${RUN[@]}" repeat --route "$DB" --config "$CONFIG" >/dev/null 2>"$WORK/usr1.err" &
+"${RUN[@]}" repeat --route "$DB" --config "$CONFIG" >"$WORK/usr1.out" 2>"$WORK/usr1.err" &
 pid=$!
-sleep 1
+wait_for_frames "$WORK/usr1.out"
 kill -USR1 $pid
 sleep 0.5
 kill -0 $pid 2>/dev/null || fail "repeat died on SIGUSR1"
@@ -142,9 +153,10 @@ wait $pid || fail "repeat after SIGTERM exited non-zero"
 grep -q "latency after [0-9]* frames (SIGUSR1" "$WORK/usr1.err" || fail "SIGUSR1 table has no label: $(cat "$WORK/usr1.err")"
 
 # 8. kill -9 during teach: the file is refused as interrupted, recovered, then usable.
-"${RUN[@]}" teach --route "$WORK/kill.db" --config "$CONFIG" >/dev/null 2>&1 &
+"${RUN[@]}" teach --route "$WORK/kill.db" --config "$CONFIG" >"$WORK/kill.out" 2>&1 &
 pid=$!
-sleep 1.5
+wait_for_frames "$WORK/kill.out"
+sleep 1
 kill -KILL $pid
 wait $pid 2>/dev/null
 expect_rc 1 "repeat on an interrupted route" -- "${RUN[@]}" repeat --route "$WORK/kill.db" --config "$CONFIG" --frames 5

@@ -37,10 +37,11 @@ check() {  # check DESCRIPTION -- command...: counts one check, fails when the c
   checks=$((checks + 1))
   "$@" || fail "$what"
 }
-# Waits (up to 20 s) until FILE exists and is larger than BYTES.
+# Waits (up to 60 s: a loaded machine, a sanitizer or qemu-user starts a teach slowly) until
+# FILE exists and is larger than BYTES.
 wait_for_size() {
   local file=$1 bytes=$2 i
-  for ((i = 0; i < 1000; i++)); do
+  for ((i = 0; i < 3000; i++)); do
     if [ -f "$file" ] && [ "$(stat -c %s "$file")" -gt "$bytes" ]; then return 0; fi
     sleep 0.02
   done
