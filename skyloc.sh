@@ -172,29 +172,11 @@ ensure_sysroot() {
 # deps demo: the skyloc executable only. Every build kind: all the host build's packages
 # (its tests, tools, fuzz targets and package test), and for host and aarch64 the VM
 # tests', for the ARM kinds the cross compilers and the sysroot.
-# Everything ./skyloc.sh test builds: the host's packages and both cross compilers. The
-# ARM sysroots are made beside the host build (start_sysroots).
+# Everything ./skyloc.sh test builds: the host's packages, both ARM sysroots.
 deps_for_test() {
   deps host
-  install_packages "${CROSS_PACKAGES_aarch64[@]}" "${CROSS_PACKAGES_armhf[@]}"
-}
-
-# The two ARM sysroots are mmdebstrap's downloads and extractions, most of their minute
-# spent waiting on the archive: ./skyloc.sh test makes them in the background while the
-# host build compiles, and waits for them before the aarch64 build. Their output:
-# $BUILD_ROOT/sysroots.out.
-SYSROOTS_PID=
-start_sysroots() {
-  (ensure_sysroot arm64 && ensure_sysroot armhf) >"$BUILD_ROOT/sysroots.out" 2>&1 &
-  SYSROOTS_PID=$!
-}
-wait_sysroots() {
-  [ -n "$SYSROOTS_PID" ] || return 0
-  local rc=0
-  wait "$SYSROOTS_PID" || rc=$?
-  SYSROOTS_PID=
-  cat "$BUILD_ROOT/sysroots.out" >&2
-  [ "$rc" -eq 0 ] || die "the ARM sysroots could not be made (above; log: $BUILD_ROOT/sysroots.out)"
+  deps aarch64
+  deps armhf
 }
 
 deps() {
@@ -378,7 +360,6 @@ wait_background() {
 }
 stop_background() {
   local entry
-  [ -z "$SYSROOTS_PID" ] || kill_tree "$SYSROOTS_PID"
   for entry in "${BACKGROUND[@]}"; do kill_tree "${entry##*:}"; done
 }
 kill_tree() {
@@ -393,8 +374,7 @@ cmd_test() {
   mkdir -p "$RESULTS_DIR"
   # A failure or Ctrl-C in the foreground stops the VMs too.
   trap stop_background EXIT
-  phase "packages" deps_for_test
-  start_sysroots
+  phase "packages, sysroots" deps_for_test
   phase "host build" configure_and_build host
   # The VM tests (label hil) get one more try when they fail: libcamera 0.0.3 under QEMU
   # TCG hung once in 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc.
@@ -425,7 +405,6 @@ cmd_test() {
     skyloc_tools_tests skyloc make_eval_datasets
   phase "tsan tests" run_ctest tsan "$BUILD_ROOT/tsan" \
     -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
-  phase "sysroots (waited for)" wait_sysroots
   phase "aarch64 build" configure_and_build aarch64
   # One VM at a time (each takes a core, and they share the HIL cache).
   wait_background
