@@ -37,9 +37,9 @@ die() {
 # demo built without them would make the test's build compile everything again.
 BUILD_PACKAGES=(build-essential cmake ninja-build pkg-config ccache libeigen3-dev
   libtomlplusplus-dev libstb-dev libgpiod-dev libcamera-dev cyclonedds-dev cyclonedds-tools)
-# The tests and benchmarks: GoogleTest (built from Debian's source with each build's
-# flags), Google Benchmark, and Boost.Math, the spherical-harmonics tests' reference.
-TEST_PACKAGES=(googletest libgtest-dev libbenchmark-dev libboost-math-dev)
+# The tests and benchmarks: GoogleTest and GoogleMock (Debian's builds; the ARM ones from
+# the sysroot), Google Benchmark, and Boost.Math, the spherical-harmonics tests' reference.
+TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev libboost-math-dev)
 # The lab's tools (app/tools): SIFT + k-means for the FAB-MAP baseline (docs/FABMAP.md).
 TOOLS_PACKAGES=(libopencv-dev)
 # clang + libFuzzer: the fuzz targets (tests/fuzz).
