@@ -87,7 +87,7 @@ grep -q '"best_index":[0-9]' "$WORK/out" || fail "a route without strips did not
 # 4. settings that differ from the taught ones are refused, naming the setting.
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
 expect_rc 1 "repeat with other bands" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/other.toml" --frames 5
-expect_err "taught with \\[descriptor\\] bands = 24 but this configuration has 16: run with" "settings mismatch"
+expect_err "taught with \\[descriptor\\] bands = 24 but this configuration has 16: set \\[descriptor\\] bands = 24 or teach again" "settings mismatch"
 # the default lens written out to a camera file is the same lens; another one is named
 write_lens() {  # write_lens FILE FOV CENTRE_X
   printf '[image]\nwidth = 96\nheight = 96\n[lens]\nmodel = "equidistant"\nfov_deg = %s\ncentre = [%s, 47.5]\nradius_px = 48.0\n' "$2" "$3" >"$1"
