@@ -29,6 +29,7 @@ constexpr int kWidth = 640, kHeight = 480, kFrames = 32, kRouteFrames = 10000;
 // What a fixture's pipeline runs, beside the default configuration.
 enum class Variant {
   kAttitude,       // the default configuration with [attitude] on: the gravity cap
+  kAttitude64,     // the same with 64 bands
   kMinimalGrid64,  // 64 bands on the minimal 32 x 128 grid, the default before 2026-11-26
   kBands64,        // 64 bands on their oversampled grid (48 x 256), the default before 2026-11-28
   kBands120,       // 120 bands on their oversampled grid (90 x 512), the default
@@ -51,7 +52,8 @@ struct Fixture {
       ResolveDescriptorGrid(&config.descriptor);
     }
     // The band count set, not taken from the defaults: each row keeps measuring what it names.
-    if (variant == Variant::kBands64 || variant == Variant::kBands64NoHeading) {
+    if (variant == Variant::kBands64 || variant == Variant::kBands64NoHeading ||
+        variant == Variant::kAttitude64) {
       config.descriptor.bands = 64;
       ResolveDescriptorGrid(&config.descriptor);
     }
@@ -63,7 +65,7 @@ struct Fixture {
         variant != Variant::kBands64NoHeading && variant != Variant::kBands120NoHeading;
     if (!heading)
       config.heading.strip.n_azimuth = 0;
-    if (variant == Variant::kAttitude)
+    if (variant == Variant::kAttitude || variant == Variant::kAttitude64)
       config.attitude.kind = AttitudeKind::kSim;  // the pipeline's gravity cap
     if (!pipeline.Init(config).ok())
       return;
@@ -115,6 +117,10 @@ Fixture& FixtureFor(Variant variant) {
       static Fixture f(variant);
       return f;
     }
+    case Variant::kAttitude64: {
+      static Fixture f(variant);
+      return f;
+    }
     case Variant::kMinimalGrid64: {
       static Fixture f(variant);
       return f;
@@ -143,7 +149,7 @@ Fixture& FixtureFor(Variant variant) {
 // descriptor with the gravity cap.
 void FrameToState(benchmark::State& state, Variant variant) {
   Fixture& fixture = FixtureFor(variant);
-  const bool attitude = variant == Variant::kAttitude;
+  const bool attitude = variant == Variant::kAttitude || variant == Variant::kAttitude64;
   if (!fixture.ok) {
     state.SkipWithError("fixture failed");
     return;
@@ -211,6 +217,11 @@ void BM_FrameToStateWithAttitude(benchmark::State& state) {
   FrameToState(state, Variant::kAttitude);
 }
 BENCHMARK(BM_FrameToStateWithAttitude)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+void BM_FrameToStateWithAttitude64(benchmark::State& state) {
+  FrameToState(state, Variant::kAttitude64);
+}
+BENCHMARK(BM_FrameToStateWithAttitude64)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 // The default descriptor before 2026-11-26: 64 bands on the minimal 32 x 128 grid.
 void BM_FrameToStateMinimalGrid64(benchmark::State& state) {
