@@ -75,8 +75,10 @@ Config DemoConfig(const char* world, bool quick) {
   c.camera.sim.frames.speed.stops = quick ? 1 : 2;
   c.camera.sim.frames.speed.stop_min_s = 2;
   c.camera.sim.frames.speed.stop_max_s = 3;
-  c.descriptor.bands = quick ? 24 : 64;
-  ResolveDescriptorGrid(&c.descriptor);  // the grid follows the bands
+  if (quick) {
+    c.descriptor.bands = 24;
+    ResolveDescriptorGrid(&c.descriptor);  // the grid follows the bands
+  }
   c.source = "the demo's own settings";
   return c;
 }

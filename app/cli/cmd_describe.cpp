@@ -30,7 +30,7 @@ constexpr char kDescription[] =
     "Prints, per image (PNG, PGM, PPM), the segmentation threshold, the sky fraction and\n"
     "the spherical-harmonic amplitude spectrum a_0..a_(L-1), as the robot describes a\n"
     "frame (firmware::SkyDescriptorOptionsFrom): the descriptor of --config (default: the\n"
-    "built-in one, 64 bands on the oversampled grid, unit_l2), its [segmentation] and,\n"
+    "built-in one, 120 bands on the oversampled grid, unit_l2), its [segmentation] and,\n"
     "when [attitude] kind is not none, the gravity-aligned cap as if level. --bands,\n"
     "--grid and --normalisation replace the configuration's. The paper's descriptor is\n"
     "--bands 120 --grid auto --normalisation none.\n"
@@ -62,7 +62,8 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
          "the firmware configuration whose [descriptor], [segmentation] and [attitude] "
          "describe the images (default: the built-in defaults)",
          &o->config_path);
-  t.Int("--bands", "L", "number of bands (default: [descriptor] bands, 64)", 1, dsp::kMaxShBands,
+  static_assert(firmware::DescriptorConfig{}.bands == 120, "the help states the default bands");
+  t.Int("--bands", "L", "number of bands (default: [descriptor] bands, 120)", 1, dsp::kMaxShBands,
         &o->descriptor.bands);
   AddDescriptorChoices(&t, &o->descriptor.grid, &o->descriptor.normalisation);
   t.Flag("--json", "one JSON object per line: file, threshold, sky_fraction, amplitudes", &o->json);

@@ -148,9 +148,10 @@ void AddOptions(OptionTable* t, EvalOptions* o) {
             });
   t->Number("--fov", "DEG", "sky: override the field of view, degrees", {0, 360, true, false},
             &o->describe.fov_deg);
+  static_assert(firmware::DescriptorConfig{}.bands == 120, "the help states the default bands");
   t->Int("--bands", "N",
          "sky: spherical-harmonic bands on the configuration's grid (default: [descriptor] "
-         "bands, 64)",
+         "bands, 120)",
          1, 512, &o->bands);
   t->Int("--jobs", "N",
          "threads for the descriptors and the batch matcher (default: all "

@@ -50,7 +50,7 @@ constexpr const char* kDescription =
     "             poses, on frames the route filter matches correctly\n"
     "  surf1d     the 1D SURF paper's ROC experiment, turning on the spot in the city\n"
     "             (own options: skyloc experiment surf1d --help)\n"
-    "The sky descriptor is the robot's (firmware::SkyDescriptorOptionsFrom: 64 bands on the\n"
+    "The sky descriptor is the robot's (firmware::SkyDescriptorOptionsFrom: 120 bands on the\n"
     "oversampled grid, unit_l2) unless --bands, --grid or --normalisation say otherwise; the\n"
     "published tables used --bands 120 --grid auto.\n";
 
@@ -75,8 +75,10 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
   t.Text("--out", "DIR", "the folder the results are written to (required)", &o->out);
   t.Int("--width", "W", "image width in pixels (default 320)", 16, 4096, &e.width);
   t.Int("--height", "H", "image height in pixels (default 240)", 16, 4096, &e.height);
-  t.Int("--bands", "N", "SH bands of the sky descriptor (default 64, the robot's; the paper 120)",
-        2, 200, &descriptor.bands);
+  static_assert(firmware::DescriptorConfig{}.bands == 120, "the help states the default bands");
+  t.Int("--bands", "N",
+        "SH bands of the sky descriptor (default 120 on the oversampled grid, the robot's)", 2, 200,
+        &descriptor.bands);
   AddDescriptorChoices(&t, &descriptor.grid, &descriptor.normalisation);
   t.Choice(
       "--route-storage",

@@ -74,8 +74,16 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
   constexpr const char* kGridFix =
       "set [descriptor] grid as taught (\"auto\" was the default before 2026-11-26), or teach "
       "again";
+  if (file.descriptor_kind == want.descriptor_kind && file.bands != want.bands) {
+    // The fix names the route's value: the default changed from 64 to 120 bands on
+    // 2026-11-28, so a route taught before meets a configuration that does not say which.
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with [descriptor] bands = %u but this configuration has %u: "
+                         "set [descriptor] bands = %u or teach again (64 was the default "
+                         "before 2026-11-28)",
+                         file.bands, want.bands, file.bands);
+  }
   const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind, kRerun},
-                          {"[descriptor] bands", file.bands, want.bands, kRerun},
                           {"[descriptor] rings", file.rings, want.rings, kGridFix},
                           {"[descriptor] longitudes", file.longitudes, want.longitudes, kGridFix},
                           {"descriptor size", file.dim, want.dim, kRerun}};

@@ -49,7 +49,7 @@ struct ExperimentOptions {
   // The firmware configuration the sky descriptor is built from, through the firmware's own
   // factory (firmware::SkyDescriptorOptionsFrom): [descriptor] bands, grid and
   // normalisation, [segmentation] and [attitude] cap_taper_deg. The defaults are the
-  // robot's descriptor (64 bands, oversampled grid, unit_l2); the published tables were
+  // robot's descriptor (120 bands, oversampled grid, unit_l2); the published tables were
   // made with 120 bands on the "auto" grid (docs/RESULTS.md gives each table's flags).
   // [attitude] max_tilt_deg is replaced by each experiment's own largest tilt. After
   // changing the bands or the grid, firmware::ResolveDescriptorGrid.

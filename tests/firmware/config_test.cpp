@@ -41,17 +41,18 @@ TEST(Config, EmptyFileGivesDefaults) {
 // why, tests/dsp/sky_descriptor_test.cpp); "auto" is the minimal unaliased one.
 TEST(Config, GridPresetsResolveToTheirRingsAndLongitudes) {
   const Config defaults = DefaultConfig();
-  EXPECT_EQ(defaults.descriptor.bands, 64);
+  EXPECT_EQ(defaults.descriptor.bands, 120);
   EXPECT_EQ(defaults.descriptor.grid, GridPreset::kOversampled);
-  EXPECT_EQ(defaults.descriptor.rings, 48);  // ceil(96 / 2): the minimal grid for 96 bands
-  EXPECT_EQ(defaults.descriptor.longitudes, 256);
+  EXPECT_EQ(defaults.descriptor.rings, 90);  // ceil(180 / 2): the minimal grid for 180 bands
+  EXPECT_EQ(defaults.descriptor.longitudes, 512);
   EXPECT_TRUE(dsp::ShGridResolvesBands({defaults.descriptor.rings, defaults.descriptor.longitudes,
                                         dsp::ShCoverage::kUpperHemisphere},
-                                       96));
-  Result<Config> paper_bands = ParseConfig("[descriptor]\nbands = 120\n", "t.toml");
-  ASSERT_TRUE(paper_bands.ok()) << paper_bands.status().message();
-  EXPECT_EQ(paper_bands->descriptor.rings, 90);
-  EXPECT_EQ(paper_bands->descriptor.longitudes, 512);
+                                       180));
+  // The default before 2026-11-28, one setting away.
+  Result<Config> old_bands = ParseConfig("[descriptor]\nbands = 64\n", "t.toml");
+  ASSERT_TRUE(old_bands.ok()) << old_bands.status().message();
+  EXPECT_EQ(old_bands->descriptor.rings, 48);
+  EXPECT_EQ(old_bands->descriptor.longitudes, 256);
   Result<Config> c = ParseConfig("[descriptor]\nbands = 120\ngrid = \"auto\"\n", "t.toml");
   ASSERT_TRUE(c.ok()) << c.status().message();
   EXPECT_EQ(c->descriptor.rings, 60);

@@ -503,7 +503,7 @@ TEST_F(RouteDbTest, SettingsMismatchNamesTheSetting) {
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(std::string(s.message())
                 .find("taught with [descriptor] bands = 5 but this "
-                      "configuration has 7: run with the configuration"),
+                      "configuration has 7: set [descriptor] bands = 5 or teach again"),
             std::string::npos)
       << s.message();
   // Another grid: says which key sets it, and what the default was before it changed.

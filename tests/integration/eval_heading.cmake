@@ -19,7 +19,7 @@ if(EMULATOR)
   set(jobs --jobs 1)
 endif()
 execute_process(COMMAND ${EMULATOR} ${CMD} eval --reference ${WORK}/ref --query ${WORK}/query
-                --method sky --ds 5 --out ${WORK}/out ${jobs}
+                --method sky --ds 5 --bands 64 --out ${WORK}/out ${jobs}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "skyloc eval failed (${rc}):\n${out}\n${err}")

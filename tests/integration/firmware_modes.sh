@@ -87,7 +87,15 @@ grep -q '"best_index":[0-9]' "$WORK/out" || fail "a route without strips did not
 # 4. settings that differ from the taught ones are refused, naming the setting.
 sed 's/^bands = 24/bands = 16/' "$CONFIG" >"$WORK/other.toml"
 expect_rc 1 "repeat with other bands" -- "${RUN[@]}" repeat --route "$DB" --config "$WORK/other.toml" --frames 5
-expect_err "taught with \\[descriptor\\] bands = 24 but this configuration has 16: run with" "settings mismatch"
+expect_err "taught with \\[descriptor\\] bands = 24 but this configuration has 16: set \\[descriptor\\] bands = 24 or teach again" "settings mismatch"
+# A route taught with the old default (64 bands) is refused by the new default by name, with
+# the setting that repeats it; with that setting it loads.
+sed 's/^bands = 24/bands = 64/' "$CONFIG" >"$WORK/bands64.toml"
+sed '/^bands = 24/d' "$CONFIG" >"$WORK/default_bands.toml"
+expect_rc 0 "teach with the old default bands" -- "${RUN[@]}" teach --route "$WORK/bands64.db" --config "$WORK/bands64.toml" --frames 5
+expect_rc 1 "repeat a 64-band route with the default bands" -- "${RUN[@]}" repeat --route "$WORK/bands64.db" --config "$WORK/default_bands.toml" --frames 5
+expect_err "route database $WORK/bands64.db: taught with \\[descriptor\\] bands = 64 but this configuration has 120: set \\[descriptor\\] bands = 64 or teach again" "old default bands refused"
+expect_rc 0 "repeat a 64-band route with bands = 64" -- "${RUN[@]}" repeat --route "$WORK/bands64.db" --config "$WORK/bands64.toml" --frames 5
 # the default lens written out to a camera file is the same lens; another one is named
 write_lens() {  # write_lens FILE FOV CENTRE_X
   printf '[image]\nwidth = 96\nheight = 96\n[lens]\nmodel = "equidistant"\nfov_deg = %s\ncentre = [%s, 47.5]\nradius_px = 48.0\n' "$2" "$3" >"$1"

@@ -2,7 +2,7 @@
 // firmware::SkyDescriptorOptionsFrom: the robot's pipeline, `skyloc eval`, `skyloc describe`
 // and the experiments. Here the same simulated UV frames go through all four and must give
 // the same float bits, for the robot's default descriptor and for one that changes every
-// setting the factory reads (a fixed segmentation threshold, 120 bands on the "auto" grid,
+// setting the factory reads (a fixed segmentation threshold, 64 bands on the "auto" grid,
 // no normalisation, the gravity-aligned cap from [attitude]). A path that dropped or
 // rebuilt any of those settings would give other bits.
 #include <gtest/gtest.h>
@@ -61,7 +61,7 @@ std::vector<Case> Cases(const std::string& camera_file) {
   firmware::Config changed = robot;
   changed.segmentation.method = firmware::SegmentationMethod::kFixed;
   changed.segmentation.threshold = 90;
-  changed.descriptor.bands = 120;
+  changed.descriptor.bands = 64;  // not the default's 120
   changed.descriptor.grid = firmware::GridPreset::kAuto;
   changed.descriptor.normalisation = dsp::AmplitudeNormalisation::kNone;
   firmware::ResolveDescriptorGrid(&changed.descriptor);
@@ -170,8 +170,11 @@ TEST(SameDescriptor, TheSettingsChangeTheBits) {
   pose.z_m = 1.0;
   pose.pitch_deg = 12;
   ASSERT_TRUE(renderer.Render(pose, noon, sim::Spectrum::kUv, 0, view).ok());
-  // Each setting alone, on the robot's descriptor.
-  const firmware::Config robot = cases[0].config;
+  // Each setting alone, on the robot's descriptor with 64 bands: every setting changes the
+  // bits at any band count, and fewer bands keep the five descriptors quick under qemu-user.
+  firmware::Config robot = cases[0].config;
+  robot.descriptor.bands = 64;
+  firmware::ResolveDescriptorGrid(&robot.descriptor);
   std::vector<firmware::Config> variants(4, robot);
   variants[0].segmentation.method = firmware::SegmentationMethod::kFixed;
   variants[0].segmentation.threshold = 90;
