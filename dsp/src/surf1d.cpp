@@ -248,6 +248,7 @@ Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& 
     side.count = 0;
   }
   has_stored_ = false;
+  distances_.assign(cap, 0.0f);
   pair_stored_.assign(cap, 0);
   pair_test_.assign(cap, 0);
   pair_distance_.assign(cap, 0.0f);
@@ -271,9 +272,10 @@ Surf1dError LandmarkMatcher::SetStored(std::span<const Surf1dFeature> stored) {
   }
   for (const Surf1dFeature& f : stored) {
     StoredSide& side = stored_[static_cast<std::size_t>(SideOf(f.laplacian_sign))];
-    std::copy(f.descriptor.begin(), f.descriptor.end(),
-              side.descriptors.begin() + side.count * kSurf1dDescriptorSize);
-    side.positions[static_cast<std::size_t>(side.count++)] = f.position;
+    const auto s = static_cast<std::size_t>(side.count++);
+    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k)
+      side.descriptors[k * static_cast<std::size_t>(capacity_) + s] = f.descriptor[k];
+    side.positions[s] = f.position;
   }
   has_stored_ = true;
   return Surf1dError::kOk;
@@ -308,44 +310,53 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   }
 
   // Nearest neighbour with the ratio test among the stored features of the same Laplacian
-  // sign. Squared distances are summed in the descriptor's order; a partial sum already at or
-  // above `second` can only grow (every term is >= 0, and float addition of a non-negative
-  // term never decreases a sum), so that candidate could change neither best nor second and
-  // is left early: the same answer as the whole sum.
-  constexpr int kDims = kSurf1dDescriptorSize;
-  static_assert(kDims == 6, "the distance below is unrolled for 6 dimensions");
+  // sign. First every squared distance, summed in the descriptor's order for each feature
+  // (the loop runs across features, so it vectorises lane by lane without reordering any
+  // sum), then one scan for the nearest two, whose branches are rarely taken: cheaper than
+  // leaving each candidate early, whose data-dependent branches the predictor cannot learn.
+  static_assert(kSurf1dDescriptorSize == 6, "the distance below is unrolled for 6 dimensions");
+  const auto cap = static_cast<std::size_t>(capacity_);
   int matches = 0;
   for (const Surf1dFeature& t : test) {
     const StoredSide& side = stored_[static_cast<std::size_t>(SideOf(t.laplacian_sign))];
     const float q0 = t.descriptor[0], q1 = t.descriptor[1], q2 = t.descriptor[2];
     const float q3 = t.descriptor[3], q4 = t.descriptor[4], q5 = t.descriptor[5];
+    const float* d0 = side.descriptors.data();
+    const float* d1 = d0 + cap;
+    const float* d2 = d1 + cap;
+    const float* d3 = d2 + cap;
+    const float* d4 = d3 + cap;
+    const float* d5 = d4 + cap;
+    float* distance = distances_.data();
+    const int candidates = side.count;
+    for (int s = 0; s < candidates; ++s) {
+      float e = d0[s] - q0;
+      float sum = e * e;
+      e = d1[s] - q1;
+      sum += e * e;
+      e = d2[s] - q2;
+      sum += e * e;
+      e = d3[s] - q3;
+      sum += e * e;
+      e = d4[s] - q4;
+      sum += e * e;
+      e = d5[s] - q5;
+      sum += e * e;
+      distance[s] = sum;
+    }
     float best = std::numeric_limits<float>::infinity();
     float second = best;
     int best_index = 0;
-    const float* d = side.descriptors.data();
-    for (int s = 0; s < side.count; ++s, d += kDims) {
-      const float e0 = d[0] - q0;
-      const float e1 = d[1] - q1;
-      float sum = e0 * e0;
-      sum += e1 * e1;
-      if (!(sum < second))
-        continue;
-      const float e2 = d[2] - q2;
-      const float e3 = d[3] - q3;
-      sum += e2 * e2;
-      sum += e3 * e3;
-      if (!(sum < second))
-        continue;
-      const float e4 = d[4] - q4;
-      const float e5 = d[5] - q5;
-      sum += e4 * e4;
-      sum += e5 * e5;
-      if (sum < best) {
-        second = best;
-        best = sum;
-        best_index = s;
-      } else if (sum < second) {
-        second = sum;
+    for (int s = 0; s < candidates; ++s) {
+      const float d = distance[s];
+      if (d < second) {  // best <= second, so this is the only way in
+        if (d < best) {
+          second = best;
+          best = d;
+          best_index = s;
+        } else {
+          second = d;
+        }
       }
     }
     if (!std::isfinite(second) || !(best < options_.ratio * options_.ratio * second))

@@ -172,7 +172,9 @@ class LandmarkMatcher {
  private:
   // The held stored features of one Laplacian sign, in the order they were given.
   struct StoredSide {
-    std::vector<float> descriptors;       // count x kSurf1dDescriptorSize, one after another
+    // Dimension-major: component k of feature s at k * capacity + s, so the distances to
+    // consecutive features are computed lane by lane (each feature's sum in its own order).
+    std::vector<float> descriptors;
     std::vector<std::int32_t> positions;  // columns
     int count = 0;
   };
@@ -184,6 +186,7 @@ class LandmarkMatcher {
   LandmarkMatchOptions options_;
   int capacity_ = 0;
   std::array<StoredSide, 2> stored_;  // [0]: laplacian_sign +1, [1]: -1
+  std::vector<float> distances_;      // squared distances of one test feature to a side
   bool has_stored_ = false;
   // The pairs passing the ratio test: positions in columns, descriptor distance.
   std::vector<std::int32_t> pair_stored_;
