@@ -5,7 +5,7 @@
 //       estimate; every column counts, so it needs no features;
 //   (a) 1D SURF features + nearest neighbours + RANSAC (surf1d.h): the second estimate,
 //       from the landmarks alone, run only when (b) is uncertain (below), where it can
-//       change the answer: it costs four times (b).
+//       change the answer: it costs about three times (b).
 // Both give how far the query strip's content is turned from the stored one towards
 // increasing azimuth; the robot turned the other way, so the heading is its negative:
 //
