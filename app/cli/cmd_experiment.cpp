@@ -399,18 +399,32 @@ int RunHeading(const Options& o, const std::string& command) {
       o.experiment.seqslam.sequence_length, o.experiment.tolerance_frames, strip.n_azimuth,
       strip.band_rows, strip.elevation_min_deg, strip.elevation_max_deg);
   md += CommonNotes(o.experiment);
+  // Every estimate in full precision (%.17g round-trips a double): two builds that give the
+  // same headings give the same file. Empty cells: that way gave no heading.
+  std::string frames_csv =
+      "world,query_frame,route_frame,uncertain,correlation_deg,surf_deg,surf_inliers\n";
+  for (const tools::HeadingRow& r : rows) {
+    for (const tools::HeadingRow::Frame& f : r.frames) {
+      frames_csv += Format("%s,%d,%d,%d,", sim::WorldKindName(r.world), f.query, f.route,
+                           f.uncertain ? 1 : 0);
+      frames_csv += f.has_correlation ? Format("%.17g", f.correlation_deg) : std::string();
+      frames_csv += f.has_surf ? Format(",%.17g,%d\n", f.surf_deg, f.surf_inliers) : ",,\n";
+    }
+  }
   if (::mkdir(o.out.c_str(), 0755) != 0 && errno != EEXIST) {
     std::fprintf(stderr, "skyloc experiment heading: cannot create '%s': %s\n", o.out.c_str(),
                  std::strerror(errno));
     return kExitFailure;
   }
-  for (const auto& [name, text] : {std::pair{"/results.md", &md}, {"/metrics.json", &json}}) {
+  for (const auto& [name, text] :
+       {std::pair{"/results.md", &md}, {"/metrics.json", &json}, {"/frames.csv", &frames_csv}}) {
     if (Status s = WriteText(o.out + name, *text); !s.ok()) {
       return Failed("experiment heading", s);
     }
   }
   std::fputs(md.c_str(), stdout);
-  std::printf("skyloc experiment heading: wrote %s/: results.md, metrics.json\n", o.out.c_str());
+  std::printf("skyloc experiment heading: wrote %s/: results.md, metrics.json, frames.csv\n",
+              o.out.c_str());
   return kExitOk;
 }
 

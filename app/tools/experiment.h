@@ -205,6 +205,19 @@ struct HeadingRow {
   dsp::HeadingErrorSummary correlation_level, correlation_tilted;
   // Signed errors (estimate - truth, degrees) of the estimated frames, for pooling worlds.
   std::vector<double> correlation_errors_deg, surf_errors_deg, answer_errors_deg;
+  // What the estimator said on each correctly matched query frame, in query order: the
+  // per-frame record (frames.csv) that shows two builds give the same answers.
+  struct Frame {
+    int query = 0;  // query frame index
+    int route = 0;  // matched reference frame index
+    bool uncertain = false;
+    bool has_correlation = false;
+    double correlation_deg = 0;
+    bool has_surf = false;
+    double surf_deg = 0;
+    int surf_inliers = 0;
+  };
+  std::vector<Frame> frames;
 };
 
 // (b)'s error above which a frame counts as wrong in HeadingRow.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 
 #include "skyloc/dsp/strip_alignment.h"
 
@@ -50,7 +51,9 @@ HeadingError HeadingEstimator::Init(int columns, const HeadingOptions& options) 
       return HeadingError::kBadOptions;
     stored_features_.assign(static_cast<std::size_t>(options.max_features), {});
     test_features_.assign(static_cast<std::size_t>(options.max_features), {});
+    held_strip_.assign(static_cast<std::size_t>(columns), 0.0f);
   }
+  holds_stored_ = false;
   correlation_.assign(static_cast<std::size_t>(columns), 0.0);
   options_ = options;
   columns_ = columns;
@@ -79,15 +82,22 @@ HeadingError HeadingEstimator::Estimate(std::span<const float> stored, std::span
   if (!options_.surf || !(out->uncertain || options_.surf_every_frame))
     return HeadingError::kOk;
   out->surf_ran = true;
-  int stored_count = 0, test_count = 0;
+  if (!holds_stored_ || std::memcmp(held_strip_.data(), stored.data(), n * sizeof(float)) != 0) {
+    int stored_count = 0;
+    holds_stored_ =
+        surf_.Detect(stored, stored_features_, &stored_count) == Surf1dError::kOk &&
+        matcher_.SetStored(std::span<const Surf1dFeature>(stored_features_)
+                               .first(static_cast<std::size_t>(stored_count))) == Surf1dError::kOk;
+    if (!holds_stored_)
+      return HeadingError::kOk;
+    std::copy(stored.begin(), stored.end(), held_strip_.begin());
+  }
+  int test_count = 0;
   LandmarkMatch match;
-  if (surf_.Detect(stored, stored_features_, &stored_count) == Surf1dError::kOk &&
-      surf_.Detect(test, test_features_, &test_count) == Surf1dError::kOk &&
-      matcher_.Match(std::span<const Surf1dFeature>(stored_features_)
-                         .first(static_cast<std::size_t>(stored_count)),
-                     std::span<const Surf1dFeature>(test_features_)
-                         .first(static_cast<std::size_t>(test_count)),
-                     columns_, &match) == Surf1dError::kOk &&
+  if (surf_.Detect(test, test_features_, &test_count) == Surf1dError::kOk &&
+      matcher_.MatchStored(std::span<const Surf1dFeature>(test_features_)
+                               .first(static_cast<std::size_t>(test_count)),
+                           columns_, &match) == Surf1dError::kOk &&
       match.model_found && match.inliers >= options_.min_surf_inliers) {
     out->has_surf = true;
     out->surf_deg = WrapDegrees(-match.heading_offset_deg);

@@ -37,14 +37,19 @@ std::uint64_t NextRandom(std::uint64_t* state) {
   return z ^ (z >> 31);
 }
 
-float SquaredDistance(const Surf1dFeature& a, const Surf1dFeature& b) {
-  float sum = 0.0f;
-  for (int i = 0; i < kSurf1dDescriptorSize; ++i) {
-    const float d =
-        a.descriptor[static_cast<std::size_t>(i)] - b.descriptor[static_cast<std::size_t>(i)];
-    sum += d * d;
-  }
-  return sum;
+// Fold for whole columns: the same values as Fold on their doubles (for integers, x > n / 2.0
+// exactly when x > n / 2 in integer division, and x < -n / 2.0 when x < -(n / 2)), in integer
+// instructions.
+int FoldColumns(int x, int n, int half) {
+  while (x > half)
+    x -= n;
+  while (x < -half)
+    x += n;
+  return x;
+}
+
+int SideOf(std::int8_t laplacian_sign) {
+  return laplacian_sign > 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -64,7 +69,11 @@ const char* Surf1dErrorMessage(Surf1dError error) {
     case Surf1dError::kSizeMismatch:
       return "the strip is not the length 1D SURF was initialised for";
     case Surf1dError::kTooManyFeatures:
-      return "more test features than the matcher was sized for: raise its max_features";
+      return "more stored or test features than the matcher was sized for: raise its "
+             "max_features";
+    case Surf1dError::kBadFeature:
+      return "a 1D SURF feature's Laplacian sign is not +1 or -1: match features that "
+             "Surf1d::Detect found";
   }
   return "unknown 1D SURF error";
 }
@@ -233,48 +242,130 @@ Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& 
   options_ = options;
   capacity_ = max_features;
   const auto cap = static_cast<std::size_t>(max_features);
-  pairs_.assign(cap, Pair{0.0, 0.0, 0.0f});
-  inlier_.assign(cap, 0);
+  for (StoredSide& side : stored_) {
+    side.descriptors.assign(cap * kSurf1dDescriptorSize, 0.0f);
+    side.positions.assign(cap, 0);
+    side.count = 0;
+  }
+  has_stored_ = false;
+  distances_.assign(cap, 0.0f);
+  pair_stored_.assign(cap, 0);
+  pair_test_.assign(cap, 0);
+  pair_distance_.assign(cap, 0.0f);
   best_inlier_.assign(cap, 0);
+  last_pairs_ = 0;
+  last_model_ = false;
+  return Surf1dError::kOk;
+}
+
+Surf1dError LandmarkMatcher::SetStored(std::span<const Surf1dFeature> stored) {
+  has_stored_ = false;
+  for (StoredSide& side : stored_)
+    side.count = 0;
+  if (capacity_ == 0)
+    return Surf1dError::kNotInitialised;
+  if (stored.size() > static_cast<std::size_t>(capacity_))
+    return Surf1dError::kTooManyFeatures;
+  for (const Surf1dFeature& f : stored) {
+    if (f.laplacian_sign != 1 && f.laplacian_sign != -1)
+      return Surf1dError::kBadFeature;
+  }
+  for (const Surf1dFeature& f : stored) {
+    StoredSide& side = stored_[static_cast<std::size_t>(SideOf(f.laplacian_sign))];
+    const auto s = static_cast<std::size_t>(side.count++);
+    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k)
+      side.descriptors[k * static_cast<std::size_t>(capacity_) + s] = f.descriptor[k];
+    side.positions[s] = f.position;
+  }
+  has_stored_ = true;
   return Surf1dError::kOk;
 }
 
 Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
                                    std::span<const Surf1dFeature> test, int n,
                                    LandmarkMatch* result) {
+  if (const Surf1dError e = SetStored(stored); e != Surf1dError::kOk) {
+    *result = LandmarkMatch{};
+    last_pairs_ = 0;
+    last_model_ = false;
+    return e;
+  }
+  return MatchStored(test, n, result);
+}
+
+Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, int n,
+                                         LandmarkMatch* result) {
   *result = LandmarkMatch{};
   last_pairs_ = 0;
   last_model_ = false;
-  if (capacity_ == 0)
+  if (capacity_ == 0 || !has_stored_)
     return Surf1dError::kNotInitialised;
   if (n < 1)
     return Surf1dError::kSizeMismatch;
   if (test.size() > static_cast<std::size_t>(capacity_))
     return Surf1dError::kTooManyFeatures;
+  for (const Surf1dFeature& f : test) {
+    if (f.laplacian_sign != 1 && f.laplacian_sign != -1)
+      return Surf1dError::kBadFeature;
+  }
 
-  // Nearest neighbour with the ratio test; only features of the same Laplacian sign compete.
+  // Nearest neighbour with the ratio test among the stored features of the same Laplacian
+  // sign. First every squared distance, summed in the descriptor's order for each feature
+  // (the loop runs across features, so it vectorises lane by lane without reordering any
+  // sum), then one scan for the nearest two, whose branches are rarely taken: cheaper than
+  // leaving each candidate early, whose data-dependent branches the predictor cannot learn.
+  static_assert(kSurf1dDescriptorSize == 6, "the distance below is unrolled for 6 dimensions");
+  const auto cap = static_cast<std::size_t>(capacity_);
   int matches = 0;
-  for (std::size_t t = 0; t < test.size(); ++t) {
+  for (const Surf1dFeature& t : test) {
+    const StoredSide& side = stored_[static_cast<std::size_t>(SideOf(t.laplacian_sign))];
+    const float q0 = t.descriptor[0], q1 = t.descriptor[1], q2 = t.descriptor[2];
+    const float q3 = t.descriptor[3], q4 = t.descriptor[4], q5 = t.descriptor[5];
+    const float* d0 = side.descriptors.data();
+    const float* d1 = d0 + cap;
+    const float* d2 = d1 + cap;
+    const float* d3 = d2 + cap;
+    const float* d4 = d3 + cap;
+    const float* d5 = d4 + cap;
+    float* distance = distances_.data();
+    const int candidates = side.count;
+    for (int s = 0; s < candidates; ++s) {
+      float e = d0[s] - q0;
+      float sum = e * e;
+      e = d1[s] - q1;
+      sum += e * e;
+      e = d2[s] - q2;
+      sum += e * e;
+      e = d3[s] - q3;
+      sum += e * e;
+      e = d4[s] - q4;
+      sum += e * e;
+      e = d5[s] - q5;
+      sum += e * e;
+      distance[s] = sum;
+    }
     float best = std::numeric_limits<float>::infinity();
     float second = best;
-    std::size_t best_index = 0;
-    for (std::size_t s = 0; s < stored.size(); ++s) {
-      if (stored[s].laplacian_sign != test[t].laplacian_sign)
-        continue;
-      const float d = SquaredDistance(stored[s], test[t]);  // squared until the end
-      if (d < best) {
-        second = best;
-        best = d;
-        best_index = s;
-      } else if (d < second) {
-        second = d;
+    int best_index = 0;
+    for (int s = 0; s < candidates; ++s) {
+      const float d = distance[s];
+      if (d < second) {  // best <= second, so this is the only way in
+        if (d < best) {
+          second = best;
+          best = d;
+          best_index = s;
+        } else {
+          second = d;
+        }
       }
     }
     if (!std::isfinite(second) || !(best < options_.ratio * options_.ratio * second))
       continue;
     best = std::sqrt(best);
-    pairs_[static_cast<std::size_t>(matches++)] = {static_cast<double>(stored[best_index].position),
-                                                   static_cast<double>(test[t].position), best};
+    const auto m = static_cast<std::size_t>(matches++);
+    pair_stored_[m] = side.positions[static_cast<std::size_t>(best_index)];
+    pair_test_[m] = t.position;
+    pair_distance_[m] = best;
     result->score += 1.0 / static_cast<double>(std::max(best, options_.min_distance));
   }
   result->matches = matches;
@@ -282,54 +373,68 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
   if (matches < 2)
     return Surf1dError::kOk;
 
+  // RANSAC. Positions are whole columns, so their differences are folded in integers (the
+  // values Fold gives on their doubles); only the line's prediction is a double.
   const double nd = n;
   const double half = 0.5 * nd;
-  const auto xs = [&](int m) { return pairs_[static_cast<std::size_t>(m)].x_stored; };
-  const auto xt = [&](int m) { return pairs_[static_cast<std::size_t>(m)].x_test; };
+  const int half_columns = n / 2;
+  const std::int32_t* xs = pair_stored_.data();
+  const std::int32_t* xt = pair_test_.data();
+  const auto threshold = static_cast<double>(options_.inlier_threshold);
+  const auto max_scale = static_cast<double>(options_.max_scale);
   const auto count = static_cast<std::uint64_t>(matches);
   std::uint64_t state = options_.seed;
   int best_inliers = 0;
   double best_residual = std::numeric_limits<double>::infinity();
   double best_scale = 1.0;
-  double best_displacement = 0.0;
+  int best_anchor = -1;
   for (int it = 0; it < options_.ransac_iterations; ++it) {
     const auto i = static_cast<int>(NextRandom(&state) % count);
     auto j = static_cast<int>(NextRandom(&state) % (count - 1));
     if (j >= i)
       ++j;
     // Differences measured the short way round, anchored at match i.
-    const double ds = Fold(xs(j) - xs(i), nd, half);
-    const double dt = Fold(xt(j) - xt(i), nd, half);
-    if (ds == 0.0)
+    const int ds = FoldColumns(xs[j] - xs[i], n, half_columns);
+    const int dt = FoldColumns(xt[j] - xt[i], n, half_columns);
+    if (ds == 0)
       continue;
-    const double scale = dt / ds;
-    const auto max_scale = static_cast<double>(options_.max_scale);
+    const double scale = static_cast<double>(dt) / static_cast<double>(ds);
     // A mirrored horizon (b_s < 0) is not a view of the same place.
     if (!(scale >= 1.0 / max_scale && scale <= max_scale)) {
       continue;
     }
-    int inliers = 0;
+    // A line that has already missed more pairs than the best line missed in all cannot
+    // win (it needs at least as many inliers), so its count stops there.
+    const int max_outliers = matches - best_inliers;
+    const int xsi = xs[i], xti = xt[i];
+    int inliers = 0, outliers = 0;
     double residual_sum = 0.0;
     for (int m = 0; m < matches; ++m) {
-      const double predicted = scale * Fold(xs(m) - xs(i), nd, half);
-      const double residual = std::abs(Fold(Fold(xt(m) - xt(i), nd, half) - predicted, nd, half));
-      const bool in = residual <= static_cast<double>(options_.inlier_threshold);
-      inlier_[static_cast<std::size_t>(m)] = in ? 1 : 0;
-      if (in) {
+      const double predicted = scale * FoldColumns(xs[m] - xsi, n, half_columns);
+      const double residual =
+          std::abs(Fold(FoldColumns(xt[m] - xti, n, half_columns) - predicted, nd, half));
+      if (residual <= threshold) {
         ++inliers;
         residual_sum += residual;
+      } else if (++outliers > max_outliers) {
+        break;
       }
     }
+    if (outliers > max_outliers)
+      continue;
     if (inliers > best_inliers || (inliers == best_inliers && residual_sum < best_residual)) {
       best_inliers = inliers;
       best_residual = residual_sum;
       best_scale = scale;
-      best_displacement = Wrap(xt(i) - scale * xs(i), nd);
-      std::copy(inlier_.begin(), inlier_.begin() + matches, best_inlier_.begin());
+      best_anchor = i;
+      // Every pair on the line with no residual: no later line can do better.
+      if (inliers == matches && residual_sum == 0.0)
+        break;
     }
   }
   if (best_inliers < 2)
     return Surf1dError::kOk;
+  MarkInliers(best_anchor, best_scale, n);
   last_model_ = true;
 
   // Circular mean of the inliers' displacement, unwrapped around the first inlier's.
@@ -339,7 +444,7 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
   for (int m = 0; m < matches; ++m) {
     if (!best_inlier_[static_cast<std::size_t>(m)])
       continue;
-    const double d = Wrap(xt(m) - xs(m), nd);
+    const double d = Wrap(static_cast<double>(xt[m]) - static_cast<double>(xs[m]), nd);
     if (!have_reference) {
       reference = d;
       have_reference = true;
@@ -347,13 +452,14 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
     sum += reference + Wrap(d - reference, nd);
     result->ransac_score +=
         1.0 / static_cast<double>(
-                  std::max(pairs_[static_cast<std::size_t>(m)].distance, options_.min_distance));
+                  std::max(pair_distance_[static_cast<std::size_t>(m)], options_.min_distance));
   }
   const double mean = Wrap(sum / best_inliers, nd);
   result->model_found = true;
   result->inliers = best_inliers;
   result->scale = best_scale;
-  result->displacement = best_displacement;
+  result->displacement = Wrap(
+      static_cast<double>(xt[best_anchor]) - best_scale * static_cast<double>(xs[best_anchor]), nd);
   double degrees = mean * 360.0 / nd;
   if (degrees >= 180.0)
     degrees -= 360.0;
@@ -361,12 +467,27 @@ Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
   return Surf1dError::kOk;
 }
 
+void LandmarkMatcher::MarkInliers(int anchor, double scale, int n) {
+  const double nd = n;
+  const double half = 0.5 * nd;
+  const int half_columns = n / 2;
+  const auto threshold = static_cast<double>(options_.inlier_threshold);
+  const int xsi = pair_stored_[static_cast<std::size_t>(anchor)];
+  const int xti = pair_test_[static_cast<std::size_t>(anchor)];
+  for (int m = 0; m < last_pairs_; ++m) {
+    const auto k = static_cast<std::size_t>(m);
+    const double predicted = scale * FoldColumns(pair_stored_[k] - xsi, n, half_columns);
+    const double residual =
+        std::abs(Fold(FoldColumns(pair_test_[k] - xti, n, half_columns) - predicted, nd, half));
+    best_inlier_[k] = residual <= threshold ? 1 : 0;
+  }
+}
+
 LandmarkMatcher::MatchedPair LandmarkMatcher::last_pair(int i) const {
   if (i < 0 || i >= last_pairs_)
     return {};
-  const Pair& p = pairs_[static_cast<std::size_t>(i)];
-  return {static_cast<int>(p.x_stored), static_cast<int>(p.x_test), p.distance,
-          last_model_ && best_inlier_[static_cast<std::size_t>(i)] != 0};
+  const auto k = static_cast<std::size_t>(i);
+  return {pair_stored_[k], pair_test_[k], pair_distance_[k], last_model_ && best_inlier_[k] != 0};
 }
 
 }  // namespace skyloc::dsp

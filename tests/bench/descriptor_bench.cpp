@@ -221,40 +221,56 @@ std::vector<std::uint8_t> SkylineFrame(const Lens& lens, double turn_deg) {
 // What the firmware does per matched frame (app::Pipeline::EstimateHeading): the query's
 // strip from the frame, the route frame's bytes to floats, then dsp::HeadingEstimator with
 // (b) the cross-correlation alone, or (b) + (a) 1D SURF + RANSAC ([heading] surf = true,
-// the default); (a)'s cost is the difference.
-void BM_Heading(benchmark::State& state, bool surf) {
+// the default: (a) only where (b) is uncertain, which this pure turn is not). The
+// surf_every_frame rows run (a) on every frame, as on a frame whose correlation is
+// uncertain: against the same route frame each time (its features held), or against two
+// route frames in turn (the stored strip's features found again every frame).
+enum class HeadingRun { kCorrelation, kDefault, kSurfSameRouteFrame, kSurfNewRouteFrame };
+
+void BM_Heading(benchmark::State& state, HeadingRun run) {
   const Lens lens = MakeLens();
-  const std::vector<std::uint8_t> taught = SkylineFrame(lens, 0.0);
   const std::vector<std::uint8_t> query = SkylineFrame(lens, 25.0);
   HorizonStrip horizon;
   if (horizon.Init(lens, HorizonStripOptions{}) != HorizonStripError::kOk)
     std::abort();
   const auto n = static_cast<std::size_t>(horizon.n_azimuth());
   std::vector<float> strip(n), stored(n);
-  std::vector<std::uint8_t> route_bytes(n);
-  horizon.Extract(View(taught), strip);
-  for (std::size_t j = 0; j < n; ++j)
-    route_bytes[j] = static_cast<std::uint8_t>(std::lround(strip[j]));
+  std::vector<std::vector<std::uint8_t>> route(2, std::vector<std::uint8_t>(n));
+  for (std::size_t r = 0; r < route.size(); ++r) {
+    horizon.Extract(View(SkylineFrame(lens, 10.0 * static_cast<double>(r))), strip);
+    for (std::size_t j = 0; j < n; ++j)
+      route[r][j] = static_cast<std::uint8_t>(std::lround(strip[j]));
+  }
   HeadingOptions options;
-  options.surf = surf;
+  options.surf = run != HeadingRun::kCorrelation;
+  options.surf_every_frame =
+      run == HeadingRun::kSurfSameRouteFrame || run == HeadingRun::kSurfNewRouteFrame;
   HeadingEstimator estimator;
   if (estimator.Init(horizon.n_azimuth(), options) != HeadingError::kOk)
     std::abort();
   HeadingEstimate estimate;
+  std::size_t frame = 0;
   for (auto _ : state) {
     horizon.Extract(View(query), strip);
+    const std::vector<std::uint8_t>& taught =
+        route[run == HeadingRun::kSurfNewRouteFrame ? frame++ % route.size() : 0];
     for (std::size_t j = 0; j < n; ++j)
-      stored[j] = route_bytes[j];
+      stored[j] = taught[j];
     estimator.Estimate(stored, strip, &estimate);
     benchmark::DoNotOptimize(estimate);
   }
   state.counters["heading_deg"] = estimate.correlation_deg;
-  if (surf) {
+  if (options.surf) {
     state.counters["surf_deg"] = estimate.surf_deg;
     state.counters["inliers"] = estimate.surf_inliers;
   }
 }
-BENCHMARK_CAPTURE(BM_Heading, correlation, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_Heading, correlation_and_surf, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, correlation, HeadingRun::kCorrelation)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, correlation_and_surf, HeadingRun::kDefault)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, surf_every_frame, HeadingRun::kSurfSameRouteFrame)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Heading, surf_every_frame_new_route_frame, HeadingRun::kSurfNewRouteFrame)
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

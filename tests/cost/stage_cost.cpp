@@ -16,6 +16,9 @@
 //   strip         the horizon strip for the heading ([heading] strip_columns)
 //   heading       dsp::HeadingEstimator on two strips ([heading] defaults: correlation + SURF)
 //   correlation   the same with surf = false (the cross-correlation only)
+//   heading_surf  the same with 1D SURF on every pair (surf_every_frame): the cost of a frame
+//                 whose correlation is uncertain; the stored and the query strip swap every
+//                 repetition, so the stored strip is never the previous one
 //   filter        one dsp::RouteFilter step against ROUTE_FRAMES rows (the default matcher)
 //   frame         firmware::Pipeline::Localise: descriptor + strip + filter + state + heading
 //   frame_noheading  the same with [heading] off (no strips in the route, no heading)
@@ -166,11 +169,14 @@ int main(int argc, char** argv) {
   }
   if (!with_heading)
     config.heading.strip.n_azimuth = 0;
-  const bool heading_stage = stage == "heading" || stage == "correlation" || stage == "strip";
+  const bool heading_stage =
+      stage == "heading" || stage == "correlation" || stage == "strip" || stage == "heading_surf";
   if (stage == "descriptor" || stage == "segmentation")
     config.heading.strip.n_azimuth = 0;  // Describe() without the strip
   if (stage == "correlation")
     config.heading.estimate.surf = false;
+  if (stage == "heading_surf")
+    config.heading.estimate.surf_every_frame = true;
   double checksum = 0;
   if (stage == "render") {
     std::vector<std::vector<std::uint8_t>> images;
@@ -243,9 +249,11 @@ int main(int argc, char** argv) {
     if (heading.Init(config.heading.strip.n_azimuth, config.heading.estimate) !=
         dsp::HeadingError::kOk)
       return Fail("heading Init");
+    const bool swap = stage == "heading_surf";
     for (long r = 0; r < repetitions; ++r) {
+      const std::size_t stored = swap ? static_cast<std::size_t>(r % 2) : 0;
       dsp::HeadingEstimate estimate;
-      (void)heading.Estimate(strips[0], strips[1], &estimate);
+      (void)heading.Estimate(strips[stored], strips[1 - stored], &estimate);
       checksum += estimate.correlation_deg + estimate.surf_inliers;
     }
   } else if (stage == "frame") {

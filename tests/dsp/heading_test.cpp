@@ -151,6 +151,46 @@ TEST(Heading, SurfRunsOnlyWhereTheCorrelationIsUncertain) {
   EXPECT_EQ(e.heading_deg, e.correlation_deg);
 }
 
+// The estimator keeps the stored strip's features while the same strip comes again; any
+// change to it, even in the same buffer and in one column, is a new strip. Every answer
+// equals a fresh estimator's on the same pair (the reference: nothing held).
+TEST(Heading, HeldStoredFeaturesGiveAFreshEstimatorsAnswers) {
+  constexpr int kN = 360;
+  HeadingOptions every_frame;
+  every_frame.surf_every_frame = true;
+  every_frame.min_surf_inliers = 2;
+  HeadingEstimator held;
+  ASSERT_EQ(held.Init(kN, every_frame), HeadingError::kOk);
+  std::vector<float> stored = Skyline(kN, 21);
+  const std::vector<float> other = Skyline(kN, 22);
+  int compared = 0, with_surf = 0;
+  const auto expect_fresh = [&](const std::vector<float>& a, const std::vector<float>& b) {
+    HeadingEstimator fresh;
+    ASSERT_EQ(fresh.Init(kN, every_frame), HeadingError::kOk);
+    HeadingEstimate got, want;
+    ASSERT_EQ(held.Estimate(a, b, &got), HeadingError::kOk);
+    ASSERT_EQ(fresh.Estimate(a, b, &want), HeadingError::kOk);
+    EXPECT_EQ(got.has_surf, want.has_surf) << compared;
+    EXPECT_EQ(got.surf_deg, want.surf_deg) << compared;
+    EXPECT_EQ(got.surf_inliers, want.surf_inliers) << compared;
+    EXPECT_EQ(got.heading_deg, want.heading_deg) << compared;
+    ++compared;
+    with_surf += want.has_surf ? 1 : 0;
+  };
+  expect_fresh(stored, Shifted(stored, 30));
+  expect_fresh(stored, Shifted(stored, -50));  // same stored strip: features held
+  expect_fresh(other, Shifted(other, 10));     // another route frame
+  expect_fresh(stored, Shifted(stored, 75));   // back to the first
+  // The held strip changed in place: its features must be found again.
+  const std::vector<float> query = Shifted(stored, 75);
+  for (int j = 100; j < 160; ++j)
+    stored[static_cast<std::size_t>(j)] = 255.0f - stored[static_cast<std::size_t>(j)];
+  expect_fresh(stored, query);
+  stored[200] += 1.0f;
+  expect_fresh(stored, query);
+  EXPECT_GE(with_surf, 4);
+}
+
 TEST(Heading, WrapDegrees) {
   EXPECT_DOUBLE_EQ(WrapDegrees(180), -180);
   EXPECT_DOUBLE_EQ(WrapDegrees(-180), -180);

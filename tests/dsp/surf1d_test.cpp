@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -429,6 +431,308 @@ TEST(Surf1dTest, RejectsBadOptionsAndSizes) {
   EXPECT_EQ(matcher.Init(0, LandmarkMatchOptions{}), Surf1dError::kBadOptions);
   ASSERT_EQ(matcher.Init(4, LandmarkMatchOptions{}), Surf1dError::kOk);
   EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kTooManyFeatures);
+  // More stored features than the matcher holds, however few test ones.
+  EXPECT_EQ(matcher.Match(f, std::span<const Surf1dFeature>(f).first(2), 360, &m),
+            Surf1dError::kTooManyFeatures);
+  // Default features have no Laplacian sign: not Detect's, refused.
+  ASSERT_EQ(matcher.Init(8, LandmarkMatchOptions{}), Surf1dError::kOk);
+  EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kBadFeature);
+}
+
+// The matcher as first written, straightforwardly: every stored feature tried in turn (the
+// Laplacian sign compared on each), whole squared distances, every pair's residual folded in
+// doubles, all ransac_iterations run. The fast matcher must give exactly its answers.
+struct ReferenceMatch {
+  LandmarkMatch result;
+  std::vector<LandmarkMatcher::MatchedPair> pairs;
+};
+
+double ReferenceWrap(double x, double n) {
+  return x - n * std::round(x / n);
+}
+
+double ReferenceFold(double x, double n, double half) {
+  while (x > half)
+    x -= n;
+  while (x < -half)
+    x += n;
+  return x;
+}
+
+std::uint64_t ReferenceRandom(std::uint64_t* state) {
+  std::uint64_t z = (*state += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+ReferenceMatch ReferenceMatcher(const std::vector<Surf1dFeature>& stored,
+                                const std::vector<Surf1dFeature>& test, int n,
+                                const LandmarkMatchOptions& o) {
+  ReferenceMatch out;
+  LandmarkMatch& r = out.result;
+  struct Pair {
+    double xs, xt;
+    float distance;
+  };
+  std::vector<Pair> pairs;
+  for (const Surf1dFeature& t : test) {
+    float best = std::numeric_limits<float>::infinity(), second = best;
+    std::size_t best_index = 0;
+    for (std::size_t s = 0; s < stored.size(); ++s) {
+      if (stored[s].laplacian_sign != t.laplacian_sign)
+        continue;
+      float d = 0.0f;
+      for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k) {
+        const float e = stored[s].descriptor[k] - t.descriptor[k];
+        d += e * e;
+      }
+      if (d < best) {
+        second = best;
+        best = d;
+        best_index = s;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (!std::isfinite(second) || !(best < o.ratio * o.ratio * second))
+      continue;
+    best = std::sqrt(best);
+    pairs.push_back(
+        {static_cast<double>(stored[best_index].position), static_cast<double>(t.position), best});
+    r.score += 1.0 / static_cast<double>(std::max(best, o.min_distance));
+  }
+  r.matches = static_cast<int>(pairs.size());
+  for (const Pair& p : pairs)
+    out.pairs.push_back({static_cast<int>(p.xs), static_cast<int>(p.xt), p.distance, false});
+  if (r.matches < 2)
+    return out;
+  const double nd = n, half = 0.5 * nd;
+  std::uint64_t state = o.seed;
+  int best_inliers = 0;
+  double best_residual = std::numeric_limits<double>::infinity();
+  double best_scale = 1.0, best_displacement = 0.0;
+  std::vector<bool> inlier(pairs.size()), best_inlier(pairs.size());
+  const auto count = static_cast<std::uint64_t>(pairs.size());
+  for (int it = 0; it < o.ransac_iterations; ++it) {
+    const auto i = static_cast<std::size_t>(ReferenceRandom(&state) % count);
+    auto j = static_cast<std::size_t>(ReferenceRandom(&state) % (count - 1));
+    if (j >= i)
+      ++j;
+    const double ds = ReferenceFold(pairs[j].xs - pairs[i].xs, nd, half);
+    const double dt = ReferenceFold(pairs[j].xt - pairs[i].xt, nd, half);
+    if (ds == 0.0)
+      continue;
+    const double scale = dt / ds;
+    const auto max_scale = static_cast<double>(o.max_scale);
+    if (!(scale >= 1.0 / max_scale && scale <= max_scale))
+      continue;
+    int inliers = 0;
+    double residual_sum = 0.0;
+    for (std::size_t m = 0; m < pairs.size(); ++m) {
+      const double predicted = scale * ReferenceFold(pairs[m].xs - pairs[i].xs, nd, half);
+      const double residual = std::abs(
+          ReferenceFold(ReferenceFold(pairs[m].xt - pairs[i].xt, nd, half) - predicted, nd, half));
+      inlier[m] = residual <= static_cast<double>(o.inlier_threshold);
+      if (inlier[m]) {
+        ++inliers;
+        residual_sum += residual;
+      }
+    }
+    if (inliers > best_inliers || (inliers == best_inliers && residual_sum < best_residual)) {
+      best_inliers = inliers;
+      best_residual = residual_sum;
+      best_scale = scale;
+      best_displacement = ReferenceWrap(pairs[i].xt - scale * pairs[i].xs, nd);
+      best_inlier = inlier;
+    }
+  }
+  if (best_inliers < 2)
+    return out;
+  double reference = 0.0, sum = 0.0;
+  bool have_reference = false;
+  for (std::size_t m = 0; m < pairs.size(); ++m) {
+    if (!best_inlier[m])
+      continue;
+    out.pairs[m].inlier = true;
+    const double d = ReferenceWrap(pairs[m].xt - pairs[m].xs, nd);
+    if (!have_reference) {
+      reference = d;
+      have_reference = true;
+    }
+    sum += reference + ReferenceWrap(d - reference, nd);
+    r.ransac_score += 1.0 / static_cast<double>(std::max(pairs[m].distance, o.min_distance));
+  }
+  const double mean = ReferenceWrap(sum / best_inliers, nd);
+  r.model_found = true;
+  r.inliers = best_inliers;
+  r.scale = best_scale;
+  r.displacement = best_displacement;
+  double degrees = mean * 360.0 / nd;
+  if (degrees >= 180.0)
+    degrees -= 360.0;
+  r.heading_offset_deg = degrees;
+  return out;
+}
+
+// Random features on n columns: `count` stored ones, and test ones of which a share are
+// stored ones moved along a line (scale, shift) with noise on the position and the
+// descriptor, the rest unrelated. Descriptors are coarse (multiples of 1/8 before scaling to
+// unit length), so equal distances and ties between candidates happen.
+void RandomFeatures(std::mt19937* rng, int n, int count, double scale, int shift,
+                    std::vector<Surf1dFeature>* stored, std::vector<Surf1dFeature>* test) {
+  std::uniform_int_distribution<int> column(0, n - 1), coarse(-8, 8), jitter(-2, 2), coin(0, 3);
+  const auto descriptor = [&](Surf1dFeature* f) {
+    float norm = 0.0f;
+    for (float& v : f->descriptor) {
+      v = static_cast<float>(coarse(*rng)) / 8.0f;
+      norm += v * v;
+    }
+    if (norm > 0.0f) {
+      for (float& v : f->descriptor)
+        v /= std::sqrt(norm);
+    }
+  };
+  stored->clear();
+  test->clear();
+  for (int k = 0; k < count; ++k) {
+    Surf1dFeature f;
+    f.position = column(*rng);
+    f.laplacian_sign = coin(*rng) < 2 ? std::int8_t{1} : std::int8_t{-1};
+    descriptor(&f);
+    stored->push_back(f);
+    Surf1dFeature g = f;
+    if (coin(*rng) == 0) {  // unrelated
+      g.position = column(*rng);
+      descriptor(&g);
+    } else {
+      const double moved = scale * f.position + shift + jitter(*rng);
+      g.position = ((static_cast<int>(std::lround(moved)) % n) + n) % n;
+      if (coin(*rng) == 0)
+        g.descriptor[static_cast<std::size_t>(coin(*rng))] += 0.05f;
+    }
+    test->push_back(g);
+  }
+  std::shuffle(test->begin(), test->end(), *rng);
+}
+
+void ExpectSameMatch(const LandmarkMatcher& matcher, const LandmarkMatch& m,
+                     const ReferenceMatch& want, const std::string& where) {
+  SCOPED_TRACE(where);
+  EXPECT_EQ(m.matches, want.result.matches);
+  EXPECT_EQ(m.score, want.result.score);
+  EXPECT_EQ(m.model_found, want.result.model_found);
+  EXPECT_EQ(m.inliers, want.result.inliers);
+  EXPECT_EQ(m.ransac_score, want.result.ransac_score);
+  EXPECT_EQ(m.scale, want.result.scale);
+  EXPECT_EQ(m.displacement, want.result.displacement);
+  EXPECT_EQ(m.heading_offset_deg, want.result.heading_offset_deg);
+  ASSERT_EQ(matcher.last_pair_count(), static_cast<int>(want.pairs.size()));
+  for (int i = 0; i < matcher.last_pair_count(); ++i) {
+    const LandmarkMatcher::MatchedPair p = matcher.last_pair(i);
+    const LandmarkMatcher::MatchedPair& q = want.pairs[static_cast<std::size_t>(i)];
+    EXPECT_EQ(p.x_stored, q.x_stored) << i;
+    EXPECT_EQ(p.x_test, q.x_test) << i;
+    EXPECT_EQ(p.distance, q.distance) << i;
+    EXPECT_EQ(p.inlier, q.inlier) << i;
+  }
+}
+
+// The matcher's early exits (partial distances, lines that cannot win, a perfect line) and
+// its integer folds give the straightforward matcher's answers exactly, on random feature
+// sets of every size from none to full, on even and odd strip lengths, several options.
+TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
+  std::mt19937 rng(2026);
+  int with_model = 0, cases = 0;
+  for (const int n : {360, 361, 200}) {
+    for (const int count : {0, 1, 2, 3, 10, 60, 256}) {
+      for (int trial = 0; trial < 6; ++trial) {
+        LandmarkMatchOptions o;
+        o.seed = static_cast<std::uint64_t>(trial + 1);
+        if (trial % 3 == 1) {
+          o.ratio = 0.9f;
+          o.inlier_threshold = 0.0f;
+          o.max_scale = 2.0f;
+        } else if (trial % 3 == 2) {
+          o.ransac_iterations = 37;
+          o.inlier_threshold = 5.5f;
+        }
+        const double scale = trial % 2 == 0 ? 1.0 : 1.1;
+        std::vector<Surf1dFeature> stored, test;
+        RandomFeatures(&rng, n, count, scale, 17 + 41 * trial, &stored, &test);
+        LandmarkMatcher matcher;
+        ASSERT_EQ(matcher.Init(256, o), Surf1dError::kOk);
+        LandmarkMatch m;
+        ASSERT_EQ(matcher.Match(stored, test, n, &m), Surf1dError::kOk);
+        const ReferenceMatch want = ReferenceMatcher(stored, test, n, o);
+        ExpectSameMatch(matcher, m, want,
+                        "n " + std::to_string(n) + " count " + std::to_string(count) + " trial " +
+                            std::to_string(trial));
+        with_model += want.result.model_found ? 1 : 0;
+        ++cases;
+      }
+    }
+  }
+  // The sets exercise both outcomes.
+  EXPECT_GT(with_model, cases / 3);
+  EXPECT_LT(with_model, cases);
+}
+
+// The same on features Detect found on strips turned and rescaled against each other, and
+// on a perfect turn (every pair on the line: RANSAC may stop at once).
+TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcherOnDetectedFeatures) {
+  const int n = 360;
+  Surf1d surf;
+  ASSERT_EQ(surf.Init(n, Surf1dOptions{}), Surf1dError::kOk);
+  LandmarkMatcher matcher;
+  ASSERT_EQ(matcher.Init(512, LandmarkMatchOptions{}), Surf1dError::kOk);
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    const std::vector<float> a = IntegerStrip(n, seed);
+    std::vector<float> b = Shifted(a, static_cast<int>(37 * seed));
+    if (seed % 2 == 0)
+      b = IntegerStrip(n, seed + 100);  // unrelated
+    if (seed == 5) {
+      for (std::size_t k = 0; k < b.size(); k += 7)
+        b[k] += 9.0f;  // turned, with local damage
+    }
+    const std::vector<Surf1dFeature> fa = DetectAll(surf, a), fb = DetectAll(surf, b);
+    LandmarkMatch m;
+    ASSERT_EQ(matcher.Match(fa, fb, n, &m), Surf1dError::kOk);
+    ExpectSameMatch(matcher, m, ReferenceMatcher(fa, fb, n, LandmarkMatchOptions{}),
+                    "seed " + std::to_string(seed));
+  }
+}
+
+// SetStored once, then MatchStored against several queries: the answers of Match.
+TEST(Surf1dTest, StoredFeaturesHeldAcrossMatches) {
+  std::mt19937 rng(7);
+  std::vector<Surf1dFeature> stored, test, other_stored, other_test;
+  RandomFeatures(&rng, 360, 120, 1.0, 30, &stored, &test);
+  RandomFeatures(&rng, 360, 120, 1.0, 90, &other_stored, &other_test);
+  LandmarkMatcher held, fresh;
+  ASSERT_EQ(held.Init(256, LandmarkMatchOptions{}), Surf1dError::kOk);
+  ASSERT_EQ(fresh.Init(256, LandmarkMatchOptions{}), Surf1dError::kOk);
+  LandmarkMatch m, want;
+  EXPECT_EQ(held.MatchStored(test, 360, &m), Surf1dError::kNotInitialised);
+  ASSERT_EQ(held.SetStored(stored), Surf1dError::kOk);
+  for (const auto* query : {&test, &other_test, &test}) {
+    ASSERT_EQ(held.MatchStored(*query, 360, &m), Surf1dError::kOk);
+    ASSERT_EQ(fresh.Match(stored, *query, 360, &want), Surf1dError::kOk);
+    EXPECT_EQ(m.matches, want.matches);
+    EXPECT_EQ(m.inliers, want.inliers);
+    EXPECT_EQ(m.heading_offset_deg, want.heading_offset_deg);
+    EXPECT_EQ(m.ransac_score, want.ransac_score);
+  }
+  EXPECT_TRUE(m.model_found);
+  // A feature not from Detect (no Laplacian sign) is refused, and holds nothing.
+  std::vector<Surf1dFeature> unsigned_features = stored;
+  unsigned_features[3].laplacian_sign = 0;
+  EXPECT_EQ(held.SetStored(unsigned_features), Surf1dError::kBadFeature);
+  EXPECT_EQ(held.MatchStored(test, 360, &m), Surf1dError::kNotInitialised);
+  ASSERT_EQ(held.SetStored(stored), Surf1dError::kOk);
+  EXPECT_EQ(held.MatchStored(unsigned_features, 360, &m), Surf1dError::kBadFeature);
+  EXPECT_NE(std::string(Surf1dErrorMessage(Surf1dError::kBadFeature)).find("Detect"),
+            std::string::npos);
 }
 
 // A full buffer keeps the strongest features.

@@ -67,6 +67,7 @@ enum class Surf1dError : std::uint8_t {
   kNotInitialised,   // Detect/Match before a successful Init
   kSizeMismatch,     // the strip is not the length given to Init
   kTooManyFeatures,  // more features than the matcher was sized for
+  kBadFeature,       // a feature's laplacian_sign is not +1 or -1 (not from Detect)
 };
 
 const char* Surf1dErrorMessage(Surf1dError error);
@@ -139,10 +140,21 @@ struct LandmarkMatch {
 
 class LandmarkMatcher {
  public:
-  // Sizes the match buffer for up to max_features test features. Not for the frame path.
+  // Sizes the buffers for up to max_features stored and max_features test features. Not
+  // for the frame path.
   Surf1dError Init(int max_features, const LandmarkMatchOptions& options);
 
-  // Matches test features to stored ones on strips of n columns. Allocates nothing.
+  // Holds the stored features for the next MatchStored calls, their descriptors split by
+  // the Laplacian sign (only the same sign competes): a route frame's features are set once
+  // and matched against any number of queries. Allocates nothing.
+  Surf1dError SetStored(std::span<const Surf1dFeature> stored);
+
+  // Matches test features to the held stored ones on strips of n columns: the nearest
+  // neighbour of the same Laplacian sign with the ratio test, then RANSAC's line through the
+  // pairs. Allocates nothing.
+  Surf1dError MatchStored(std::span<const Surf1dFeature> test, int n, LandmarkMatch* result);
+
+  // SetStored(stored), then MatchStored(test, n, result).
   Surf1dError Match(std::span<const Surf1dFeature> stored, std::span<const Surf1dFeature> test,
                     int n, LandmarkMatch* result);
 
@@ -158,16 +170,28 @@ class LandmarkMatcher {
   MatchedPair last_pair(int i) const;
 
  private:
-  struct Pair {
-    double x_stored;  // positions, columns
-    double x_test;
-    float distance;
+  // The held stored features of one Laplacian sign, in the order they were given.
+  struct StoredSide {
+    // Dimension-major: component k of feature s at k * capacity + s, so the distances to
+    // consecutive features are computed lane by lane (each feature's sum in its own order).
+    std::vector<float> descriptors;
+    std::vector<std::int32_t> positions;  // columns
+    int count = 0;
   };
+
+  // RANSAC's inliers of the line through anchor pair `anchor` with slope `scale`, into
+  // best_inlier_: the arithmetic of the search, so the same pairs it counted.
+  void MarkInliers(int anchor, double scale, int n);
 
   LandmarkMatchOptions options_;
   int capacity_ = 0;
-  std::vector<Pair> pairs_;
-  std::vector<std::uint8_t> inlier_;
+  std::array<StoredSide, 2> stored_;  // [0]: laplacian_sign +1, [1]: -1
+  std::vector<float> distances_;      // squared distances of one test feature to a side
+  bool has_stored_ = false;
+  // The pairs passing the ratio test: positions in columns, descriptor distance.
+  std::vector<std::int32_t> pair_stored_;
+  std::vector<std::int32_t> pair_test_;
+  std::vector<float> pair_distance_;
   std::vector<std::uint8_t> best_inlier_;
   int last_pairs_ = 0;
   bool last_model_ = false;
