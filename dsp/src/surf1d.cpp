@@ -19,8 +19,12 @@ double Wrap(double x, double n) {
 }
 
 // The same for |x| within a few n, without a library call in the RANSAC loop (std::round
-// is not inlined without SSE4.1): +-n/2 are left as they are.
-double Fold(double x, double n, double half) {
+// is not inlined without SSE4.1): +-n/2 are left as they are. On whole columns (int) it
+// gives the same values as on their doubles (for integers, x > n / 2.0 exactly when
+// x > n / 2 in integer division, and x < -n / 2.0 when x < -(n / 2)), in integer
+// instructions.
+template <typename T>
+T Fold(T x, T n, T half) {
   while (x > half)
     x -= n;
   while (x < -half)
@@ -35,17 +39,6 @@ std::uint64_t NextRandom(std::uint64_t* state) {
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
   return z ^ (z >> 31);
-}
-
-// Fold for whole columns: the same values as Fold on their doubles (for integers, x > n / 2.0
-// exactly when x > n / 2 in integer division, and x < -n / 2.0 when x < -(n / 2)), in integer
-// instructions.
-int FoldColumns(int x, int n, int half) {
-  while (x > half)
-    x -= n;
-  while (x < -half)
-    x += n;
-  return x;
 }
 
 int SideOf(std::int8_t laplacian_sign) {
@@ -394,8 +387,8 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
     if (j >= i)
       ++j;
     // Differences measured the short way round, anchored at match i.
-    const int ds = FoldColumns(xs[j] - xs[i], n, half_columns);
-    const int dt = FoldColumns(xt[j] - xt[i], n, half_columns);
+    const int ds = Fold<int>(xs[j] - xs[i], n, half_columns);
+    const int dt = Fold<int>(xt[j] - xt[i], n, half_columns);
     if (ds == 0)
       continue;
     const double scale = static_cast<double>(dt) / static_cast<double>(ds);
@@ -410,9 +403,9 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
     int inliers = 0, outliers = 0;
     double residual_sum = 0.0;
     for (int m = 0; m < matches; ++m) {
-      const double predicted = scale * FoldColumns(xs[m] - xsi, n, half_columns);
+      const double predicted = scale * Fold<int>(xs[m] - xsi, n, half_columns);
       const double residual =
-          std::abs(Fold(FoldColumns(xt[m] - xti, n, half_columns) - predicted, nd, half));
+          std::abs(Fold<double>(Fold<int>(xt[m] - xti, n, half_columns) - predicted, nd, half));
       if (residual <= threshold) {
         ++inliers;
         residual_sum += residual;
@@ -476,9 +469,9 @@ void LandmarkMatcher::MarkInliers(int anchor, double scale, int n) {
   const int xti = pair_test_[static_cast<std::size_t>(anchor)];
   for (int m = 0; m < last_pairs_; ++m) {
     const auto k = static_cast<std::size_t>(m);
-    const double predicted = scale * FoldColumns(pair_stored_[k] - xsi, n, half_columns);
-    const double residual =
-        std::abs(Fold(FoldColumns(pair_test_[k] - xti, n, half_columns) - predicted, nd, half));
+    const double predicted = scale * Fold<int>(pair_stored_[k] - xsi, n, half_columns);
+    const double residual = std::abs(
+        Fold<double>(Fold<int>(pair_test_[k] - xti, n, half_columns) - predicted, nd, half));
     best_inlier_[k] = residual <= threshold ? 1 : 0;
   }
 }
