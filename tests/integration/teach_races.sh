@@ -16,6 +16,13 @@ CONFIG=$2
 ROUNDS=$3
 shift 3
 RUN=("$@" "$SKYLOC")
+# A program that is not there (a build that stopped before it) fails here, at once: each
+# wait below would otherwise run out, and CTest's timeout kills the script with SIGKILL,
+# which leaves its scratch folder in /tmp.
+if [ ! -x "$SKYLOC" ]; then
+  echo "FAIL: $SKYLOC is not an executable program: build the skyloc target first" >&2
+  exit 1
+fi
 WORK=$(mktemp -d /tmp/skyloc_races_XXXXXX)
 pids=()
 cleanup() {
