@@ -65,7 +65,7 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
   struct Field {
     const char* name;
     std::uint64_t in_file, wanted;
-    const char* fix;
+    const char* fix;  // nullptr: set the key to the route's value (a setting of its own)
   };
   // Short enough to survive a long route path in a Status (240 characters): the fix first.
   constexpr const char* kRerun = "run with the configuration it was taught with, or teach again";
@@ -74,26 +74,27 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
   constexpr const char* kGridFix =
       "set [descriptor] grid as taught (\"auto\" was the default before 2026-11-26), or teach "
       "again";
-  if (file.descriptor_kind == want.descriptor_kind && file.bands != want.bands) {
-    // The fix names the route's value: the default changed from 64 to 120 bands on
-    // 2026-11-28, so a route taught before meets a configuration that does not say which.
-    return Status::Error(StatusCode::kFailedPrecondition,
-                         "taught with [descriptor] bands = %u but this configuration has %u: "
-                         "set [descriptor] bands = %u or teach again (64 was the default "
-                         "before 2026-11-28)",
-                         file.bands, want.bands, file.bands);
-  }
+  // bands names the route's value in its fix: the default changed from 64 to 120 on
+  // 2026-11-28, so a route taught before meets a configuration that does not say which.
   const Field fields[] = {{"descriptor kind", file.descriptor_kind, want.descriptor_kind, kRerun},
+                          {"[descriptor] bands", file.bands, want.bands, nullptr},
                           {"[descriptor] rings", file.rings, want.rings, kGridFix},
                           {"[descriptor] longitudes", file.longitudes, want.longitudes, kGridFix},
                           {"descriptor size", file.dim, want.dim, kRerun}};
   for (const Field& f : fields) {
-    if (f.in_file != f.wanted) {
+    if (f.in_file == f.wanted)
+      continue;
+    const auto in_file = static_cast<unsigned long long>(f.in_file);
+    const auto wanted = static_cast<unsigned long long>(f.wanted);
+    if (f.fix == nullptr) {
       return Status::Error(StatusCode::kFailedPrecondition,
-                           "taught with %s = %llu but this configuration has %llu: %s", f.name,
-                           static_cast<unsigned long long>(f.in_file),
-                           static_cast<unsigned long long>(f.wanted), f.fix);
+                           "taught with %s = %llu but this configuration has %llu: set %s = %llu "
+                           "or teach again",
+                           f.name, in_file, wanted, f.name, in_file);
     }
+    return Status::Error(StatusCode::kFailedPrecondition,
+                         "taught with %s = %llu but this configuration has %llu: %s", f.name,
+                         in_file, wanted, f.fix);
   }
   // A route without strips, or a configuration without heading, loads: heading is then
   // off (the caller says so once). Two different strips would give a wrong heading.
