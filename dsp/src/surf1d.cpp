@@ -45,6 +45,35 @@ int SideOf(std::int8_t laplacian_sign) {
   return laplacian_sign > 0 ? 0 : 1;
 }
 
+// Whether every feature has the Laplacian sign Detect gives (+1 or -1): the matcher files
+// them by it.
+bool SignsAreFromDetect(std::span<const Surf1dFeature> features) {
+  return std::all_of(features.begin(), features.end(), [](const Surf1dFeature& f) {
+    return f.laplacian_sign == 1 || f.laplacian_sign == -1;
+  });
+}
+
+// RANSAC's arithmetic on a strip of n columns, one definition for the search and for the
+// inliers it reports. Positions are whole columns, so their differences fold in integers
+// (the values Fold gives on their doubles); only the line's prediction is a double.
+struct CircularColumns {
+  explicit CircularColumns(int columns)
+      : n(columns), half(columns / 2), nd(columns), half_d(0.5 * columns) {}
+
+  // x_b - x_a measured the short way round.
+  int Difference(int a, int b) const { return Fold<int>(b - a, n, half); }
+
+  // How far pair (xs, xt) lies off the line through pair (xs0, xt0) with slope scale,
+  // folded the short way round.
+  double Residual(int xs, int xt, int xs0, int xt0, double scale) const {
+    const double predicted = scale * Difference(xs0, xs);
+    return std::abs(Fold<double>(Difference(xt0, xt) - predicted, nd, half_d));
+  }
+
+  int n, half;
+  double nd, half_d;
+};
+
 }  // namespace
 
 const char* Surf1dErrorMessage(Surf1dError error) {
@@ -259,10 +288,8 @@ Surf1dError LandmarkMatcher::SetStored(std::span<const Surf1dFeature> stored) {
     return Surf1dError::kNotInitialised;
   if (stored.size() > static_cast<std::size_t>(capacity_))
     return Surf1dError::kTooManyFeatures;
-  for (const Surf1dFeature& f : stored) {
-    if (f.laplacian_sign != 1 && f.laplacian_sign != -1)
-      return Surf1dError::kBadFeature;
-  }
+  if (!SignsAreFromDetect(stored))
+    return Surf1dError::kBadFeature;
   for (const Surf1dFeature& f : stored) {
     StoredSide& side = stored_[static_cast<std::size_t>(SideOf(f.laplacian_sign))];
     const auto s = static_cast<std::size_t>(side.count++);
@@ -297,10 +324,8 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
     return Surf1dError::kSizeMismatch;
   if (test.size() > static_cast<std::size_t>(capacity_))
     return Surf1dError::kTooManyFeatures;
-  for (const Surf1dFeature& f : test) {
-    if (f.laplacian_sign != 1 && f.laplacian_sign != -1)
-      return Surf1dError::kBadFeature;
-  }
+  if (!SignsAreFromDetect(test))
+    return Surf1dError::kBadFeature;
 
   // Nearest neighbour with the ratio test among the stored features of the same Laplacian
   // sign. First every squared distance, summed in the descriptor's order for each feature
@@ -366,11 +391,9 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   if (matches < 2)
     return Surf1dError::kOk;
 
-  // RANSAC. Positions are whole columns, so their differences are folded in integers (the
-  // values Fold gives on their doubles); only the line's prediction is a double.
-  const double nd = n;
-  const double half = 0.5 * nd;
-  const int half_columns = n / 2;
+  // RANSAC.
+  const CircularColumns circle(n);
+  const double nd = circle.nd;
   const std::int32_t* xs = pair_stored_.data();
   const std::int32_t* xt = pair_test_.data();
   const auto threshold = static_cast<double>(options_.inlier_threshold);
@@ -387,8 +410,8 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
     if (j >= i)
       ++j;
     // Differences measured the short way round, anchored at match i.
-    const int ds = Fold<int>(xs[j] - xs[i], n, half_columns);
-    const int dt = Fold<int>(xt[j] - xt[i], n, half_columns);
+    const int ds = circle.Difference(xs[i], xs[j]);
+    const int dt = circle.Difference(xt[i], xt[j]);
     if (ds == 0)
       continue;
     const double scale = static_cast<double>(dt) / static_cast<double>(ds);
@@ -403,9 +426,7 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
     int inliers = 0, outliers = 0;
     double residual_sum = 0.0;
     for (int m = 0; m < matches; ++m) {
-      const double predicted = scale * Fold<int>(xs[m] - xsi, n, half_columns);
-      const double residual =
-          std::abs(Fold<double>(Fold<int>(xt[m] - xti, n, half_columns) - predicted, nd, half));
+      const double residual = circle.Residual(xs[m], xt[m], xsi, xti, scale);
       if (residual <= threshold) {
         ++inliers;
         residual_sum += residual;
@@ -461,18 +482,14 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
 }
 
 void LandmarkMatcher::MarkInliers(int anchor, double scale, int n) {
-  const double nd = n;
-  const double half = 0.5 * nd;
-  const int half_columns = n / 2;
+  const CircularColumns circle(n);
   const auto threshold = static_cast<double>(options_.inlier_threshold);
   const int xsi = pair_stored_[static_cast<std::size_t>(anchor)];
   const int xti = pair_test_[static_cast<std::size_t>(anchor)];
   for (int m = 0; m < last_pairs_; ++m) {
     const auto k = static_cast<std::size_t>(m);
-    const double predicted = scale * Fold<int>(pair_stored_[k] - xsi, n, half_columns);
-    const double residual = std::abs(
-        Fold<double>(Fold<int>(pair_test_[k] - xti, n, half_columns) - predicted, nd, half));
-    best_inlier_[k] = residual <= threshold ? 1 : 0;
+    best_inlier_[k] =
+        circle.Residual(pair_stored_[k], pair_test_[k], xsi, xti, scale) <= threshold ? 1 : 0;
   }
 }
 
