@@ -325,11 +325,10 @@ count_shard_cases() {
   shards=$(grep -cE '^ *[0-9]+/[0-9]+ Test +#[0-9]+: [^ ]+[.]shard[0-9]+ ' "$log" || true)
   for xml in "$dir"/test-cases/*.xml; do
     [ -f "$xml" ] || continue
-    tests=$(grep -m1 -oE '<testsuites tests="[0-9]+"' "$xml" | grep -oE '[0-9]+' || echo 0)
-    failures=$(grep -m1 -oE '<testsuites tests="[0-9]+" failures="[0-9]+"' "$xml" | grep -oE '[0-9]+"$' | tr -d '"' || echo 0)
+    read -r tests failures < <(sed -nE 's/.*<testsuites tests="([0-9]+)" failures="([0-9]+)".*/\1 \2/p' "$xml")
     skips=$(grep -c 'result="skipped"' "$xml" || true)
-    passed=$((passed + tests - failures - skips))
-    failed=$((failed + failures))
+    passed=$((passed + ${tests:-0} - ${failures:-0} - skips))
+    failed=$((failed + ${failures:-0}))
     skipped=$((skipped + skips))
   done
   while read -r test; do
