@@ -405,10 +405,11 @@ int RunHeading(const Options& o, const std::string& command) {
       "world,query_frame,route_frame,uncertain,correlation_deg,surf_deg,surf_inliers\n";
   for (const tools::HeadingRow& r : rows) {
     for (const tools::HeadingRow::Frame& f : r.frames) {
+      const dsp::HeadingEstimate& e = f.estimate;
       frames_csv += Format("%s,%d,%d,%d,", sim::WorldKindName(r.world), f.query, f.route,
-                           f.uncertain ? 1 : 0);
-      frames_csv += f.has_correlation ? Format("%.17g", f.correlation_deg) : std::string();
-      frames_csv += f.has_surf ? Format(",%.17g,%d\n", f.surf_deg, f.surf_inliers) : ",,\n";
+                           e.uncertain ? 1 : 0);
+      frames_csv += e.has_correlation ? Format("%.17g", e.correlation_deg) : std::string();
+      frames_csv += e.has_surf ? Format(",%.17g,%d\n", e.surf_deg, e.surf_inliers) : ",,\n";
     }
   }
   if (::mkdir(o.out.c_str(), 0755) != 0 && errno != EEXIST) {

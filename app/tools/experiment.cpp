@@ -476,9 +476,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
       if (estimate.has_heading)
         answer.push_back(dsp::WrapDegrees(estimate.heading_deg - truth));
       row.uncertain_frames += estimate.uncertain ? 1 : 0;
-      row.frames.push_back({static_cast<int>(q), static_cast<int>(r), estimate.uncertain,
-                            estimate.has_correlation, estimate.correlation_deg, estimate.has_surf,
-                            estimate.surf_deg, estimate.surf_inliers});
+      row.frames.push_back({static_cast<int>(q), static_cast<int>(r), estimate});
     }
     row.correlation_errors_deg = correlation;
     row.surf_errors_deg = surf;

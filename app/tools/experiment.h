@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "firmware/config.h"
+#include "skyloc/dsp/heading.h"
 #include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/dsp/place_metrics.h"
 #include "skyloc/dsp/route_filter.h"
@@ -210,12 +211,7 @@ struct HeadingRow {
   struct Frame {
     int query = 0;  // query frame index
     int route = 0;  // matched reference frame index
-    bool uncertain = false;
-    bool has_correlation = false;
-    double correlation_deg = 0;
-    bool has_surf = false;
-    double surf_deg = 0;
-    int surf_inliers = 0;
+    dsp::HeadingEstimate estimate;
   };
   std::vector<Frame> frames;
 };
