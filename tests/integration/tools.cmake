@@ -114,12 +114,23 @@ add_test(NAME cli.experiment_bad_grid_exits_2 COMMAND ${CMAKE_COMMAND}
   "-DEXPECT_STDERR=--grid 'fine': expected oversampled, auto or paper"
   "-DEMULATOR=${CMAKE_CROSSCOMPILING_EMULATOR}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
 
-# FAB-MAP 2.0 (host builds only): train a vocabulary on one simulated visible-light run,
-# evaluate two others, and refuse a file that is not a vocabulary.
-skyloc_expect_output(cli.fabmap_train_eval COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
-  -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fabmap -P ${CMAKE_CURRENT_SOURCE_DIR}/fabmap_check.cmake
-  OUTPUT "all fabmap checks passed")
+# FAB-MAP 2.0 (host builds only): train a vocabulary on one simulated visible-light run
+# (cli.fabmap_train), then, side by side, evaluate two others and refuse a file that is
+# not a vocabulary (cli.fabmap_eval), and run the tilt experiment's FAB-MAP column
+# (cli.fabmap_experiment). As one test they took 150 s of one core under ASan, the longest
+# test of that run. cli.fabmap_clean removes the vocabulary after them.
+foreach(part train eval experiment clean)
+  skyloc_expect_output(cli.fabmap_${part} COMMAND ${CMAKE_COMMAND} -DCMD=${skyloc_exe}
+    -DWORK=${CMAKE_CURRENT_BINARY_DIR}/fabmap -DPART=${part}
+    -P ${CMAKE_CURRENT_SOURCE_DIR}/fabmap_check.cmake
+    OUTPUT "fabmap ${part}: passed")
+endforeach()
+set_tests_properties(cli.fabmap_train PROPERTIES FIXTURES_SETUP fabmap_vocabulary)
+set_tests_properties(cli.fabmap_eval cli.fabmap_experiment PROPERTIES
+                     FIXTURES_REQUIRED fabmap_vocabulary)
+set_tests_properties(cli.fabmap_clean PROPERTIES FIXTURES_CLEANUP fabmap_vocabulary)
 # COST: seconds, so a parallel run starts the long ones first (tests/test_costs.cmake).
-set_tests_properties(cli.fabmap_train_eval PROPERTIES TIMEOUT 300 COST 40)
+set_tests_properties(cli.fabmap_train cli.fabmap_eval cli.fabmap_experiment PROPERTIES
+                     TIMEOUT 300 COST 40)
 set_tests_properties(cli.experiment_speed_writes_outputs cli.experiment_heading_writes_outputs
                      PROPERTIES COST 20)
