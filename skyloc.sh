@@ -377,8 +377,9 @@ phase() {
   local name=$1 start=$SECONDS
   shift
   "$@"
-  printf '%-22s %4d s\n' "$name" $((SECONDS - start)) >>"$RESULTS_DIR/phases"
+  note_phase "$name" "$start"
 }
+note_phase() { printf '%-22s %4d s\n' "$1" $((SECONDS - $2)) >>"$RESULTS_DIR/phases"; }
 
 # The VM tests run in the background: QEMU (TCG, one vCPU) keeps one core busy for
 # minutes, and the builds and test runs after them use the other. Those are niced while a
@@ -412,21 +413,54 @@ kill_tree() {
   kill "$1" 2>/dev/null || true
 }
 
+# Every VM test, one VM at a time (each takes a core, and they share the HIL cache), in
+# one background job beside the builds and test runs of the foreground:
+#   1. the host VM tests, as soon as the host build is there;
+#   2. what the aarch64 VM tests need made once, which needs neither the aarch64 build nor
+#      its tests: the arm64 kernel's modules (tests/hil/setup.sh arm64, about 100 s of
+#      compiling) and the arm64 Debian root the package test installs into
+#      (tests/package/arm64_root.sh, about 280 s, most of it dpkg in a TCG guest). Made
+#      here they wait in the HIL cache, and the aarch64 VM tests' hil.setup and
+#      package.arm64_root find them made (seconds) instead of spending those minutes at
+#      the end of the run. The verdict on them stays with those two CTest tests: a failure
+#      here is met again there and reported by them, so it is only noted here;
+#   3. the aarch64 VM tests, once the foreground has built aarch64 (the file
+#      $AARCH64_BUILT says so): they boot an arm64 kernel in qemu-system-aarch64 with the
+#      cross-built binaries (the rest run under qemu-user), package.deb_arm64 too (the
+#      arm64 .deb installed in the arm64 Debian root in the VM).
+# The VM tests (label hil) get one more try when they fail: libcamera 0.0.3 under QEMU TCG
+# hung once in 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc. A real
+# failure fails both tries. Not the host's package test (label package, tests/package): 2.5
+# min and ~60 MB from the archive at every run; ctest -L package runs it
+# (docs/PACKAGING.md).
+AARCH64_BUILT="$BUILD_ROOT/aarch64.built"
+vm_tests() {
+  local cache="$BUILD_ROOT/hil-cache" rc=0 start
+  phase "host VM tests" run_ctest host-vm "$BUILD_ROOT/host/tests/hil" -L hil --repeat until-pass:2
+  start=$SECONDS
+  "$ROOT/tests/hil/setup.sh" arm64 "$cache" || rc=$?
+  # The package test exists only with lintian and mmdebstrap (tests/hil/CMakeLists.txt).
+  if [ "$rc" -eq 0 ] && command -v lintian >/dev/null && command -v mmdebstrap >/dev/null; then
+    "$ROOT/tests/package/arm64_root.sh" "$cache" || rc=$?
+  fi
+  note_phase "arm64 VM set-up" "$start"
+  [ "$rc" -eq 0 ] || say "the arm64 VM set-up exited $rc here; the aarch64 VM tests try it again and report it"
+  start=$SECONDS
+  while [ ! -e "$AARCH64_BUILT" ]; do sleep 2; done
+  note_phase "waiting for aarch64" "$start"
+  phase "aarch64 VM tests" run_ctest aarch64-vm "$BUILD_ROOT/aarch64/tests/hil" -L hil --repeat until-pass:2
+}
+
 cmd_test() {
   local start=$SECONDS
   rm -rf "$RESULTS_DIR"
   mkdir -p "$RESULTS_DIR"
   # A failure or Ctrl-C in the foreground stops the VMs too.
   trap stop_background EXIT
+  rm -f "$AARCH64_BUILT"
   phase "packages, sysroots" deps_for_test
   phase "host build" configure_and_build host
-  # The VM tests (label hil) get one more try when they fail: libcamera 0.0.3 under QEMU
-  # TCG hung once in 16 runs (docs/DRIVERS.md), and a hang is not a finding about skyloc.
-  # A real failure fails both tries. Not the package test (label package, tests/package):
-  # 2.5 min and ~60 MB from the archive at every run; ctest -L package runs it
-  # (docs/PACKAGING.md).
-  start_background host-vm phase "host VM tests" \
-    run_ctest host-vm "$BUILD_ROOT/host/tests/hil" -L hil --repeat until-pass:2
+  start_background vm vm_tests
   # x86-64 runs each test once: the ASan+UBSan build runs every test but the VM ones (those
   # boot a guest with the host build's binaries) and the long soak runs; the plain host
   # build runs those, the fuzz targets and the cases labelled native, whose subject the
@@ -450,13 +484,7 @@ cmd_test() {
   phase "tsan tests" run_ctest tsan "$BUILD_ROOT/tsan" \
     -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
   phase "aarch64 build" configure_and_build aarch64
-  # One VM at a time (each takes a core, and they share the HIL cache).
-  wait_background
-  # Every aarch64 VM test: those boot an arm64 kernel in qemu-system-aarch64 with the
-  # cross-built binaries (the rest run under qemu-user), package.deb_arm64 too (the arm64
-  # .deb installed in an arm64 Debian root in the VM).
-  start_background aarch64-vm phase "aarch64 VM tests" \
-    run_ctest aarch64-vm "$BUILD_ROOT/aarch64/tests/hil" -L hil --repeat until-pass:2
+  touch "$AARCH64_BUILT"
   # The slow soak runs are the host build's job.
   phase "aarch64 tests" run_ctest aarch64 "$BUILD_ROOT/aarch64" -LE "slow|hil"
   # 32-bit ARM (Raspberry Pi OS 32-bit, ARMv7 boards): what only a 32-bit target shows
@@ -464,6 +492,7 @@ cmd_test() {
   phase "armhf build" configure_and_build armhf
   phase "armhf tests" run_ctest armhf "$BUILD_ROOT/armhf" -LE "slow|hil"
   wait_background
+  rm -f "$AARCH64_BUILT"
   trap - EXIT
   summarise_results $((SECONDS - start))
 }
