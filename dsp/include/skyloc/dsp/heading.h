@@ -111,12 +111,11 @@ class HeadingEstimator {
   LandmarkMatcher matcher_;
   std::vector<Surf1dFeature> stored_features_;
   std::vector<Surf1dFeature> test_features_;
-  // The stored strip whose features the matcher holds (valid when holds_stored_): a
-  // localised robot matches the same route frame on many frames in a row, and the same
-  // strip, bit for bit, has the same features, so they are detected once.
-  std::vector<float> held_strip_;
-  bool holds_stored_ = false;
-  std::vector<double> correlation_;  // c(s) of the last pair (AlignStrips' scratch)
+  // (b) by FFT; it holds the stored strip and its spectrum: a localised robot matches the
+  // same route frame on many frames in a row, and the same strip, bit for bit, has the
+  // same spectrum and the same features, so both are computed once.
+  StripCorrelator correlator_;
+  bool features_held_ = false;  // stored_features_ are the held strip's, in the matcher
 };
 
 }  // namespace skyloc::dsp
