@@ -1,11 +1,11 @@
 // The heading of a recognised place: how far the robot is turned from the view
 // a route frame was taught with, from the two frames' horizon strips (horizon_strip.h),
 // two ways:
-//   (b) circular cross-correlation of the whole strips (strip_alignment.h): the main
-//       estimate; every column counts, so it needs no features;
+//   (b) circular cross-correlation of the whole strips by FFT (strip_alignment.h,
+//       StripCorrelator): the main estimate; every column counts, so it needs no features;
 //   (a) 1D SURF features + nearest neighbours + RANSAC (surf1d.h): the second estimate,
 //       from the landmarks alone, run only when (b) is uncertain (below), where it can
-//       change the answer: it costs about three times (b).
+//       change the answer: it costs about fifteen times (b).
 // Both give how far the query strip's content is turned from the stored one towards
 // increasing azimuth; the robot turned the other way, so the heading is its negative:
 //

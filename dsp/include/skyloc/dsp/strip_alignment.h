@@ -7,9 +7,8 @@
 //   c(s) = sum_j (a_j - mean a) (b_(j+s mod n) - mean b) / (n std a std b)
 //
 // is the normalised (Pearson) correlation of the stored strip a with the test strip b
-// shifted back by s columns, for every s = 0..n-1 (O(n^2): 130 k multiply-adds at n = 360
-// for the peak, and as many again for the runner-up unless the caller lends n doubles of
-// scratch to keep c(s) in; allocation-free either way, so it can run per frame). The best s is
+// shifted back by s columns, for every s = 0..n-1 (AlignStrips by the definition, O(n^2);
+// StripCorrelator, below, by FFT for the frame path, with the same peak). The best s is
 // refined to a fraction of a column by the parabola through c(s-1), c(s), c(s+1). The test strip's
 // content is then turned by +s columns from the stored one: heading_offset_deg = s * 360 / n,
 // wrapped to [-180, 180), the convention of LandmarkMatch::heading_offset_deg (a robot that turned
