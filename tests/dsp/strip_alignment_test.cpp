@@ -165,15 +165,24 @@ TEST(StripAlignmentTest, AllocatesNothing) {
   const std::vector<float> a = Harmonics(360, 0.0, 9);
   const std::vector<float> b = Harmonics(360, 20.0, 9);
   StripAlignment r;
-  StripCorrelator correlator;
-  ASSERT_TRUE(correlator.Init(360));
-  AllocationScope scope;
-  ASSERT_EQ(AlignStrips(a, b, &r), StripAlignmentError::kOk);
-  for (int i = 0; i < 3; ++i) {
-    ASSERT_EQ(correlator.SetStored(i % 2 == 0 ? a : b), StripAlignmentError::kOk);
-    ASSERT_EQ(correlator.Align(i % 2 == 0 ? b : a, &r), StripAlignmentError::kOk);
+  {
+    AllocationScope scope;
+    ASSERT_EQ(AlignStrips(a, b, &r), StripAlignmentError::kOk);
+    EXPECT_EQ(scope.allocations(), 0u);
   }
-  EXPECT_EQ(scope.allocations(), 0u);
+  // The transforms' other paths too: a length not a multiple of 4 (a complex transform of
+  // the whole strip) and a prime one (the generic butterfly).
+  for (const int n : {360, 150, 149}) {
+    const std::vector<float> c = Harmonics(n, 0.0, 9), d = Harmonics(n, 20.0, 9);
+    StripCorrelator correlator;
+    ASSERT_TRUE(correlator.Init(n));
+    AllocationScope scope;
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_EQ(correlator.SetStored(i % 2 == 0 ? c : d), StripAlignmentError::kOk);
+      ASSERT_EQ(correlator.Align(i % 2 == 0 ? d : c, &r), StripAlignmentError::kOk);
+    }
+    EXPECT_EQ(scope.allocations(), 0u) << n;
+  }
 }
 
 // Strips as the route stores them: bytes, columns of random width and level (a skyline's
