@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <cstring>
 
 #include "skyloc/dsp/strip_alignment.h"
 
@@ -51,10 +50,10 @@ HeadingError HeadingEstimator::Init(int columns, const HeadingOptions& options) 
       return HeadingError::kBadOptions;
     stored_features_.assign(static_cast<std::size_t>(options.max_features), {});
     test_features_.assign(static_cast<std::size_t>(options.max_features), {});
-    held_strip_.assign(static_cast<std::size_t>(columns), 0.0f);
   }
-  holds_stored_ = false;
-  correlation_.assign(static_cast<std::size_t>(columns), 0.0);
+  if (!correlator_.Init(columns))
+    return HeadingError::kBadOptions;
+  features_held_ = false;
   options_ = options;
   columns_ = columns;
   return HeadingError::kOk;
@@ -67,9 +66,13 @@ HeadingError HeadingEstimator::Estimate(std::span<const float> stored, std::span
   if (n == 0 || stored.size() != n || test.size() != n)
     return HeadingError::kSizeMismatch;
   // Both ways measure the query content's turn; the robot turned the other way.
+  if (!correlator_.Holds(stored)) {
+    (void)correlator_.SetStored(stored);  // a flat strip: Align says so below
+    features_held_ = false;
+  }
   StripAlignment alignment;
   out->uncertain = true;  // a flat strip: nothing to stand out
-  if (AlignStrips(stored, test, &alignment, 5, correlation_) == StripAlignmentError::kOk) {
+  if (correlator_.Align(test, &alignment) == StripAlignmentError::kOk) {
     out->has_correlation = true;
     out->correlation_deg = WrapDegrees(-alignment.heading_offset_deg);
     out->confidence = std::clamp(alignment.correlation, 0.0f, 1.0f);
@@ -82,15 +85,14 @@ HeadingError HeadingEstimator::Estimate(std::span<const float> stored, std::span
   if (!options_.surf || !(out->uncertain || options_.surf_every_frame))
     return HeadingError::kOk;
   out->surf_ran = true;
-  if (!holds_stored_ || std::memcmp(held_strip_.data(), stored.data(), n * sizeof(float)) != 0) {
+  if (!features_held_) {
     int stored_count = 0;
-    holds_stored_ =
+    features_held_ =
         surf_.Detect(stored, stored_features_, &stored_count) == Surf1dError::kOk &&
         matcher_.SetStored(std::span<const Surf1dFeature>(stored_features_)
                                .first(static_cast<std::size_t>(stored_count))) == Surf1dError::kOk;
-    if (!holds_stored_)
+    if (!features_held_)
       return HeadingError::kOk;
-    std::copy(stored.begin(), stored.end(), held_strip_.begin());
   }
   int test_count = 0;
   LandmarkMatch match;

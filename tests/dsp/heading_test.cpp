@@ -105,10 +105,17 @@ TEST(Heading, ErrorsAndNoAllocation) {
   every_frame.surf_every_frame = true;  // (a) too: its path must allocate nothing either
   HeadingEstimator both;
   ASSERT_EQ(both.Init(360, every_frame), HeadingError::kOk);
+  // The route frame held, and a new one every frame (the spectrum and features computed
+  // again in the buffers Init sized).
+  const std::vector<float> other = Skyline(360, 10);
   AllocationScope scope;
   for (int i = 0; i < 10; ++i) {
     (void)estimator.Estimate(stored, test, &e);
     (void)both.Estimate(stored, test, &e);
+  }
+  for (int i = 0; i < 10; ++i) {
+    (void)estimator.Estimate(i % 2 == 0 ? stored : other, test, &e);
+    (void)both.Estimate(i % 2 == 0 ? stored : other, test, &e);
   }
   EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_TRUE(e.surf_ran);
@@ -174,6 +181,10 @@ TEST(Heading, HeldStoredFeaturesGiveAFreshEstimatorsAnswers) {
     EXPECT_EQ(got.surf_deg, want.surf_deg) << compared;
     EXPECT_EQ(got.surf_inliers, want.surf_inliers) << compared;
     EXPECT_EQ(got.heading_deg, want.heading_deg) << compared;
+    // The held stored spectrum too.
+    EXPECT_EQ(got.noise, want.noise) << compared;
+    EXPECT_EQ(got.runner_up, want.runner_up) << compared;
+    EXPECT_EQ(got.uncertain, want.uncertain) << compared;
     ++compared;
     with_surf += want.has_surf ? 1 : 0;
   };

@@ -310,15 +310,24 @@ TEST_F(FisheyeStrips, SurfRecoversTheYawOfTheScene) {
 
 // The second heading method on the same rendered fisheye frames: circular correlation of
 // the whole strips (strip_alignment.h) agrees with the true yaw as 1D SURF does.
+// The frame path's correlator by FFT gives the definition's peak to the bit on them.
 TEST_F(FisheyeStrips, StripCorrelationRecoversTheSameYaw) {
   const std::vector<float> stored = StripAt(0.0);
+  StripCorrelator correlator;
+  ASSERT_TRUE(correlator.Init(static_cast<int>(stored.size())));
+  ASSERT_EQ(correlator.SetStored(stored), StripAlignmentError::kOk);
   for (const double yaw : {23.5, -71.2, 178.4, -163.0}) {
-    StripAlignment a;
-    ASSERT_EQ(AlignStrips(stored, StripAt(yaw), &a), StripAlignmentError::kOk);
+    const std::vector<float> test = StripAt(yaw);
+    StripAlignment a, by_fft;
+    ASSERT_EQ(AlignStrips(stored, test, &a), StripAlignmentError::kOk);
     double error = a.heading_offset_deg - yaw;
     error -= 360.0 * std::round(error / 360.0);
     EXPECT_LE(std::abs(error), 1.0) << "yaw " << yaw << " recovered " << a.heading_offset_deg;
     EXPECT_GT(a.correlation, 0.9f);
+    ASSERT_EQ(correlator.Align(test, &by_fft), StripAlignmentError::kOk);
+    EXPECT_EQ(by_fft.shift_columns, a.shift_columns) << "yaw " << yaw;
+    EXPECT_EQ(by_fft.heading_offset_deg, a.heading_offset_deg) << "yaw " << yaw;
+    EXPECT_EQ(by_fft.correlation, a.correlation) << "yaw " << yaw;
   }
 }
 

@@ -1,11 +1,11 @@
 // The heading of a recognised place: how far the robot is turned from the view
 // a route frame was taught with, from the two frames' horizon strips (horizon_strip.h),
 // two ways:
-//   (b) circular cross-correlation of the whole strips (strip_alignment.h): the main
-//       estimate; every column counts, so it needs no features;
+//   (b) circular cross-correlation of the whole strips by FFT (strip_alignment.h,
+//       StripCorrelator): the main estimate; every column counts, so it needs no features;
 //   (a) 1D SURF features + nearest neighbours + RANSAC (surf1d.h): the second estimate,
 //       from the landmarks alone, run only when (b) is uncertain (below), where it can
-//       change the answer: it costs about three times (b).
+//       change the answer: it costs about fifteen times (b).
 // Both give how far the query strip's content is turned from the stored one towards
 // increasing azimuth; the robot turned the other way, so the heading is its negative:
 //
@@ -111,12 +111,11 @@ class HeadingEstimator {
   LandmarkMatcher matcher_;
   std::vector<Surf1dFeature> stored_features_;
   std::vector<Surf1dFeature> test_features_;
-  // The stored strip whose features the matcher holds (valid when holds_stored_): a
-  // localised robot matches the same route frame on many frames in a row, and the same
-  // strip, bit for bit, has the same features, so they are detected once.
-  std::vector<float> held_strip_;
-  bool holds_stored_ = false;
-  std::vector<double> correlation_;  // c(s) of the last pair (AlignStrips' scratch)
+  // (b) by FFT; it holds the stored strip and its spectrum: a localised robot matches the
+  // same route frame on many frames in a row, and the same strip, bit for bit, has the
+  // same spectrum and the same features, so both are computed once.
+  StripCorrelator correlator_;
+  bool features_held_ = false;  // stored_features_ are the held strip's, in the matcher
 };
 
 }  // namespace skyloc::dsp

@@ -7,9 +7,8 @@
 //   c(s) = sum_j (a_j - mean a) (b_(j+s mod n) - mean b) / (n std a std b)
 //
 // is the normalised (Pearson) correlation of the stored strip a with the test strip b
-// shifted back by s columns, for every s = 0..n-1 (O(n^2): 130 k multiply-adds at n = 360
-// for the peak, and as many again for the runner-up unless the caller lends n doubles of
-// scratch to keep c(s) in; allocation-free either way, so it can run per frame). The best s is
+// shifted back by s columns, for every s = 0..n-1 (AlignStrips by the definition, O(n^2);
+// StripCorrelator, below, by FFT for the frame path, with the same peak). The best s is
 // refined to a fraction of a column by the parabola through c(s-1), c(s), c(s+1). The test strip's
 // content is then turned by +s columns from the stored one: heading_offset_deg = s * 360 / n,
 // wrapped to [-180, 180), the convention of LandmarkMatch::heading_offset_deg (a robot that turned
@@ -27,8 +26,11 @@
 // the peak's own share makes it an overestimate: a cautious one.
 #pragma once
 
+#include <complex>
 #include <cstdint>
 #include <span>
+#include <unsupported/Eigen/FFT>
+#include <vector>
 
 namespace skyloc::dsp {
 
@@ -36,6 +38,7 @@ enum class StripAlignmentError : std::uint8_t {
   kOk,
   kSizeMismatch,  // the strips differ in length, or are shorter than 3 columns
   kFlat,          // a strip is constant: no turn can be read from it
+  kNoStored,      // StripCorrelator::Align before Init and SetStored
 };
 
 // A sentence naming the problem and the fix.
@@ -50,10 +53,61 @@ struct StripAlignment {
   float noise = 0.0f;               // RMS of c over all shifts: chance's standard deviation
 };
 
+// The definition, O(n^2): every c(s) a dot product. For tools and as the reference of
+// StripCorrelator, which the frame path uses.
 // min_peak_separation: columns around the peak that belong to it (its width), >= 1.
 // scratch: n doubles (or empty) to keep c(s) in, which halves the work; same result.
 StripAlignmentError AlignStrips(std::span<const float> stored, std::span<const float> test,
                                 StripAlignment* result, int min_peak_separation = 5,
                                 std::span<double> scratch = {});
+
+// The same alignment by FFT, O(n log n), for the frame path. With A and B the DFTs of the
+// mean-removed strips, n std a std b c(s) is the inverse DFT of conj(A) B, and by Parseval
+// sum_s c(s)^2 = sum_k |A_k|^2 |B_k|^2 / (n var a var b) (var: sums of squared
+// deviations), so `noise` needs no second transform. The stored strip's spectrum is held
+// (SetStored) while a localised robot matches the same route frame again, so such a frame
+// costs one forward and one inverse transform. Any n >= 3 (Eigen's kissfft: mixed radix
+// 2, 3, 4, 5 and a generic butterfly for larger primes).
+//
+// The answer is AlignStrips' to the last bit for the peak (shift_columns,
+// heading_offset_deg, correlation): the transforms' c(s) agree with the dot products to
+// ~1e-15 (double rounding times log n), so every shift within 1e-9 of the transforms'
+// maximum, and the peak's two neighbours the parabola reads, are computed again as
+// AlignStrips computes them; the first of equal maxima wins, as there. That also keeps
+// the heading the same on every target whatever the twiddles' last bits (the libm's
+// cos and sin). runner_up, second_peak and noise come from the transforms: within one
+// float rounding of AlignStrips'.
+class StripCorrelator {
+ public:
+  // Sizes the buffers and the transforms' plans for strips of `columns` (>= 3; false
+  // otherwise). Allocates: not for the frame path.
+  bool Init(int columns);
+
+  // Holds `stored` (a copy) and its spectrum for the Align calls that follow. kFlat: held,
+  // and every Align answers kFlat until another strip is set. Allocates nothing.
+  StripAlignmentError SetStored(std::span<const float> stored);
+
+  // Whether `stored` is, bit for bit, the strip held by SetStored.
+  bool Holds(std::span<const float> stored) const;
+
+  // Aligns `test` against the held stored strip, as AlignStrips(stored, test, ...).
+  // Allocates nothing.
+  StripAlignmentError Align(std::span<const float> test, StripAlignment* result,
+                            int min_peak_separation = 5);
+
+ private:
+  using Complex = std::complex<double>;
+  int columns_ = 0;
+  bool has_stored_ = false;
+  bool stored_flat_ = false;
+  std::vector<float> stored_;
+  double stored_mean_ = 0;
+  double stored_var_ = 0;                 // sum of squared deviations
+  std::vector<Complex> stored_spectrum_;  // n/2 + 1 bins of the mean-removed strip
+  std::vector<Complex> spectrum_;         // the test strip's, then the cross spectrum
+  std::vector<double> deviations_;        // the mean-removed test strip
+  std::vector<double> correlation_;       // c(s), s = 0..n-1
+  Eigen::FFT<double> fft_;
+};
 
 }  // namespace skyloc::dsp
