@@ -36,8 +36,10 @@ function(skyloc_add_gtest name)
   # and often Eigen, which cost more than the tests themselves, and the five build kinds of
   # ./skyloc.sh test compile every test. Measured on the dsp tests, cold: 108 s of CPU
   # against 169 s file by file. File-local names must therefore be unique within a folder
-  # (shared helpers live in tests/support).
-  set_target_properties(${name} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
+  # (shared helpers live in tests/support). SKYLOC_TEST_PROGRAM: the sanitizer builds
+  # compile this code at -Og (cmake/SkylocOptions.cmake says why).
+  set_target_properties(${name} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8
+                                            SKYLOC_TEST_PROGRAM ON)
   # The test code at -O1 in the optimised native build (the code under test keeps -O2):
   # most of a test file's compile is GoogleTest's assertions, which -O2 spends longer
   # optimising for no gain there (host: 179 s of compile CPU for the test programs instead
