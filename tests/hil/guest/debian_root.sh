@@ -3,7 +3,10 @@
 # apt and the package's runtime libraries, their .debs in /var/cache/apt/archives): here,
 # on an arm64 kernel, dpkg installs them for real (their maintainer scripts are arm64
 # programs, which the build machine cannot run), as mmdebstrap itself does: dpkg
-# --install --force-depends of every .deb at once (dpkg does not order Pre-Depends).
+# --install --force-depends of every .deb at once (dpkg does not order Pre-Depends), and
+# --force-unsafe-io, as mmdebstrap's own installs: no fsync per unpacked file, since the
+# image is only used after the sync and the unmount below (under TCG: dpkg 225 -> 185 s
+# of guest time, measured 2026-11-28 on the quiet 2-core machine).
 # shellcheck source=tests/hil/guest/lib.sh
 . /hil/tests/lib.sh
 
@@ -14,7 +17,7 @@ debian_root_mount || {
 n=$(find "$DEBIAN_ROOT/var/cache/apt/archives" -maxdepth 1 -name '*.deb' | wc -l)
 echo "--- dpkg --install --force-depends: $n packages"
 t0=$(cut -d' ' -f1 /proc/uptime)
-if in_debian_root sh -c 'dpkg --install --force-depends /var/cache/apt/archives/*.deb' >/tmp/dpkg.log 2>&1; then
+if in_debian_root sh -c 'dpkg --install --force-depends --force-unsafe-io /var/cache/apt/archives/*.deb' >/tmp/dpkg.log 2>&1; then
   ok "dpkg installed $n packages ($t0 s to $(cut -d' ' -f1 /proc/uptime) s of guest uptime)"
 else
   bad "dpkg --install of the extracted packages failed"
