@@ -85,16 +85,14 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
     if (f.in_file == f.wanted)
       continue;
     const auto in_file = static_cast<unsigned long long>(f.in_file);
-    const auto wanted = static_cast<unsigned long long>(f.wanted);
-    if (f.fix == nullptr) {
-      return Status::Error(StatusCode::kFailedPrecondition,
-                           "taught with %s = %llu but this configuration has %llu: set %s = %llu "
-                           "or teach again",
-                           f.name, in_file, wanted, f.name, in_file);
-    }
+    char set_as_taught[64];
+    if (f.fix == nullptr)
+      std::snprintf(set_as_taught, sizeof set_as_taught, "set %s = %llu or teach again", f.name,
+                    in_file);
     return Status::Error(StatusCode::kFailedPrecondition,
                          "taught with %s = %llu but this configuration has %llu: %s", f.name,
-                         in_file, wanted, f.fix);
+                         in_file, static_cast<unsigned long long>(f.wanted),
+                         f.fix != nullptr ? f.fix : set_as_taught);
   }
   // A route without strips, or a configuration without heading, loads: heading is then
   // off (the caller says so once). Two different strips would give a wrong heading.
