@@ -77,9 +77,8 @@ while :; do
   level=$v
 done
 frames=$(($(grep -c '^{' /tmp/blink.out) - lines_before))
-kill -TERM "$skyloc" 2>/dev/null
-wait "$skyloc"
-rc=$?
+stop_skyloc "$skyloc" /tmp/blink.err
+rc=$stop_rc
 expect_eq "repeat exit status after SIGTERM" "$rc" 0
 
 echo "  $samples samples, $frames frames, flashes starting at (1/100 s):$starts"

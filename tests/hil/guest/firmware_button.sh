@@ -99,9 +99,8 @@ case "$lit" in
   *) bad "status lines read $lit while repeating; per-state encoding lights exactly one" ;;
 esac
 
-kill -TERM "$skyloc" 2>/dev/null
-wait "$skyloc"
-rc=$?
+stop_skyloc "$skyloc" /tmp/button.err
+rc=$stop_rc
 expect_eq "repeat exit status after SIGTERM" "$rc" 0
 expect_eq "lines released at exit" "$(lines_held_by_skyloc "2,4p;9p")" 0
 if [ -e "$ROUTE.tmp" ]; then bad "$ROUTE.tmp left after the commit"; fi

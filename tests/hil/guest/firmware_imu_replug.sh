@@ -167,9 +167,8 @@ else
   bad "no frame since the unplug"
 fi
 
-kill -TERM "$skyloc"
-wait "$skyloc"
-expect_eq "repeat exit status after SIGTERM" "$?" 0
+stop_skyloc "$skyloc" "$ERR"
+expect_eq "repeat exit status after SIGTERM" "$stop_rc" 0
 counted=$(sed -n 's/^.*: \([0-9]*\) frames (.*/\1/p' "$ERR" | tail -n 1)
 expect_eq "frames in the JSON lines = frames counted in the summary" "$(frame_lines "$OUT")" "$counted"
 # Frame numbers only ever increase (a line is never repeated or out of order).

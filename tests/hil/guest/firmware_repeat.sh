@@ -103,9 +103,8 @@ if kill -0 "$skyloc" 2>/dev/null; then
   else
     bad "repeat did not reopen the camera and resume within 30 s of the re-plug"
   fi
-  kill -TERM "$skyloc"
-  wait "$skyloc"
-  rc=$?
+  stop_skyloc "$skyloc" /tmp/repeat.err
+  rc=$stop_rc
   expect_eq "repeat exit status after SIGTERM" "$rc" 0
   expect_eq "status lines released at exit" "$(lines_held_by_skyloc 2,4p)" 0
 else

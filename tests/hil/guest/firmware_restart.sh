@@ -79,8 +79,7 @@ else
   bad "the restarted repeat printed $(json_lines /tmp/lc-restart.out) frames in 60 s"
   sed 's/^/       | /' /tmp/lc-restart.err | grep -v ' INFO \| WARN ' | tail -n 8
 fi
-kill -TERM "$skyloc" 2>/dev/null
-wait "$skyloc"
-expect_eq "restarted repeat exit status after SIGTERM" "$?" 0
+stop_skyloc "$skyloc" /tmp/lc-restart.err
+expect_eq "restarted repeat exit status after SIGTERM" "$stop_rc" 0
 udev_stub_stop
 finish_scenario

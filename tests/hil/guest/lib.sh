@@ -90,6 +90,27 @@ wait_gone() { # PID SECONDS: 0 when the process has exited within the time
   done
   return 0
 }
+# stop_skyloc PID ERRFILE: SIGTERM to a running skyloc, as systemd stops the service, and
+# its exit status in $stop_rc. The service gives it TimeoutStopSec=5 before SIGKILL
+# (config/skyloc.service); a guest under TCG runs several times slower than the board, so
+# the scenario allows 20 s. A process still there then is a failure, told with what each
+# of its threads was doing (state, kernel wait channel, system call) and the end of its
+# stderr, and is killed: a hang costs the scenario 20 s instead of its whole time limit.
+stop_skyloc() {
+  kill -TERM "$1" 2>/dev/null
+  if ! wait_gone "$1" 20; then
+    bad "skyloc (pid $1) still running 20 s after SIGTERM; its threads (name, state, wait channel, syscall):"
+    for t in /proc/"$1"/task/*; do
+      echo "       | $(cat "$t/comm" 2>/dev/null) $(cut -d' ' -f3 "$t/stat" 2>/dev/null)" \
+        "$(cat "$t/wchan" 2>/dev/null) $(cut -d' ' -f1 "$t/syscall" 2>/dev/null)"
+    done
+    grep -v ' INFO \| WARN ' "$2" | tail -n 8 | sed 's/^/       | /'
+    kill -KILL "$1" 2>/dev/null
+  fi
+  wait "$1"
+  # shellcheck disable=SC2034 # read by the scenarios that call this
+  stop_rc=$?
+}
 # Exit status of a scenario: 0 when every check passed.
 finish_scenario() {
   if [ "$failures" -eq 0 ]; then
