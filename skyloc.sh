@@ -169,16 +169,32 @@ ensure_sysroot() {
   say "$arch sysroot ready in $((SECONDS - start)) s ($(du -sh "$dir" | cut -f1), $(wc -l <"$dir/skyloc-sysroot/packages") packages)"
 }
 
+# ./skyloc.sh test installs first what the host build, its tests and its VM tests use
+# (deps host). The ARM builds' cross compilers, qemu-user and sysroots (about 40 s of
+# downloading and unpacking on the 2-core machine) are installed by cross_deps in the
+# background, beside the host build: the aarch64 build, minutes later, is the first to
+# need them, and the arm64 VM set-up (its cross-compiled modules) the second.
+CROSS_READY="$BUILD_ROOT/cross.ready"
+CROSS_FAILED="$BUILD_ROOT/cross.failed"
+cross_deps() {
+  local start=$SECONDS
+  if (deps aarch64 && deps armhf); then
+    note_phase "ARM packages, sysroots" "$start"
+    touch "$CROSS_READY"
+  else
+    touch "$CROSS_FAILED"
+    return 1
+  fi
+}
+# Waits (in any job) until cross_deps has ended; fails when it failed.
+await_cross_deps() {
+  while [ ! -e "$CROSS_READY" ] && [ ! -e "$CROSS_FAILED" ]; do sleep 1; done
+  [ -e "$CROSS_READY" ]
+}
+
 # deps demo: the skyloc executable only. Every build kind: all the host build's packages
 # (its tests, tools, fuzz targets and package test), and for host and aarch64 the VM
 # tests', for the ARM kinds the cross compilers and the sysroot.
-# Everything ./skyloc.sh test builds: the host's packages, both ARM sysroots.
-deps_for_test() {
-  deps host
-  deps aarch64
-  deps armhf
-}
-
 deps() {
   local kind=${1:-host}
   mkdir -p "$BUILD_ROOT"
@@ -438,7 +454,9 @@ vm_tests() {
   local cache="$BUILD_ROOT/hil-cache" rc=0 start
   phase "host VM tests" run_ctest host-vm "$BUILD_ROOT/host/tests/hil" -L hil --repeat until-pass:2
   start=$SECONDS
-  "$ROOT/tests/hil/setup.sh" arm64 "$cache" || rc=$?
+  # The arm64 kernel modules are cross-compiled: after cross_deps.
+  await_cross_deps || rc=$?
+  [ "$rc" -ne 0 ] || "$ROOT/tests/hil/setup.sh" arm64 "$cache" || rc=$?
   # The package test exists only with lintian and mmdebstrap (tests/hil/CMakeLists.txt).
   if [ "$rc" -eq 0 ] && command -v lintian >/dev/null && command -v mmdebstrap >/dev/null; then
     "$ROOT/tests/package/arm64_root.sh" "$cache" || rc=$?
@@ -452,13 +470,14 @@ vm_tests() {
 }
 
 cmd_test() {
-  local start=$SECONDS
+  local start=$SECONDS wait_start
   rm -rf "$RESULTS_DIR"
   mkdir -p "$RESULTS_DIR"
   # A failure or Ctrl-C in the foreground stops the VMs too.
   trap stop_background EXIT
-  rm -f "$AARCH64_BUILT"
-  phase "packages, sysroots" deps_for_test
+  rm -f "$AARCH64_BUILT" "$CROSS_READY" "$CROSS_FAILED"
+  phase "packages" deps host
+  start_background cross cross_deps
   phase "host build" configure_and_build host
   start_background vm vm_tests
   # x86-64 runs each test once: the ASan+UBSan build runs every test but the VM ones (those
@@ -483,6 +502,9 @@ cmd_test() {
     skyloc_tools_tests skyloc make_eval_datasets
   phase "tsan tests" run_ctest tsan "$BUILD_ROOT/tsan" \
     -R "SpscQueue|FrameRecorder|ParallelFor|BlockedSeqSlamThreads|^cli[.]eval_(batch|streaming)$"
+  wait_start=$SECONDS
+  await_cross_deps || die "the ARM builds' packages or sysroots could not be installed (its output: $BUILD_ROOT/background-cross.out)"
+  note_phase "waiting for ARM deps" "$wait_start"
   phase "aarch64 build" configure_and_build aarch64
   touch "$AARCH64_BUILT"
   # The slow soak runs are the host build's job.
@@ -492,7 +514,7 @@ cmd_test() {
   phase "armhf build" configure_and_build armhf
   phase "armhf tests" run_ctest armhf "$BUILD_ROOT/armhf" -LE "slow|hil"
   wait_background
-  rm -f "$AARCH64_BUILT"
+  rm -f "$AARCH64_BUILT" "$CROSS_READY" "$CROSS_FAILED"
   trap - EXIT
   summarise_results $((SECONDS - start))
 }
