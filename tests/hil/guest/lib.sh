@@ -100,8 +100,9 @@ stop_skyloc() {
   kill -TERM "$1" 2>/dev/null
   if ! wait_gone "$1" 20; then
     bad "skyloc (pid $1) still running 20 s after SIGTERM; its threads (name, state, wait channel, syscall):"
+    # The state is the field after the name in parentheses, which may hold spaces.
     for t in /proc/"$1"/task/*; do
-      echo "       | $(cat "$t/comm" 2>/dev/null) $(cut -d' ' -f3 "$t/stat" 2>/dev/null)" \
+      echo "       | $(cat "$t/comm" 2>/dev/null) $(sed 's/.*) //' "$t/stat" 2>/dev/null | cut -d' ' -f1)" \
         "$(cat "$t/wchan" 2>/dev/null) $(cut -d' ' -f1 "$t/syscall" 2>/dev/null)"
     done
     grep -v ' INFO \| WARN ' "$2" | tail -n 8 | sed 's/^/       | /'
