@@ -457,10 +457,12 @@ kill_tree() {
 AARCH64_BUILT="$BUILD_ROOT/aarch64.built"
 vm_tests() {
   local cache="$BUILD_ROOT/hil-cache" rc=0 start
+  # After cross_deps, always: the VM set-ups install a missing host package themselves
+  # (tests/hil/setup.sh), and two apt-get runs at once would fail on dpkg's lock; and the
+  # arm64 kernel modules are cross-compiled. It ends long before the host build does.
+  await_cross_deps || rc=$?
   phase "host VM tests" run_ctest host-vm "$BUILD_ROOT/host/tests/hil" -L hil --repeat until-pass:2
   start=$SECONDS
-  # The arm64 kernel modules are cross-compiled: after cross_deps.
-  await_cross_deps || rc=$?
   [ "$rc" -ne 0 ] || "$ROOT/tests/hil/setup.sh" arm64 "$cache" || rc=$?
   # The package test exists only with lintian and mmdebstrap (tests/hil/CMakeLists.txt).
   if [ "$rc" -eq 0 ] && command -v lintian >/dev/null && command -v mmdebstrap >/dev/null; then
