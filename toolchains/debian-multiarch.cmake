@@ -41,8 +41,14 @@ set(ENV{PKG_CONFIG_PATH} "")
 # qemu-user runs the cross-built tests; -L makes it load the target's dynamic loader and
 # libraries (libcamera's, libgpiod's, libc) from the sysroot. There is no binfmt_misc on
 # the build machines, so the emulator is always named.
+# aarch64 runs on a Cortex-A53, the core of the Raspberry Pi 3 and Zero 2 our users fly,
+# rather than qemu's default "max" (every optional feature, SVE and pointer authentication
+# among them, none of which the A53 has): the tests then run on the users' core, and 7 %
+# faster (a quarter of the dsp tests: 27.3 s against 25.5 s, 2026-11-28). armhf keeps the
+# default: cortex-a7 and cortex-a15 were no faster there.
 if(CMAKE_SYSTEM_PROCESSOR STREQUAL "arm")
   set(CMAKE_CROSSCOMPILING_EMULATOR /usr/bin/qemu-arm-static;-L;${SKYLOC_SYSROOT})
 else()
-  set(CMAKE_CROSSCOMPILING_EMULATOR /usr/bin/qemu-${CMAKE_SYSTEM_PROCESSOR}-static;-L;${SKYLOC_SYSROOT})
+  set(CMAKE_CROSSCOMPILING_EMULATOR
+      /usr/bin/qemu-${CMAKE_SYSTEM_PROCESSOR}-static;-cpu;cortex-a53;-L;${SKYLOC_SYSROOT})
 endif()
