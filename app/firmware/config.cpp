@@ -206,6 +206,27 @@ template const char* NameOf(GridPreset);
 template const char* NameOf(StatusOutputKind);
 template const char* NameOf(AttitudeKind);
 template const char* NameOf(Matcher);
+template const char* NameOf(dsp::ReferenceStorage);
+
+template <typename E>
+bool ValueOf(std::string_view name, E* value) {
+  for (const EnumName<E>& n : std::get<std::span<const EnumName<E>>>(kNameTables))
+    if (name == n.name) {
+      *value = n.value;
+      return true;
+    }
+  return false;
+}
+template bool ValueOf(std::string_view, dsp::ReferenceStorage*);
+
+template <typename E>
+std::string NamesOf() {
+  std::string names;
+  for (const EnumName<E>& n : std::get<std::span<const EnumName<E>>>(kNameTables))
+    names += std::string(names.empty() ? "" : ", ") + n.name;
+  return names;
+}
+template std::string NamesOf<dsp::ReferenceStorage>();
 
 Config DefaultConfig() {
   Config c;

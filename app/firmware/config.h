@@ -29,9 +29,19 @@ enum class AttitudeKind : std::uint8_t { kNone, kIio, kDataset, kSim };
 
 // The one spelling of a configuration enum's value: the config file's, the command line's
 // (--grid, which has no "custom"; --matcher) and the reports'; "?" for a value outside the
-// enum. For CameraKind, GridPreset, StatusOutputKind, AttitudeKind and Matcher.
+// enum. For CameraKind, GridPreset, StatusOutputKind, AttitudeKind, Matcher and
+// dsp::ReferenceStorage.
 template <typename E>
 const char* NameOf(E value);
+
+// The reverse, from the same table: the value `name` spells, or false (and *value
+// untouched). NamesOf lists every spelling in the table's order, comma-separated, for an
+// error message ("float32, bfloat16, codes8, codes16"). For dsp::ReferenceStorage
+// ([capacities] route_storage; tests/cost/stage_cost takes it on its command line).
+template <typename E>
+bool ValueOf(std::string_view name, E* value);
+template <typename E>
+std::string NamesOf();
 
 // The world of a simulated run and how a run through it is sampled: what the
 // configuration's [camera] sim_* keys own (and `skyloc simulate`'s --world, --seed and

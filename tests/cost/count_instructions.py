@@ -13,8 +13,8 @@ table, SH tables, the route) cancels. See docs/BENCHMARKS.md, "ARM cost, measure
   tests/cost/count_instructions.py --arch aarch64 --binary build/cost-aarch64/tests/cost/stage_cost \
       --sysroot build/sysroot-arm64 [--repetitions 4] [--functions 8] [CASE ...]
 
-A CASE is STAGE[:ROUTE_FRAMES[:bfloat16]] (stage_cost's arguments); without any, the
-default list below. Prints one line per case: instructions per repetition, and with
+A CASE is STAGE[:ROUTE_FRAMES[:STORAGE]] (stage_cost's arguments; STORAGE as [capacities]
+route_storage: float32, bfloat16, codes8 or codes16); without any, the default list below. Prints one line per case: instructions per repetition, and with
 --functions N the N functions with the most instructions per repetition (self counts).
 """
 import argparse
@@ -34,7 +34,7 @@ DEFAULT_CASES = [
 
 # The cost model (a model, not a measurement; docs/BENCHMARKS.md, "ARM cost, measured",
 # gives the sources): time = instructions / (IPC x clock), except the route scan (the
-# functions named *DifferenceRows*), which takes at least its bytes / memory bandwidth
+# functions named in SCAN_FUNCTIONS), which takes at least its bytes / memory bandwidth
 # when the route does not fit in L2 (512 KiB on the Pi 3's BCM2837, 1 MiB on the Pi 4's
 # BCM2711): from about 2,000 (float) or 3,500 (bfloat16) frames of 64 bands up. IPC is a range: a low and a high assumption under
 # the core's issue width (Cortex-A53: 2, in order; Cortex-A72: 3, out of order).
@@ -43,6 +43,12 @@ CORES = [
     ("A53@1.2GHz", 1.2e9, 0.7, 1.0, 2.0e9, 512 << 10),
     ("A72@1.5GHz", 1.5e9, 1.2, 1.8, 4.0e9, 1 << 20),
 ]
+
+# The route scan: dsp/src/seqslam.cpp's DifferenceRows<Rows>, one instance per route storage
+# (Float32Rows, BFloat16Rows, CodeRows<unsigned char> for codes8, CodeRows<unsigned short>
+# for codes16; each a function of its own in the Release builds, so qemu's log names it).
+# A substring of the symbol's name, mangled or not.
+SCAN_FUNCTIONS = ["DifferenceRows"]
 
 QEMU = {"aarch64": "qemu-aarch64-static", "armhf": "qemu-arm-static", "x86_64": "qemu-x86_64-static"}
 
@@ -54,28 +60,36 @@ def count(qemu, sysroot, binary, args):
         cmd += ["-L", sysroot]
     cmd += [binary] + args
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=1 << 20)
+    # A block's instruction count goes from its translation (IN:, a listing of guest
+    # instructions) to its first run (the first Trace line of its guest address), keyed by
+    # that guest address: the program's shared libraries start threads of their own (two,
+    # before main), whose translations and runs interleave with the main thread's in the log.
     blocks = {}  # host address of a translated block -> (guest instructions, function)
-    pending = None  # instructions of the last logged translation, until it first runs
-    in_block = False
+    pending = {}  # guest address -> instructions of a logged translation, until it first runs
+    in_block = None  # the translation being listed: [guest address, instructions]
     per_function = collections.Counter()
     for line in proc.stderr:
-        if in_block:
+        if in_block is not None:
             if line.startswith(b"0x"):
-                pending += 1
+                if in_block[0] is None:
+                    in_block[0] = int(line.split(b":", 1)[0], 16)
+                in_block[1] += 1
             elif not line.strip():
-                in_block = False
+                pending[in_block[0]] = in_block[1]
+                in_block = None
         elif line.startswith(b"Trace "):
+            # Trace CPU: HOST [CS_BASE/GUEST/FLAGS/CFLAGS] FUNCTION
             parts = line.split(b" ", 4)
             host = parts[2]
-            if pending is not None:  # its first run: a new block (maybe at a reused address)
+            guest = int(parts[3].split(b"/")[1], 16)
+            n = pending.pop(guest, None)
+            if n is not None:  # its first run: a new block (maybe at a reused address)
                 name = parts[4].strip().decode(errors="replace") if len(parts) > 4 else "?"
-                blocks[host] = (pending, name or "?")
-                pending = None
+                blocks[host] = (n, name or "?")
             n, name = blocks[host]
             per_function[name] += n
         elif line.startswith(b"IN:"):
-            in_block = True
-            pending = 0
+            in_block = [None, 0]
     out = proc.stdout.read()
     proc.wait()
     if proc.returncode != 0:
@@ -114,7 +128,7 @@ def run_cases(a, images):
         diff = collections.Counter(twice[1])
         diff.subtract(once[1])
         if a.model:
-            scan = sum(n for name, n in diff.items() if "DifferenceRows" in name) / r
+            scan = sum(n for name, n in diff.items() if any(f in name for f in SCAN_FUNCTIONS)) / r
             m = re.search(r"route bytes per step (\d+)", twice[2])
             scan_bytes = int(m.group(1)) if m else 0
             if not scan:

@@ -5,8 +5,11 @@
 // stage for R and 2R repetitions and takes the difference: the instructions of R repetitions
 // with the set-up subtracted. Not a benchmark: it measures no time.
 //
-//   stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [float32|bfloat16 [IMAGE_DIR]]]
+//   stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [STORAGE [IMAGE_DIR]]]
 //
+// STORAGE: how the route filter holds the route ([capacities] route_storage, spelled by the
+// configuration's own table through firmware::ValueOf); float32 when left out. It applies
+// to the filter and frame stages.
 // @BANDS sets [descriptor] bands on the default (oversampled) grid, e.g. frame@120: the
 // descriptor the robot would run with more bands, measured the same way.
 //
@@ -28,7 +31,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <string>
 #include <utility>
 #include <vector>
@@ -126,21 +128,18 @@ void RouteDescriptor(int i, std::vector<float>* d) {
   }
 }
 
-// The bytes one route filter step reads and writes per route row (descriptor, cost and
-// difference columns), for the cost model's memory term.
-std::size_t ScanBytes(int route_frames, int dim, bool bfloat16) {
-  return static_cast<std::size_t>(route_frames) *
-         dsp::RouteFilter::BytesPerReference(
-             dim, bfloat16 ? dsp::ReferenceStorage::kBFloat16 : dsp::ReferenceStorage::kFloat32);
+// The bytes one route filter step reads and writes per route row (descriptor as held,
+// with its exponent byte for codes; frame numbers, cost and difference columns), for the
+// cost model's memory term.
+std::size_t ScanBytes(int route_frames, int dim, dsp::ReferenceStorage storage) {
+  return static_cast<std::size_t>(route_frames) * dsp::RouteFilter::BytesPerReference(dim, storage);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3)
-    return Fail(
-        "usage: stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [float32|bfloat16 "
-        "[IMAGE_DIR]]]");
+    return Fail("usage: stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [STORAGE [IMAGE_DIR]]]");
   std::string stage = argv[1];
   int bands = 0;  // 0: the default configuration's
   if (const std::size_t at = stage.find('@'); at != std::string::npos) {
@@ -154,15 +153,18 @@ int main(int argc, char** argv) {
     stage = "frame";
   const long repetitions = std::strtol(argv[2], nullptr, 10);
   const int route_frames = argc > 3 ? static_cast<int>(std::strtol(argv[3], nullptr, 10)) : 10000;
-  const bool bfloat16 = argc > 4 && std::strcmp(argv[4], "bfloat16") == 0;
+  dsp::ReferenceStorage storage = dsp::ReferenceStorage::kFloat32;
+  if (argc > 4 && !ValueOf(argv[4], &storage))
+    return Fail(("unknown route storage \"" + std::string(argv[4]) + "\": one of " +
+                 NamesOf<dsp::ReferenceStorage>())
+                    .c_str());
   const std::string image_dir = argc > 5 ? argv[5] : "";
   if (repetitions < 0 || route_frames < 1)
     return Fail("REPETITIONS >= 0 and ROUTE_FRAMES >= 1");
 
   Config config = DefaultConfig();
   config.capacities.route_frames = route_frames;
-  config.capacities.route_storage =
-      bfloat16 ? dsp::ReferenceStorage::kBFloat16 : dsp::ReferenceStorage::kFloat32;
+  config.capacities.route_storage = storage;
   if (bands > 0) {
     config.descriptor.bands = bands;
     ResolveDescriptorGrid(&config.descriptor);  // the grid for these bands
@@ -188,9 +190,7 @@ int main(int argc, char** argv) {
     // The route filter alone, as Pipeline::Init configures it (no pipeline, no frames).
     dsp::RouteFilter filter;
     const int dim = config.descriptor.bands;
-    if (filter.Init(config.seqslam.filter, dim, route_frames,
-                    bfloat16 ? dsp::ReferenceStorage::kBFloat16
-                             : dsp::ReferenceStorage::kFloat32) != dsp::SeqSlamError::kOk)
+    if (filter.Init(config.seqslam.filter, dim, route_frames, storage) != dsp::SeqSlamError::kOk)
       return Fail("filter Init");
     std::vector<float> d(static_cast<std::size_t>(dim));
     for (int i = 0; i < route_frames; ++i) {
@@ -208,8 +208,8 @@ int main(int argc, char** argv) {
       checksum += static_cast<double>(match.row);
     }
     std::printf("stage filter x %ld, route %d %s: checksum %.6g, route bytes per step %zu\n",
-                repetitions, route_frames, bfloat16 ? "bfloat16" : "float32", checksum,
-                ScanBytes(route_frames, dim, bfloat16));
+                repetitions, route_frames, NameOf(storage), checksum,
+                ScanBytes(route_frames, dim, storage));
     return 0;
   }
   const MonotonicClock clock;
@@ -300,7 +300,7 @@ int main(int argc, char** argv) {
     return Fail("unknown STAGE");
   }
   std::printf("stage %s x %ld, route %d %s: checksum %.6g, route bytes per step %zu\n",
-              stage.c_str(), repetitions, route_frames, bfloat16 ? "bfloat16" : "float32", checksum,
-              stage == "frame" ? ScanBytes(route_frames, pipeline.dim(), bfloat16) : 0);
+              stage.c_str(), repetitions, route_frames, NameOf(storage), checksum,
+              stage == "frame" ? ScanBytes(route_frames, pipeline.dim(), storage) : 0);
   return 0;
 }
