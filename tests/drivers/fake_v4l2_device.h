@@ -35,6 +35,9 @@ class FakeV4l2Device final : public V4l2Io {
   std::uint32_t skip_sequences = 0;  // the driver lost frames before the next one
   bool next_frame_error = false;     // V4L2_BUF_FLAG_ERROR on the next frame
   bool next_frame_short = false;     // bytesused half the image on the next frame
+  // The next frame carries the previous frame's sequence number again (vivid did, in a
+  // guest starved of CPU: the HIL VM, 2026-11-28).
+  bool repeat_last_sequence = false;
   // --- what happened ---
   int opens = 0;
   int streamons = 0;
@@ -138,6 +141,9 @@ class FakeV4l2Device final : public V4l2Io {
         --queue_size_;
         sequence_ += skip_sequences;
         skip_sequences = 0;
+        if (repeat_last_sequence && sequence_ > 0)
+          --sequence_;
+        repeat_last_sequence = false;
         buf->sequence = sequence_++;
         buf->timestamp.tv_sec = static_cast<time_t>(now_.count() / 1'000'000'000);
         buf->timestamp.tv_usec = static_cast<suseconds_t>(now_.count() % 1'000'000'000 / 1000);

@@ -500,11 +500,18 @@ Result<Frame> V4l2Camera::DoCapture(Nanoseconds timeout) {
     held_buffer_ = static_cast<int>(buf.index);
     recovery_.FrameArrived(now);
 
-    const std::uint64_t sequence = sequence_base_ + buf.sequence;
+    std::uint64_t sequence = sequence_base_ + buf.sequence;
+    // A frame the driver stamps with a number already given (vivid did, in a guest starved
+    // of CPU) gets the next number of ours, and our numbering follows the driver's from
+    // there: a Camera's frame numbers only increase (the recorder and the drop count rely
+    // on it), and later gaps still count as drops.
+    if (have_sequence_ && sequence < next_sequence_) {
+      sequence_base_ += next_sequence_ - sequence;
+      sequence = next_sequence_;
+    }
     if (have_sequence_ && sequence > next_sequence_)
       counters_.dropped += sequence - next_sequence_;
-    if (!have_sequence_ || sequence >= next_sequence_)
-      next_sequence_ = sequence + 1;
+    next_sequence_ = sequence + 1;
     have_sequence_ = true;
 
     if ((buf.flags & V4L2_BUF_FLAG_ERROR) != 0) {
