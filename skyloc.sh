@@ -172,8 +172,8 @@ ensure_sysroot() {
 # ./skyloc.sh test installs first what the host build, its tests and its VM tests use
 # (deps host). The ARM builds' cross compilers, qemu-user and sysroots (about 40 s of
 # downloading and unpacking on the 2-core machine) are installed by cross_deps in the
-# background, beside the host build: the aarch64 build, minutes later, is the first to
-# need them, and the arm64 VM set-up (its cross-compiled modules) the second.
+# background, beside the host build. The VM job waits for it before its first VM (see
+# vm_tests), the aarch64 build, minutes later, before compiling.
 CROSS_READY="$BUILD_ROOT/cross.ready"
 CROSS_FAILED="$BUILD_ROOT/cross.failed"
 cross_deps() {
