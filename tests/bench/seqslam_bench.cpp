@@ -127,6 +127,13 @@ void BM_RouteFilterStepCodes8(benchmark::State& state) {
 }
 BENCHMARK(BM_RouteFilterStepCodes8)->Apply(RouteLengths);
 
+// 16-bit linear codes with a power-of-two scale per row: the route file's own values
+// (format 5), at half the float route's bytes.
+void BM_RouteFilterStepCodes16(benchmark::State& state) {
+  RouteFilterStep(state, skyloc::dsp::ReferenceStorage::kCodes16);
+}
+BENCHMARK(BM_RouteFilterStepCodes16)->Apply(RouteLengths);
+
 void BM_DifferenceColumn(benchmark::State& state) {
   const std::size_t n = static_cast<std::size_t>(state.range(0));
   const std::vector<float> db = RandomFloats(n * kDim, 1), q = RandomFloats(kDim, 2);
