@@ -41,6 +41,24 @@ std::uint64_t NextRandom(std::uint64_t* state) {
   return z ^ (z >> 31);
 }
 
+// RANSAC's standard stopping rule: the draws after which a sample of two inliers has been
+// drawn with probability `confidence`, when `inliers` of `matches` pairs are inliers:
+// the least k with (1 - w^2)^k <= 1 - confidence, w = inliers / matches, at most `limit`.
+// By products, not log(1 - p) / log(1 - w^2): basic operations round the same on every
+// target, and the count decides the answer.
+int DrawsForConfidence(int inliers, int matches, float confidence, int limit) {
+  const double w = static_cast<double>(inliers) / static_cast<double>(matches);
+  const double miss = 1.0 - w * w;  // a draw is not two inliers
+  const double allowed = 1.0 - static_cast<double>(confidence);
+  double all_missed = 1.0;
+  int k = 0;
+  while (all_missed > allowed && k < limit) {
+    all_missed *= miss;
+    ++k;
+  }
+  return k;
+}
+
 int SideOf(std::int8_t laplacian_sign) {
   return laplacian_sign > 0 ? 0 : 1;
 }
@@ -257,8 +275,9 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
 
 Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& options) {
   if (max_features < 1 || !(options.ratio > 0.0f) || !(options.min_distance > 0.0f) ||
-      options.ransac_iterations < 1 || !(options.inlier_threshold >= 0.0f) ||
-      !(options.max_scale >= 1.0f)) {
+      options.ransac_iterations < 1 ||
+      !(options.ransac_confidence >= 0.0f && options.ransac_confidence < 1.0f) ||
+      !(options.inlier_threshold >= 0.0f) || !(options.max_scale >= 1.0f)) {
     return Surf1dError::kBadOptions;
   }
   options_ = options;
@@ -398,27 +417,23 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   const std::int32_t* xt = pair_test_.data();
   const auto threshold = static_cast<double>(options_.inlier_threshold);
   const auto max_scale = static_cast<double>(options_.max_scale);
-  const auto count = static_cast<std::uint64_t>(matches);
-  std::uint64_t state = options_.seed;
   int best_inliers = 0;
   double best_residual = std::numeric_limits<double>::infinity();
   double best_scale = 1.0;
   int best_anchor = -1;
-  for (int it = 0; it < options_.ransac_iterations; ++it) {
-    const auto i = static_cast<int>(NextRandom(&state) % count);
-    auto j = static_cast<int>(NextRandom(&state) % (count - 1));
-    if (j >= i)
-      ++j;
+  // The line through pairs i and j, anchored at i, against the best so far (most inliers,
+  // then the smallest residual sum; the first of equals stays). True when no later line can
+  // do better: every pair on it with no residual.
+  const auto try_line = [&](int i, int j) {
     // Differences measured the short way round, anchored at match i.
     const int ds = circle.Difference(xs[i], xs[j]);
     const int dt = circle.Difference(xt[i], xt[j]);
     if (ds == 0)
-      continue;
+      return false;
     const double scale = static_cast<double>(dt) / static_cast<double>(ds);
     // A mirrored horizon (b_s < 0) is not a view of the same place.
-    if (!(scale >= 1.0 / max_scale && scale <= max_scale)) {
-      continue;
-    }
+    if (!(scale >= 1.0 / max_scale && scale <= max_scale))
+      return false;
     // A line that has already missed more pairs than the best line missed in all cannot
     // win (it needs at least as many inliers), so its count stops there.
     const int max_outliers = matches - best_inliers;
@@ -431,19 +446,41 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
         ++inliers;
         residual_sum += residual;
       } else if (++outliers > max_outliers) {
-        break;
+        return false;
       }
     }
-    if (outliers > max_outliers)
-      continue;
     if (inliers > best_inliers || (inliers == best_inliers && residual_sum < best_residual)) {
       best_inliers = inliers;
       best_residual = residual_sum;
       best_scale = scale;
       best_anchor = i;
-      // Every pair on the line with no residual: no later line can do better.
-      if (inliers == matches && residual_sum == 0.0)
+      return inliers == matches && residual_sum == 0.0;
+    }
+    return false;
+  };
+  const int budget = options_.ransac_iterations;
+  const auto lines = static_cast<std::int64_t>(matches) * (matches - 1) / 2;
+  if (lines <= budget) {
+    // No more distinct lines than draws: each once, i < j, anchored at i.
+    bool done = false;
+    for (int i = 0; i < matches && !done; ++i) {
+      for (int j = i + 1; j < matches && !done; ++j)
+        done = try_line(i, j);
+    }
+  } else {
+    const auto count = static_cast<std::uint64_t>(matches);
+    std::uint64_t state = options_.seed;
+    int needed = budget;
+    for (int it = 0; it < needed; ++it) {
+      const auto i = static_cast<int>(NextRandom(&state) % count);
+      auto j = static_cast<int>(NextRandom(&state) % (count - 1));
+      if (j >= i)
+        ++j;
+      const int before = best_inliers;
+      if (try_line(i, j))
         break;
+      if (best_inliers > before && options_.ransac_confidence > 0.0f)
+        needed = DrawsForConfidence(best_inliers, matches, options_.ransac_confidence, budget);
     }
   }
   if (best_inliers < 2)
