@@ -142,7 +142,7 @@ Surf1dError Surf1d::Init(int n, const Surf1dOptions& options) {
   dropped_ = 0;
   lobes_ = std::move(lobes);
   const int max_lobe = lobes_.back();
-  const long max_step = std::max(1L, std::lround(0.4 * max_lobe));
+  const long max_step = DescriptorStep(max_lobe);
   pad_ = std::max<long>((3 * max_lobe + 1) / 2 + 1, (kDescriptorHalfSamples + 1) * max_step + 1);
   integral_.assign(static_cast<std::size_t>(n + 2 * pad_) + 1, 0.0);
   for (int k = -kDescriptorHalfSamples; k <= kDescriptorHalfSamples; ++k) {
@@ -151,6 +151,9 @@ Surf1dError Surf1d::Init(int n, const Surf1dOptions& options) {
         std::exp(-kk * kk / (2.0 * kDescriptorSigmaSamples * kDescriptorSigmaSamples));
   }
   responses_.assign(lobes_.size() * static_cast<std::size_t>(n), 0.0f);
+  steps_.clear();
+  for (const int lobe : lobes_)
+    steps_.push_back(DescriptorStep(lobe));
   return Surf1dError::kOk;
 }
 
@@ -159,14 +162,27 @@ double Surf1d::BoxSum(long a, long b) const {
          integral_[static_cast<std::size_t>(a + pad_)];
 }
 
-void Surf1d::Describe(int position, int lobe, Surf1dFeature* feature) const {
-  const long step = std::max(1L, std::lround(0.4 * lobe));
+long Surf1d::DescriptorStep(int lobe) {
+  return std::max(1L, std::lround(0.4 * lobe));
+}
+
+void Surf1d::Describe(int position, int layer, Surf1dFeature* feature) const {
+  const long step = steps_[static_cast<std::size_t>(layer)];
+  // Sample k (p = position + k step) is (BoxSum(p, p + step) - BoxSum(p - step, p)) / step:
+  // neighbouring samples share box ends, so the integral is read once at each of the 17
+  // points position + m step, m = -8..8, and the differences taken in the same order.
+  constexpr int kPoints = 2 * kDescriptorHalfSamples + 3;
+  std::array<double, kPoints> at;
+  const double* base = integral_.data() + pad_ + position;
+  for (int m = 0; m < kPoints; ++m)
+    at[static_cast<std::size_t>(m)] = base[(m - kDescriptorHalfSamples - 1) * step];
+  const auto step_d = static_cast<double>(step);
   std::array<double, kSurf1dDescriptorSize> v{};
-  for (int k = -kDescriptorHalfSamples; k <= kDescriptorHalfSamples; ++k) {
-    const long p = position + k * step;
-    const double dx = (BoxSum(p, p + step) - BoxSum(p - step, p)) / static_cast<double>(step);
-    const double w = weights_[static_cast<std::size_t>(k + kDescriptorHalfSamples)];
-    const auto sub = static_cast<std::size_t>((k + kDescriptorHalfSamples) / kSamplesPerSubregion);
+  for (std::size_t k = 0; k < 2 * kDescriptorHalfSamples + 1; ++k) {
+    const double centre = at[k + 1];
+    const double dx = ((at[k + 2] - centre) - (centre - at[k])) / step_d;
+    const double w = weights_[k];
+    const std::size_t sub = k / kSamplesPerSubregion;
     v[2 * sub] += w * dx;
     v[2 * sub + 1] += w * std::abs(dx);
   }
@@ -268,7 +284,7 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
     return a.position != b.position ? a.position < b.position : a.layer < b.layer;
   });
   for (Surf1dFeature& f : kept)
-    Describe(f.position, f.lobe, &f);
+    Describe(f.position, f.layer, &f);
   *count = written;
   return Surf1dError::kOk;
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -789,6 +790,166 @@ TEST(Surf1dTest, StoredFeaturesHeldAcrossMatches) {
   EXPECT_EQ(held.MatchStored(unsigned_features, 360, &m), Surf1dError::kBadFeature);
   EXPECT_NE(std::string(Surf1dErrorMessage(Surf1dError::kBadFeature)).find("Detect"),
             std::string::npos);
+}
+
+// The detector as first written: the integral summed from -pad as Detect sums it (so the
+// responses are the same bits), the candidates layer by layer with the weakest replaced when
+// the buffer is full, std::sort by position then layer, and each descriptor's 15 samples as
+// two BoxSums each. Detect must give exactly its features, in its order.
+std::vector<Surf1dFeature> ReferenceDetect(const std::vector<float>& strip, const Surf1dOptions& o,
+                                           std::size_t capacity, int* dropped) {
+  const long n = static_cast<long>(strip.size());
+  std::vector<long> lobes;
+  for (int oc = 0; oc < o.octaves; ++oc) {
+    for (int i = 0; i < o.intervals; ++i)
+      lobes.push_back((2L << oc) * (i + 1) + 1);
+  }
+  std::sort(lobes.begin(), lobes.end());
+  lobes.erase(std::unique(lobes.begin(), lobes.end()), lobes.end());
+  const long max_lobe = lobes.back();
+  const auto step_of = [](long lobe) {
+    return std::max(1L, std::lround(0.4 * static_cast<double>(lobe)));
+  };
+  const long pad = std::max<long>((3 * max_lobe + 1) / 2 + 1, 8 * step_of(max_lobe) + 1);
+  std::vector<double> integral(static_cast<std::size_t>(n + 2 * pad) + 1, 0.0);
+  double running = 0.0;
+  for (std::size_t i = 1; i < integral.size(); ++i) {
+    const long column = ((static_cast<long>(i) - 1 - pad) % n + n) % n;
+    running += static_cast<double>(strip[static_cast<std::size_t>(column)]);
+    integral[i] = running;
+  }
+  const auto box = [&](long a, long b) {
+    return integral[static_cast<std::size_t>(b + pad)] -
+           integral[static_cast<std::size_t>(a + pad)];
+  };
+  const auto layers = static_cast<long>(lobes.size());
+  std::vector<float> response(static_cast<std::size_t>(layers * n));
+  for (long li = 0; li < layers; ++li) {
+    const long l = lobes[static_cast<std::size_t>(li)], h = (l - 1) / 2;
+    for (long x = 0; x < n; ++x) {
+      response[static_cast<std::size_t>(li * n + x)] = static_cast<float>(
+          (box(x - h - l, x - h) + box(x + h + 1, x + h + 1 + l) - 2.0 * box(x - h, x + h + 1)) /
+          static_cast<double>(l));
+    }
+  }
+  const auto magnitude = [&](long li, long x) {
+    return std::abs(response[static_cast<std::size_t>(li * n + (x + n) % n)]);
+  };
+  std::vector<Surf1dFeature> kept;
+  *dropped = 0;
+  for (long li = 0; li < layers; ++li) {
+    for (long x = 0; x < n; ++x) {
+      const float m = magnitude(li, x);
+      if (!(m > o.threshold) || !(m > magnitude(li, x - 1) && m >= magnitude(li, x + 1)))
+        continue;
+      bool is_max = true;
+      for (long dx = -1; dx <= 1 && o.suppress_across_scale; ++dx) {
+        if (li > 0 && !(m > magnitude(li - 1, x + dx)))
+          is_max = false;
+        if (li + 1 < layers && !(m >= magnitude(li + 1, x + dx)))
+          is_max = false;
+      }
+      if (!is_max)
+        continue;
+      Surf1dFeature f;
+      f.position = static_cast<std::int32_t>(x);
+      f.layer = static_cast<std::int32_t>(li);
+      f.lobe = static_cast<std::int32_t>(lobes[static_cast<std::size_t>(li)]);
+      f.response = response[static_cast<std::size_t>(li * n + x)];
+      f.laplacian_sign = f.response > 0.0f ? std::int8_t{1} : std::int8_t{-1};
+      if (kept.size() < capacity) {
+        kept.push_back(f);
+        continue;
+      }
+      ++*dropped;
+      if (kept.empty())
+        continue;
+      auto weakest = std::min_element(kept.begin(), kept.end(), [](const auto& a, const auto& b) {
+        return std::abs(a.response) < std::abs(b.response);
+      });
+      if (std::abs(weakest->response) < m)
+        *weakest = f;
+    }
+  }
+  std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) {
+    return a.position != b.position ? a.position < b.position : a.layer < b.layer;
+  });
+  for (Surf1dFeature& f : kept) {
+    const long step = step_of(f.lobe);
+    std::array<double, kSurf1dDescriptorSize> v{};
+    for (long k = -7; k <= 7; ++k) {
+      const long p = f.position + k * step;
+      const double dx = (box(p, p + step) - box(p - step, p)) / static_cast<double>(step);
+      const double kk = static_cast<double>(k);
+      const double w = std::exp(-kk * kk / (2.0 * 2.5 * 2.5));
+      const auto sub = static_cast<std::size_t>((k + 7) / 5);
+      v[2 * sub] += w * dx;
+      v[2 * sub + 1] += w * std::abs(dx);
+    }
+    double norm = 0.0;
+    for (const double x : v)
+      norm += x * x;
+    norm = std::sqrt(norm);
+    for (std::size_t i = 0; i < v.size(); ++i)
+      f.descriptor[i] = norm > 0.0 ? static_cast<float>(v[i] / norm) : 0.0f;
+  }
+  return kept;
+}
+
+// Detect's features are the first-written detector's to the bit, in the same order: on
+// integer and fractional strips, with the default and other options, and with buffers too
+// small for all the candidates (the strongest kept, which may then be any of them).
+TEST(Surf1dTest, DetectEqualsTheStraightforwardDetector) {
+  std::mt19937 rng(33);
+  std::uniform_real_distribution<float> fraction(0.0f, 1.0f);
+  std::uniform_int_distribution<int> exponent(-12, 12);
+  int cases = 0, overflowed = 0;
+  for (const int n : {360, 361, 200}) {
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      std::vector<float> strip = IntegerStrip(n, seed);
+      if (seed % 2 == 0) {
+        for (float& x : strip)  // magnitudes 2^-12..2^20: the integral's sums round
+          x = std::ldexp(x * (1.0f + fraction(rng)), exponent(rng));
+      }
+      for (int variant = 0; variant < 3; ++variant) {
+        Surf1dOptions o;
+        if (variant == 1) {
+          o.suppress_across_scale = true;
+          o.threshold = 0.5f;
+        } else if (variant == 2) {
+          o.octaves = 3;
+          o.intervals = 4;
+        }
+        Surf1d surf;
+        ASSERT_EQ(surf.Init(n, o), Surf1dError::kOk);
+        for (const std::size_t capacity : {std::size_t{512}, std::size_t{40}, std::size_t{0}}) {
+          SCOPED_TRACE("n " + std::to_string(n) + " seed " + std::to_string(seed) + " variant " +
+                       std::to_string(variant) + " capacity " + std::to_string(capacity));
+          int want_dropped = 0;
+          const std::vector<Surf1dFeature> want =
+              ReferenceDetect(strip, o, capacity, &want_dropped);
+          std::vector<Surf1dFeature> got(capacity);
+          int count = -1;
+          ASSERT_EQ(surf.Detect(strip, got, &count), Surf1dError::kOk);
+          ASSERT_EQ(count, static_cast<int>(want.size()));
+          EXPECT_EQ(surf.dropped(), want_dropped);
+          for (std::size_t i = 0; i < want.size(); ++i) {
+            EXPECT_EQ(got[i].position, want[i].position) << i;
+            EXPECT_EQ(got[i].layer, want[i].layer) << i;
+            EXPECT_EQ(got[i].lobe, want[i].lobe) << i;
+            EXPECT_EQ(got[i].response, want[i].response) << i;
+            EXPECT_EQ(got[i].laplacian_sign, want[i].laplacian_sign) << i;
+            EXPECT_EQ(got[i].descriptor, want[i].descriptor) << i;
+          }
+          overflowed += want_dropped > 0 ? 1 : 0;
+          ++cases;
+        }
+      }
+    }
+  }
+  // Both paths: every candidate kept, and the buffer full.
+  EXPECT_GT(overflowed, cases / 3);
+  EXPECT_LT(overflowed, cases);
 }
 
 // A full buffer keeps the strongest features.

@@ -100,12 +100,15 @@ class Surf1d {
  private:
   // Sum of the circular signal over columns [a, b), -pad_ <= a <= b <= n + pad_.
   double BoxSum(long a, long b) const;
-  void Describe(int position, int lobe, Surf1dFeature* feature) const;
+  // The descriptor's sample spacing for a lobe width: max(1, round(0.4 l)).
+  static long DescriptorStep(int lobe);
+  void Describe(int position, int layer, Surf1dFeature* feature) const;
 
   Surf1dOptions options_;
   int n_ = 0;
   int dropped_ = 0;
   std::vector<int> lobes_;
+  std::vector<long> steps_;  // DescriptorStep of each layer's lobe
   long pad_ = 0;  // columns of wrap-around on either side: the widest filter or descriptor
   // integral_[i] = sum of the periodic strip over columns [-pad_, i - pad_).
   std::vector<double> integral_;
