@@ -237,77 +237,52 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
     }
     return std::abs(Response(layer, x));
   };
-  const auto is_feature = [&](int li, int x) {
-    const float m = magnitude(li, x);
-    if (!(m > options_.threshold))
-      return false;
-    // Strictly above the neighbours before it, at least equal to those after it: a
-    // plateau yields one feature, at the same place whatever the shift.
-    if (!(m > magnitude(li, x - 1) && m >= magnitude(li, x + 1)))
-      return false;
-    if (options_.suppress_across_scale) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (li > 0 && !(m > magnitude(li - 1, x + dx)))
-          return false;
-        if (li + 1 < layers && !(m >= magnitude(li + 1, x + dx)))
-          return false;
-      }
-    }
-    return true;
-  };
-  const auto candidate = [&](int li, int x) {
-    Surf1dFeature f;
-    f.position = x;
-    f.layer = li;
-    f.lobe = lobes_[static_cast<std::size_t>(li)];
-    f.response = Response(li, x);
-    f.laplacian_sign = f.response > 0.0f ? std::int8_t{1} : std::int8_t{-1};
-    return f;
-  };
-  // The features are returned by position, then layer: scanned in that order they need no
-  // sort, as long as every candidate fits.
   int written = 0;
-  bool full = false;
-  for (int x = 0; x < n_ && !full; ++x) {
-    for (int li = 0; li < layers; ++li) {
-      if (!is_feature(li, x))
+  for (int li = 0; li < layers; ++li) {
+    for (int x = 0; x < n_; ++x) {
+      const float m = magnitude(li, x);
+      if (!(m > options_.threshold))
         continue;
-      if (static_cast<std::size_t>(written) == features.size()) {
-        full = true;
-        break;
-      }
-      features[static_cast<std::size_t>(written++)] = candidate(li, x);
-    }
-  }
-  if (full) {
-    // More candidates than room: layer by layer, each beyond the room replacing the weakest
-    // kept one if it is stronger (which ones are kept depends on this order), then sorted.
-    written = 0;
-    for (int li = 0; li < layers; ++li) {
-      for (int x = 0; x < n_; ++x) {
-        if (!is_feature(li, x))
-          continue;
-        if (static_cast<std::size_t>(written) < features.size()) {
-          features[static_cast<std::size_t>(written++)] = candidate(li, x);
-          continue;
+      // Strictly above the neighbours before it, at least equal to those after it: a
+      // plateau yields one feature, at the same place whatever the shift.
+      if (!(m > magnitude(li, x - 1) && m >= magnitude(li, x + 1)))
+        continue;
+      if (options_.suppress_across_scale) {
+        bool is_max = true;
+        for (int dx = -1; dx <= 1 && is_max; ++dx) {
+          if (li > 0 && !(m > magnitude(li - 1, x + dx)))
+            is_max = false;
+          if (li + 1 < layers && !(m >= magnitude(li + 1, x + dx)))
+            is_max = false;
         }
-        ++dropped_;
-        if (features.empty())
+        if (!is_max)
           continue;
-        auto weakest = std::min_element(features.begin(), features.end(),
-                                        [](const Surf1dFeature& a, const Surf1dFeature& b) {
-                                          return std::abs(a.response) < std::abs(b.response);
-                                        });
-        if (std::abs(weakest->response) < std::abs(Response(li, x)))
-          *weakest = candidate(li, x);
       }
+      Surf1dFeature candidate;
+      candidate.position = x;
+      candidate.layer = li;
+      candidate.lobe = lobes_[static_cast<std::size_t>(li)];
+      candidate.response = Response(li, x);
+      candidate.laplacian_sign = candidate.response > 0.0f ? std::int8_t{1} : std::int8_t{-1};
+      if (static_cast<std::size_t>(written) < features.size()) {
+        features[static_cast<std::size_t>(written++)] = candidate;
+        continue;
+      }
+      ++dropped_;
+      if (features.empty())
+        continue;
+      auto weakest = std::min_element(features.begin(), features.end(),
+                                      [](const Surf1dFeature& a, const Surf1dFeature& b) {
+                                        return std::abs(a.response) < std::abs(b.response);
+                                      });
+      if (std::abs(weakest->response) < m)
+        *weakest = candidate;
     }
-    std::sort(features.begin(), features.begin() + written,
-              [](const Surf1dFeature& a, const Surf1dFeature& b) {
-                return a.position != b.position ? a.position < b.position : a.layer < b.layer;
-              });
   }
   auto kept = features.first(static_cast<std::size_t>(written));
+  std::sort(kept.begin(), kept.end(), [](const Surf1dFeature& a, const Surf1dFeature& b) {
+    return a.position != b.position ? a.position < b.position : a.layer < b.layer;
+  });
   for (Surf1dFeature& f : kept)
     Describe(f.position, f.layer, &f);
   *count = written;
