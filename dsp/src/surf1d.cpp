@@ -41,6 +41,24 @@ std::uint64_t NextRandom(std::uint64_t* state) {
   return z ^ (z >> 31);
 }
 
+// RANSAC's standard stopping rule: the draws after which a sample of two inliers has been
+// drawn with probability `confidence`, when `inliers` of `matches` pairs are inliers:
+// the least k with (1 - w^2)^k <= 1 - confidence, w = inliers / matches, at most `limit`.
+// By products, not log(1 - p) / log(1 - w^2): basic operations round the same on every
+// target, and the count decides the answer.
+int DrawsForConfidence(int inliers, int matches, float confidence, int limit) {
+  const double w = static_cast<double>(inliers) / static_cast<double>(matches);
+  const double miss = 1.0 - w * w;  // a draw is not two inliers
+  const double allowed = 1.0 - static_cast<double>(confidence);
+  double all_missed = 1.0;
+  int k = 0;
+  while (all_missed > allowed && k < limit) {
+    all_missed *= miss;
+    ++k;
+  }
+  return k;
+}
+
 int SideOf(std::int8_t laplacian_sign) {
   return laplacian_sign > 0 ? 0 : 1;
 }
@@ -124,7 +142,7 @@ Surf1dError Surf1d::Init(int n, const Surf1dOptions& options) {
   dropped_ = 0;
   lobes_ = std::move(lobes);
   const int max_lobe = lobes_.back();
-  const long max_step = std::max(1L, std::lround(0.4 * max_lobe));
+  const long max_step = DescriptorStep(max_lobe);
   pad_ = std::max<long>((3 * max_lobe + 1) / 2 + 1, (kDescriptorHalfSamples + 1) * max_step + 1);
   integral_.assign(static_cast<std::size_t>(n + 2 * pad_) + 1, 0.0);
   for (int k = -kDescriptorHalfSamples; k <= kDescriptorHalfSamples; ++k) {
@@ -133,6 +151,9 @@ Surf1dError Surf1d::Init(int n, const Surf1dOptions& options) {
         std::exp(-kk * kk / (2.0 * kDescriptorSigmaSamples * kDescriptorSigmaSamples));
   }
   responses_.assign(lobes_.size() * static_cast<std::size_t>(n), 0.0f);
+  steps_.clear();
+  for (const int lobe : lobes_)
+    steps_.push_back(DescriptorStep(lobe));
   return Surf1dError::kOk;
 }
 
@@ -141,14 +162,27 @@ double Surf1d::BoxSum(long a, long b) const {
          integral_[static_cast<std::size_t>(a + pad_)];
 }
 
-void Surf1d::Describe(int position, int lobe, Surf1dFeature* feature) const {
-  const long step = std::max(1L, std::lround(0.4 * lobe));
+long Surf1d::DescriptorStep(int lobe) {
+  return std::max(1L, std::lround(0.4 * lobe));
+}
+
+void Surf1d::Describe(int position, int layer, Surf1dFeature* feature) const {
+  const long step = steps_[static_cast<std::size_t>(layer)];
+  // Sample k (p = position + k step) is (BoxSum(p, p + step) - BoxSum(p - step, p)) / step:
+  // neighbouring samples share box ends, so the integral is read once at each of the 17
+  // points position + m step, m = -8..8, and the differences taken in the same order.
+  constexpr int kPoints = 2 * kDescriptorHalfSamples + 3;
+  std::array<double, kPoints> at;
+  const double* base = integral_.data() + pad_ + position;
+  for (int m = 0; m < kPoints; ++m)
+    at[static_cast<std::size_t>(m)] = base[(m - kDescriptorHalfSamples - 1) * step];
+  const auto step_d = static_cast<double>(step);
   std::array<double, kSurf1dDescriptorSize> v{};
-  for (int k = -kDescriptorHalfSamples; k <= kDescriptorHalfSamples; ++k) {
-    const long p = position + k * step;
-    const double dx = (BoxSum(p, p + step) - BoxSum(p - step, p)) / static_cast<double>(step);
-    const double w = weights_[static_cast<std::size_t>(k + kDescriptorHalfSamples)];
-    const auto sub = static_cast<std::size_t>((k + kDescriptorHalfSamples) / kSamplesPerSubregion);
+  for (std::size_t k = 0; k < 2 * kDescriptorHalfSamples + 1; ++k) {
+    const double centre = at[k + 1];
+    const double dx = ((at[k + 2] - centre) - (centre - at[k])) / step_d;
+    const double w = weights_[k];
+    const std::size_t sub = k / kSamplesPerSubregion;
     v[2 * sub] += w * dx;
     v[2 * sub + 1] += w * std::abs(dx);
   }
@@ -250,15 +284,16 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
     return a.position != b.position ? a.position < b.position : a.layer < b.layer;
   });
   for (Surf1dFeature& f : kept)
-    Describe(f.position, f.lobe, &f);
+    Describe(f.position, f.layer, &f);
   *count = written;
   return Surf1dError::kOk;
 }
 
 Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& options) {
   if (max_features < 1 || !(options.ratio > 0.0f) || !(options.min_distance > 0.0f) ||
-      options.ransac_iterations < 1 || !(options.inlier_threshold >= 0.0f) ||
-      !(options.max_scale >= 1.0f)) {
+      options.ransac_iterations < 1 ||
+      !(options.ransac_confidence >= 0.0f && options.ransac_confidence < 1.0f) ||
+      !(options.inlier_threshold >= 0.0f) || !(options.max_scale >= 1.0f)) {
     return Surf1dError::kBadOptions;
   }
   options_ = options;
@@ -398,27 +433,23 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   const std::int32_t* xt = pair_test_.data();
   const auto threshold = static_cast<double>(options_.inlier_threshold);
   const auto max_scale = static_cast<double>(options_.max_scale);
-  const auto count = static_cast<std::uint64_t>(matches);
-  std::uint64_t state = options_.seed;
   int best_inliers = 0;
   double best_residual = std::numeric_limits<double>::infinity();
   double best_scale = 1.0;
   int best_anchor = -1;
-  for (int it = 0; it < options_.ransac_iterations; ++it) {
-    const auto i = static_cast<int>(NextRandom(&state) % count);
-    auto j = static_cast<int>(NextRandom(&state) % (count - 1));
-    if (j >= i)
-      ++j;
+  // The line through pairs i and j, anchored at i, against the best so far (most inliers,
+  // then the smallest residual sum; the first of equals stays). True when no later line can
+  // do better: every pair on it with no residual.
+  const auto try_line = [&](int i, int j) {
     // Differences measured the short way round, anchored at match i.
     const int ds = circle.Difference(xs[i], xs[j]);
     const int dt = circle.Difference(xt[i], xt[j]);
     if (ds == 0)
-      continue;
+      return false;
     const double scale = static_cast<double>(dt) / static_cast<double>(ds);
     // A mirrored horizon (b_s < 0) is not a view of the same place.
-    if (!(scale >= 1.0 / max_scale && scale <= max_scale)) {
-      continue;
-    }
+    if (!(scale >= 1.0 / max_scale && scale <= max_scale))
+      return false;
     // A line that has already missed more pairs than the best line missed in all cannot
     // win (it needs at least as many inliers), so its count stops there.
     const int max_outliers = matches - best_inliers;
@@ -431,19 +462,41 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
         ++inliers;
         residual_sum += residual;
       } else if (++outliers > max_outliers) {
-        break;
+        return false;
       }
     }
-    if (outliers > max_outliers)
-      continue;
     if (inliers > best_inliers || (inliers == best_inliers && residual_sum < best_residual)) {
       best_inliers = inliers;
       best_residual = residual_sum;
       best_scale = scale;
       best_anchor = i;
-      // Every pair on the line with no residual: no later line can do better.
-      if (inliers == matches && residual_sum == 0.0)
+      return inliers == matches && residual_sum == 0.0;
+    }
+    return false;
+  };
+  const int budget = options_.ransac_iterations;
+  const auto lines = static_cast<std::int64_t>(matches) * (matches - 1) / 2;
+  if (lines <= budget) {
+    // No more distinct lines than draws: each once, i < j, anchored at i.
+    bool done = false;
+    for (int i = 0; i < matches && !done; ++i) {
+      for (int j = i + 1; j < matches && !done; ++j)
+        done = try_line(i, j);
+    }
+  } else {
+    const auto count = static_cast<std::uint64_t>(matches);
+    std::uint64_t state = options_.seed;
+    int needed = budget;
+    for (int it = 0; it < needed; ++it) {
+      const auto i = static_cast<int>(NextRandom(&state) % count);
+      auto j = static_cast<int>(NextRandom(&state) % (count - 1));
+      if (j >= i)
+        ++j;
+      const int before = best_inliers;
+      if (try_line(i, j))
         break;
+      if (best_inliers > before && options_.ransac_confidence > 0.0f)
+        needed = DrawsForConfidence(best_inliers, matches, options_.ransac_confidence, budget);
     }
   }
   if (best_inliers < 2)

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -438,6 +439,11 @@ TEST(Surf1dTest, RejectsBadOptionsAndSizes) {
   LandmarkMatch m;
   EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kNotInitialised);
   EXPECT_EQ(matcher.Init(0, LandmarkMatchOptions{}), Surf1dError::kBadOptions);
+  for (const float confidence : {-0.1f, 1.0f, std::numeric_limits<float>::quiet_NaN()}) {
+    LandmarkMatchOptions bad;
+    bad.ransac_confidence = confidence;
+    EXPECT_EQ(matcher.Init(8, bad), Surf1dError::kBadOptions) << confidence;
+  }
   ASSERT_EQ(matcher.Init(4, LandmarkMatchOptions{}), Surf1dError::kOk);
   EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kTooManyFeatures);
   // More stored features than the matcher holds, however few test ones.
@@ -450,10 +456,17 @@ TEST(Surf1dTest, RejectsBadOptionsAndSizes) {
 
 // The matcher as first written, straightforwardly: every stored feature tried in turn (the
 // Laplacian sign compared on each), whole squared distances, every pair's residual folded in
-// doubles, all ransac_iterations run. The fast matcher must give exactly its answers.
+// doubles, every line counted to the end. RANSAC's lines: when M matches give no more
+// distinct lines M (M - 1) / 2 than ransac_iterations, the best of all of them by brute
+// force (pairs i < j, anchored at i, in that order); otherwise the seeded random draws, all
+// ransac_iterations of them, or, with ransac_confidence p, until the textbook count
+// ceil(log(1 - p) / log(1 - w^2)) for the best line's inlier ratio w (by the library's log,
+// where the matcher multiplies). The fast matcher must give exactly its answers.
 struct ReferenceMatch {
   LandmarkMatch result;
   std::vector<LandmarkMatcher::MatchedPair> pairs;
+  bool every_line = false;  // RANSAC tried every distinct line
+  int draws = 0;            // otherwise, how many random draws it made
 };
 
 double ReferenceWrap(double x, double n) {
@@ -523,19 +536,15 @@ ReferenceMatch ReferenceMatcher(const std::vector<Surf1dFeature>& stored,
   double best_scale = 1.0, best_displacement = 0.0;
   std::vector<bool> inlier(pairs.size()), best_inlier(pairs.size());
   const auto count = static_cast<std::uint64_t>(pairs.size());
-  for (int it = 0; it < o.ransac_iterations; ++it) {
-    const auto i = static_cast<std::size_t>(ReferenceRandom(&state) % count);
-    auto j = static_cast<std::size_t>(ReferenceRandom(&state) % (count - 1));
-    if (j >= i)
-      ++j;
+  const auto line = [&](std::size_t i, std::size_t j) {
     const double ds = ReferenceFold(pairs[j].xs - pairs[i].xs, nd, half);
     const double dt = ReferenceFold(pairs[j].xt - pairs[i].xt, nd, half);
     if (ds == 0.0)
-      continue;
+      return;
     const double scale = dt / ds;
     const auto max_scale = static_cast<double>(o.max_scale);
     if (!(scale >= 1.0 / max_scale && scale <= max_scale))
-      continue;
+      return;
     int inliers = 0;
     double residual_sum = 0.0;
     for (std::size_t m = 0; m < pairs.size(); ++m) {
@@ -554,6 +563,30 @@ ReferenceMatch ReferenceMatcher(const std::vector<Surf1dFeature>& stored,
       best_scale = scale;
       best_displacement = ReferenceWrap(pairs[i].xt - scale * pairs[i].xs, nd);
       best_inlier = inlier;
+    }
+  };
+  if (count * (count - 1) / 2 <= static_cast<std::uint64_t>(o.ransac_iterations)) {
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      for (std::size_t j = i + 1; j < pairs.size(); ++j)
+        line(i, j);
+    }
+    out.every_line = true;
+  } else {
+    int draws = o.ransac_iterations;
+    for (int it = 0; it < draws; ++it) {
+      const auto i = static_cast<std::size_t>(ReferenceRandom(&state) % count);
+      auto j = static_cast<std::size_t>(ReferenceRandom(&state) % (count - 1));
+      if (j >= i)
+        ++j;
+      const int before = best_inliers;
+      line(i, j);
+      if (o.ransac_confidence > 0.0f && best_inliers > before) {
+        const double w = static_cast<double>(best_inliers) / static_cast<double>(count);
+        const double needed = std::ceil(std::log(1.0 - static_cast<double>(o.ransac_confidence)) /
+                                        std::log(1.0 - w * w));
+        draws = std::min(o.ransac_iterations, std::max(1, static_cast<int>(needed)));
+      }
+      out.draws = it + 1;
     }
   }
   if (best_inliers < 2)
@@ -649,13 +682,15 @@ void ExpectSameMatch(const LandmarkMatcher& matcher, const LandmarkMatch& m,
 
 // The matcher's early exits (partial distances, lines that cannot win, a perfect line) and
 // its integer folds give the straightforward matcher's answers exactly, on random feature
-// sets of every size from none to full, on even and odd strip lengths, several options.
+// sets of every size from none to full, on even and odd strip lengths, several options:
+// every distinct line when there are few, the random draws, and those stopped by the
+// confidence rule.
 TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
   std::mt19937 rng(2026);
-  int with_model = 0, cases = 0;
+  int with_model = 0, cases = 0, every_line = 0, stopped_early = 0;
   for (const int n : {360, 361, 200}) {
-    for (const int count : {0, 1, 2, 3, 10, 60, 256}) {
-      for (int trial = 0; trial < 6; ++trial) {
+    for (const int count : {0, 1, 2, 3, 10, 20, 21, 30, 60, 256}) {
+      for (int trial = 0; trial < 9; ++trial) {
         LandmarkMatchOptions o;
         o.seed = static_cast<std::uint64_t>(trial + 1);
         if (trial % 3 == 1) {
@@ -666,6 +701,8 @@ TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
           o.ransac_iterations = 37;
           o.inlier_threshold = 5.5f;
         }
+        if (trial >= 6)
+          o.ransac_confidence = trial == 8 ? 0.5f : 0.99f;
         const double scale = trial % 2 == 0 ? 1.0 : 1.1;
         std::vector<Surf1dFeature> stored, test;
         RandomFeatures(&rng, n, count, scale, 17 + 41 * trial, &stored, &test);
@@ -678,6 +715,11 @@ TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
                         "n " + std::to_string(n) + " count " + std::to_string(count) + " trial " +
                             std::to_string(trial));
         with_model += want.result.model_found ? 1 : 0;
+        every_line += want.every_line && want.result.matches >= 3 ? 1 : 0;
+        stopped_early += !want.every_line && want.draws > 0 && want.draws < o.ransac_iterations &&
+                                 !(want.result.inliers == want.result.matches)
+                             ? 1
+                             : 0;
         ++cases;
       }
     }
@@ -685,6 +727,12 @@ TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
   // The sets exercise both outcomes.
   EXPECT_GT(with_model, cases / 3);
   EXPECT_LT(with_model, cases);
+  std::printf(
+      "%d cases: %d with a model, %d tried every line (>= 3 matches), %d random draws "
+      "stopped by the confidence rule\n",
+      cases, with_model, every_line, stopped_early);
+  EXPECT_GT(every_line, cases / 10);
+  EXPECT_GT(stopped_early, cases / 20);
 }
 
 // The same on features Detect found on strips turned and rescaled against each other, and
@@ -742,6 +790,166 @@ TEST(Surf1dTest, StoredFeaturesHeldAcrossMatches) {
   EXPECT_EQ(held.MatchStored(unsigned_features, 360, &m), Surf1dError::kBadFeature);
   EXPECT_NE(std::string(Surf1dErrorMessage(Surf1dError::kBadFeature)).find("Detect"),
             std::string::npos);
+}
+
+// The detector as first written: the integral summed from -pad as Detect sums it (so the
+// responses are the same bits), the candidates layer by layer with the weakest replaced when
+// the buffer is full, std::sort by position then layer, and each descriptor's 15 samples as
+// two BoxSums each. Detect must give exactly its features, in its order.
+std::vector<Surf1dFeature> ReferenceDetect(const std::vector<float>& strip, const Surf1dOptions& o,
+                                           std::size_t capacity, int* dropped) {
+  const long n = static_cast<long>(strip.size());
+  std::vector<long> lobes;
+  for (int oc = 0; oc < o.octaves; ++oc) {
+    for (int i = 0; i < o.intervals; ++i)
+      lobes.push_back((2L << oc) * (i + 1) + 1);
+  }
+  std::sort(lobes.begin(), lobes.end());
+  lobes.erase(std::unique(lobes.begin(), lobes.end()), lobes.end());
+  const long max_lobe = lobes.back();
+  const auto step_of = [](long lobe) {
+    return std::max(1L, std::lround(0.4 * static_cast<double>(lobe)));
+  };
+  const long pad = std::max<long>((3 * max_lobe + 1) / 2 + 1, 8 * step_of(max_lobe) + 1);
+  std::vector<double> integral(static_cast<std::size_t>(n + 2 * pad) + 1, 0.0);
+  double running = 0.0;
+  for (std::size_t i = 1; i < integral.size(); ++i) {
+    const long column = ((static_cast<long>(i) - 1 - pad) % n + n) % n;
+    running += static_cast<double>(strip[static_cast<std::size_t>(column)]);
+    integral[i] = running;
+  }
+  const auto box = [&](long a, long b) {
+    return integral[static_cast<std::size_t>(b + pad)] -
+           integral[static_cast<std::size_t>(a + pad)];
+  };
+  const auto layers = static_cast<long>(lobes.size());
+  std::vector<float> response(static_cast<std::size_t>(layers * n));
+  for (long li = 0; li < layers; ++li) {
+    const long l = lobes[static_cast<std::size_t>(li)], h = (l - 1) / 2;
+    for (long x = 0; x < n; ++x) {
+      response[static_cast<std::size_t>(li * n + x)] = static_cast<float>(
+          (box(x - h - l, x - h) + box(x + h + 1, x + h + 1 + l) - 2.0 * box(x - h, x + h + 1)) /
+          static_cast<double>(l));
+    }
+  }
+  const auto magnitude = [&](long li, long x) {
+    return std::abs(response[static_cast<std::size_t>(li * n + (x + n) % n)]);
+  };
+  std::vector<Surf1dFeature> kept;
+  *dropped = 0;
+  for (long li = 0; li < layers; ++li) {
+    for (long x = 0; x < n; ++x) {
+      const float m = magnitude(li, x);
+      if (!(m > o.threshold) || !(m > magnitude(li, x - 1) && m >= magnitude(li, x + 1)))
+        continue;
+      bool is_max = true;
+      for (long dx = -1; dx <= 1 && o.suppress_across_scale; ++dx) {
+        if (li > 0 && !(m > magnitude(li - 1, x + dx)))
+          is_max = false;
+        if (li + 1 < layers && !(m >= magnitude(li + 1, x + dx)))
+          is_max = false;
+      }
+      if (!is_max)
+        continue;
+      Surf1dFeature f;
+      f.position = static_cast<std::int32_t>(x);
+      f.layer = static_cast<std::int32_t>(li);
+      f.lobe = static_cast<std::int32_t>(lobes[static_cast<std::size_t>(li)]);
+      f.response = response[static_cast<std::size_t>(li * n + x)];
+      f.laplacian_sign = f.response > 0.0f ? std::int8_t{1} : std::int8_t{-1};
+      if (kept.size() < capacity) {
+        kept.push_back(f);
+        continue;
+      }
+      ++*dropped;
+      if (kept.empty())
+        continue;
+      auto weakest = std::min_element(kept.begin(), kept.end(), [](const auto& a, const auto& b) {
+        return std::abs(a.response) < std::abs(b.response);
+      });
+      if (std::abs(weakest->response) < m)
+        *weakest = f;
+    }
+  }
+  std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) {
+    return a.position != b.position ? a.position < b.position : a.layer < b.layer;
+  });
+  for (Surf1dFeature& f : kept) {
+    const long step = step_of(f.lobe);
+    std::array<double, kSurf1dDescriptorSize> v{};
+    for (long k = -7; k <= 7; ++k) {
+      const long p = f.position + k * step;
+      const double dx = (box(p, p + step) - box(p - step, p)) / static_cast<double>(step);
+      const double kk = static_cast<double>(k);
+      const double w = std::exp(-kk * kk / (2.0 * 2.5 * 2.5));
+      const auto sub = static_cast<std::size_t>((k + 7) / 5);
+      v[2 * sub] += w * dx;
+      v[2 * sub + 1] += w * std::abs(dx);
+    }
+    double norm = 0.0;
+    for (const double x : v)
+      norm += x * x;
+    norm = std::sqrt(norm);
+    for (std::size_t i = 0; i < v.size(); ++i)
+      f.descriptor[i] = norm > 0.0 ? static_cast<float>(v[i] / norm) : 0.0f;
+  }
+  return kept;
+}
+
+// Detect's features are the first-written detector's to the bit, in the same order: on
+// integer and fractional strips, with the default and other options, and with buffers too
+// small for all the candidates (the strongest kept, which may then be any of them).
+TEST(Surf1dTest, DetectEqualsTheStraightforwardDetector) {
+  std::mt19937 rng(33);
+  std::uniform_real_distribution<float> fraction(0.0f, 1.0f);
+  std::uniform_int_distribution<int> exponent(-12, 12);
+  int cases = 0, overflowed = 0;
+  for (const int n : {360, 361, 200}) {
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      std::vector<float> strip = IntegerStrip(n, seed);
+      if (seed % 2 == 0) {
+        for (float& x : strip)  // magnitudes 2^-12..2^20: the integral's sums round
+          x = std::ldexp(x * (1.0f + fraction(rng)), exponent(rng));
+      }
+      for (int variant = 0; variant < 3; ++variant) {
+        Surf1dOptions o;
+        if (variant == 1) {
+          o.suppress_across_scale = true;
+          o.threshold = 0.5f;
+        } else if (variant == 2) {
+          o.octaves = 3;
+          o.intervals = 4;
+        }
+        Surf1d surf;
+        ASSERT_EQ(surf.Init(n, o), Surf1dError::kOk);
+        for (const std::size_t capacity : {std::size_t{512}, std::size_t{40}, std::size_t{0}}) {
+          SCOPED_TRACE("n " + std::to_string(n) + " seed " + std::to_string(seed) + " variant " +
+                       std::to_string(variant) + " capacity " + std::to_string(capacity));
+          int want_dropped = 0;
+          const std::vector<Surf1dFeature> want =
+              ReferenceDetect(strip, o, capacity, &want_dropped);
+          std::vector<Surf1dFeature> got(capacity);
+          int count = -1;
+          ASSERT_EQ(surf.Detect(strip, got, &count), Surf1dError::kOk);
+          ASSERT_EQ(count, static_cast<int>(want.size()));
+          EXPECT_EQ(surf.dropped(), want_dropped);
+          for (std::size_t i = 0; i < want.size(); ++i) {
+            EXPECT_EQ(got[i].position, want[i].position) << i;
+            EXPECT_EQ(got[i].layer, want[i].layer) << i;
+            EXPECT_EQ(got[i].lobe, want[i].lobe) << i;
+            EXPECT_EQ(got[i].response, want[i].response) << i;
+            EXPECT_EQ(got[i].laplacian_sign, want[i].laplacian_sign) << i;
+            EXPECT_EQ(got[i].descriptor, want[i].descriptor) << i;
+          }
+          overflowed += want_dropped > 0 ? 1 : 0;
+          ++cases;
+        }
+      }
+    }
+  }
+  // Both paths: every candidate kept, and the buffer full.
+  EXPECT_GT(overflowed, cases / 3);
+  EXPECT_LT(overflowed, cases);
 }
 
 // A full buffer keeps the strongest features.

@@ -100,12 +100,15 @@ class Surf1d {
  private:
   // Sum of the circular signal over columns [a, b), -pad_ <= a <= b <= n + pad_.
   double BoxSum(long a, long b) const;
-  void Describe(int position, int lobe, Surf1dFeature* feature) const;
+  // The descriptor's sample spacing for a lobe width: max(1, round(0.4 l)).
+  static long DescriptorStep(int lobe);
+  void Describe(int position, int layer, Surf1dFeature* feature) const;
 
   Surf1dOptions options_;
   int n_ = 0;
   int dropped_ = 0;
   std::vector<int> lobes_;
+  std::vector<long> steps_;  // DescriptorStep of each layer's lobe
   long pad_ = 0;  // columns of wrap-around on either side: the widest filter or descriptor
   // integral_[i] = sum of the periodic strip over columns [-pad_, i - pad_).
   std::vector<double> integral_;
@@ -114,9 +117,14 @@ class Surf1d {
 };
 
 struct LandmarkMatchOptions {
-  float ratio = 0.7f;             // nearest / second-nearest distance must be below this
-  float min_distance = 1e-3f;     // distance floor in the 1 / distance score
-  int ransac_iterations = 200;    // fixed: the cost does not depend on the data
+  float ratio = 0.7f;          // nearest / second-nearest distance must be below this
+  float min_distance = 1e-3f;  // distance floor in the 1 / distance score
+  // RANSAC's lines: when the pairs give no more distinct lines (i < j) than this, every one
+  // is tried once (the best line exactly); otherwise at most this many random draws.
+  int ransac_iterations = 200;
+  // The random draws stop once a sample of two inliers has been drawn with this probability,
+  // given the best line's inlier ratio (the standard adaptive rule); 0: all the draws.
+  float ransac_confidence = 0.0f;
   float inlier_threshold = 2.0f;  // columns
   float max_scale = 1.25f;        // b_s within [1 / max_scale, max_scale] (> 0)
   std::uint64_t seed = 1;         // the same inputs always give the same answer
