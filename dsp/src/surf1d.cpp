@@ -41,24 +41,6 @@ std::uint64_t NextRandom(std::uint64_t* state) {
   return z ^ (z >> 31);
 }
 
-// RANSAC's standard stopping rule: the draws after which a sample of two inliers has been
-// drawn with probability `confidence`, when `inliers` of `matches` pairs are inliers:
-// the least k with (1 - w^2)^k <= 1 - confidence, w = inliers / matches, at most `limit`.
-// By products, not log(1 - p) / log(1 - w^2): basic operations round the same on every
-// target, and the count decides the answer.
-int DrawsForConfidence(int inliers, int matches, float confidence, int limit) {
-  const double w = static_cast<double>(inliers) / static_cast<double>(matches);
-  const double miss = 1.0 - w * w;  // a draw is not two inliers
-  const double allowed = 1.0 - static_cast<double>(confidence);
-  double all_missed = 1.0;
-  int k = 0;
-  while (all_missed > allowed && k < limit) {
-    all_missed *= miss;
-    ++k;
-  }
-  return k;
-}
-
 int SideOf(std::int8_t laplacian_sign) {
   return laplacian_sign > 0 ? 0 : 1;
 }
@@ -291,9 +273,8 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
 
 Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& options) {
   if (max_features < 1 || !(options.ratio > 0.0f) || !(options.min_distance > 0.0f) ||
-      options.ransac_iterations < 1 ||
-      !(options.ransac_confidence >= 0.0f && options.ransac_confidence < 1.0f) ||
-      !(options.inlier_threshold >= 0.0f) || !(options.max_scale >= 1.0f)) {
+      options.ransac_iterations < 1 || !(options.inlier_threshold >= 0.0f) ||
+      !(options.max_scale >= 1.0f)) {
     return Surf1dError::kBadOptions;
   }
   options_ = options;
@@ -486,17 +467,13 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   } else {
     const auto count = static_cast<std::uint64_t>(matches);
     std::uint64_t state = options_.seed;
-    int needed = budget;
-    for (int it = 0; it < needed; ++it) {
+    for (int it = 0; it < budget; ++it) {
       const auto i = static_cast<int>(NextRandom(&state) % count);
       auto j = static_cast<int>(NextRandom(&state) % (count - 1));
       if (j >= i)
         ++j;
-      const int before = best_inliers;
       if (try_line(i, j))
         break;
-      if (best_inliers > before && options_.ransac_confidence > 0.0f)
-        needed = DrawsForConfidence(best_inliers, matches, options_.ransac_confidence, budget);
     }
   }
   if (best_inliers < 2)

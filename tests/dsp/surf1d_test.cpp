@@ -439,11 +439,6 @@ TEST(Surf1dTest, RejectsBadOptionsAndSizes) {
   LandmarkMatch m;
   EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kNotInitialised);
   EXPECT_EQ(matcher.Init(0, LandmarkMatchOptions{}), Surf1dError::kBadOptions);
-  for (const float confidence : {-0.1f, 1.0f, std::numeric_limits<float>::quiet_NaN()}) {
-    LandmarkMatchOptions bad;
-    bad.ransac_confidence = confidence;
-    EXPECT_EQ(matcher.Init(8, bad), Surf1dError::kBadOptions) << confidence;
-  }
   ASSERT_EQ(matcher.Init(4, LandmarkMatchOptions{}), Surf1dError::kOk);
   EXPECT_EQ(matcher.Match(f, f, 360, &m), Surf1dError::kTooManyFeatures);
   // More stored features than the matcher holds, however few test ones.
@@ -459,14 +454,11 @@ TEST(Surf1dTest, RejectsBadOptionsAndSizes) {
 // doubles, every line counted to the end. RANSAC's lines: when M matches give no more
 // distinct lines M (M - 1) / 2 than ransac_iterations, the best of all of them by brute
 // force (pairs i < j, anchored at i, in that order); otherwise the seeded random draws, all
-// ransac_iterations of them, or, with ransac_confidence p, until the textbook count
-// ceil(log(1 - p) / log(1 - w^2)) for the best line's inlier ratio w (by the library's log,
-// where the matcher multiplies). The fast matcher must give exactly its answers.
+// ransac_iterations of them. The fast matcher must give exactly its answers.
 struct ReferenceMatch {
   LandmarkMatch result;
   std::vector<LandmarkMatcher::MatchedPair> pairs;
   bool every_line = false;  // RANSAC tried every distinct line
-  int draws = 0;            // otherwise, how many random draws it made
 };
 
 double ReferenceWrap(double x, double n) {
@@ -572,21 +564,12 @@ ReferenceMatch ReferenceMatcher(const std::vector<Surf1dFeature>& stored,
     }
     out.every_line = true;
   } else {
-    int draws = o.ransac_iterations;
-    for (int it = 0; it < draws; ++it) {
+    for (int it = 0; it < o.ransac_iterations; ++it) {
       const auto i = static_cast<std::size_t>(ReferenceRandom(&state) % count);
       auto j = static_cast<std::size_t>(ReferenceRandom(&state) % (count - 1));
       if (j >= i)
         ++j;
-      const int before = best_inliers;
       line(i, j);
-      if (o.ransac_confidence > 0.0f && best_inliers > before) {
-        const double w = static_cast<double>(best_inliers) / static_cast<double>(count);
-        const double needed = std::ceil(std::log(1.0 - static_cast<double>(o.ransac_confidence)) /
-                                        std::log(1.0 - w * w));
-        draws = std::min(o.ransac_iterations, std::max(1, static_cast<int>(needed)));
-      }
-      out.draws = it + 1;
     }
   }
   if (best_inliers < 2)
@@ -683,11 +666,10 @@ void ExpectSameMatch(const LandmarkMatcher& matcher, const LandmarkMatch& m,
 // The matcher's early exits (partial distances, lines that cannot win, a perfect line) and
 // its integer folds give the straightforward matcher's answers exactly, on random feature
 // sets of every size from none to full, on even and odd strip lengths, several options:
-// every distinct line when there are few, the random draws, and those stopped by the
-// confidence rule.
+// every distinct line when there are few, and the random draws.
 TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
   std::mt19937 rng(2026);
-  int with_model = 0, cases = 0, every_line = 0, stopped_early = 0;
+  int with_model = 0, cases = 0, every_line = 0;
   for (const int n : {360, 361, 200}) {
     for (const int count : {0, 1, 2, 3, 10, 20, 21, 30, 60, 256}) {
       for (int trial = 0; trial < 9; ++trial) {
@@ -701,8 +683,6 @@ TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
           o.ransac_iterations = 37;
           o.inlier_threshold = 5.5f;
         }
-        if (trial >= 6)
-          o.ransac_confidence = trial == 8 ? 0.5f : 0.99f;
         const double scale = trial % 2 == 0 ? 1.0 : 1.1;
         std::vector<Surf1dFeature> stored, test;
         RandomFeatures(&rng, n, count, scale, 17 + 41 * trial, &stored, &test);
@@ -716,10 +696,6 @@ TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
                             std::to_string(trial));
         with_model += want.result.model_found ? 1 : 0;
         every_line += want.every_line && want.result.matches >= 3 ? 1 : 0;
-        stopped_early += !want.every_line && want.draws > 0 && want.draws < o.ransac_iterations &&
-                                 !(want.result.inliers == want.result.matches)
-                             ? 1
-                             : 0;
         ++cases;
       }
     }
@@ -727,12 +703,9 @@ TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcher) {
   // The sets exercise both outcomes.
   EXPECT_GT(with_model, cases / 3);
   EXPECT_LT(with_model, cases);
-  std::printf(
-      "%d cases: %d with a model, %d tried every line (>= 3 matches), %d random draws "
-      "stopped by the confidence rule\n",
-      cases, with_model, every_line, stopped_early);
+  std::printf("%d cases: %d with a model, %d tried every line (>= 3 matches)\n", cases, with_model,
+              every_line);
   EXPECT_GT(every_line, cases / 10);
-  EXPECT_GT(stopped_early, cases / 20);
 }
 
 // The same on features Detect found on strips turned and rescaled against each other, and

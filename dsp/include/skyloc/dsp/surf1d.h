@@ -122,9 +122,6 @@ struct LandmarkMatchOptions {
   // RANSAC's lines: when the pairs give no more distinct lines (i < j) than this, every one
   // is tried once (the best line exactly); otherwise at most this many random draws.
   int ransac_iterations = 200;
-  // The random draws stop once a sample of two inliers has been drawn with this probability,
-  // given the best line's inlier ratio (the standard adaptive rule); 0: all the draws.
-  float ransac_confidence = 0.0f;
   float inlier_threshold = 2.0f;  // columns
   float max_scale = 1.25f;        // b_s within [1 / max_scale, max_scale] (> 0)
   std::uint64_t seed = 1;         // the same inputs always give the same answer
