@@ -1,8 +1,12 @@
 #include "skyloc/dsp/surf1d.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
+
+#include "float4.h"
 
 namespace skyloc::dsp {
 
@@ -279,14 +283,18 @@ Surf1dError LandmarkMatcher::Init(int max_features, const LandmarkMatchOptions& 
   }
   options_ = options;
   capacity_ = max_features;
+  stride_ = (max_features + 3) / 4 * 4;
   const auto cap = static_cast<std::size_t>(max_features);
   for (StoredSide& side : stored_) {
-    side.descriptors.assign(cap * kSurf1dDescriptorSize, 0.0f);
+    side.descriptors.assign(static_cast<std::size_t>(stride_) * kSurf1dDescriptorSize, 0.0f);
     side.positions.assign(cap, 0);
+    side.indices.assign(cap, 0);
     side.count = 0;
+    side.key = 0;
+    side.sorted = false;
   }
   has_stored_ = false;
-  distances_.assign(cap, 0.0f);
+  order_.assign(2 * cap, 0);
   pair_stored_.assign(cap, 0);
   pair_test_.assign(cap, 0);
   pair_distance_.assign(cap, 0.0f);
@@ -306,15 +314,202 @@ Surf1dError LandmarkMatcher::SetStored(std::span<const Surf1dFeature> stored) {
     return Surf1dError::kTooManyFeatures;
   if (!SignsAreFromDetect(stored))
     return Surf1dError::kBadFeature;
-  for (const Surf1dFeature& f : stored) {
-    StoredSide& side = stored_[static_cast<std::size_t>(SideOf(f.laplacian_sign))];
-    const auto s = static_cast<std::size_t>(side.count++);
-    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k)
-      side.descriptors[k * static_cast<std::size_t>(capacity_) + s] = f.descriptor[k];
-    side.positions[s] = f.position;
+  const auto stride = static_cast<std::size_t>(stride_);
+  const auto cap = static_cast<std::size_t>(capacity_);
+  // Each side's features in the given order (side s's indices from s * capacity_ in
+  // order_), each component's range, and whether every component is finite.
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  std::array<int, 2> counts{};
+  std::array<bool, 2> finites{true, true};
+  std::array<std::array<float, kSurf1dDescriptorSize>, 2> lows{}, highs{};
+  for (auto& low : lows)
+    low.fill(kInfinity);
+  for (auto& high : highs)
+    high.fill(-kInfinity);
+  for (std::size_t i = 0; i < stored.size(); ++i) {
+    const Surf1dFeature& f = stored[i];
+    const auto sign = static_cast<std::size_t>(SideOf(f.laplacian_sign));
+    bool finite = true;
+    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k) {
+      const float v = f.descriptor[k];
+      finite &= std::fabs(v) <= std::numeric_limits<float>::max();  // false for NaN too
+      lows[sign][k] = std::min(lows[sign][k], v);
+      highs[sign][k] = std::max(highs[sign][k], v);
+    }
+    finites[sign] = finites[sign] && finite;
+    order_[sign * cap + static_cast<std::size_t>(counts[sign]++)] = i;
+  }
+  for (int sign = 0; sign < 2; ++sign) {
+    StoredSide& side = stored_[static_cast<std::size_t>(sign)];
+    const int count = counts[static_cast<std::size_t>(sign)];
+    const bool finite = finites[static_cast<std::size_t>(sign)];
+    const std::array<float, kSurf1dDescriptorSize>& low = lows[static_cast<std::size_t>(sign)];
+    const std::array<float, kSurf1dDescriptorSize>& high = highs[static_cast<std::size_t>(sign)];
+    const auto order = order_.begin() + static_cast<std::ptrdiff_t>(sign) * capacity_;
+    // The key: the component of the widest range (the first of equals). Sorted by its
+    // value, as an integer whose order is the floats' (-0 before +0: equal keys in either
+    // order), then by the index.
+    std::size_t key = 0;
+    if (finite) {
+      for (std::size_t k = 1; k < kSurf1dDescriptorSize; ++k) {
+        if (high[k] - low[k] > high[key] - low[key])
+          key = k;
+      }
+      for (int slot = 0; slot < count; ++slot) {
+        std::uint64_t& o = order[slot];
+        const auto bits = std::bit_cast<std::uint32_t>(stored[o].descriptor[key]);
+        const std::uint32_t sortable = (bits & 0x80000000u) != 0 ? ~bits : bits | 0x80000000u;
+        o |= static_cast<std::uint64_t>(sortable) << 32;
+      }
+      std::sort(order, order + count);
+    }
+    for (int slot = 0; slot < count; ++slot) {
+      const auto s = static_cast<std::size_t>(slot);
+      const auto i = static_cast<std::size_t>(order[slot] & 0xFFFFFFFFu);
+      const Surf1dFeature& f = stored[i];
+      for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k)
+        side.descriptors[k * stride + s] = f.descriptor[k];
+      side.positions[s] = f.position;
+      side.indices[s] = static_cast<std::int32_t>(i);
+    }
+    // The search reads whole groups of four slots.
+    for (auto s = static_cast<std::size_t>(count); s % 4 != 0; ++s) {
+      for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k)
+        side.descriptors[k * stride + s] = kInfinity;
+    }
+    side.count = count;
+    side.key = static_cast<int>(key);
+    side.sorted = finite;
   }
   has_stored_ = true;
   return Surf1dError::kOk;
+}
+
+LandmarkMatcher::Nearest LandmarkMatcher::NearestTwo(const Surf1dFeature& test) const {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  if (!has_stored_)
+    return {-1, kInfinity, kInfinity};
+  const StoredSide& side = stored_[static_cast<std::size_t>(SideOf(test.laplacian_sign))];
+  Nearest nearest = NearestOnSide(side, test, 0.0f);
+  nearest.index =
+      nearest.best < kInfinity ? side.indices[static_cast<std::size_t>(nearest.index)] : -1;
+  return nearest;
+}
+
+// The nearest two by the straightforward scan's rule, in any order of visits: best the
+// smallest distance, on ties the smallest index in the stored span; second the second
+// smallest value, duplicates counted; a NaN distance is never below anything.
+//
+// Distances four slots at a time (element-wise IEEE operations, each lane summed in the
+// descriptor's order: the scalar loop's bits), then kept in slot order. On a sorted side
+// the search starts at the group of four holding the first slot whose key is >= the test
+// feature's, q, and goes out both ways a group at a time, the nearer group first. A
+// distance is a sum of non-negative rounded squares and rounding is monotonic, so it is at
+// least its key term fl(fl(key - q)^2); along either way out that term does not decrease
+// (fl(key - q) is monotonic in key), so a group's least is at its end nearest q. A way ends
+// when that term is above `second` (no slot left there can change best or second) or equal
+// to it while best < second (one could only equal second). With best == second a slot at
+// that distance with a smaller index could still become best, so the search goes on.
+//
+// The ratio test (ratio2 > 0) needs only best, its slot, and whether best < ratio2 *
+// second. Once the next term is above best, no slot left can change best or its slot, and
+// the final second is at least min(second, term); with second finite (so the final one is
+// too) and best < ratio2 * min(second, term), the test passes whatever is left (fl(ratio2 *
+// x) is monotonic in x), so the search stops there.
+LandmarkMatcher::Nearest LandmarkMatcher::NearestOnSide(const StoredSide& side,
+                                                        const Surf1dFeature& test,
+                                                        float ratio2) const {
+  static_assert(kSurf1dDescriptorSize == 6, "the distance below is unrolled for 6 dimensions");
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  using simd::Float4;
+  using simd::Load4;
+  const auto stride = static_cast<std::size_t>(stride_);
+  const float* d0 = side.descriptors.data();
+  const float* d1 = d0 + stride;
+  const float* d2 = d1 + stride;
+  const float* d3 = d2 + stride;
+  const float* d4 = d3 + stride;
+  const float* d5 = d4 + stride;
+  const std::int32_t* indices = side.indices.data();
+  const std::array<float, kSurf1dDescriptorSize>& q = test.descriptor;
+  const Float4 q0 = {q[0], q[0], q[0], q[0]}, q1 = {q[1], q[1], q[1], q[1]};
+  const Float4 q2 = {q[2], q[2], q[2], q[2]}, q3 = {q[3], q[3], q[3], q[3]};
+  const Float4 q4 = {q[4], q[4], q[4], q[4]}, q5 = {q[5], q[5], q[5], q[5]};
+  const int count = side.count;
+  float best = kInfinity;
+  float second = kInfinity;
+  int best_slot = 0;
+  int best_index = std::numeric_limits<int>::max();
+  const int groups = (count + 3) / 4;
+  // Not sorted, or a test component not finite: every group, in slot order.
+  const bool every =
+      !side.sorted || !std::all_of(q.begin(), q.end(), [](float v) { return std::isfinite(v); });
+  const float* keys = d0 + static_cast<std::size_t>(side.key) * stride;
+  const float qk = q[static_cast<std::size_t>(side.key)];
+  const auto term = [&](int slot) {
+    const float e = keys[slot] - qk;
+    return e * e;
+  };
+  // The next group each way: up (keys >= qk, least term at a group's first slot) and down
+  // (keys < qk, at its last). The first group, up's, is always read (term -1).
+  int up = 0, down = -1;
+  if (!every && groups > 0) {
+    const auto first = static_cast<int>(std::lower_bound(keys, keys + count, qk) - keys);
+    up = std::min(first / 4, groups - 1);
+    down = up - 1;
+  }
+  float up_term = -1.0f;
+  float down_term = down >= 0 ? term(4 * down + 3) : kInfinity;
+  while (up < groups || down >= 0) {
+    const bool go_up = down < 0 || (up < groups && up_term <= down_term);
+    const float bound = go_up ? up_term : down_term;
+    if (bound > second || (bound == second && best < second))
+      break;  // the other way's term is no smaller
+    if (bound > best && second < kInfinity && best < ratio2 * std::min(second, bound))
+      break;  // the ratio test passes
+    const int group = go_up ? up++ : down--;
+    if (go_up)
+      up_term = every ? -1.0f : up < groups ? term(4 * up) : kInfinity;
+    else
+      down_term = down >= 0 ? term(4 * down + 3) : kInfinity;
+
+    const auto i = static_cast<std::size_t>(4 * group);
+    Float4 e = Load4(d0 + i) - q0;
+    Float4 d = e * e;
+    e = Load4(d1 + i) - q1;
+    d += e * e;
+    e = Load4(d2 + i) - q2;
+    d += e * e;
+    e = Load4(d3 + i) - q3;
+    d += e * e;
+    e = Load4(d4 + i) - q4;
+    d += e * e;
+    e = Load4(d5 + i) - q5;
+    d += e * e;
+    // Most groups have no slot within second: one vector comparison passes them.
+    using Int4 = std::int32_t __attribute__((vector_size(16)));
+    const Int4 within = d <= Float4{second, second, second, second};
+    std::array<std::uint64_t, 2> halves{};
+    std::memcpy(halves.data(), &within, sizeof within);
+    if ((halves[0] | halves[1]) == 0)
+      continue;
+    const int lanes = std::min(4, count - 4 * group);
+    for (int lane = 0; lane < lanes; ++lane) {
+      const float v = d[lane];
+      if (v <= second) {
+        const int index = indices[i + static_cast<std::size_t>(lane)];
+        if (v < best || (v == best && index < best_index)) {
+          second = best;
+          best = v;
+          best_slot = 4 * group + lane;
+          best_index = index;
+        } else if (v < second) {
+          second = v;
+        }
+      }
+    }
+  }
+  return {best_slot, best, second};
 }
 
 Surf1dError LandmarkMatcher::Match(std::span<const Surf1dFeature> stored,
@@ -344,60 +539,18 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
     return Surf1dError::kBadFeature;
 
   // Nearest neighbour with the ratio test among the stored features of the same Laplacian
-  // sign. First every squared distance, summed in the descriptor's order for each feature
-  // (the loop runs across features, so it vectorises lane by lane without reordering any
-  // sum), then one scan for the nearest two, whose branches are rarely taken: cheaper than
-  // leaving each candidate early, whose data-dependent branches the predictor cannot learn.
-  static_assert(kSurf1dDescriptorSize == 6, "the distance below is unrolled for 6 dimensions");
-  const auto cap = static_cast<std::size_t>(capacity_);
+  // sign (NearestOnSide).
   int matches = 0;
   for (const Surf1dFeature& t : test) {
     const StoredSide& side = stored_[static_cast<std::size_t>(SideOf(t.laplacian_sign))];
-    const float q0 = t.descriptor[0], q1 = t.descriptor[1], q2 = t.descriptor[2];
-    const float q3 = t.descriptor[3], q4 = t.descriptor[4], q5 = t.descriptor[5];
-    const float* d0 = side.descriptors.data();
-    const float* d1 = d0 + cap;
-    const float* d2 = d1 + cap;
-    const float* d3 = d2 + cap;
-    const float* d4 = d3 + cap;
-    const float* d5 = d4 + cap;
-    float* distance = distances_.data();
-    const int candidates = side.count;
-    for (int s = 0; s < candidates; ++s) {
-      float e = d0[s] - q0;
-      float sum = e * e;
-      e = d1[s] - q1;
-      sum += e * e;
-      e = d2[s] - q2;
-      sum += e * e;
-      e = d3[s] - q3;
-      sum += e * e;
-      e = d4[s] - q4;
-      sum += e * e;
-      e = d5[s] - q5;
-      sum += e * e;
-      distance[s] = sum;
-    }
-    float best = std::numeric_limits<float>::infinity();
-    float second = best;
-    int best_index = 0;
-    for (int s = 0; s < candidates; ++s) {
-      const float d = distance[s];
-      if (d < second) {  // best <= second, so this is the only way in
-        if (d < best) {
-          second = best;
-          best = d;
-          best_index = s;
-        } else {
-          second = d;
-        }
-      }
-    }
+    const Nearest nearest = NearestOnSide(side, t, options_.ratio * options_.ratio);
+    float best = nearest.best;
+    const float second = nearest.second;
     if (!std::isfinite(second) || !(best < options_.ratio * options_.ratio * second))
       continue;
     best = std::sqrt(best);
     const auto m = static_cast<std::size_t>(matches++);
-    pair_stored_[m] = side.positions[static_cast<std::size_t>(best_index)];
+    pair_stored_[m] = side.positions[static_cast<std::size_t>(nearest.index)];
     pair_test_[m] = t.position;
     pair_distance_[m] = best;
     result->score += 1.0 / static_cast<double>(std::max(best, options_.min_distance));

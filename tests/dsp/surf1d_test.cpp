@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -763,6 +764,191 @@ TEST(Surf1dTest, StoredFeaturesHeldAcrossMatches) {
   EXPECT_EQ(held.MatchStored(unsigned_features, 360, &m), Surf1dError::kBadFeature);
   EXPECT_NE(std::string(Surf1dErrorMessage(Surf1dError::kBadFeature)).find("Detect"),
             std::string::npos);
+}
+
+// The nearest two as the matcher first found them: every stored feature of the test
+// feature's sign in the given order, the whole squared distance, a strictly smaller one
+// replacing best. NearestTwo must give exactly its index (-1 when best is infinite) and
+// both distances.
+LandmarkMatcher::Nearest BruteNearestTwo(const std::vector<Surf1dFeature>& stored,
+                                         const Surf1dFeature& t) {
+  float best = std::numeric_limits<float>::infinity(), second = best;
+  int index = -1;
+  for (std::size_t s = 0; s < stored.size(); ++s) {
+    if (stored[s].laplacian_sign != t.laplacian_sign)
+      continue;
+    float d = 0.0f;
+    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k) {
+      const float e = stored[s].descriptor[k] - t.descriptor[k];
+      d += e * e;
+    }
+    if (d < best) {
+      second = best;
+      best = d;
+      index = static_cast<int>(s);
+    } else if (d < second) {
+      second = d;
+    }
+  }
+  return {std::isinf(best) ? -1 : index, best, second};
+}
+
+// The search walks out from the test feature's key and stops early; on random and on
+// adversarial stored sets (coarse values with many equal distances, duplicated features,
+// every feature the same, one candidate of a sign, none, keys all equal, distances that
+// overflow, components that are not finite) it gives the brute force's nearest two to the
+// bit, the first index of equals included. Counted: cases where best ties another feature
+// at a larger index (the tie-break mattered), and none of a sign.
+TEST(Surf1dTest, NearestTwoEqualsTheBruteForce) {
+  std::mt19937 rng(33);
+  std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> coarse(-3, 3), coin(0, 1);
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  LandmarkMatcher matcher;
+  ASSERT_EQ(matcher.Init(300, LandmarkMatchOptions{}), Surf1dError::kOk);
+  int cases = 0, tied = 0, none = 0, found = 0;
+  const auto check = [&](const std::vector<Surf1dFeature>& stored,
+                         const std::vector<Surf1dFeature>& tests, const std::string& where) {
+    SCOPED_TRACE(where);
+    ASSERT_EQ(matcher.SetStored(stored), Surf1dError::kOk);
+    for (const Surf1dFeature& t : tests) {
+      const LandmarkMatcher::Nearest got = matcher.NearestTwo(t);
+      const LandmarkMatcher::Nearest want = BruteNearestTwo(stored, t);
+      ASSERT_EQ(got.index, want.index);
+      // Bits, so NaN and -0 compare too.
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(got.best), std::bit_cast<std::uint32_t>(want.best));
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(got.second),
+                std::bit_cast<std::uint32_t>(want.second));
+      ++cases;
+      found += want.index >= 0 ? 1 : 0;
+      none +=
+          std::none_of(stored.begin(), stored.end(),
+                       [&](const Surf1dFeature& f) { return f.laplacian_sign == t.laplacian_sign; })
+              ? 1
+              : 0;
+      if (want.index >= 0 && want.best == want.second) {
+        for (std::size_t s = static_cast<std::size_t>(want.index) + 1; s < stored.size(); ++s) {
+          if (stored[s].laplacian_sign == t.laplacian_sign &&
+              BruteNearestTwo({stored[s]}, t).best == want.best) {
+            ++tied;
+            break;
+          }
+        }
+      }
+    }
+  };
+  const auto feature = [&](bool coarse_values, std::int8_t sign) {
+    Surf1dFeature f;
+    f.position = static_cast<int>(rng() % 360);
+    f.laplacian_sign = sign;
+    for (float& v : f.descriptor)
+      v = coarse_values ? static_cast<float>(coarse(rng)) / 4.0f : uniform(rng);
+    return f;
+  };
+  const auto random_sign = [&] { return coin(rng) == 0 ? std::int8_t{1} : std::int8_t{-1}; };
+  for (const int count : {0, 1, 2, 3, 4, 5, 7, 8, 9, 31, 64, 129, 300}) {
+    for (int trial = 0; trial < 6; ++trial) {
+      const bool coarse_values = trial % 2 == 1;
+      std::vector<Surf1dFeature> stored, tests;
+      for (int i = 0; i < count; ++i) {
+        // trial 2, 3: every stored feature of one sign, so none of the other
+        stored.push_back(feature(coarse_values, trial / 2 == 1 ? std::int8_t{1} : random_sign()));
+        if (trial >= 4 && i > 0 && coin(rng) == 0)
+          stored.back().descriptor = stored[rng() % stored.size()].descriptor;  // a duplicate
+      }
+      for (int i = 0; i < 60; ++i)
+        tests.push_back(feature(coarse_values, random_sign()));
+      for (const Surf1dFeature& f : stored) {  // at distance 0 from a stored one, and near
+        tests.push_back(f);
+        tests.push_back(f);
+        tests.back().descriptor[rng() % kSurf1dDescriptorSize] += 0.01f;
+      }
+      check(stored, tests, "count " + std::to_string(count) + " trial " + std::to_string(trial));
+    }
+  }
+  // Every stored feature the same: best == second, the first index must win.
+  std::vector<Surf1dFeature> same(40, feature(false, 1));
+  check(same, {same[0], feature(false, 1), feature(false, -1)}, "all the same");
+  // One candidate of each sign.
+  std::vector<Surf1dFeature> one = {feature(false, 1), feature(false, -1)};
+  check(one, {feature(false, 1), feature(false, -1), one[0]}, "one candidate");
+  // Keys all equal: the first component equal everywhere, the rest in a narrower range.
+  std::vector<Surf1dFeature> flat;
+  for (int i = 0; i < 50; ++i) {
+    flat.push_back(feature(true, 1));
+    for (float& v : flat.back().descriptor)
+      v = 0.5f;
+    flat.back().descriptor[1 + static_cast<std::size_t>(i % 5)] = 0.25f * static_cast<float>(i % 3);
+  }
+  check(flat, {feature(true, 1), feature(false, 1), flat[7]}, "keys equal");
+  // Large values: some distances overflow to infinity (all of them for the far test).
+  std::vector<Surf1dFeature> large;
+  for (int i = 0; i < 30; ++i) {
+    large.push_back(feature(false, 1));
+    for (float& v : large.back().descriptor)
+      v *= 3e38f;
+  }
+  Surf1dFeature far = feature(false, 1);
+  far.descriptor.fill(-3e38f);
+  check(large, {far, large[3], feature(false, 1)}, "overflow");
+  // Components that are not finite, stored and test: the scan's NaN rules.
+  std::vector<Surf1dFeature> odd;
+  for (int i = 0; i < 20; ++i)
+    odd.push_back(feature(false, 1));
+  odd[4].descriptor[2] = nan;
+  odd[9].descriptor[0] = inf;
+  odd[13].descriptor[5] = -inf;
+  Surf1dFeature test_nan = feature(false, 1), test_inf = feature(false, 1);
+  test_nan.descriptor[3] = nan;
+  test_inf.descriptor[0] = inf;
+  check(odd, {feature(false, 1), odd[2], test_nan, test_inf}, "not finite, stored");
+  std::vector<Surf1dFeature> plain(odd.begin(), odd.begin() + 4);
+  check(plain, {test_nan, test_inf, feature(false, 1)}, "not finite, test");
+  std::printf(
+      "%d test features: %d with a nearest, %d tied at best with a later index, %d of a "
+      "sign with no candidates\n",
+      cases, found, tied, none);
+  EXPECT_GT(tied, 100);
+  EXPECT_GT(none, 100);
+  EXPECT_GT(found, cases / 2);
+}
+
+// The search stops early once the ratio test is sure to pass; at every ratio, above 1 too
+// (where a nearer feature could still be left when the test already holds), the matcher
+// gives the straightforward matcher's pairs.
+TEST(Surf1dTest, MatcherEqualsTheStraightforwardMatcherAtAnyRatio) {
+  std::mt19937 rng(34);
+  int pairs = 0;
+  for (const float ratio : {0.3f, 0.7f, 1.0f, 1.5f, 4.0f}) {
+    for (const int count : {2, 9, 64, 256}) {
+      for (int trial = 0; trial < 4; ++trial) {
+        LandmarkMatchOptions o;
+        o.ratio = ratio;
+        std::vector<Surf1dFeature> stored, test;
+        RandomFeatures(&rng, 360, count, 1.0, 40 + trial, &stored, &test);
+        if (trial % 2 == 1) {  // continuous descriptors: fewer ties, other stops
+          std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+          for (auto* features : {&stored, &test}) {
+            for (Surf1dFeature& f : *features) {
+              for (float& v : f.descriptor)
+                v = uniform(rng);
+            }
+          }
+        }
+        LandmarkMatcher matcher;
+        ASSERT_EQ(matcher.Init(256, o), Surf1dError::kOk);
+        LandmarkMatch m;
+        ASSERT_EQ(matcher.Match(stored, test, 360, &m), Surf1dError::kOk);
+        const ReferenceMatch want = ReferenceMatcher(stored, test, 360, o);
+        ExpectSameMatch(matcher, m, want,
+                        "ratio " + std::to_string(ratio) + " count " + std::to_string(count) +
+                            " trial " + std::to_string(trial));
+        pairs += want.result.matches;
+      }
+    }
+  }
+  EXPECT_GT(pairs, 1000);
 }
 
 // The detector as first written: the integral summed from -pad as Detect sums it (so the

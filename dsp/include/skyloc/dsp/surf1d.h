@@ -159,6 +159,19 @@ class LandmarkMatcher {
   // pairs. Allocates nothing.
   Surf1dError MatchStored(std::span<const Surf1dFeature> test, int n, LandmarkMatch* result);
 
+  // The nearest two held stored features of test's Laplacian sign, as the straightforward
+  // scan over them in the stored order finds them: `best` and `second` the smallest and the
+  // second smallest squared descriptor distance (duplicates counted; infinity when there
+  // are fewer candidates), `index` the first stored feature at `best` (its index in
+  // SetStored's span), -1 when best is infinite. Each distance is the sum over k of
+  // (stored[k] - test[k])^2 in floats, added in k's order. MatchStored's search; for tests.
+  struct Nearest {
+    int index = -1;
+    float best = 0.0f;
+    float second = 0.0f;
+  };
+  Nearest NearestTwo(const Surf1dFeature& test) const;
+
   // SetStored(stored), then MatchStored(test, n, result).
   Surf1dError Match(std::span<const Surf1dFeature> stored, std::span<const Surf1dFeature> test,
                     int n, LandmarkMatch* result);
@@ -175,14 +188,25 @@ class LandmarkMatcher {
   MatchedPair last_pair(int i) const;
 
  private:
-  // The held stored features of one Laplacian sign, in the order they were given.
+  // The held stored features of one Laplacian sign, sorted by one descriptor component
+  // (the key: the one whose values spread most on this side), or in the given order when a
+  // component is not finite.
   struct StoredSide {
-    // Dimension-major: component k of feature s at k * capacity + s, so the distances to
-    // consecutive features are computed lane by lane (each feature's sum in its own order).
+    // Dimension-major: component k of slot s at k * stride_ + s, so four consecutive slots'
+    // distances are computed lane by lane (each feature's sum in its own order). Slots from
+    // count to the next multiple of four hold +infinity.
     std::vector<float> descriptors;
     std::vector<std::int32_t> positions;  // columns
+    std::vector<std::int32_t> indices;    // index in SetStored's span
     int count = 0;
+    int key = 0;          // the key component
+    bool sorted = false;  // every component finite, the slots sorted by the key
   };
+
+  // NearestTwo on one side, `index` the slot in it. With ratio2 > 0 the search may stop
+  // once best < ratio2 * second is sure however it ends: best and index are exact, second
+  // is then only some value >= the true one for which best < ratio2 * second holds too.
+  Nearest NearestOnSide(const StoredSide& side, const Surf1dFeature& test, float ratio2) const;
 
   // RANSAC's inliers of the line through anchor pair `anchor` with slope `scale`, into
   // best_inlier_: the arithmetic of the search, so the same pairs it counted.
@@ -190,8 +214,10 @@ class LandmarkMatcher {
 
   LandmarkMatchOptions options_;
   int capacity_ = 0;
+  int stride_ = 0;                    // capacity_ rounded up to a multiple of four
   std::array<StoredSide, 2> stored_;  // [0]: laplacian_sign +1, [1]: -1
-  std::vector<float> distances_;      // squared distances of one test feature to a side
+  // SetStored's sort, side s's from s * capacity_: the key's order bits, then the index.
+  std::vector<std::uint64_t> order_;
   bool has_stored_ = false;
   // The pairs passing the ratio test: positions in columns, descriptor distance.
   std::vector<std::int32_t> pair_stored_;
