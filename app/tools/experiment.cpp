@@ -585,6 +585,27 @@ Status RunSpeedExperiment(const ExperimentOptions& speed_options, std::span<cons
           query_spec.motion.speed_ratio = ratio;
           query_spec.motion.bumps_deg = bumps;
           query_spec.motion.lateral_m = options.lateral_m;
+          // With a frame budget a repeat ends where the taught run ended. The 0.9 above
+          // assumes stops in both runs: a repeat without stops covers more ground in its
+          // frames than the taught run did with its own, and its frames past the taught
+          // route's end have no place to be recognised at (no ground truth). The route
+          // filter stays on the last row there, so those frames measured the route's end,
+          // not the matchers (docs/RESULTS.md, "Past the taught route's end"). The motion is
+          // the same with fewer frames, so the frames kept are the same.
+          if (options.max_frames > 0) {
+            std::vector<sim::TrajectoryPoint> path;
+            SKYLOC_TRY(
+                BuildTrajectory(world.route, world.route_closed, RowMotion(query_spec, o), &path));
+            const double taught_end_m = reference.trajectory.back().route_m;
+            const auto past_end = std::find_if(path.begin(), path.end(), [&](const auto& point) {
+              return point.route_m > taught_end_m;
+            });
+            if (past_end == path.begin())
+              return Status::Error(StatusCode::kInternal, "%s starts past the taught run's end",
+                                   label);
+            if (past_end != path.end())
+              o.max_frames = static_cast<int>(past_end - path.begin());
+          }
           RunDescriptors query;
           SKYLOC_TRY(DescribeReported(world, world.route, world.route_closed, query_spec, o,
                                       progress, &query));
