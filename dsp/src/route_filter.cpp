@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
@@ -16,6 +17,53 @@ namespace {
 // stays in L1 while it is read K + 1 times.
 constexpr int kBlockRows = 1024;
 
+// Two doubles as one SIMD register (SSE2 on x86-64, NEON on aarch64, plain code elsewhere).
+using Double2 = double __attribute__((vector_size(16)));
+
+// Adds diff[i] and its square to lane i & 3 of sum and sum_sq, i = 0 .. n - 1. Lanes 0, 1
+// and 2, 3 go as two vectors of two doubles: each lane's adds come in the same order as
+// one row at a time, so the sums are the same doubles on every machine.
+void AccumulateSums(const float* diff, int n, double sum[4], double sum_sq[4]) {
+  Double2 s01 = {sum[0], sum[1]}, s23 = {sum[2], sum[3]};
+  Double2 q01 = {sum_sq[0], sum_sq[1]}, q23 = {sum_sq[2], sum_sq[3]};
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const Double2 v01 = {static_cast<double>(diff[i]), static_cast<double>(diff[i + 1])};
+    const Double2 v23 = {static_cast<double>(diff[i + 2]), static_cast<double>(diff[i + 3])};
+    s01 += v01;
+    s23 += v23;
+    q01 += v01 * v01;
+    q23 += v23 * v23;
+  }
+  sum[0] = s01[0];
+  sum[1] = s01[1];
+  sum[2] = s23[0];
+  sum[3] = s23[1];
+  sum_sq[0] = q01[0];
+  sum_sq[1] = q01[1];
+  sum_sq[2] = q23[0];
+  sum_sq[3] = q23[1];
+  for (; i < n; ++i) {
+    const double v = static_cast<double>(diff[i]);
+    sum[i & 3] += v;
+    sum_sq[i & 3] += v * v;
+  }
+}
+
+// The lowest of cost[begin .. end - 1] (kInf when empty), four lanes at a time. Min4 keeps
+// the lane's value against a NaN as std::min(lowest, cost) does, and which lane finds the
+// minimum does not change its value.
+float LowestOf(const float* cost, int begin, int end) {
+  simd::Float4 lowest = {kInf, kInf, kInf, kInf};
+  int i = begin;
+  for (; i + 4 <= end; i += 4)
+    lowest = simd::Min4(lowest, simd::Load4(cost + i));
+  float m = std::min(std::min(lowest[0], lowest[1]), std::min(lowest[2], lowest[3]));
+  for (; i < end; ++i)
+    m = std::min(m, cost[i]);
+  return m;
+}
+
 }  // namespace
 
 SeqSlamError ValidateRouteFilterParams(const RouteFilterParams& p) {
@@ -27,6 +75,11 @@ SeqSlamError ValidateRouteFilterParams(const RouteFilterParams& p) {
     return SeqSlamError::kBadUniquenessWindow;
   if (!(p.keyframe_noise_factor >= 0.0f && p.keyframe_noise_factor <= 100.0f))
     return SeqSlamError::kBadKeyframeFactor;
+  if (p.search_window < 0 || p.search_window > kMaxSearchWindow)
+    return SeqSlamError::kBadSearchWindow;
+  if (p.search_window > 0 ? p.refresh_frames < 1 || p.refresh_frames > kMaxRefreshFrames
+                          : p.refresh_frames != 0)
+    return SeqSlamError::kBadRefreshFrames;
   return SeqSlamError::kOk;
 }
 
@@ -79,6 +132,7 @@ void RouteFilter::ClearReferences() {
 
 void RouteFilter::ResetQueries() {
   steps_ = 0;
+  refresh_phase_ = 0;
   track_row_ = -1;
   track_frames_ = 0;
 }
@@ -142,6 +196,47 @@ SeqSlamError RouteFilter::FinishRoute() {
   return SeqSlamError::kOk;
 }
 
+void RouteFilter::CompareRows(std::span<const float> query) {
+  const int n = rows_;
+  float* diff = difference_.data();
+  const int w = params_.search_window;
+  // Every row on the first frame after a reset (no stale difference is ever used before
+  // it was computed) and whenever the window covers the route.
+  const bool windowed = w > 0 && steps_ > 0 && track_row_ >= 0 && 2 * std::int64_t{w} + 1 < n;
+  if (!windowed) {
+    route_.Differences(query, 0, n, diff);
+    compared_[0] = 0;
+    compared_[1] = n;
+    compared_[2] = compared_[3] = 0;
+    rows_compared_ = n;
+    refresh_phase_ = 0;
+    return;
+  }
+  const int w0 = std::max(0, track_row_ - w), w1 = std::min(n, track_row_ + w + 1);
+  // Slice f of F: rows f n / F .. (f + 1) n / F - 1, so a cycle of F frames covers every
+  // row exactly once and the slices differ by at most one row.
+  const std::int64_t f = params_.refresh_frames;
+  const int s0 = static_cast<int>(refresh_phase_ * std::int64_t{n} / f);
+  const int s1 = static_cast<int>((refresh_phase_ + 1) * std::int64_t{n} / f);
+  refresh_phase_ = static_cast<int>((refresh_phase_ + 1) % f);
+  route_.Differences(query, w0, w1 - w0, diff + w0);
+  rows_compared_ = w1 - w0;
+  // The slice's rows outside the window: before it and after it.
+  const int before_end = std::min(s1, w0), after_begin = std::max(s0, w1);
+  if (s0 < before_end) {
+    route_.Differences(query, s0, before_end - s0, diff + s0);
+    rows_compared_ += before_end - s0;
+  }
+  if (after_begin < s1) {
+    route_.Differences(query, after_begin, s1 - after_begin, diff + after_begin);
+    rows_compared_ += s1 - after_begin;
+  }
+  compared_[0] = w0;
+  compared_[1] = w1;
+  compared_[2] = s0;
+  compared_[3] = s1;
+}
+
 SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) {
   *out = SeqSlamMatch{};
   if (capacity_ == 0)
@@ -153,20 +248,14 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   if (rows_ == 0)
     return SeqSlamError::kEmptyDatabase;
   const int n = rows_;
-  float* diff = difference_.data();
+  const float* diff = difference_.data();
 
-  // 1. Differences, and their sums for the z-score. Four partial sums in a fixed order:
-  // the same doubles on every machine, without one long dependent add chain.
+  // 1. Differences (every row, or the window's and a slice's: 6.), and the sums of the
+  // whole column for the z-score. Four partial sums in a fixed order: the same doubles on
+  // every machine, without one long dependent add chain.
+  CompareRows(query);
   double sum[4] = {0, 0, 0, 0}, sum_sq[4] = {0, 0, 0, 0};
-  for (int r0 = 0; r0 < n; r0 += kBlockRows) {
-    const int count = std::min(kBlockRows, n - r0);
-    route_.Differences(query, r0, count, diff + r0);
-    for (int i = r0; i < r0 + count; ++i) {
-      const double v = static_cast<double>(diff[Sz(i)]);
-      sum[i & 3] += v;
-      sum_sq[i & 3] += v * v;
-    }
-  }
+  AccumulateSums(diff, n, sum, sum_sq);
   const double total = (sum[0] + sum[1]) + (sum[2] + sum[3]);
   const double total_sq = (sum_sq[0] + sum_sq[1]) + (sum_sq[2] + sum_sq[3]);
   const double mean = total / n;
@@ -178,13 +267,16 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   const float mean_f = static_cast<float>(mean);
   const float inv_std = flat ? 0.0f : static_cast<float>(1.0 / std::sqrt(var));
 
-  // 2. The filter update: cost(i) = z(i) + lambda * min over k = 0..K of previous(i - k).
+  // 2. The filter update: cost(i) = z(i) + lambda * min over k = 0..K of previous(i - k),
+  // and 3.'s best row (the first on ties) while the block is in L1.
   std::swap(cost_, previous_);
   const float* __restrict prev = previous_.data();
   float* __restrict cost = cost_.data();
   const float lambda = lambda_;
   const int advance = params_.max_advance;
   const bool first = steps_ == 0;
+  int best = 0;
+  float best_cost = 0;
   for (int r0 = 0; r0 < n; r0 += kBlockRows) {
     const int count = std::min(kBlockRows, n - r0);
     float band[kBlockRows];
@@ -206,22 +298,26 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
           dst[i] = src[i] < dst[i] ? src[i] : dst[i];
       }
     }
+    float* block_cost = cost + r0;
     for (int i = 0; i < count; ++i) {
       const float z = (diff[Sz(r0 + i)] - mean_f) * inv_std;
-      cost[r0 + i] = z + lambda * band[i];
+      block_cost[i] = z + lambda * band[i];
+    }
+    int i = 0;
+    if (r0 == 0) {
+      best_cost = block_cost[0];
+      i = 1;
+    }
+    for (; i < count; ++i) {
+      if (block_cost[i] < best_cost) {
+        best_cost = block_cost[i];
+        best = r0 + i;
+      }
     }
   }
   ++steps_;
 
-  // 3. The best row (the first on ties) and the best row outside its window.
-  int best = 0;
-  float best_cost = cost[0];
-  for (int i = 1; i < n; ++i) {
-    if (cost[i] < best_cost) {
-      best_cost = cost[i];
-      best = i;
-    }
-  }
+  // 3. The best row outside the best's window.
   // The runner-up is the best row outside the best's basin: the rows around it whose cost
   // rises monotonically away from it (a route sampled in time has alike neighbours, so
   // the basin can be wider than any fixed window), and at least +-uniqueness_window/2.
@@ -231,11 +327,7 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
     w0 = std::min(w0, i - 1);
   for (int i = best; i + 1 < n && cost[i + 1] >= cost[i]; ++i)
     w1 = std::max(w1, i + 1);
-  float second = kInf;
-  for (int i = 0; i < w0; ++i)
-    second = std::min(second, cost[i]);
-  for (int i = w1 + 1; i < n; ++i)
-    second = std::min(second, cost[i]);
+  const float second = std::min(LowestOf(cost, 0, w0), LowestOf(cost, w1 + 1, n));
 
   out->valid = true;
   out->row = best;
