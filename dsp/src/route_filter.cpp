@@ -13,23 +13,21 @@
 namespace skyloc::dsp {
 namespace {
 
-// Rows per pass of the filter update: the band minimum works on a block of rows that
-// stays in L1 while it is read K + 1 times.
-constexpr int kBlockRows = 1024;
-
 // Two doubles as one SIMD register (SSE2 on x86-64, NEON on aarch64, plain code elsewhere).
-using Double2 = double __attribute__((vector_size(16)));
+using DoublePair = double __attribute__((vector_size(16)));
+// Four row numbers, and the lane masks of a Float4 comparison.
+using RowNumber4 = std::int32_t __attribute__((vector_size(16)));
 
 // Adds diff[i] and its square to lane i & 3 of sum and sum_sq, i = 0 .. n - 1. Lanes 0, 1
 // and 2, 3 go as two vectors of two doubles: each lane's adds come in the same order as
 // one row at a time, so the sums are the same doubles on every machine.
 void AccumulateSums(const float* diff, int n, double sum[4], double sum_sq[4]) {
-  Double2 s01 = {sum[0], sum[1]}, s23 = {sum[2], sum[3]};
-  Double2 q01 = {sum_sq[0], sum_sq[1]}, q23 = {sum_sq[2], sum_sq[3]};
+  DoublePair s01 = {sum[0], sum[1]}, s23 = {sum[2], sum[3]};
+  DoublePair q01 = {sum_sq[0], sum_sq[1]}, q23 = {sum_sq[2], sum_sq[3]};
   int i = 0;
   for (; i + 4 <= n; i += 4) {
-    const Double2 v01 = {static_cast<double>(diff[i]), static_cast<double>(diff[i + 1])};
-    const Double2 v23 = {static_cast<double>(diff[i + 2]), static_cast<double>(diff[i + 3])};
+    const DoublePair v01 = {static_cast<double>(diff[i]), static_cast<double>(diff[i + 1])};
+    const DoublePair v23 = {static_cast<double>(diff[i + 2]), static_cast<double>(diff[i + 3])};
     s01 += v01;
     s23 += v23;
     q01 += v01 * v01;
@@ -268,51 +266,97 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   const float inv_std = flat ? 0.0f : static_cast<float>(1.0 / std::sqrt(var));
 
   // 2. The filter update: cost(i) = z(i) + lambda * min over k = 0..K of previous(i - k),
-  // and 3.'s best row (the first on ties) while the block is in L1.
+  // with 3.'s best row (the first on ties) found on the way. Rows i >= K go 16 at a time
+  // (four registers of four: the K + 1 loads of previous per register are in L1, and
+  // nothing is stored between them); each row's minimum is taken in the order k = 1..K,
+  // the costs and the best row are those of one row at a time, bit for bit.
   std::swap(cost_, previous_);
   const float* __restrict prev = previous_.data();
   float* __restrict cost = cost_.data();
   const float lambda = lambda_;
   const int advance = params_.max_advance;
   const bool first = steps_ == 0;
+  // One row, its band over the rows that exist (i - k >= 0).
+  const auto update_row = [&](int i) {
+    float band = 0.0f;
+    if (!first) {
+      band = prev[i];
+      for (int k = 1; k <= std::min(advance, i); ++k)
+        band = prev[i - k] < band ? prev[i - k] : band;
+    }
+    const float z = (diff[Sz(i)] - mean_f) * inv_std;
+    cost[i] = z + lambda * band;
+  };
+  const int head = std::min(n, advance);  // rows without K rows before them
+  for (int i = 0; i < head; ++i)
+    update_row(i);
   int best = 0;
-  float best_cost = 0;
-  for (int r0 = 0; r0 < n; r0 += kBlockRows) {
-    const int count = std::min(kBlockRows, n - r0);
-    float band[kBlockRows];
-    if (first) {
-      std::fill(band, band + count, 0.0f);
-    } else {
-      std::copy_n(prev + r0, count, band);
+  float best_cost = cost[0];
+  for (int i = 1; i < head; ++i) {
+    if (cost[i] < best_cost) {
+      best_cost = cost[i];
+      best = i;
+    }
+  }
+  // Four lanes of the best so far: a lane takes a row only when strictly lower, so each
+  // keeps its first minimum, and the lowest lane (the lowest index on ties) is the row
+  // one row at a time would find. Lanes start at the head's best.
+  using simd::Float4;
+  Float4 lane_cost = {best_cost, best_cost, best_cost, best_cost};
+  RowNumber4 lane_row = {best, best, best, best};
+  const Float4 mean4 = {mean_f, mean_f, mean_f, mean_f};
+  const Float4 inv_std4 = {inv_std, inv_std, inv_std, inv_std};
+  const Float4 lambda4 = {lambda, lambda, lambda, lambda};
+  const auto finish4 = [&](int i, Float4 band) {
+    const Float4 z = (simd::Load4(diff + i) - mean4) * inv_std4;
+    const Float4 c = z + lambda4 * band;
+    simd::Store4(cost + i, c);
+    const RowNumber4 lower = c < lane_cost;
+    lane_cost = lower ? c : lane_cost;
+    const RowNumber4 rows = {i, i + 1, i + 2, i + 3};
+    lane_row = lower ? rows : lane_row;
+  };
+  int row = head;
+  for (; row + 16 <= n; row += 16) {
+    Float4 b0 = {}, b1 = {}, b2 = {}, b3 = {};
+    if (!first) {
+      b0 = simd::Load4(prev + row);
+      b1 = simd::Load4(prev + row + 4);
+      b2 = simd::Load4(prev + row + 8);
+      b3 = simd::Load4(prev + row + 12);
       for (int k = 1; k <= advance; ++k) {
-        const int lo = std::max(r0, k);  // rows i >= k have a row i - k
-        float* dst = band + (lo - r0);
-        const float* src = prev + (lo - k);
-        const int m = r0 + count - lo;
-        // Four rows at a time, branch-free: a scalar std::min compiles to a compare and a
-        // branch that random costs mispredict half the time.
-        int i = 0;
-        for (; i + 4 <= m; i += 4)
-          simd::Store4(dst + i, simd::Min4(simd::Load4(dst + i), simd::Load4(src + i)));
-        for (; i < m; ++i)
-          dst[i] = src[i] < dst[i] ? src[i] : dst[i];
+        const float* src = prev + row - k;
+        b0 = simd::Min4(b0, simd::Load4(src));
+        b1 = simd::Min4(b1, simd::Load4(src + 4));
+        b2 = simd::Min4(b2, simd::Load4(src + 8));
+        b3 = simd::Min4(b3, simd::Load4(src + 12));
       }
     }
-    float* block_cost = cost + r0;
-    for (int i = 0; i < count; ++i) {
-      const float z = (diff[Sz(r0 + i)] - mean_f) * inv_std;
-      block_cost[i] = z + lambda * band[i];
+    finish4(row, b0);
+    finish4(row + 4, b1);
+    finish4(row + 8, b2);
+    finish4(row + 12, b3);
+  }
+  for (; row + 4 <= n; row += 4) {
+    Float4 b = {};
+    if (!first) {
+      b = simd::Load4(prev + row);
+      for (int k = 1; k <= advance; ++k)
+        b = simd::Min4(b, simd::Load4(prev + row - k));
     }
-    int i = 0;
-    if (r0 == 0) {
-      best_cost = block_cost[0];
-      i = 1;
+    finish4(row, b);
+  }
+  for (int lane = 0; lane < 4; ++lane) {
+    if (lane_cost[lane] < best_cost || (lane_cost[lane] == best_cost && lane_row[lane] < best)) {
+      best_cost = lane_cost[lane];
+      best = lane_row[lane];
     }
-    for (; i < count; ++i) {
-      if (block_cost[i] < best_cost) {
-        best_cost = block_cost[i];
-        best = r0 + i;
-      }
+  }
+  for (; row < n; ++row) {
+    update_row(row);
+    if (cost[row] < best_cost) {
+      best_cost = cost[row];
+      best = row;
     }
   }
   ++steps_;
