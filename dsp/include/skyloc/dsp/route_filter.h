@@ -47,7 +47,7 @@
 //     first + floor((1/2 + p) (last - first)): its middle when both neighbours are far
 //     behind (p = 0), its last frame when the next row is as good (leaving), its first
 //     when the row before is (arriving). A row of one frame reports that frame.
-//  6. The search window (optional; off by default, docs/SEQSLAM.md, "The search window").
+//  6. The search window (optional, off by default; docs/SEQSLAM.md, Design 6).
 //     On a long route most of a frame's time is the difference column (rows x dim). With
 //     search_window W > 0 and refresh_frames F, a frame compares the query with the rows
 //     within +-W of the last frame's best row and with one slice of F (rows f x n / F ..
