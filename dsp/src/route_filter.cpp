@@ -361,8 +361,7 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   }
   ++steps_;
 
-  // 3. The best row outside the best's window.
-  // The runner-up is the best row outside the best's basin: the rows around it whose cost
+  // 3. The runner-up: the best row outside the best's basin: the rows around it whose cost
   // rises monotonically away from it (a route sampled in time has alike neighbours, so
   // the basin can be wider than any fixed window), and at least +-uniqueness_window/2.
   const int half = params_.uniqueness_window / 2;
