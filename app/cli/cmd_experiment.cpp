@@ -92,6 +92,15 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
        {dsp::ReferenceStorageName(dsp::ReferenceStorage::kCodes16),
         dsp::ReferenceStorage::kCodes16}},
       &e.config.capacities.route_storage);
+  t.Int("--search-window", "N",
+        "route filter: compare each frame with the rows within +-N of the last best row and "
+        "every other row once every --refresh-frames frames ([seqslam] search_window; "
+        "default 0: every row every frame)",
+        0, dsp::kMaxSearchWindow, &e.filter.search_window);
+  t.Int("--refresh-frames", "F",
+        "route filter with --search-window: frames between two comparisons of a row outside "
+        "the window ([seqslam] refresh_frames, 1..1000)",
+        1, dsp::kMaxRefreshFrames, &e.filter.refresh_frames);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
            &e.frames.frame_spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,
@@ -139,6 +148,9 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
     return t.Refuse("--vocab (FAB-MAP) is for tilt and manoeuvre");
   if (o->out.empty())
     return t.Refuse("--out DIR is required");
+  if (t.Given("--search-window") != t.Given("--refresh-frames") ||
+      (t.Given("--search-window") && e.filter.search_window == 0))
+    return t.Refuse("--search-window N (N >= 1) and --refresh-frames F go together");
   o->spacing_given = t.Given("--spacing");
   firmware::ResolveDescriptorGrid(&descriptor);
   return ParseOutcome::kRun;
@@ -305,7 +317,7 @@ std::string CommonNotes(const tools::ExperimentOptions& e) {
          Format(
              ". OpenSeqSLAM: ds %d (unless stated), v %.1f..%.1f, R %d, Rwindow %d, centred "
              "window. Route filter: ds as OpenSeqSLAM's, K %d, keyframe noise factor %.3g, "
-             "Rwindow %d, causal, route held as %s. Ground truth: the reference frames tied "
+             "Rwindow %d, causal, route held as %s%s. Ground truth: the reference frames tied "
              "(within 1 cm) "
              "for nearest by position; correct within %d frames of them; no truth farther "
              "than %.3g m.\n",
@@ -313,8 +325,13 @@ std::string CommonNotes(const tools::ExperimentOptions& e) {
              static_cast<double>(e.seqslam.v_max), e.seqslam.contrast_window,
              e.seqslam.uniqueness_window, e.filter.max_advance,
              static_cast<double>(e.filter.keyframe_noise_factor), e.filter.uniqueness_window,
-             dsp::ReferenceStorageName(e.config.capacities.route_storage), e.tolerance_frames,
-             e.max_offset_m);
+             dsp::ReferenceStorageName(e.config.capacities.route_storage),
+             e.filter.search_window > 0
+                 ? Format(", search window +-%d rows, other rows every %d frames",
+                          e.filter.search_window, e.filter.refresh_frames)
+                       .c_str()
+                 : "",
+             e.tolerance_frames, e.max_offset_m);
 }
 
 std::string HeadingCell(const dsp::HeadingErrorSummary& e) {

@@ -305,6 +305,8 @@ void ReadSeqslamSection(SectionReader& r, const toml::table* /*table*/, Config& 
   c.seqslam.set_ds(ds);
   r.Int("max_advance", &filter.max_advance, 1, 64);
   r.Float("keyframe_noise_factor", &filter.keyframe_noise_factor, 0.0, 100.0);
+  r.Int("search_window", &filter.search_window, 0, dsp::kMaxSearchWindow);
+  r.Int("refresh_frames", &filter.refresh_frames, 0, dsp::kMaxRefreshFrames);
   r.Float("vmin", &open.v_min, 0.1, 10.0);
   r.Float("vmax", &open.v_max, 0.1, 10.0);
   r.Float("vstep", &open.v_step, 0.01, 10.0);
@@ -314,6 +316,12 @@ void ReadSeqslamSection(SectionReader& r, const toml::table* /*table*/, Config& 
   r.Int("contrast_r", &open.contrast_window, 0, 1000);
   if (r.ok() && open.v_max < open.v_min)
     r.Invalid("vmax", "must not be smaller than vmin");
+  if (r.ok() && filter.search_window > 0 && filter.refresh_frames < 1)
+    r.Invalid("refresh_frames",
+              "must be 1..1000 with search_window > 0 (how many frames a row outside the "
+              "window may go without being compared)");
+  else if (r.ok() && filter.search_window == 0 && filter.refresh_frames != 0)
+    r.Invalid("refresh_frames", "is only used with search_window > 0; remove it or set both");
 }
 
 // [capacities]

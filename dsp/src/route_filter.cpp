@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
@@ -12,9 +13,54 @@
 namespace skyloc::dsp {
 namespace {
 
-// Rows per pass of the filter update: the band minimum works on a block of rows that
-// stays in L1 while it is read K + 1 times.
-constexpr int kBlockRows = 1024;
+// Two doubles as one SIMD register (SSE2 on x86-64, NEON on aarch64, plain code elsewhere).
+using DoublePair = double __attribute__((vector_size(16)));
+// Four row numbers, and the lane masks of a Float4 comparison.
+using RowNumber4 = std::int32_t __attribute__((vector_size(16)));
+
+// Adds diff[i] and its square to lane i & 3 of sum and sum_sq, i = 0 .. n - 1. Lanes 0, 1
+// and 2, 3 go as two vectors of two doubles: each lane's adds come in the same order as
+// one row at a time, so the sums are the same doubles on every machine.
+void AccumulateSums(const float* diff, int n, double sum[4], double sum_sq[4]) {
+  DoublePair s01 = {sum[0], sum[1]}, s23 = {sum[2], sum[3]};
+  DoublePair q01 = {sum_sq[0], sum_sq[1]}, q23 = {sum_sq[2], sum_sq[3]};
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const DoublePair v01 = {static_cast<double>(diff[i]), static_cast<double>(diff[i + 1])};
+    const DoublePair v23 = {static_cast<double>(diff[i + 2]), static_cast<double>(diff[i + 3])};
+    s01 += v01;
+    s23 += v23;
+    q01 += v01 * v01;
+    q23 += v23 * v23;
+  }
+  sum[0] = s01[0];
+  sum[1] = s01[1];
+  sum[2] = s23[0];
+  sum[3] = s23[1];
+  sum_sq[0] = q01[0];
+  sum_sq[1] = q01[1];
+  sum_sq[2] = q23[0];
+  sum_sq[3] = q23[1];
+  for (; i < n; ++i) {
+    const double v = static_cast<double>(diff[i]);
+    sum[i & 3] += v;
+    sum_sq[i & 3] += v * v;
+  }
+}
+
+// The lowest of cost[begin .. end - 1] (kInf when empty), four lanes at a time. Min4 keeps
+// the lane's value against a NaN as std::min(lowest, cost) does, and which lane finds the
+// minimum does not change its value.
+float LowestOf(const float* cost, int begin, int end) {
+  simd::Float4 lowest = {kInf, kInf, kInf, kInf};
+  int i = begin;
+  for (; i + 4 <= end; i += 4)
+    lowest = simd::Min4(lowest, simd::Load4(cost + i));
+  float m = std::min(std::min(lowest[0], lowest[1]), std::min(lowest[2], lowest[3]));
+  for (; i < end; ++i)
+    m = std::min(m, cost[i]);
+  return m;
+}
 
 }  // namespace
 
@@ -27,6 +73,11 @@ SeqSlamError ValidateRouteFilterParams(const RouteFilterParams& p) {
     return SeqSlamError::kBadUniquenessWindow;
   if (!(p.keyframe_noise_factor >= 0.0f && p.keyframe_noise_factor <= 100.0f))
     return SeqSlamError::kBadKeyframeFactor;
+  if (p.search_window < 0 || p.search_window > kMaxSearchWindow)
+    return SeqSlamError::kBadSearchWindow;
+  if (p.search_window > 0 ? p.refresh_frames < 1 || p.refresh_frames > kMaxRefreshFrames
+                          : p.refresh_frames != 0)
+    return SeqSlamError::kBadRefreshFrames;
   return SeqSlamError::kOk;
 }
 
@@ -79,6 +130,7 @@ void RouteFilter::ClearReferences() {
 
 void RouteFilter::ResetQueries() {
   steps_ = 0;
+  refresh_phase_ = 0;
   track_row_ = -1;
   track_frames_ = 0;
 }
@@ -142,6 +194,47 @@ SeqSlamError RouteFilter::FinishRoute() {
   return SeqSlamError::kOk;
 }
 
+void RouteFilter::CompareRows(std::span<const float> query) {
+  const int n = rows_;
+  float* diff = difference_.data();
+  const int w = params_.search_window;
+  // Every row on the first frame after a reset (no stale difference is ever used before
+  // it was computed) and whenever the window covers the route.
+  const bool windowed = w > 0 && steps_ > 0 && track_row_ >= 0 && 2 * std::int64_t{w} + 1 < n;
+  if (!windowed) {
+    route_.Differences(query, 0, n, diff);
+    compared_[0] = 0;
+    compared_[1] = n;
+    compared_[2] = compared_[3] = 0;
+    rows_compared_ = n;
+    refresh_phase_ = 0;
+    return;
+  }
+  const int w0 = std::max(0, track_row_ - w), w1 = std::min(n, track_row_ + w + 1);
+  // Slice f of F: rows f n / F .. (f + 1) n / F - 1, so a cycle of F frames covers every
+  // row exactly once and the slices differ by at most one row.
+  const std::int64_t f = params_.refresh_frames;
+  const int s0 = static_cast<int>(refresh_phase_ * std::int64_t{n} / f);
+  const int s1 = static_cast<int>((refresh_phase_ + 1) * std::int64_t{n} / f);
+  refresh_phase_ = static_cast<int>((refresh_phase_ + 1) % f);
+  route_.Differences(query, w0, w1 - w0, diff + w0);
+  rows_compared_ = w1 - w0;
+  // The slice's rows outside the window: before it and after it.
+  const int before_end = std::min(s1, w0), after_begin = std::max(s0, w1);
+  if (s0 < before_end) {
+    route_.Differences(query, s0, before_end - s0, diff + s0);
+    rows_compared_ += before_end - s0;
+  }
+  if (after_begin < s1) {
+    route_.Differences(query, after_begin, s1 - after_begin, diff + after_begin);
+    rows_compared_ += s1 - after_begin;
+  }
+  compared_[0] = w0;
+  compared_[1] = w1;
+  compared_[2] = s0;
+  compared_[3] = s1;
+}
+
 SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) {
   *out = SeqSlamMatch{};
   if (capacity_ == 0)
@@ -153,20 +246,14 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   if (rows_ == 0)
     return SeqSlamError::kEmptyDatabase;
   const int n = rows_;
-  float* diff = difference_.data();
+  const float* diff = difference_.data();
 
-  // 1. Differences, and their sums for the z-score. Four partial sums in a fixed order:
-  // the same doubles on every machine, without one long dependent add chain.
+  // 1. Differences (every row, or the window's and a slice's: 6.), and the sums of the
+  // whole column for the z-score. Four partial sums in a fixed order: the same doubles on
+  // every machine, without one long dependent add chain.
+  CompareRows(query);
   double sum[4] = {0, 0, 0, 0}, sum_sq[4] = {0, 0, 0, 0};
-  for (int r0 = 0; r0 < n; r0 += kBlockRows) {
-    const int count = std::min(kBlockRows, n - r0);
-    route_.Differences(query, r0, count, diff + r0);
-    for (int i = r0; i < r0 + count; ++i) {
-      const double v = static_cast<double>(diff[Sz(i)]);
-      sum[i & 3] += v;
-      sum_sq[i & 3] += v * v;
-    }
-  }
+  AccumulateSums(diff, n, sum, sum_sq);
   const double total = (sum[0] + sum[1]) + (sum[2] + sum[3]);
   const double total_sq = (sum_sq[0] + sum_sq[1]) + (sum_sq[2] + sum_sq[3]);
   const double mean = total / n;
@@ -178,51 +265,103 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
   const float mean_f = static_cast<float>(mean);
   const float inv_std = flat ? 0.0f : static_cast<float>(1.0 / std::sqrt(var));
 
-  // 2. The filter update: cost(i) = z(i) + lambda * min over k = 0..K of previous(i - k).
+  // 2. The filter update: cost(i) = z(i) + lambda * min over k = 0..K of previous(i - k),
+  // with 3.'s best row (the first on ties) found on the way. Rows i >= K go 16 at a time
+  // (four registers of four: the K + 1 loads of previous per register are in L1, and
+  // nothing is stored between them); each row's minimum is taken in the order k = 1..K,
+  // the costs and the best row are those of one row at a time, bit for bit.
   std::swap(cost_, previous_);
   const float* __restrict prev = previous_.data();
   float* __restrict cost = cost_.data();
   const float lambda = lambda_;
   const int advance = params_.max_advance;
   const bool first = steps_ == 0;
-  for (int r0 = 0; r0 < n; r0 += kBlockRows) {
-    const int count = std::min(kBlockRows, n - r0);
-    float band[kBlockRows];
-    if (first) {
-      std::fill(band, band + count, 0.0f);
-    } else {
-      std::copy_n(prev + r0, count, band);
-      for (int k = 1; k <= advance; ++k) {
-        const int lo = std::max(r0, k);  // rows i >= k have a row i - k
-        float* dst = band + (lo - r0);
-        const float* src = prev + (lo - k);
-        const int m = r0 + count - lo;
-        // Four rows at a time, branch-free: a scalar std::min compiles to a compare and a
-        // branch that random costs mispredict half the time.
-        int i = 0;
-        for (; i + 4 <= m; i += 4)
-          simd::Store4(dst + i, simd::Min4(simd::Load4(dst + i), simd::Load4(src + i)));
-        for (; i < m; ++i)
-          dst[i] = src[i] < dst[i] ? src[i] : dst[i];
-      }
+  // One row, its band over the rows that exist (i - k >= 0).
+  const auto update_row = [&](int i) {
+    float band = 0.0f;
+    if (!first) {
+      band = prev[i];
+      for (int k = 1; k <= std::min(advance, i); ++k)
+        band = prev[i - k] < band ? prev[i - k] : band;
     }
-    for (int i = 0; i < count; ++i) {
-      const float z = (diff[Sz(r0 + i)] - mean_f) * inv_std;
-      cost[r0 + i] = z + lambda * band[i];
-    }
-  }
-  ++steps_;
-
-  // 3. The best row (the first on ties) and the best row outside its window.
+    const float z = (diff[Sz(i)] - mean_f) * inv_std;
+    cost[i] = z + lambda * band;
+  };
+  const int head = std::min(n, advance);  // rows without K rows before them
+  for (int i = 0; i < head; ++i)
+    update_row(i);
   int best = 0;
   float best_cost = cost[0];
-  for (int i = 1; i < n; ++i) {
+  for (int i = 1; i < head; ++i) {
     if (cost[i] < best_cost) {
       best_cost = cost[i];
       best = i;
     }
   }
-  // The runner-up is the best row outside the best's basin: the rows around it whose cost
+  // Four lanes of the best so far: a lane takes a row only when strictly lower, so each
+  // keeps its first minimum, and the lowest lane (the lowest index on ties) is the row
+  // one row at a time would find. Lanes start at the head's best.
+  using simd::Float4;
+  Float4 lane_cost = {best_cost, best_cost, best_cost, best_cost};
+  RowNumber4 lane_row = {best, best, best, best};
+  const Float4 mean4 = {mean_f, mean_f, mean_f, mean_f};
+  const Float4 inv_std4 = {inv_std, inv_std, inv_std, inv_std};
+  const Float4 lambda4 = {lambda, lambda, lambda, lambda};
+  const auto finish4 = [&](int i, Float4 band) {
+    const Float4 z = (simd::Load4(diff + i) - mean4) * inv_std4;
+    const Float4 c = z + lambda4 * band;
+    simd::Store4(cost + i, c);
+    const RowNumber4 lower = c < lane_cost;
+    lane_cost = lower ? c : lane_cost;
+    const RowNumber4 rows = {i, i + 1, i + 2, i + 3};
+    lane_row = lower ? rows : lane_row;
+  };
+  int row = head;
+  for (; row + 16 <= n; row += 16) {
+    Float4 b0 = {}, b1 = {}, b2 = {}, b3 = {};
+    if (!first) {
+      b0 = simd::Load4(prev + row);
+      b1 = simd::Load4(prev + row + 4);
+      b2 = simd::Load4(prev + row + 8);
+      b3 = simd::Load4(prev + row + 12);
+      for (int k = 1; k <= advance; ++k) {
+        const float* src = prev + row - k;
+        b0 = simd::Min4(b0, simd::Load4(src));
+        b1 = simd::Min4(b1, simd::Load4(src + 4));
+        b2 = simd::Min4(b2, simd::Load4(src + 8));
+        b3 = simd::Min4(b3, simd::Load4(src + 12));
+      }
+    }
+    finish4(row, b0);
+    finish4(row + 4, b1);
+    finish4(row + 8, b2);
+    finish4(row + 12, b3);
+  }
+  for (; row + 4 <= n; row += 4) {
+    Float4 b = {};
+    if (!first) {
+      b = simd::Load4(prev + row);
+      for (int k = 1; k <= advance; ++k)
+        b = simd::Min4(b, simd::Load4(prev + row - k));
+    }
+    finish4(row, b);
+  }
+  for (int lane = 0; lane < 4; ++lane) {
+    if (lane_cost[lane] < best_cost || (lane_cost[lane] == best_cost && lane_row[lane] < best)) {
+      best_cost = lane_cost[lane];
+      best = lane_row[lane];
+    }
+  }
+  for (; row < n; ++row) {
+    update_row(row);
+    if (cost[row] < best_cost) {
+      best_cost = cost[row];
+      best = row;
+    }
+  }
+  ++steps_;
+
+  // 3. The runner-up: the best row outside the best's basin: the rows around it whose cost
   // rises monotonically away from it (a route sampled in time has alike neighbours, so
   // the basin can be wider than any fixed window), and at least +-uniqueness_window/2.
   const int half = params_.uniqueness_window / 2;
@@ -231,11 +370,7 @@ SeqSlamError RouteFilter::Step(std::span<const float> query, SeqSlamMatch* out) 
     w0 = std::min(w0, i - 1);
   for (int i = best; i + 1 < n && cost[i + 1] >= cost[i]; ++i)
     w1 = std::max(w1, i + 1);
-  float second = kInf;
-  for (int i = 0; i < w0; ++i)
-    second = std::min(second, cost[i]);
-  for (int i = w1 + 1; i < n; ++i)
-    second = std::min(second, cost[i]);
+  const float second = std::min(LowestOf(cost, 0, w0), LowestOf(cost, w1 + 1, n));
 
   out->valid = true;
   out->row = best;

@@ -58,6 +58,12 @@ const char* SeqSlamErrorMessage(SeqSlamError error) {
       return "route not finished: call FinishRoute() after the last taught frame";
     case SeqSlamError::kRouteFinished:
       return "route already finished: clear it before adding taught frames";
+    case SeqSlamError::kBadSearchWindow:
+      return "search_window (route rows each side of the last best row) must be 0..1000000 "
+             "(0: every row every frame)";
+    case SeqSlamError::kBadRefreshFrames:
+      return "refresh_frames (frames between refreshes of the rows outside search_window) must "
+             "be 1..1000 with search_window > 0, and 0 without";
   }
   return "unknown SeqSLAM error";
 }

@@ -14,7 +14,9 @@ table, SH tables, the route) cancels. See docs/BENCHMARKS.md, "ARM cost, measure
       --sysroot build/sysroot-arm64 [--repetitions 4] [--functions 8] [CASE ...]
 
 A CASE is STAGE[:ROUTE_FRAMES[:STORAGE]] (stage_cost's arguments; STORAGE as [capacities]
-route_storage: float32, bfloat16, codes8 or codes16); without any, the default list below.
+route_storage: float32, bfloat16, codes8 or codes16; STAGE may carry stage_cost's @BANDS and
++wWfF, the route filter's search window, e.g. frame+w128f10:100000:float32); without any,
+the default list below.
 Prints one line per case: instructions per repetition, and with --functions N the N
 functions with the most instructions per repetition (self counts).
 """

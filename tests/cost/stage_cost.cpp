@@ -5,13 +5,17 @@
 // stage for R and 2R repetitions and takes the difference: the instructions of R repetitions
 // with the set-up subtracted. Not a benchmark: it measures no time.
 //
-//   stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [STORAGE [IMAGE_DIR]]]
+//   stage_cost STAGE[@BANDS][+wWfF] REPETITIONS [ROUTE_FRAMES [STORAGE [IMAGE_DIR]]]
 //
 // STORAGE: how the route filter holds the route ([capacities] route_storage, spelled by the
 // configuration's own table through firmware::ValueOf); float32 when left out. It applies
 // to the filter and frame stages.
 // @BANDS sets [descriptor] bands on the default (oversampled) grid, e.g. frame@120: the
 // descriptor the robot would run with more bands, measured the same way.
+// +wWfF sets the route filter's search window ([seqslam] search_window W, refresh_frames F;
+// route_filter.h, 6.), e.g. frame+w128f10 or filter@64+w128f10: each step compares the
+// rows within +-W of the last best row and a slice of N / F rows, after the first step
+// (every row), which the counter's R / 2R difference cancels.
 //
 // Stages (the default configuration, config/skyloc.toml, one 640x480 grey frame):
 //   segmentation  the Otsu threshold of the frame (histogram over the lens's visible pixels)
@@ -27,6 +31,7 @@
 //   frame_noheading  the same with [heading] off (no strips in the route, no heading)
 //   render        renders the street frames into IMAGE_DIR for the stages above (set-up only)
 // It prints what it ran and a checksum of the results (so no stage can be optimised away).
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -131,16 +136,43 @@ void RouteDescriptor(int i, std::vector<float>* d) {
 // The bytes one route filter step reads and writes per route row (descriptor as held,
 // with its exponent byte for codes; frame numbers, cost and difference columns), for the
 // cost model's memory term.
-std::size_t ScanBytes(int route_frames, int dim, dsp::ReferenceStorage storage) {
-  return static_cast<std::size_t>(route_frames) * dsp::RouteFilter::BytesPerReference(dim, storage);
+// With the search window, the descriptors of at most 2 W + 1 + ceil(N / F) rows, and the
+// columns of all N.
+std::size_t ScanBytes(int route_frames, int dim, dsp::ReferenceStorage storage,
+                      const dsp::RouteFilterParams& filter) {
+  const std::size_t n = static_cast<std::size_t>(route_frames);
+  const std::size_t row = dsp::RouteFilter::BytesPerReference(dim, storage);
+  if (filter.search_window == 0 || 2 * static_cast<std::size_t>(filter.search_window) + 1 >= n)
+    return n * row;
+  const std::size_t f = static_cast<std::size_t>(filter.refresh_frames);
+  const std::size_t compared =
+      2 * static_cast<std::size_t>(filter.search_window) + 1 + (n + f - 1) / f;
+  const std::size_t descriptor = dsp::ReferenceRowBytes(storage, dim);
+  return std::min(compared, n) * descriptor + n * (row - descriptor);
+}
+
+// " search window W refresh F" (rows each side, frames) for the output line, or nothing.
+std::string WindowText(const dsp::RouteFilterParams& filter) {
+  if (filter.search_window == 0)
+    return "";
+  return " search window " + std::to_string(filter.search_window) + " refresh " +
+         std::to_string(filter.refresh_frames);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3)
-    return Fail("usage: stage_cost STAGE[@BANDS] REPETITIONS [ROUTE_FRAMES [STORAGE [IMAGE_DIR]]]");
+    return Fail(
+        "usage: stage_cost STAGE[@BANDS][+wWfF] REPETITIONS [ROUTE_FRAMES [STORAGE [IMAGE_DIR]]]");
   std::string stage = argv[1];
+  int search_window = 0, refresh_frames = 0;
+  if (const std::size_t plus = stage.find('+'); plus != std::string::npos) {
+    char end = 0;
+    if (std::sscanf(stage.c_str() + plus, "+w%df%d%c", &search_window, &refresh_frames, &end) != 2)
+      return Fail("STAGE+wWfF: e.g. frame+w128f10");
+    stage.resize(plus);
+  }
   int bands = 0;  // 0: the default configuration's
   if (const std::size_t at = stage.find('@'); at != std::string::npos) {
     bands = static_cast<int>(std::strtol(stage.c_str() + at + 1, nullptr, 10));
@@ -163,6 +195,10 @@ int main(int argc, char** argv) {
     return Fail("REPETITIONS >= 0 and ROUTE_FRAMES >= 1");
 
   Config config = DefaultConfig();
+  config.seqslam.filter.search_window = search_window;
+  config.seqslam.filter.refresh_frames = refresh_frames;
+  if (dsp::ValidateRouteFilterParams(config.seqslam.filter) != dsp::SeqSlamError::kOk)
+    return Fail(dsp::SeqSlamErrorMessage(dsp::ValidateRouteFilterParams(config.seqslam.filter)));
   config.capacities.route_frames = route_frames;
   config.capacities.route_storage = storage;
   if (bands > 0) {
@@ -207,9 +243,10 @@ int main(int argc, char** argv) {
       (void)filter.Step(d, &match);
       checksum += static_cast<double>(match.row);
     }
-    std::printf("stage filter x %ld, route %d %s: checksum %.6g, route bytes per step %zu\n",
-                repetitions, route_frames, NameOf(storage), checksum,
-                ScanBytes(route_frames, dim, storage));
+    std::printf("stage filter x %ld, route %d %s%s: checksum %.6g, route bytes per step %zu\n",
+                repetitions, route_frames, NameOf(storage),
+                WindowText(config.seqslam.filter).c_str(), checksum,
+                ScanBytes(route_frames, dim, storage, config.seqslam.filter));
     return 0;
   }
   const MonotonicClock clock;
@@ -299,8 +336,11 @@ int main(int argc, char** argv) {
   } else {
     return Fail("unknown STAGE");
   }
-  std::printf("stage %s x %ld, route %d %s: checksum %.6g, route bytes per step %zu\n",
-              stage.c_str(), repetitions, route_frames, NameOf(storage), checksum,
-              stage == "frame" ? ScanBytes(route_frames, pipeline.dim(), storage) : 0);
+  std::printf("stage %s x %ld, route %d %s%s: checksum %.6g, route bytes per step %zu\n",
+              stage.c_str(), repetitions, route_frames, NameOf(storage),
+              WindowText(config.seqslam.filter).c_str(), checksum,
+              stage == "frame"
+                  ? ScanBytes(route_frames, pipeline.dim(), storage, config.seqslam.filter)
+                  : 0);
   return 0;
 }

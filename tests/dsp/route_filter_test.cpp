@@ -7,9 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "skyloc/dsp/localisation_state.h"
@@ -145,8 +149,11 @@ struct NaiveResult {
   std::vector<double> gap;  // best cost against the next lowest cost of any row
 };
 
+// `compared` (the search window, docs/SEQSLAM.md): compared[t][r] says whether row r's
+// difference is computed at frame t; the others keep their last value. Null: every row.
 NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int dim,
-                        const RouteFilterParams& p) {
+                        const RouteFilterParams& p,
+                        const std::vector<std::vector<bool>>* compared = nullptr) {
   NaiveResult out;
   const int n = reference.frames();
   // Keyframes: the 10th percentile (index floor((n - 1) / 10) of the sorted consecutive
@@ -180,11 +187,14 @@ NaiveResult NaiveFilter(const TimedRun& reference, const TimedRun& query, int di
   std::vector<double> cost(static_cast<std::size_t>(rows), 0.0);
   int track_best = -1;   // the best row of the frame before
   int track_length = 0;  // frames the best row has continued its track, this one included
+  std::vector<double> d(static_cast<std::size_t>(rows));
   for (int t = 0; t < query.frames(); ++t) {
-    std::vector<double> d(static_cast<std::size_t>(rows));
-    for (int r = 0; r < rows; ++r)
-      d[static_cast<std::size_t>(r)] = MeanAbsDifference(
-          reference.Frame(out.first[static_cast<std::size_t>(r)], dim), query.Frame(t, dim));
+    for (int r = 0; r < rows; ++r) {
+      if (compared == nullptr ||
+          (*compared)[static_cast<std::size_t>(t)][static_cast<std::size_t>(r)])
+        d[static_cast<std::size_t>(r)] = MeanAbsDifference(
+            reference.Frame(out.first[static_cast<std::size_t>(r)], dim), query.Frame(t, dim));
+    }
     double mean = 0;
     for (const double v : d)
       mean += v / rows;
@@ -675,21 +685,224 @@ TEST(RouteFilter, ConfidenceFallsOnAnUntaughtRoute) {
     EXPECT_GT(on[t].confidence, off_max) << "frame " << t;
 }
 
+// ---- The search window (route_filter.h, 6.) ------------------------------------------
+
+// A long route for the window: 120 s at 1 m/s, 1,200 rows (nothing merges: no stops), and
+// a repeat that drives 60 s of it at 1.5x with a 3 s stop.
+Scenario LongRoute() {
+  Scenario sc;
+  sc.reference = MakeRun(sc.field, SampleInTime({{120, 1.0}}, 10, 0.0), 0.02f, 61);
+  sc.query = MakeRun(sc.field, SampleInTime({{20, 1.5}, {3, 0}, {37, 1.5}}, 10, 10.0), 0.02f, 62);
+  return sc;
+}
+
+struct WindowRun {
+  std::vector<SeqSlamMatch> matches;
+  std::vector<std::vector<bool>> compared;  // [frame][row]: RowCompared after the frame
+  std::vector<int> rows_compared;
+  int rows = 0;
+};
+
+WindowRun RunWindowed(const Scenario& sc, const RouteFilterParams& p,
+                      ReferenceStorage storage = ReferenceStorage::kFloat32) {
+  WindowRun w;
+  const int dim = sc.field.dim();
+  RouteFilter filter;
+  EXPECT_EQ(filter.Init(p, dim, sc.reference.frames(), storage), SeqSlamError::kOk);
+  EXPECT_TRUE(Teach(filter, sc.reference, dim));
+  w.rows = filter.rows();
+  for (int t = 0; t < sc.query.frames(); ++t) {
+    SeqSlamMatch m;
+    EXPECT_EQ(filter.Step(sc.query.Frame(t, dim), &m), SeqSlamError::kOk);
+    w.matches.push_back(m);
+    std::vector<bool> row(static_cast<std::size_t>(w.rows));
+    for (int r = 0; r < w.rows; ++r)
+      row[static_cast<std::size_t>(r)] = filter.RowCompared(r);
+    w.compared.push_back(std::move(row));
+    w.rows_compared.push_back(filter.rows_compared());
+  }
+  return w;
+}
+
+::testing::AssertionResult SameOutput(const std::vector<SeqSlamMatch>& a,
+                                      const std::vector<SeqSlamMatch>& b) {
+  if (a.size() != b.size())
+    return ::testing::AssertionFailure() << a.size() << " against " << b.size() << " frames";
+  for (std::size_t t = 0; t < a.size(); ++t) {
+    if (a[t].row != b[t].row || a[t].reference != b[t].reference ||
+        std::bit_cast<std::uint32_t>(a[t].confidence) !=
+            std::bit_cast<std::uint32_t>(b[t].confidence) ||
+        std::bit_cast<std::uint32_t>(a[t].score) != std::bit_cast<std::uint32_t>(b[t].score) ||
+        std::bit_cast<std::uint32_t>(a[t].uniqueness) !=
+            std::bit_cast<std::uint32_t>(b[t].uniqueness))
+      return ::testing::AssertionFailure()
+             << "frame " << t << ": row " << a[t].row << " / " << b[t].row << ", confidence "
+             << a[t].confidence << " / " << b[t].confidence;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// With refresh_frames 1 every row is compared on every frame (the window's and the slice's
+// parts assembled into the whole column), and with a window as wide as the route too: the
+// output is the full scan's to the bit. With refresh_frames 5 the rows outside the window
+// are stale and the output differs (so the comparison can fail).
+TEST(RouteFilter, SearchWindowThatComparesEveryRowEqualsTheFullScanToTheBit) {
+  const Scenario sc = LongRoute();
+  for (const ReferenceStorage storage : {ReferenceStorage::kFloat32, ReferenceStorage::kCodes16}) {
+    const RouteFilterParams off;
+    const WindowRun full = RunWindowed(sc, off, storage);
+    ASSERT_GT(full.rows, 1000);
+    RouteFilterParams every_frame = off;
+    every_frame.search_window = 16;
+    every_frame.refresh_frames = 1;
+    const WindowRun one = RunWindowed(sc, every_frame, storage);
+    EXPECT_TRUE(SameOutput(one.matches, full.matches));
+    for (std::size_t t = 0; t < one.rows_compared.size(); ++t)
+      ASSERT_EQ(one.rows_compared[t], one.rows) << "frame " << t;
+    RouteFilterParams covering = off;
+    covering.search_window = full.rows;
+    covering.refresh_frames = 7;
+    EXPECT_TRUE(SameOutput(RunWindowed(sc, covering, storage).matches, full.matches));
+    RouteFilterParams stale = every_frame;
+    stale.refresh_frames = 5;
+    EXPECT_FALSE(SameOutput(RunWindowed(sc, stale, storage).matches, full.matches));
+  }
+}
+
+// Which rows a frame compares: every row on the first frame after a reset; afterwards the
+// rows within +-search_window of the last best row, and each other row exactly once in
+// every refresh_frames consecutive frames. The output is then a second implementation's
+// (the naive filter of docs/SEQSLAM.md, in doubles) fed the same schedule: the stale rows
+// keep their last difference and everything else runs over the whole column.
+TEST(RouteFilter, SearchWindowComparesEachStaleRowOnceEveryRefreshFrames) {
+  const Scenario sc = LongRoute();
+  const int dim = sc.field.dim();
+  RouteFilterParams p;
+  p.search_window = 24;
+  p.refresh_frames = 7;  // 1,200 rows are not a multiple of 7: slices of 171 and 172 rows
+  const WindowRun w = RunWindowed(sc, p, ReferenceStorage::kFloat32);
+  const int n = w.rows, frames = static_cast<int>(w.matches.size());
+  const auto at = [](int i) { return static_cast<std::size_t>(i); };
+  for (int r = 0; r < n; ++r)
+    ASSERT_TRUE(w.compared[0][at(r)]) << "first frame, row " << r;
+  ASSERT_EQ(w.rows_compared[0], n);
+  int checked_rows = 0;
+  for (int t = 1; t < frames; ++t) {
+    const int last_best = w.matches[at(t - 1)].row;
+    int count = 0;
+    for (int r = 0; r < n; ++r) {
+      const bool in_window = std::abs(r - last_best) <= p.search_window;
+      if (in_window) {
+        EXPECT_TRUE(w.compared[at(t)][at(r)]) << "frame " << t << ", row " << r;
+      }
+      count += w.compared[at(t)][at(r)] ? 1 : 0;
+    }
+    EXPECT_EQ(w.rows_compared[at(t)], count) << "frame " << t;
+    EXPECT_LE(count, 2 * p.search_window + 1 + (n + p.refresh_frames - 1) / p.refresh_frames);
+  }
+  // Rows no window came near: compared exactly once in every run of refresh_frames frames
+  // (after the first, which compares all).
+  for (int r = 0; r < n; ++r) {
+    bool ever_in_window = false;
+    for (int t = 1; t < frames; ++t)
+      ever_in_window |= std::abs(r - w.matches[at(t - 1)].row) <= p.search_window;
+    if (ever_in_window)
+      continue;
+    ++checked_rows;
+    for (int t = 1; t + p.refresh_frames <= frames; ++t) {
+      int times = 0;
+      for (int u = t; u < t + p.refresh_frames; ++u)
+        times += w.compared[at(u)][at(r)] ? 1 : 0;
+      ASSERT_EQ(times, 1) << "row " << r << ", frames " << t << ".." << t + p.refresh_frames - 1;
+    }
+  }
+  EXPECT_GT(checked_rows, n / 5);  // the repeat's windows cover 10-96 m of the 120
+
+  const NaiveResult naive = NaiveFilter(sc.reference, sc.query, dim, p, &w.compared);
+  ASSERT_EQ(static_cast<int>(naive.first.size()), n);
+  int compared = 0;
+  for (std::size_t t = 0; t < w.matches.size(); ++t) {
+    if (naive.gap[t] < 1e-4)
+      continue;  // float and double may order near-ties either way
+    ++compared;
+    EXPECT_EQ(w.matches[t].row, naive.row[t]) << "frame " << t;
+    EXPECT_NEAR(w.matches[t].confidence, naive.confidence[t], 1e-4) << "frame " << t;
+  }
+  EXPECT_GT(compared, frames * 9 / 10);
+  // The same filter after a reset compares every row again on its first frame.
+  RouteFilter filter;
+  ASSERT_EQ(filter.Init(p, dim, sc.reference.frames()), SeqSlamError::kOk);
+  ASSERT_TRUE(Teach(filter, sc.reference, dim));
+  SeqSlamMatch m;
+  for (int t = 0; t < 3; ++t)
+    ASSERT_EQ(filter.Step(sc.query.Frame(t, dim), &m), SeqSlamError::kOk);
+  ASSERT_LT(filter.rows_compared(), n);
+  filter.ResetQueries();
+  ASSERT_EQ(filter.Step(sc.query.Frame(0, dim), &m), SeqSlamError::kOk);
+  EXPECT_EQ(filter.rows_compared(), n);
+}
+
+// After a kidnap to a place outside the window, the new place is compared only in its
+// slice: the filter is back on the truth at most refresh_frames frames later than the full
+// scan, and stays there.
+TEST(RouteFilter, SearchWindowRelocalisesAfterAKidnapWithinRefreshFramesMore) {
+  const auto back_on_truth = [](const Kidnap& k) {
+    const std::vector<double>& s = k.sc.query.s_m;
+    for (int t = 100; t < k.sc.query.frames(); ++t) {
+      if (Within(k.sc.reference, s[static_cast<std::size_t>(t)],
+                 k.matches[static_cast<std::size_t>(t)].reference, 5))
+        return t - 100;
+    }
+    return -1;
+  };
+  for (const double to_m : {35.0, 50.0}) {
+    RouteFilterParams p;
+    const Kidnap full = RunKidnap(5.0, to_m, 31, p);
+    const int full_delay = back_on_truth(full);
+    ASSERT_GE(full_delay, 0);
+    p.search_window = 20;  // 20-35 m (200-350 rows) from the last best row: far outside
+    for (const int f : {5, 10, 20}) {
+      p.refresh_frames = f;
+      const Kidnap k = RunKidnap(5.0, to_m, 31, p);
+      const int delay = back_on_truth(k);
+      ASSERT_GE(delay, 0) << "F " << f << ", to " << to_m << " m";
+      EXPECT_LE(delay, full_delay + f) << "F " << f << ", to " << to_m << " m";
+      EXPECT_LE(delay, p.sequence_length + f) << "F " << f << ", to " << to_m << " m";
+      for (int t = 100 + delay; t < k.sc.query.frames(); ++t)
+        EXPECT_TRUE(Within(k.sc.reference, k.sc.query.s_m[static_cast<std::size_t>(t)],
+                           k.matches[static_cast<std::size_t>(t)].reference, 5))
+            << "F " << f << ", to " << to_m << " m, frame " << t;
+      std::printf("kidnap to %.0f m: on the truth %d frames after the carry (full scan %d), F %d\n",
+                  to_m, delay, full_delay, f);
+    }
+  }
+}
+
 TEST(RouteFilter, StepAllocatesNothing) {
   const Scenario sc = StopsAndSpeeds();
-  RouteFilter filter;
-  ASSERT_EQ(filter.Init(RouteFilterParams{}, sc.field.dim(), sc.reference.frames(),
-                        ReferenceStorage::kBFloat16),
-            SeqSlamError::kOk);
-  ASSERT_TRUE(AllocationCounterActive());
-  AllocationScope scope;
-  for (int i = 0; i < sc.reference.frames(); ++i)
-    ASSERT_EQ(filter.AddReference(sc.reference.Frame(i, sc.field.dim())), SeqSlamError::kOk);
-  ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
-  SeqSlamMatch m;
-  for (int t = 0; t < sc.query.frames(); ++t)
-    ASSERT_EQ(filter.Step(sc.query.Frame(t, sc.field.dim()), &m), SeqSlamError::kOk);
-  EXPECT_EQ(scope.allocations(), 0u);
+  RouteFilterParams windowed;  // the search window, its slices and its reset
+  windowed.search_window = 8;
+  windowed.refresh_frames = 4;
+  for (const RouteFilterParams& p : {RouteFilterParams{}, windowed}) {
+    RouteFilter filter;
+    ASSERT_EQ(filter.Init(p, sc.field.dim(), sc.reference.frames(), ReferenceStorage::kBFloat16),
+              SeqSlamError::kOk);
+    ASSERT_TRUE(AllocationCounterActive());
+    AllocationScope scope;
+    for (int i = 0; i < sc.reference.frames(); ++i)
+      ASSERT_EQ(filter.AddReference(sc.reference.Frame(i, sc.field.dim())), SeqSlamError::kOk);
+    ASSERT_EQ(filter.FinishRoute(), SeqSlamError::kOk);
+    SeqSlamMatch m;
+    for (int t = 0; t < sc.query.frames(); ++t) {
+      ASSERT_EQ(filter.Step(sc.query.Frame(t, sc.field.dim()), &m), SeqSlamError::kOk);
+      if (t == sc.query.frames() / 2)
+        filter.ResetQueries();
+    }
+    EXPECT_EQ(scope.allocations(), 0u) << "search_window " << p.search_window;
+    if (p.search_window > 0) {
+      EXPECT_LT(filter.rows_compared(), filter.rows());  // the window was used
+    }
+  }
 }
 
 TEST(RouteFilter, RefusesBadParametersAndCallOrder) {
@@ -704,6 +917,31 @@ TEST(RouteFilter, RefusesBadParametersAndCallOrder) {
   EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadKeyframeFactor);
   p.keyframe_noise_factor = std::numeric_limits<float>::quiet_NaN();
   EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadKeyframeFactor);
+  p = {};
+  p.search_window = -1;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadSearchWindow);
+  p.search_window = kMaxSearchWindow + 1;
+  p.refresh_frames = 10;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadSearchWindow);
+  p.search_window = kMaxSearchWindow;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kOk);
+  for (const int f : {0, kMaxRefreshFrames + 1}) {
+    p.refresh_frames = f;
+    EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadRefreshFrames) << f;
+  }
+  p.refresh_frames = kMaxRefreshFrames;
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kOk);
+  p.search_window = 0;  // no window: refresh_frames would be ignored, so it is refused
+  EXPECT_EQ(ValidateRouteFilterParams(p), SeqSlamError::kBadRefreshFrames);
+  EXPECT_NE(
+      std::string(SeqSlamErrorMessage(SeqSlamError::kBadRefreshFrames)).find("refresh_frames"),
+      std::string::npos);
+  EXPECT_NE(std::string(SeqSlamErrorMessage(SeqSlamError::kBadSearchWindow)).find("search_window"),
+            std::string::npos);
+  {
+    RouteFilter refused;
+    EXPECT_EQ(refused.Init(p, 4, 2), SeqSlamError::kBadRefreshFrames);
+  }
 
   RouteFilter filter;
   SeqSlamMatch m;

@@ -86,6 +86,8 @@ longitudes = 64
 normalisation = "divide_by_a0"
 [seqslam]
 ds = 1
+search_window = 128
+refresh_frames = 10
 [capacities]
 route_storage = "bfloat16"
 [realtime]
@@ -118,6 +120,8 @@ stale_ms = 100
   EXPECT_EQ(c->descriptor.normalisation, dsp::AmplitudeNormalisation::kDivideByA0);
   EXPECT_EQ(c->seqslam.ds(), 1);
   EXPECT_EQ(c->seqslam.openseqslam.sequence_length, 1);
+  EXPECT_EQ(c->seqslam.filter.search_window, 128);
+  EXPECT_EQ(c->seqslam.filter.refresh_frames, 10);
   EXPECT_EQ(c->capacities.route_storage, dsp::ReferenceStorage::kBFloat16);
   EXPECT_TRUE(c->realtime.mlockall);
   EXPECT_EQ(c->realtime.cpu_affinity, 3);
@@ -182,6 +186,13 @@ const BadCase kBadCases[] = {
     {"[seqslam]\nrwindow = -1\n", "[seqslam] rwindow"},
     {"[seqslam]\ncontrast_r = 1001\n", "[seqslam] contrast_r"},
     {"[seqslam]\nmode = \"batch\"\n", "key mode is not known in [seqslam]"},
+    {"[seqslam]\nsearch_window = -1\n", "[seqslam] search_window"},
+    {"[seqslam]\nsearch_window = 1000001\n", "[seqslam] search_window"},
+    {"[seqslam]\nsearch_window = 128\n",
+     "[seqslam] refresh_frames must be 1..1000 with search_window", ":1:"},
+    {"[seqslam]\nsearch_window = 128\nrefresh_frames = 1001\n", "[seqslam] refresh_frames", ":3:"},
+    {"[seqslam]\nrefresh_frames = 10\n",
+     "[seqslam] refresh_frames is only used with search_window"},
     {"[capacities]\nroute_frames = 0\n", "[capacities] route_frames"},
     {"[capacities]\nroute_frames = 1000001\n", "[capacities] route_frames"},
     {"[state]\nenter_confidence = 1.5\n", "[state] enter_confidence"},

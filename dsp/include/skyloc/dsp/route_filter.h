@@ -47,9 +47,19 @@
 //     first + floor((1/2 + p) (last - first)): its middle when both neighbours are far
 //     behind (p = 0), its last frame when the next row is as good (leaving), its first
 //     when the row before is (arriving). A row of one frame reports that frame.
+//  6. The search window (optional, off by default; docs/SEQSLAM.md, Design 6).
+//     On a long route most of a frame's time is the difference column (rows x dim). With
+//     search_window W > 0 and refresh_frames F, a frame compares the query with the rows
+//     within +-W of the last frame's best row and with one slice of F (rows f x n / F ..
+//     (f + 1) x n / F - 1 on the f-th frame of each cycle of F), so every row's
+//     difference is at most F - 1 frames old. Every other row keeps its last difference,
+//     and 2.-5. run over the whole column as without the window: one filter, and the
+//     runner-up still sees the whole route. The first frame after a reset compares every
+//     row (no difference is used before it was computed). A kidnap is found when the
+//     slices reach the new place: up to F frames later than without the window.
 //
 // Fixed memory (everything at Init), no allocation in AddReference, FinishRoute or Step.
-// Step is O(rows x (dim + K)).
+// Step is O(rows x (dim + K)), with the window O((2 W + 1 + rows / F) x dim + rows x K).
 #pragma once
 
 #include <cstddef>
@@ -62,6 +72,8 @@
 namespace skyloc::dsp {
 
 inline constexpr int kMaxAdvance = 64;
+inline constexpr int kMaxSearchWindow = 1000000;
+inline constexpr int kMaxRefreshFrames = 1000;
 
 struct RouteFilterParams {
   int sequence_length = 10;  // ds: frames of evidence the filter remembers (1..1000)
@@ -75,6 +87,14 @@ struct RouteFilterParams {
   // Merge a frame into the current route row while it differs from the row's first
   // frame by at most this x the route's noise floor (0..100; 0 keeps every frame).
   float keyframe_noise_factor = 2.0f;
+  // The search window (6. above), for routes too long to compare with every frame: the
+  // rows within +-search_window of the last best row are compared with every frame, every
+  // other row once every refresh_frames frames (a slice of rows / refresh_frames rows a
+  // frame, in turn) and keeps its last difference in between. 0 (and refresh_frames 0):
+  // off, every row every frame. search_window 0..kMaxSearchWindow; refresh_frames
+  // 1..kMaxRefreshFrames with a window, 0 without.
+  int search_window = 0;
+  int refresh_frames = 0;
 
   bool operator==(const RouteFilterParams&) const = default;
 };
@@ -115,6 +135,14 @@ class RouteFilter {
   // The merge threshold FinishRoute used (0: nothing merged).
   float keyframe_threshold() const { return keyframe_threshold_; }
 
+  // The rows whose differences the last Step computed (6.): the window and this frame's
+  // slice; every row on a frame that compared them all.
+  bool RowCompared(int r) const {
+    return (r >= compared_[0] && r < compared_[1]) || (r >= compared_[2] && r < compared_[3]);
+  }
+  // How many rows the last Step compared with the query (the window and the slice once).
+  int rows_compared() const { return rows_compared_; }
+
   // The frame a match to row `best` reports, from the costs of the last Step (docs
   // above, 5.).
   int ReportedFrame(int best) const;
@@ -130,10 +158,13 @@ class RouteFilter {
   int frames_ = 0;
   int rows_ = 0;
   bool finished_ = false;
-  int steps_ = 0;         // query frames since the last reset
-  int track_row_ = -1;    // the best row of the last step (-1: none since the reset)
-  int track_frames_ = 0;  // steps since the best row last jumped
-  float lambda_ = 0;      // 1 - 1/ds
+  int steps_ = 0;                   // query frames since the last reset
+  int track_row_ = -1;              // the best row of the last step (-1: none since the reset)
+  int track_frames_ = 0;            // steps since the best row last jumped
+  int refresh_phase_ = 0;           // the slice the next windowed frame compares (0..F-1)
+  int compared_[4] = {0, 0, 0, 0};  // rows the last Step compared: [0, 1) and [2, 3)
+  int rows_compared_ = 0;
+  float lambda_ = 0;  // 1 - 1/ds
   float keyframe_threshold_ = 0;
   ReferenceRows route_;            // taught frames, then (FinishRoute) the keyframe rows
   std::vector<int> first_frame_;   // capacity
@@ -142,6 +173,9 @@ class RouteFilter {
   std::vector<float> previous_;    // capacity: cost before it
   std::vector<float> difference_;  // capacity: this frame's differences
   std::vector<float> key_;         // dim: a row's descriptor as floats
+
+  // Step's first part: this frame's differences (every row, or the window and a slice).
+  void CompareRows(std::span<const float> query);
 };
 
 }  // namespace skyloc::dsp

@@ -62,6 +62,9 @@ enum class SeqSlamError : std::uint8_t {
   kBadKeyframeFactor,    // route filter: keyframe_noise_factor outside 0..100
   kRouteNotFinished,     // route filter: Step() before FinishRoute()
   kRouteFinished,        // route filter: AddReference() after FinishRoute()
+  kBadSearchWindow,      // route filter: search_window outside 0..kMaxSearchWindow
+  kBadRefreshFrames,     // route filter: refresh_frames outside 1..kMaxRefreshFrames with a
+                         // search window, or not 0 without one
 };
 
 // A sentence saying what is wrong, for the caller to turn into its error.
