@@ -481,6 +481,33 @@ std::uint64_t ReferenceRandom(std::uint64_t* state) {
   return z ^ (z >> 31);
 }
 
+// The nearest two as the matcher first found them: every stored feature of the test
+// feature's sign in the given order, the whole squared distance, a strictly smaller one
+// replacing best. NearestTwo must give exactly its index (-1 when best is infinite) and
+// both distances.
+LandmarkMatcher::Nearest BruteNearestTwo(const std::vector<Surf1dFeature>& stored,
+                                         const Surf1dFeature& t) {
+  float best = std::numeric_limits<float>::infinity(), second = best;
+  int index = -1;
+  for (std::size_t s = 0; s < stored.size(); ++s) {
+    if (stored[s].laplacian_sign != t.laplacian_sign)
+      continue;
+    float d = 0.0f;
+    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k) {
+      const float e = stored[s].descriptor[k] - t.descriptor[k];
+      d += e * e;
+    }
+    if (d < best) {
+      second = best;
+      best = d;
+      index = static_cast<int>(s);
+    } else if (d < second) {
+      second = d;
+    }
+  }
+  return {std::isinf(best) ? -1 : index, best, second};
+}
+
 ReferenceMatch ReferenceMatcher(const std::vector<Surf1dFeature>& stored,
                                 const std::vector<Surf1dFeature>& test, int n,
                                 const LandmarkMatchOptions& o) {
@@ -492,29 +519,12 @@ ReferenceMatch ReferenceMatcher(const std::vector<Surf1dFeature>& stored,
   };
   std::vector<Pair> pairs;
   for (const Surf1dFeature& t : test) {
-    float best = std::numeric_limits<float>::infinity(), second = best;
-    std::size_t best_index = 0;
-    for (std::size_t s = 0; s < stored.size(); ++s) {
-      if (stored[s].laplacian_sign != t.laplacian_sign)
-        continue;
-      float d = 0.0f;
-      for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k) {
-        const float e = stored[s].descriptor[k] - t.descriptor[k];
-        d += e * e;
-      }
-      if (d < best) {
-        second = best;
-        best = d;
-        best_index = s;
-      } else if (d < second) {
-        second = d;
-      }
-    }
-    if (!std::isfinite(second) || !(best < o.ratio * o.ratio * second))
+    const LandmarkMatcher::Nearest nearest = BruteNearestTwo(stored, t);
+    if (!std::isfinite(nearest.second) || !(nearest.best < o.ratio * o.ratio * nearest.second))
       continue;
-    best = std::sqrt(best);
-    pairs.push_back(
-        {static_cast<double>(stored[best_index].position), static_cast<double>(t.position), best});
+    const float best = std::sqrt(nearest.best);
+    pairs.push_back({static_cast<double>(stored[static_cast<std::size_t>(nearest.index)].position),
+                     static_cast<double>(t.position), best});
     r.score += 1.0 / static_cast<double>(std::max(best, o.min_distance));
   }
   r.matches = static_cast<int>(pairs.size());
@@ -764,33 +774,6 @@ TEST(Surf1dTest, StoredFeaturesHeldAcrossMatches) {
   EXPECT_EQ(held.MatchStored(unsigned_features, 360, &m), Surf1dError::kBadFeature);
   EXPECT_NE(std::string(Surf1dErrorMessage(Surf1dError::kBadFeature)).find("Detect"),
             std::string::npos);
-}
-
-// The nearest two as the matcher first found them: every stored feature of the test
-// feature's sign in the given order, the whole squared distance, a strictly smaller one
-// replacing best. NearestTwo must give exactly its index (-1 when best is infinite) and
-// both distances.
-LandmarkMatcher::Nearest BruteNearestTwo(const std::vector<Surf1dFeature>& stored,
-                                         const Surf1dFeature& t) {
-  float best = std::numeric_limits<float>::infinity(), second = best;
-  int index = -1;
-  for (std::size_t s = 0; s < stored.size(); ++s) {
-    if (stored[s].laplacian_sign != t.laplacian_sign)
-      continue;
-    float d = 0.0f;
-    for (std::size_t k = 0; k < kSurf1dDescriptorSize; ++k) {
-      const float e = stored[s].descriptor[k] - t.descriptor[k];
-      d += e * e;
-    }
-    if (d < best) {
-      second = best;
-      best = d;
-      index = static_cast<int>(s);
-    } else if (d < second) {
-      second = d;
-    }
-  }
-  return {std::isinf(best) ? -1 : index, best, second};
 }
 
 // The search walks out from the test feature's key and stops early; on random and on
