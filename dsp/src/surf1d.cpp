@@ -357,7 +357,9 @@ Surf1dError LandmarkMatcher::SetStored(std::span<const Surf1dFeature> stored) {
       }
       for (int slot = 0; slot < count; ++slot) {
         std::uint64_t& o = order[slot];
-        const auto bits = std::bit_cast<std::uint32_t>(stored[o].descriptor[key]);
+        // Before the key is added, o holds only the index (32 bits on any target).
+        const auto bits =
+            std::bit_cast<std::uint32_t>(stored[static_cast<std::size_t>(o)].descriptor[key]);
         const std::uint32_t sortable = (bits & 0x80000000u) != 0 ? ~bits : bits | 0x80000000u;
         o |= static_cast<std::uint64_t>(sortable) << 32;
       }
