@@ -23,6 +23,7 @@
 #include "firmware/config.h"
 #include "firmware/pipeline.h"
 #include "skyloc/dsp/localisation_state.h"
+#include "skyloc/dsp/route_filter.h"
 #include "tools/eval_results.h"
 #include "tools/experiment.h"
 #include "tools/output_file.h"
@@ -148,9 +149,11 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
     return t.Refuse("--vocab (FAB-MAP) is for tilt and manoeuvre");
   if (o->out.empty())
     return t.Refuse("--out DIR is required");
-  if (t.Given("--search-window") != t.Given("--refresh-frames") ||
-      (t.Given("--search-window") && e.filter.search_window == 0))
-    return t.Refuse("--search-window N (N >= 1) and --refresh-frames F go together");
+  // The route filter's own rule for the pair (refresh_frames only with a window).
+  if (const dsp::SeqSlamError f = dsp::ValidateRouteFilterParams(e.filter);
+      f != dsp::SeqSlamError::kOk)
+    return t.Refuse(std::string("--search-window, --refresh-frames: ") +
+                    dsp::SeqSlamErrorMessage(f));
   o->spacing_given = t.Given("--spacing");
   firmware::ResolveDescriptorGrid(&descriptor);
   return ParseOutcome::kRun;
