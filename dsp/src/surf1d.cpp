@@ -137,6 +137,8 @@ Surf1dError Surf1d::Init(int n, const Surf1dOptions& options) {
         std::exp(-kk * kk / (2.0 * kDescriptorSigmaSamples * kDescriptorSigmaSamples));
   }
   responses_.assign(lobes_.size() * static_cast<std::size_t>(n), 0.0f);
+  magnitudes_.assign(lobes_.size() * (static_cast<std::size_t>(n) + 2), 0.0f);
+  peaks_.assign((static_cast<std::size_t>(n) + 7) / 8 * 8, 0);
   steps_.clear();
   for (const int lobe : lobes_)
     steps_.push_back(DescriptorStep(lobe));
@@ -215,54 +217,79 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
     }
   }
 
-  const auto magnitude = [&](int layer, int x) {  // x within [-1, n]
-    if (x < 0) {
-      x += n_;
-    } else if (x >= n_) {
-      x -= n_;
-    }
-    return std::abs(Response(layer, x));
-  };
+  // The scan's tests read |response| with the columns either side, wrapped: one padded row
+  // a layer, so no test computes a wrap-around index.
+  const std::size_t row = static_cast<std::size_t>(n_) + 2;
+  const auto columns = static_cast<std::size_t>(n_);
+  for (std::size_t li = 0; li < static_cast<std::size_t>(layers); ++li) {
+    const float* response = &responses_[li * columns];
+    float* magnitude = &magnitudes_[li * row];
+    magnitude[0] = std::abs(response[columns - 1]);
+    for (std::size_t x = 0; x < columns; ++x)
+      magnitude[x + 1] = std::abs(response[x]);
+    magnitude[columns + 1] = std::abs(response[0]);
+  }
+  // Most columns fail the within-layer test (threshold, then a local maximum along the
+  // strip), so it runs first over a whole layer, a byte a column in SIMD lanes; only the
+  // columns it passes are visited, in ascending order, for the test across scales. The
+  // comparisons are the ones a column-by-column scan made (a NaN fails each), so the
+  // candidates and their order are the same.
+  static_assert(std::endian::native == std::endian::little,
+                "the peak bytes are read eight at a time, the lowest column in the lowest byte");
+  const float threshold = options_.threshold;
+  std::uint8_t* peaks = peaks_.data();
   int written = 0;
   for (int li = 0; li < layers; ++li) {
-    for (int x = 0; x < n_; ++x) {
-      const float m = magnitude(li, x);
-      if (!(m > options_.threshold))
-        continue;
+    const float* here = &magnitudes_[static_cast<std::size_t>(li) * row + 1];  // here[-1..n]
+    const float* below = li > 0 ? here - row : nullptr;
+    const float* above = li + 1 < layers ? here + row : nullptr;
+    for (std::ptrdiff_t x = 0; x < static_cast<std::ptrdiff_t>(columns); ++x) {
+      const float m = here[x];
       // Strictly above the neighbours before it, at least equal to those after it: a
       // plateau yields one feature, at the same place whatever the shift.
-      if (!(m > magnitude(li, x - 1) && m >= magnitude(li, x + 1)))
-        continue;
-      if (options_.suppress_across_scale) {
-        bool is_max = true;
-        for (int dx = -1; dx <= 1 && is_max; ++dx) {
-          if (li > 0 && !(m > magnitude(li - 1, x + dx)))
-            is_max = false;
-          if (li + 1 < layers && !(m >= magnitude(li + 1, x + dx)))
-            is_max = false;
+      peaks[x] =
+          static_cast<std::uint8_t>((m > threshold) & (m > here[x - 1]) & (m >= here[x + 1]));
+    }
+    for (std::size_t word = 0; word < peaks_.size(); word += 8) {
+      std::uint64_t bits;
+      std::memcpy(&bits, peaks + word, sizeof bits);
+      while (bits != 0) {
+        const std::size_t byte = static_cast<std::size_t>(std::countr_zero(bits)) / 8;
+        bits &= ~(std::uint64_t{0xff} << (8 * byte));
+        const std::size_t xs = word + byte;
+        const int x = static_cast<int>(xs);
+        const float m = here[xs];
+        if (options_.suppress_across_scale) {
+          bool is_max = true;
+          for (int dx = -1; dx <= 1 && is_max; ++dx) {
+            if (below != nullptr && !(m > below[x + dx]))
+              is_max = false;
+            if (above != nullptr && !(m >= above[x + dx]))
+              is_max = false;
+          }
+          if (!is_max)
+            continue;
         }
-        if (!is_max)
+        Surf1dFeature candidate;
+        candidate.position = x;
+        candidate.layer = li;
+        candidate.lobe = lobes_[static_cast<std::size_t>(li)];
+        candidate.response = Response(li, x);
+        candidate.laplacian_sign = candidate.response > 0.0f ? std::int8_t{1} : std::int8_t{-1};
+        if (static_cast<std::size_t>(written) < features.size()) {
+          features[static_cast<std::size_t>(written++)] = candidate;
           continue;
+        }
+        ++dropped_;
+        if (features.empty())
+          continue;
+        auto weakest = std::min_element(features.begin(), features.end(),
+                                        [](const Surf1dFeature& a, const Surf1dFeature& b) {
+                                          return std::abs(a.response) < std::abs(b.response);
+                                        });
+        if (std::abs(weakest->response) < m)
+          *weakest = candidate;
       }
-      Surf1dFeature candidate;
-      candidate.position = x;
-      candidate.layer = li;
-      candidate.lobe = lobes_[static_cast<std::size_t>(li)];
-      candidate.response = Response(li, x);
-      candidate.laplacian_sign = candidate.response > 0.0f ? std::int8_t{1} : std::int8_t{-1};
-      if (static_cast<std::size_t>(written) < features.size()) {
-        features[static_cast<std::size_t>(written++)] = candidate;
-        continue;
-      }
-      ++dropped_;
-      if (features.empty())
-        continue;
-      auto weakest = std::min_element(features.begin(), features.end(),
-                                      [](const Surf1dFeature& a, const Surf1dFeature& b) {
-                                        return std::abs(a.response) < std::abs(b.response);
-                                      });
-      if (std::abs(weakest->response) < m)
-        *weakest = candidate;
     }
   }
   auto kept = features.first(static_cast<std::size_t>(written));

@@ -114,6 +114,12 @@ class Surf1d {
   std::vector<double> integral_;
   std::array<double, 15> weights_{};  // descriptor Gaussian, per sample
   std::vector<float> responses_;      // layers x n
+  // |response| of each layer with one wrapped column either side: layer li's column x in
+  // [-1, n] at li * (n + 2) + x + 1, so the neighbour tests read no wrap-around index.
+  std::vector<float> magnitudes_;
+  // Detect's within-layer test for one layer, a byte a column (1: above the threshold and a
+  // local maximum along the strip), zero past n up to a whole number of 8-byte words.
+  std::vector<std::uint8_t> peaks_;
 };
 
 struct LandmarkMatchOptions {
