@@ -165,14 +165,21 @@ void Surf1d::Describe(int position, int layer, Surf1dFeature* feature) const {
   for (int m = 0; m < kPoints; ++m)
     at[static_cast<std::size_t>(m)] = base[(m - kDescriptorHalfSamples - 1) * step];
   const auto step_d = static_cast<double>(step);
-  std::array<double, kSurf1dDescriptorSize> v{};
-  for (std::size_t k = 0; k < 2 * kDescriptorHalfSamples + 1; ++k) {
+  // The weighted samples first, in a loop with no dependence between samples (SIMD lanes,
+  // each the scalar's operations), then the sums in sample order.
+  constexpr std::size_t kSamples = 2 * kDescriptorHalfSamples + 1;
+  std::array<double, kSamples> weighted, weighted_abs;
+  for (std::size_t k = 0; k < kSamples; ++k) {
     const double centre = at[k + 1];
     const double dx = ((at[k + 2] - centre) - (centre - at[k])) / step_d;
-    const double w = weights_[k];
+    weighted[k] = weights_[k] * dx;
+    weighted_abs[k] = weights_[k] * std::abs(dx);
+  }
+  std::array<double, kSurf1dDescriptorSize> v{};
+  for (std::size_t k = 0; k < kSamples; ++k) {
     const std::size_t sub = k / kSamplesPerSubregion;
-    v[2 * sub] += w * dx;
-    v[2 * sub + 1] += w * std::abs(dx);
+    v[2 * sub] += weighted[k];
+    v[2 * sub + 1] += weighted_abs[k];
   }
   double norm = 0.0;
   for (const double x : v)
@@ -194,14 +201,19 @@ Surf1dError Surf1d::Detect(std::span<const float> strip, std::span<Surf1dFeature
 
   // The integral of the periodic signal over [-pad, n + pad): every box the filters and
   // descriptors read is then two look-ups, with no wrap-around arithmetic.
+  // In runs up to the strip's end, so the inner loop has no wrap-around test; the sums are
+  // the same, in the same order.
   double running = 0.0;
   const long n = n_;
-  long source = ((-pad_ % n) + n) % n;
-  for (std::size_t i = 1; i < integral_.size(); ++i) {
-    running += static_cast<double>(strip[static_cast<std::size_t>(source)]);
-    integral_[i] = running;
-    if (++source == n)
-      source = 0;
+  auto source = static_cast<std::size_t>(((-pad_ % n) + n) % n);
+  for (std::size_t i = 1; i < integral_.size();) {
+    const std::size_t run = std::min(strip.size() - source, integral_.size() - i);
+    for (std::size_t k = 0; k < run; ++k) {
+      running += static_cast<double>(strip[source + k]);
+      integral_[i + k] = running;
+    }
+    i += run;
+    source = 0;
   }
 
   const int layers = static_cast<int>(lobes_.size());
