@@ -23,12 +23,8 @@ double Wrap(double x, double n) {
 }
 
 // The same for |x| within a few n, without a library call in the RANSAC loop (std::round
-// is not inlined without SSE4.1): +-n/2 are left as they are. On whole columns (int) it
-// gives the same values as on their doubles (for integers, x > n / 2.0 exactly when
-// x > n / 2 in integer division, and x < -n / 2.0 when x < -(n / 2)), in integer
-// instructions.
-template <typename T>
-T Fold(T x, T n, T half) {
+// is not inlined without SSE4.1): +-half are left as they are.
+double Fold(double x, double n, double half) {
   while (x > half)
     x -= n;
   while (x < -half)
@@ -62,20 +58,21 @@ bool SignsAreFromDetect(std::span<const Surf1dFeature> features) {
 // (the values Fold gives on their doubles); only the line's prediction is a double.
 struct CircularColumns {
   explicit CircularColumns(int columns)
-      : n(columns), half(columns / 2), nd(columns), half_d(0.5 * columns) {}
+      : nd(columns), half_columns(columns / 2), half_d(0.5 * columns) {}
 
-  // x_b - x_a measured the short way round.
-  int Difference(int a, int b) const { return Fold<int>(b - a, n, half); }
+  // x_b - x_a measured the short way round, for whole columns held as doubles: exact, and
+  // folded at n / 2 in integer division as on ints (for whole x, x > n / 2 exactly when it
+  // is above that integer), so the same values as on the ints, with no conversion.
+  double Difference(double a, double b) const { return Fold(b - a, nd, half_columns); }
 
   // How far pair (xs, xt) lies off the line through pair (xs0, xt0) with slope scale,
   // folded the short way round.
-  double Residual(int xs, int xt, int xs0, int xt0, double scale) const {
+  double Residual(double xs, double xt, double xs0, double xt0, double scale) const {
     const double predicted = scale * Difference(xs0, xs);
-    return std::abs(Fold<double>(Difference(xt0, xt) - predicted, nd, half_d));
+    return std::abs(Fold(Difference(xt0, xt) - predicted, nd, half_d));
   }
 
-  int n, half;
-  double nd, half_d;
+  double nd, half_columns, half_d;
 };
 
 }  // namespace
@@ -604,8 +601,8 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   // RANSAC.
   const CircularColumns circle(n);
   const double nd = circle.nd;
-  const std::int32_t* xs = pair_stored_.data();
-  const std::int32_t* xt = pair_test_.data();
+  const double* xs = pair_stored_.data();
+  const double* xt = pair_test_.data();
   const auto threshold = static_cast<double>(options_.inlier_threshold);
   const auto max_scale = static_cast<double>(options_.max_scale);
   int best_inliers = 0;
@@ -617,18 +614,18 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   // do better: every pair on it with no residual.
   const auto try_line = [&](int i, int j) {
     // Differences measured the short way round, anchored at match i.
-    const int ds = circle.Difference(xs[i], xs[j]);
-    const int dt = circle.Difference(xt[i], xt[j]);
+    const double ds = circle.Difference(xs[i], xs[j]);
+    const double dt = circle.Difference(xt[i], xt[j]);
     if (ds == 0)
       return false;
-    const double scale = static_cast<double>(dt) / static_cast<double>(ds);
+    const double scale = dt / ds;
     // A mirrored horizon (b_s < 0) is not a view of the same place.
     if (!(scale >= 1.0 / max_scale && scale <= max_scale))
       return false;
     // A line that has already missed more pairs than the best line missed in all cannot
     // win (it needs at least as many inliers), so its count stops there.
     const int max_outliers = matches - best_inliers;
-    const int xsi = xs[i], xti = xt[i];
+    const double xsi = xs[i], xti = xt[i];
     int inliers = 0, outliers = 0;
     double residual_sum = 0.0;
     for (int m = 0; m < matches; ++m) {
@@ -682,7 +679,7 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   for (int m = 0; m < matches; ++m) {
     if (!best_inlier_[static_cast<std::size_t>(m)])
       continue;
-    const double d = Wrap(static_cast<double>(xt[m]) - static_cast<double>(xs[m]), nd);
+    const double d = Wrap(xt[m] - xs[m], nd);
     if (!have_reference) {
       reference = d;
       have_reference = true;
@@ -696,8 +693,7 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
   result->model_found = true;
   result->inliers = best_inliers;
   result->scale = best_scale;
-  result->displacement = Wrap(
-      static_cast<double>(xt[best_anchor]) - best_scale * static_cast<double>(xs[best_anchor]), nd);
+  result->displacement = Wrap(xt[best_anchor] - best_scale * xs[best_anchor], nd);
   double degrees = mean * 360.0 / nd;
   if (degrees >= 180.0)
     degrees -= 360.0;
@@ -708,8 +704,8 @@ Surf1dError LandmarkMatcher::MatchStored(std::span<const Surf1dFeature> test, in
 void LandmarkMatcher::MarkInliers(int anchor, double scale, int n) {
   const CircularColumns circle(n);
   const auto threshold = static_cast<double>(options_.inlier_threshold);
-  const int xsi = pair_stored_[static_cast<std::size_t>(anchor)];
-  const int xti = pair_test_[static_cast<std::size_t>(anchor)];
+  const double xsi = pair_stored_[static_cast<std::size_t>(anchor)];
+  const double xti = pair_test_[static_cast<std::size_t>(anchor)];
   for (int m = 0; m < last_pairs_; ++m) {
     const auto k = static_cast<std::size_t>(m);
     best_inlier_[k] =
@@ -721,7 +717,8 @@ LandmarkMatcher::MatchedPair LandmarkMatcher::last_pair(int i) const {
   if (i < 0 || i >= last_pairs_)
     return {};
   const auto k = static_cast<std::size_t>(i);
-  return {pair_stored_[k], pair_test_[k], pair_distance_[k], last_model_ && best_inlier_[k] != 0};
+  return {static_cast<std::int32_t>(pair_stored_[k]), static_cast<std::int32_t>(pair_test_[k]),
+          pair_distance_[k], last_model_ && best_inlier_[k] != 0};
 }
 
 }  // namespace skyloc::dsp

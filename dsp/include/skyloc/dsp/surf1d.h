@@ -225,9 +225,10 @@ class LandmarkMatcher {
   // SetStored's sort, side s's from s * capacity_: the key's order bits, then the index.
   std::vector<std::uint64_t> order_;
   bool has_stored_ = false;
-  // The pairs passing the ratio test: positions in columns, descriptor distance.
-  std::vector<std::int32_t> pair_stored_;
-  std::vector<std::int32_t> pair_test_;
+  // The pairs passing the ratio test: positions in columns (whole numbers, held as doubles
+  // so RANSAC's residuals convert none), descriptor distance.
+  std::vector<double> pair_stored_;
+  std::vector<double> pair_test_;
   std::vector<float> pair_distance_;
   std::vector<std::uint8_t> best_inlier_;
   int last_pairs_ = 0;
