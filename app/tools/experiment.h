@@ -83,6 +83,9 @@ struct ExperimentOptions {
   // byte per column) for the heading: config's [heading] strip
   // (firmware::StripOptionsFrom); false: none (every other experiment).
   bool strips = false;
+  // Heading: the bits a column of the route's (stored) strip, 8 (a byte, as route formats 4
+  // and 5 store it) or 4 (dsp::PackStrip); the query strip stays in bytes.
+  int stored_strip_bits = 8;
   // FAB-MAP 2.0 (tilt and manoeuvre): the visible image's words over this vocabulary (not
   // owned; trained on runs of another world, docs/FABMAP.md). Null: no FAB-MAP column.
   const Vocabulary* fabmap_vocabulary = nullptr;
@@ -209,8 +212,9 @@ struct HeadingRow {
   // What the estimator said on each correctly matched query frame, in query order: the
   // per-frame record (frames.csv) that shows two builds give the same answers.
   struct Frame {
-    int query = 0;  // query frame index
-    int route = 0;  // matched reference frame index
+    int query = 0;         // query frame index
+    int route = 0;         // matched reference frame index
+    double truth_deg = 0;  // the query's yaw minus the route frame's
     dsp::HeadingEstimate estimate;
   };
   std::vector<Frame> frames;
