@@ -107,9 +107,10 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
         "default 360; at least 148, 1D SURF's widest filter)",
         148, 4096, &e.config.heading.strip.n_azimuth);
   t.Choice("--stored-strip-bits",
-           "heading: bits a column of the route's strip, 8 (a byte) or 4 (16 levels over the "
-           "strip's own range, dsp::PackStrip); the query strip stays in bytes",
-           {{"8", 8}, {"4", 4}}, &e.stored_strip_bits);
+           "heading: bits a column of the route's strip, 4 (16 levels over the strip's own "
+           "range, as the firmware keeps it; default) or 8 (a byte, route formats 4 and 5); "
+           "the query strip stays in bytes",
+           {{"4", 4}, {"8", 8}}, &e.stored_strip_bits);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
            &e.frames.frame_spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,

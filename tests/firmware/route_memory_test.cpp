@@ -53,7 +53,8 @@ TEST(RouteMemory, BytesAPlaceAreTheSumOfTheParts) {
       const std::size_t row = dsp::RouteFilter::BytesPerReference(config.descriptor.bands, storage);
       const std::size_t meta = sizeof(std::uint64_t) + 6 * sizeof(float);  // time, pose
       const std::size_t along = sizeof(double);                            // the publisher's
-      const auto strip = static_cast<std::size_t>(columns);
+      // Packed, 4 bits a column (route format 6): a byte minimum, a byte range, the levels.
+      const std::size_t strip = columns == 0 ? 0 : 2 + static_cast<std::size_t>(columns) / 2;
       std::printf(
           "%-8s %3d columns: %llu bytes a place = filter row %zu + time and pose %zu + "
           "distance %zu + strip %zu\n",
