@@ -63,11 +63,20 @@ HorizonStripError UnpackStrip(std::span<const std::uint8_t> packed, std::span<fl
     return HorizonStripError::kBadOutputSize;
   const int lo = packed[0];
   const int width = packed[1] + 1;
-  for (std::size_t j = 0; j < strip.size(); ++j) {
-    const int level = (packed[2 + j / 2] >> (4u * (j % 2))) & 15;
-    // lo - 0.5 + (2 level + 1) width / 32: an integer over 32, exact in float.
-    strip[j] = static_cast<float>(32 * lo - 16 + (2 * level + 1) * width) / 32.0f;
+  // The 16 centres once, then a look-up a column (a third of the instructions of the
+  // arithmetic per column): lo - 0.5 + (2 level + 1) width / 32, an integer over 32, exact
+  // in float.
+  float centre[16];
+  for (int level = 0; level < 16; ++level)
+    centre[level] = static_cast<float>(32 * lo - 16 + (2 * level + 1) * width) / 32.0f;
+  const std::size_t pairs = strip.size() / 2;
+  for (std::size_t i = 0; i < pairs; ++i) {
+    const std::uint8_t b = packed[2 + i];
+    strip[2 * i] = centre[b & 15u];
+    strip[2 * i + 1] = centre[b >> 4];
   }
+  if (strip.size() % 2 == 1)
+    strip.back() = centre[packed[2 + pairs] & 15u];
   return HorizonStripError::kOk;
 }
 
