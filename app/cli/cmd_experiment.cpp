@@ -102,6 +102,15 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
         "route filter with --search-window: frames between two comparisons of a row outside "
         "the window ([seqslam] refresh_frames, 1..1000)",
         1, dsp::kMaxRefreshFrames, &e.filter.refresh_frames);
+  t.Int("--strip-columns", "N",
+        "heading: the horizon strip's columns over 360 degrees ([heading] strip_columns; "
+        "default 360; at least 148, 1D SURF's widest filter)",
+        148, 4096, &e.config.heading.strip.n_azimuth);
+  t.Choice("--stored-strip-bits",
+           "heading: bits a column of the route's strip, 4 (16 levels over the strip's own "
+           "range, as the firmware keeps it; default) or 8 (a byte, route formats 4 and 5); "
+           "the query strip stays in bytes",
+           {{"4", 4}, {"8", 8}}, &e.stored_strip_bits);
   t.Number("--spacing", "M", "frame spacing in metres (default 1; ants 0.05)", {0.001, 100},
            &e.frames.frame_spacing_m);
   t.Int("--frames", "N", "at most N frames a run (default: whole routes)", 20, 1000000,
@@ -145,6 +154,8 @@ ParseOutcome ParseArgs(std::span<char* const> args, Options* o) {
       std::end(kExperiments))
     return t.Refuse("unknown experiment '" + o->name +
                     "' (tilt, manoeuvre, ants, speed, heading, surf1d)");
+  if ((t.Given("--strip-columns") || t.Given("--stored-strip-bits")) && o->name != "heading")
+    return t.Refuse("--strip-columns and --stored-strip-bits are for heading");
   if (t.Given("--vocab") && o->name != "tilt" && o->name != "manoeuvre")
     return t.Refuse("--vocab (FAB-MAP) is for tilt and manoeuvre");
   if (o->out.empty())
@@ -417,21 +428,22 @@ int RunHeading(const Options& o, const std::string& command) {
       "\nTruth: the query pose's yaw minus the matched reference frame's (counter-clockwise "
       "positive, the firmware's heading_deg). Matches: the route filter (ds %d) on the sky "
       "descriptor, correct within %d frames. Strips: %d columns, %d rows over %.3g..%.3g "
-      "degrees above the body's horizon, from the UV frame, rounded to bytes as the route "
-      "stores them. Tilt: the query body's z from the zenith. The target: median < "
-      "3 degrees and 90th percentile < 10 degrees.\n\n",
+      "degrees above the body's horizon, from the UV frame, rounded to bytes; the route's "
+      "strip at %d bits a column. Tilt: the query body's z from the zenith. The target: "
+      "median < 3 degrees and 90th percentile < 10 degrees.\n\n",
       o.experiment.seqslam.sequence_length, o.experiment.tolerance_frames, strip.n_azimuth,
-      strip.band_rows, strip.elevation_min_deg, strip.elevation_max_deg);
+      strip.band_rows, strip.elevation_min_deg, strip.elevation_max_deg,
+      o.experiment.stored_strip_bits);
   md += CommonNotes(o.experiment);
   // Every estimate in full precision (%.17g round-trips a double): two builds that give the
   // same headings give the same file. Empty cells: that way gave no heading.
   std::string frames_csv =
-      "world,query_frame,route_frame,uncertain,correlation_deg,surf_deg,surf_inliers\n";
+      "world,query_frame,route_frame,truth_deg,uncertain,correlation_deg,surf_deg,surf_inliers\n";
   for (const tools::HeadingRow& r : rows) {
     for (const tools::HeadingRow::Frame& f : r.frames) {
       const dsp::HeadingEstimate& e = f.estimate;
-      frames_csv += Format("%s,%d,%d,%d,", sim::WorldKindName(r.world), f.query, f.route,
-                           e.uncertain ? 1 : 0);
+      frames_csv += Format("%s,%d,%d,%.17g,%d,", sim::WorldKindName(r.world), f.query, f.route,
+                           f.truth_deg, e.uncertain ? 1 : 0);
       frames_csv += e.has_correlation ? Format("%.17g", e.correlation_deg) : std::string();
       frames_csv += e.has_surf ? Format(",%.17g,%d\n", e.surf_deg, e.surf_inliers) : ",,\n";
     }

@@ -200,10 +200,11 @@ int InfoOrRecover(const RouteOptions& o) {
               st.lens.known ? "" : "; repeat checks the lens hash only (teach again to store it)");
   if (st.strip.columns != 0)
     std::printf(
-        "%s: horizon strips for heading: %u columns (bytes per frame), %u rows over "
-        "%.2f..%.2f deg above the horizon\n",
-        path, st.strip.columns, st.strip.band_rows, st.strip.elevation_min_cdeg / 100.0,
-        st.strip.elevation_max_cdeg / 100.0);
+        "%s: horizon strips for heading: %u columns at %u bits a column (%zu bytes per frame), "
+        "%u rows over %.2f..%.2f deg above the horizon\n",
+        path, st.strip.columns, report.strip_bits,
+        RouteDbStripBytes(report.version, st.strip.columns), st.strip.band_rows,
+        st.strip.elevation_min_cdeg / 100.0, st.strip.elevation_max_cdeg / 100.0);
   else
     std::printf("%s: no horizon strips: repeat reports no heading (teach again to store them)\n",
                 path);

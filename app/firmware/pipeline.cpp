@@ -195,9 +195,10 @@ Status Pipeline::Init(const Config& config) {
   }
 
   SKYLOC_TRY(InitHeading(config.heading));
-  // The route's strips, once: the loader hands them here (RouteSink), not kept elsewhere.
+  // The route's strips, once, packed: the loader hands them here (RouteSink), not kept
+  // elsewhere.
   SKYLOC_TRY(route_strips_.Allocate(static_cast<std::size_t>(config.capacities.route_frames) *
-                                    strip_.size()));
+                                    route_strip_bytes()));
 
   latency_ = LatencyTable();
   stages_.capture = latency_.AddStage("capture");
@@ -212,6 +213,7 @@ Status Pipeline::Init(const Config& config) {
 Status Pipeline::InitHeading(const HeadingConfig& config) {
   route_settings_.strip = {};
   route_strip_frames_ = 0;
+  stored_frame_ = kNoStoredFrame;
   const auto columns = static_cast<std::size_t>(config.strip.n_azimuth);
   // Zero-sized buffers when heading is off: strip() is then empty and teach stores none.
   SKYLOC_TRY(strip_.Allocate(columns));
@@ -245,6 +247,7 @@ void Pipeline::BeginRoute() {
   route_frames_added_ = 0;
   route_strips_complete_ = true;
   route_strip_frames_ = 0;
+  stored_frame_ = kNoStoredFrame;  // the route's strips change
 }
 
 Status Pipeline::AddFrame(std::span<const float> descriptor, std::span<const std::uint8_t> strip) {
@@ -260,10 +263,10 @@ Status Pipeline::AddFrame(std::span<const float> descriptor, std::span<const std
     return DspStatus(e, "route frame %zu", route_frames_added_);
   // Strips of another length cannot be compared (the route loader refuses them; this
   // guards a route built in memory): a route with any frame without one has no heading.
-  const std::size_t columns = strip_.size();
-  if (columns != 0 && strip.size() == columns &&
-      (route_frames_added_ + 1) * columns <= route_strips_.size())
-    std::memcpy(route_strips_.data() + route_frames_added_ * columns, strip.data(), columns);
+  const std::size_t packed = route_strip_bytes();
+  if (packed != 0 && strip.size() == packed &&
+      (route_frames_added_ + 1) * packed <= route_strips_.size())
+    std::memcpy(route_strips_.data() + route_frames_added_ * packed, strip.data(), packed);
   else
     route_strips_complete_ = false;
   ++route_frames_added_;
@@ -337,11 +340,17 @@ Status Pipeline::Describe(const dsp::ImageView& image, FrameResult* result,
 
 void Pipeline::EstimateHeading(std::size_t route_frame, FrameResult* result) {
   StageTimer timer(latency_, stages_.heading, *clock_);
-  const std::uint8_t* stored = route_strips_.data() + route_frame * strip_.size();
-  for (std::size_t j = 0; j < strip_.size(); ++j)
-    stored_strip_[j] = stored[j];
-  // The query is compared as the route stores it (bytes), so a frame against its own
-  // taught copy correlates at exactly 1.
+  // Unpacked when the matched route frame changes: a localised robot holds one for many
+  // frames (and the estimator keeps what it computed from the same strip).
+  if (route_frame != stored_frame_) {
+    const std::size_t packed = route_strip_bytes();
+    if (dsp::UnpackStrip(route_strips_.span().subspan(route_frame * packed, packed),
+                         stored_strip_.span()) != dsp::HorizonStripError::kOk)
+      return;  // strips of the configured length by construction (SetRoute)
+    stored_frame_ = route_frame;
+  }
+  // The query in bytes, as teach hands its strip to the route; the route keeps 4 bits a
+  // column, which the heading experiment measured (docs/RESULTS.md, "Heading").
   for (std::size_t j = 0; j < strip_.size(); ++j)
     strip_[j] = strip_bytes_[j];
   dsp::HeadingEstimate estimate;

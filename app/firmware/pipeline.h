@@ -125,8 +125,9 @@ class Pipeline final : private RouteSink {
   bool uses_attitude() const { return uses_attitude_; }
   const dsp::Lens& lens() const { return lens_; }  // the lens the frames are read through
   std::span<const float> descriptor() const { return amplitudes_.span(); }
-  // The last described frame's horizon strip as the route stores it (one byte per
-  // column); empty when [heading] strip_columns = 0.
+  // The last described frame's horizon strip in bytes, a byte a column (what teach hands
+  // the route, which packs it: RouteFrames, RouteDbWriter); empty when [heading]
+  // strip_columns = 0.
   std::span<const std::uint8_t> strip() const { return strip_bytes_.span(); }
   // What the route database records about the strip (columns 0: none).
   const RouteDbStrip& strip_settings() const { return route_settings_.strip; }
@@ -154,15 +155,23 @@ class Pipeline final : private RouteSink {
   // Heading ([heading]); all sized by Init.
   Status InitHeading(const HeadingConfig& config);
   void EstimateHeading(std::size_t route_frame, FrameResult* result);
+  // A route frame's packed strip (0 with heading off).
+  std::size_t route_strip_bytes() const {
+    return strip_.empty() ? 0 : dsp::PackedStripBytes(strip_.size());
+  }
   dsp::HorizonStrip horizon_;
   FixedArray<float> strip_;               // the frame's strip, grey levels
-  FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the route stores it
-  FixedArray<float> stored_strip_;        // the matched route frame's strip as floats
+  FixedArray<std::uint8_t> strip_bytes_;  // the same rounded to bytes, as the query compares it
+  FixedArray<float> stored_strip_;        // the matched route frame's strip, unpacked
+  std::size_t stored_frame_ = kNoStoredFrame;  // the route frame stored_strip_ holds
+  static constexpr std::size_t kNoStoredFrame = static_cast<std::size_t>(-1);
   dsp::HeadingEstimator heading_;
   // RouteSink: the loader's frames.
   void BeginRoute() override;
   Status AddFrame(std::span<const float> descriptor, std::span<const std::uint8_t> strip) override;
-  FixedArray<std::uint8_t> route_strips_;  // capacity x strip columns (Init), filled by AddFrame
+  // capacity x dsp::PackedStripBytes(strip columns) (Init), filled by AddFrame: the route's
+  // strips as the route keeps them, 4 bits a column.
+  FixedArray<std::uint8_t> route_strips_;
   std::size_t route_frames_added_ = 0;
   bool route_strips_complete_ = true;   // every frame added had a strip of our length
   std::size_t route_strip_frames_ = 0;  // frames with strips after SetRoute (0: no heading)

@@ -194,6 +194,16 @@ Status ParseRouteDbHeader(std::span<const std::uint8_t> bytes, RouteDbLoadReport
       return Status::Error(StatusCode::kDataLoss, "strip record: %u strip columns is invalid",
                            s.strip.columns);
     }
+    // Version 6 names its encoding; the versions before it had 0 there (a byte a column).
+    const std::uint32_t bits =
+        version >= 6 ? LoadBytes<std::uint32_t>(strip_record + kStripBitsOffset) : 8;
+    if (bits != RouteDbStripBits(version)) {
+      return Status::Error(StatusCode::kDataLoss,
+                           "strip record: %u bits a strip column, version %u stores %u: the "
+                           "file is corrupt",
+                           bits, version, RouteDbStripBits(version));
+    }
+    r->strip_bits = s.strip.columns != 0 ? bits : 0;
   }
   if (s.dim == 0 || s.dim > kMaxDim ||
       LoadBytes<std::uint32_t>(b + 48) != RouteDbRecordBytes(version, s.dim, s.strip.columns)) {
@@ -205,12 +215,13 @@ Status ParseRouteDbHeader(std::span<const std::uint8_t> bytes, RouteDbLoadReport
   return Status::Ok();
 }
 
-// A frames chunk's `count` records at `payload` appended to `out` (its strips when
-// `keep_strips`); kResourceExhausted when `out` is full (`chunk` names the chunk). `codes`:
-// room for a version-5 record's dim codes.
+// A frames chunk's `count` records at `payload` appended to `out` (its strips, packed,
+// when `keep_strips`); kResourceExhausted when `out` is full (`chunk` names the chunk).
+// `codes`: room for a version-5 or 6 record's dim codes.
 Status AppendRecords(const std::uint8_t* payload, std::uint32_t count, std::size_t record_bytes,
                      std::uint32_t version, std::uint32_t dim, bool keep_strips, std::size_t chunk,
                      std::span<std::uint16_t> codes, RouteFrames* out) {
+  const std::size_t strip_columns = out->strip_columns();
   if (out->size() + count > out->capacity()) {
     return Status::Error(StatusCode::kResourceExhausted,
                          "the route has more than %zu frames (chunk %zu): raise [capacities] "
@@ -243,8 +254,14 @@ Status AppendRecords(const std::uint8_t* payload, std::uint32_t count, std::size
       // Copied byte-wise: the input need not be aligned for float.
       std::memcpy(slot.descriptor.data(), rec + fixed_bytes, slot.descriptor.size_bytes());
     }
-    if (keep_strips)
+    if (keep_strips && RouteDbStripBits(version) == 8) {
+      // A byte a column (versions 4, 5): packed as this skyloc keeps every strip, with the
+      // loss the heading experiment measured for it (docs/ROUTE_DB.md, version 6).
+      (void)dsp::PackStrip(std::span<const std::uint8_t>(rec + strip_at, strip_columns),
+                           slot.strip);  // slot.strip is PackedStripBytes(strip_columns)
+    } else if (keep_strips) {
       std::memcpy(slot.strip.data(), rec + strip_at, slot.strip.size());
+    }
     if (Status added = out->Complete(slot); !added.ok()) {
       return Status::Error(added.code(), "route frame %zu: %s", out->size() - 1, added.message());
     }

@@ -16,6 +16,7 @@
 #include <span>
 
 #include "skyloc/drivers/camera.h"
+#include "skyloc/dsp/horizon_strip.h"
 #include "skyloc/platform/fixed_array.h"
 #include "skyloc/platform/status.h"
 #include "skyloc/platform/unique_fd.h"
@@ -59,10 +60,12 @@ Status CheckRouteDbLens(const RouteDbLens& taught, const RouteDbLens& now);
 void FormatRouteDbLens(const RouteDbLens& lens, char* out, std::size_t size);
 
 // The horizon strip stored with every frame (version 4) for the heading of a recognised
-// place (docs/SURF1D.md): `columns` bytes per frame, the band mean of each azimuth column
-// rounded to 0..255. columns = 0: no strips (every file before version 4, or a route
-// taught with [heading] strip_columns = 0). Numbers only; app/ fills it from
-// dsp::HorizonStripOptions.
+// place (docs/SURF1D.md): the band mean of each azimuth column rounded to 0..255, stored
+// as a byte a column in versions 4 and 5 and at 4 bits a column from version 6
+// (dsp::PackStrip; RouteDbStripBytes). columns = 0: no strips (every file before version
+// 4, or a route taught with [heading] strip_columns = 0). Numbers only; app/ fills it from
+// dsp::HorizonStripOptions. What the strip samples, not how it is stored: a route taught
+// with 8-bit strips loads into any skyloc with the same band.
 struct RouteDbStrip {
   std::uint32_t columns = 0;  // azimuth columns over 360 degrees; 0: none stored
   std::uint32_t band_rows = 0;
@@ -110,13 +113,14 @@ inline constexpr std::uint32_t kNoGravityCap = 0xffffffffu;
 // Version 3 added the lens record after the header. Version 4 added the strip record after
 // the lens record and a horizon strip at the end of every frame record. Version 5 made the
 // frame record compact: the descriptor as 16-bit codes with a power-of-two scale
-// (dsp::EncodeCodes), the pose as floats. This version reads 1 to 5, writes 5.
-inline constexpr std::uint32_t kRouteDbVersion = 5;
+// (dsp::EncodeCodes), the pose as floats. Version 6 stores the strip at 4 bits a column
+// (dsp::PackStrip), its bits in the strip record. This version reads 1 to 6, writes 6.
+inline constexpr std::uint32_t kRouteDbVersion = 6;
 inline constexpr std::size_t kRouteDbHeaderBytes = 64;
 inline constexpr std::size_t kRouteDbLensRecordBytes = 144;  // version 3, after the header
 inline constexpr std::size_t kRouteDbStripRecordBytes = 32;  // version 4, after the lens
 // Where the first chunk starts: after the header (versions 1, 2), the lens record (3) and
-// the strip record (4 and 5).
+// the strip record (4 to 6).
 constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
   return kRouteDbHeaderBytes + (version >= 3 ? kRouteDbLensRecordBytes : 0) +
          (version >= 4 ? kRouteDbStripRecordBytes : 0);
@@ -124,7 +128,7 @@ constexpr std::size_t RouteDbDataOffset(std::uint32_t version) {
 inline constexpr std::size_t kRouteDbChunkHeaderBytes = 32;
 // The frame record's part before the descriptor: versions 1 to 4 a u64 timestamp, u32
 // flags, u32 reserved and six f64 pose values; version 5 a u64 timestamp, u8 flags, the
-// descriptor's i8 scale exponent and six f32 pose values.
+// descriptor's i8 scale exponent and six f32 pose values (and version 6).
 constexpr std::size_t RouteDbRecordFixedBytes(std::uint32_t version) {
   return version >= 5 ? 34 : 64;
 }
@@ -133,11 +137,24 @@ constexpr std::size_t RouteDbRecordFixedBytes(std::uint32_t version) {
 constexpr std::size_t RouteDbDescriptorValueBytes(std::uint32_t version) {
   return version >= 5 ? 2 : 4;
 }
-// A frame record: the fixed part, the descriptor, then strip_columns bytes (version 4+).
+// Bits a strip column takes in a frame record: a byte in versions 4 and 5, 4 bits from
+// version 6 (the heading experiment lost nothing: docs/RESULTS.md, "Heading").
+constexpr std::uint32_t RouteDbStripBits(std::uint32_t version) {
+  return version >= 6 ? 4 : 8;
+}
+// A frame record's strip: strip_columns bytes in versions 4 and 5, from version 6
+// dsp::PackedStripBytes(strip_columns) (a byte minimum, a byte range, then 4 bits a
+// column); nothing without strips.
+constexpr std::size_t RouteDbStripBytes(std::uint32_t version, std::size_t strip_columns) {
+  if (strip_columns == 0 || RouteDbStripBits(version) == 8)
+    return strip_columns;
+  return dsp::PackedStripBytes(strip_columns);
+}
+// A frame record: the fixed part, the descriptor, then the strip (version 4+).
 constexpr std::size_t RouteDbRecordBytes(std::uint32_t version, std::size_t dim,
                                          std::size_t strip_columns) {
   return RouteDbRecordFixedBytes(version) + RouteDbDescriptorValueBytes(version) * dim +
-         strip_columns;
+         RouteDbStripBytes(version, strip_columns);
 }
 
 // Where a route's descriptors and strips go when RouteFrames does not keep them: the
@@ -147,7 +164,7 @@ constexpr std::size_t RouteDbRecordBytes(std::uint32_t version, std::size_t dim,
 class RouteSink {
  public:
   virtual void BeginRoute() = 0;  // a route starts: forget the frames added before
-  // strip: empty when the route has none.
+  // strip: packed (dsp::PackStrip, as RouteFrames keeps it), empty when the route has none.
   virtual Status AddFrame(std::span<const float> descriptor,
                           std::span<const std::uint8_t> strip) = 0;
 
@@ -156,10 +173,11 @@ class RouteSink {
 };
 
 // The frames of a route in memory, at a capacity fixed at start-up. strip_columns: room
-// for a horizon strip per frame (0: none); has_strips() says whether the loaded route
-// filled them (a file before version 4, or taught without strips, does not). With a
-// sink, descriptors and strips are handed to it as they arrive and not kept:
-// descriptor(i) and strip(i) are then empty.
+// for a horizon strip per frame (0: none), kept packed at 4 bits a column
+// (dsp::PackStrip: dsp::PackedStripBytes(strip_columns) bytes a frame, whatever the file's
+// version); has_strips() says whether the loaded route filled them (a file before version
+// 4, or taught without strips, does not). With a sink, descriptors and strips are handed
+// to it as they arrive and not kept: descriptor(i) and strip(i) are then empty.
 class RouteFrames {
  public:
   Status Allocate(std::size_t capacity, std::size_t dim, std::size_t strip_columns = 0,
@@ -170,8 +188,9 @@ class RouteFrames {
     if (sink_ != nullptr)
       sink_->BeginRoute();
   }
-  // False when full, or when `strip` is neither empty nor strip_columns() long. Every
-  // frame of a route has a strip or none does: the first Append decides.
+  // False when full, or when `strip` (a byte a column, as dsp::StripToBytes gives it; kept
+  // packed) is neither empty nor strip_columns() long. Every frame of a route has a strip
+  // or none does: the first Append decides.
   [[nodiscard]] bool Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
                             std::span<const std::uint8_t> strip = {});
 
@@ -187,19 +206,20 @@ class RouteFrames {
       return {};
     return {descriptors_.data() + i * dim_, dim_};
   }
-  // Frame i's horizon strip; empty when the route has none.
+  // Frame i's horizon strip, packed (dsp::UnpackStrip reads it); empty when the route has
+  // none.
   std::span<const std::uint8_t> strip(std::size_t i) const {
     if (!has_strips_ || sink_ != nullptr)
       return {};
-    return {strips_.data() + i * strip_columns_, strip_columns_};
+    return {strips_.data() + i * strip_bytes_, strip_bytes_};
   }
   // Frame i's time and pose; the pose as the route file keeps it since version 5, in
   // floats (RoutePoseFloats).
   RouteFrameMeta meta(std::size_t i) const;
 
   // Adds a frame and returns its storage to fill in (the loader copies straight into it):
-  // the descriptor, and the strip when `with_strip` (which the first frame decides for
-  // the route). Empty spans when full or when with_strip disagrees with the route. Once
+  // the descriptor, and the packed strip when `with_strip` (which the first frame decides
+  // for the route). Empty spans when full or when with_strip disagrees with the route. Once
   // filled, Complete(slot) hands the descriptor to the sink, if there is one.
   struct Slot {
     std::span<float> descriptor;
@@ -211,13 +231,14 @@ class RouteFrames {
  private:
   RouteSink* sink_ = nullptr;
   FixedArray<float> descriptors_;    // capacity x dim; with a sink: one frame, to fill
-  FixedArray<std::uint8_t> strips_;  // capacity x strip columns; with a sink: one frame
+  FixedArray<std::uint8_t> strips_;  // capacity x strip_bytes_; with a sink: one frame
   // Per frame 32 bytes, not a RouteFrameMeta's 64: the time, and the pose as six floats
   // (x NaN: no pose). A pose grades a repeat against the route and steers nothing.
   FixedArray<std::uint64_t> timestamps_;
   FixedArray<std::array<float, 6>> poses_;
   std::size_t dim_ = 0;
   std::size_t strip_columns_ = 0;
+  std::size_t strip_bytes_ = 0;  // a packed strip's: dsp::PackedStripBytes(strip_columns_)
   std::size_t size_ = 0;
   bool has_strips_ = false;
 };
@@ -238,6 +259,8 @@ enum class RouteDbLoadPolicy : std::uint8_t {
 struct RouteDbLoadReport {
   RouteDbSettings settings;   // as stored in the file
   std::uint32_t version = 0;  // the file's format version
+  // Bits a strip column takes in the file: 8 (versions 4, 5), 4 (version 6); 0: no strips.
+  std::uint32_t strip_bits = 0;
   std::size_t frames = 0;
   std::size_t chunks = 0;  // intact frame chunks
   bool committed = false;
@@ -332,9 +355,10 @@ class RouteDbWriter {
   // flock() until it is closed, so `route recover` refuses a file being taught.
   Status Create(const char* path, const RouteDbSettings& settings, std::size_t flush_every,
                 bool overwrite);
-  // `strip`: settings.strip.columns bytes (version 4), empty when that is 0. The descriptor
-  // is stored as 16-bit codes (dsp::EncodeCodes: values >= 0, each within max / 65535
-  // of its code), the pose as floats.
+  // `strip`: settings.strip.columns bytes (dsp::StripToBytes), empty when that is 0; stored
+  // at 4 bits a column (dsp::PackStrip). The descriptor is stored as 16-bit codes
+  // (dsp::EncodeCodes: values >= 0, each within max / 65535 of its code), the pose as
+  // floats.
   Status Append(const RouteFrameMeta& meta, std::span<const float> descriptor,
                 std::span<const std::uint8_t> strip = {});
   // Writes the buffered frames as one chunk and waits until they are on the disk.

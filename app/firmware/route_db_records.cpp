@@ -81,6 +81,7 @@ void EncodeStripRecord(const RouteDbStrip& strip, std::uint8_t* h) {
   StoreBytes<std::uint32_t>(h + 4, strip.band_rows);
   StoreBytes<std::int32_t>(h + 8, strip.elevation_min_cdeg);
   StoreBytes<std::int32_t>(h + 12, strip.elevation_max_cdeg);
+  StoreBytes<std::uint32_t>(h + kStripBitsOffset, RouteDbStripBits(kRouteDbVersion));
   StoreBytes<std::uint32_t>(h + kStripCrcOffset, CrcOf(h, kStripCrcOffset));
 }
 

@@ -49,11 +49,14 @@ inline constexpr std::uint32_t kLensOcamHash =
     2u;  // ocam_hash holds the OCamCalib polynomials' hash
 inline constexpr std::size_t kLensCrcOffset = kRouteDbLensRecordBytes - 4;
 inline constexpr std::size_t kStripCrcOffset = kRouteDbStripRecordBytes - 4;
+// The strip record's bits a column (version 6; reserved and 0 before, a byte a column).
+inline constexpr std::size_t kStripBitsOffset = 16;
 
 // The lens record (docs/ROUTE_DB.md): h points just after the 64-byte header.
 void EncodeLensRecord(const RouteDbLens& l, std::uint8_t* h);
 RouteDbLens DecodeLensRecord(const std::uint8_t* h);
-// The strip record (version 4): h points just after the lens record.
+// The strip record (version 4; version 6 adds the bits a column): h points just after the
+// lens record.
 void EncodeStripRecord(const RouteDbStrip& strip, std::uint8_t* h);
 RouteDbStrip DecodeStripRecord(const std::uint8_t* h);
 // The header of the current version with its lens and strip records:

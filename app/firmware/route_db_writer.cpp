@@ -134,8 +134,11 @@ Status RouteDbWriter::Append(const RouteFrameMeta& meta, std::span<const float> 
   for (std::size_t k = 0; k < descriptor.size(); ++k)
     StoreBytes<std::uint16_t>(rec + kFixed + 2 * k, codes_[k]);  // little-endian
   rec[9] = static_cast<std::uint8_t>(exponent);
-  if (!strip.empty())
-    std::memcpy(rec + kFixed + 2 * descriptor.size(), strip.data(), strip.size());
+  if (!strip.empty()) {
+    // 4 bits a column (version 6): the lengths were checked above.
+    (void)dsp::PackStrip(strip, {rec + kFixed + 2 * descriptor.size(),
+                                 RouteDbStripBytes(kRouteDbVersion, strip.size())});
+  }
   ++pending_;
   ++appended_;
   if (pending_ == flush_every_)

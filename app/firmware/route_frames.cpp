@@ -27,12 +27,14 @@ Status RouteFrames::Allocate(std::size_t capacity, std::size_t dim, std::size_t 
                              RouteSink* sink) {
   sink_ = sink;
   const std::size_t kept = sink != nullptr ? 1 : capacity;
+  const std::size_t strip_bytes = strip_columns != 0 ? dsp::PackedStripBytes(strip_columns) : 0;
   SKYLOC_TRY(descriptors_.Allocate(kept * dim));
-  SKYLOC_TRY(strips_.Allocate(kept * strip_columns));
+  SKYLOC_TRY(strips_.Allocate(kept * strip_bytes));
   SKYLOC_TRY(timestamps_.Allocate(capacity));
   SKYLOC_TRY(poses_.Allocate(capacity));
   dim_ = dim;
   strip_columns_ = strip_columns;
+  strip_bytes_ = strip_bytes;
   Clear();
   return Status::Ok();
 }
@@ -46,7 +48,7 @@ bool RouteFrames::Append(const RouteFrameMeta& meta, std::span<const float> desc
     return false;
   std::memcpy(slot.descriptor.data(), descriptor.data(), slot.descriptor.size_bytes());
   if (!strip.empty())
-    std::memcpy(slot.strip.data(), strip.data(), strip.size());
+    (void)dsp::PackStrip(strip, slot.strip);  // the lengths were checked above
   if (!Complete(slot).ok()) {
     --size_;  // the sink refused it (full): the frame is not part of the route
     return false;
@@ -79,7 +81,7 @@ RouteFrames::Slot RouteFrames::Emplace(const RouteFrameMeta& meta, bool with_str
   Slot slot;
   slot.descriptor = {descriptors_.data() + (sink_ != nullptr ? 0 : size_ * dim_), dim_};
   if (with_strip)
-    slot.strip = {strips_.data() + (sink_ != nullptr ? 0 : size_ * strip_columns_), strip_columns_};
+    slot.strip = {strips_.data() + (sink_ != nullptr ? 0 : size_ * strip_bytes_), strip_bytes_};
   ++size_;
   return slot;
 }

@@ -428,6 +428,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
   if (const dsp::HeadingError e = estimator.Init(columns, heading); e != dsp::HeadingError::kOk)
     return drivers::DspStatus(e, "heading");
   std::vector<float> stored(n), test(n);
+  std::vector<std::uint8_t> packed(dsp::PackedStripBytes(n));
   rows->clear();
   for (WorldKind kind : {WorldKind::kForest, WorldKind::kRepetitive}) {
     RunDescriptors reference, query;
@@ -444,9 +445,16 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
       if (!row.match.correct[q])
         continue;
       const auto r = static_cast<std::size_t>(row.match.matched[q]);
+      const std::span<const std::uint8_t> taught =
+          std::span<const std::uint8_t>(reference.strips).subspan(r * n, n);
       for (std::size_t j = 0; j < n; ++j) {
-        stored[j] = reference.strips[r * n + j];
+        stored[j] = taught[j];
         test[j] = query.strips[q * n + j];
+      }
+      if (options.stored_strip_bits == 4) {
+        if (dsp::PackStrip(taught, packed) != dsp::HorizonStripError::kOk ||
+            dsp::UnpackStrip(packed, stored) != dsp::HorizonStripError::kOk)
+          return Status::Error(StatusCode::kInternal, "4-bit strip of reference frame %zu", r);
       }
       const drivers::Pose& query_pose = query.trajectory[q].pose;
       // The truth: how far the robot is turned from the taught frame's heading.
@@ -476,7 +484,7 @@ Status RunHeadingExperiment(const ExperimentOptions& heading_options, std::vecto
       if (estimate.has_heading)
         answer.push_back(dsp::WrapDegrees(estimate.heading_deg - truth));
       row.uncertain_frames += estimate.uncertain ? 1 : 0;
-      row.frames.push_back({static_cast<int>(q), static_cast<int>(r), estimate});
+      row.frames.push_back({static_cast<int>(q), static_cast<int>(r), truth, estimate});
     }
     row.correlation_errors_deg = correlation;
     row.surf_errors_deg = surf;

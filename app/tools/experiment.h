@@ -79,10 +79,14 @@ struct ExperimentOptions {
   bool cap = false;
   double cap_elevation_deg = -1;
   dsp::ZenithEstimateOptions zenith;  // AttitudeInput::kImage
-  // Horizon strips of every frame's UV image, as the firmware's route stores them (one
-  // byte per column) for the heading: config's [heading] strip
+  // Horizon strips of every frame's UV image, rounded to bytes as the firmware's query is
+  // (one byte per column), for the heading: config's [heading] strip
   // (firmware::StripOptionsFrom); false: none (every other experiment).
   bool strips = false;
+  // Heading: the bits a column of the route's (stored) strip, 4 as the firmware's route
+  // keeps it since route format 6 (dsp::PackStrip), or 8 (a byte, formats 4 and 5, kept
+  // to measure the two against each other); the query strip stays in bytes.
+  int stored_strip_bits = 4;
   // FAB-MAP 2.0 (tilt and manoeuvre): the visible image's words over this vocabulary (not
   // owned; trained on runs of another world, docs/FABMAP.md). Null: no FAB-MAP column.
   const Vocabulary* fabmap_vocabulary = nullptr;
@@ -209,8 +213,9 @@ struct HeadingRow {
   // What the estimator said on each correctly matched query frame, in query order: the
   // per-frame record (frames.csv) that shows two builds give the same answers.
   struct Frame {
-    int query = 0;  // query frame index
-    int route = 0;  // matched reference frame index
+    int query = 0;         // query frame index
+    int route = 0;         // matched reference frame index
+    double truth_deg = 0;  // the query's yaw minus the route frame's
     dsp::HeadingEstimate estimate;
   };
   std::vector<Frame> frames;

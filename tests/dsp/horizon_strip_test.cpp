@@ -194,5 +194,97 @@ TEST(StripToBytes, AllocatesNothing) {
   EXPECT_EQ(scope.allocations(), 0u);
 }
 
+// The 4-bit strip against a quantiser written out in doubles: the range [lo - 0.5,
+// hi + 0.5] of the strip's bytes cut into 16 equal bins, each byte to the bin its value
+// falls in, decoded as the bin's centre. Not the integer arithmetic PackStrip uses.
+std::vector<float> ReferenceFourBits(const std::vector<std::uint8_t>& bytes) {
+  const double lo = *std::min_element(bytes.begin(), bytes.end());
+  const double hi = *std::max_element(bytes.begin(), bytes.end());
+  const double bin = (hi - lo + 1.0) / 16.0;
+  std::vector<float> out;
+  for (const std::uint8_t v : bytes) {
+    const double level = std::min(15.0, std::floor((v - (lo - 0.5)) / bin));
+    out.push_back(static_cast<float>(lo - 0.5 + (level + 0.5) * bin));
+  }
+  return out;
+}
+
+TEST(PackStrip, FourBitsAreTheReferenceQuantiserOnRandomStrips) {
+  std::uint32_t state = 12345;
+  const auto next = [&] {
+    state = state * 1664525u + 1013904223u;
+    return state >> 8;
+  };
+  for (int trial = 0; trial < 2000; ++trial) {
+    const std::size_t columns = 8 + next() % 400;  // odd and even lengths
+    const unsigned lo = next() % 256;
+    const unsigned range = next() % (256 - lo);
+    std::vector<std::uint8_t> bytes(columns);
+    for (std::uint8_t& b : bytes)
+      b = static_cast<std::uint8_t>(lo + next() % (range + 1));
+    std::vector<std::uint8_t> packed(PackedStripBytes(columns));
+    ASSERT_EQ(PackStrip(bytes, packed), HorizonStripError::kOk);
+    std::vector<float> decoded(columns);
+    ASSERT_EQ(UnpackStrip(packed, decoded), HorizonStripError::kOk);
+    const std::vector<float> reference = ReferenceFourBits(bytes);
+    const float width = static_cast<float>(packed[1]) + 1.0f;
+    for (std::size_t j = 0; j < columns; ++j) {
+      ASSERT_EQ(decoded[j], reference[j]) << "trial " << trial << " column " << j;
+      ASSERT_LE(std::fabs(decoded[j] - static_cast<float>(bytes[j])), width / 32.0f);
+    }
+    if (columns % 2 == 1) {
+      EXPECT_EQ(packed.back() >> 4, 0);  // the unused nibble
+    }
+  }
+}
+
+TEST(PackStrip, SixteenGreyLevelsComeBackExactly) {
+  std::vector<std::uint8_t> bytes;
+  for (int j = 0; j < 160; ++j)
+    bytes.push_back(static_cast<std::uint8_t>(100 + (j * 7) % 16));
+  std::vector<std::uint8_t> packed(PackedStripBytes(bytes.size()));
+  ASSERT_EQ(PackStrip(bytes, packed), HorizonStripError::kOk);
+  EXPECT_EQ(packed[0], 100);
+  EXPECT_EQ(packed[1], 15);
+  EXPECT_EQ(packed.size(), 2u + 80u);
+  std::vector<float> decoded(bytes.size());
+  ASSERT_EQ(UnpackStrip(packed, decoded), HorizonStripError::kOk);
+  for (std::size_t j = 0; j < bytes.size(); ++j)
+    EXPECT_EQ(decoded[j], static_cast<float>(bytes[j]));
+}
+
+TEST(PackStrip, AFlatStripAndTheFullRange) {
+  const std::vector<std::uint8_t> flat(9, 42);
+  std::vector<std::uint8_t> packed(PackedStripBytes(flat.size()));
+  ASSERT_EQ(PackStrip(flat, packed), HorizonStripError::kOk);
+  std::vector<float> decoded(flat.size());
+  ASSERT_EQ(UnpackStrip(packed, decoded), HorizonStripError::kOk);
+  for (const float v : decoded)
+    EXPECT_EQ(v, 42.0f + 1.0f / 32.0f);  // the middle level of [41.5, 42.5]
+  // 0..255: bins of 16 grey levels, 0..15 -> 7.5, 240..255 -> 247.5.
+  const std::vector<std::uint8_t> full = {0, 15, 16, 128, 239, 240, 255, 255};
+  packed.assign(PackedStripBytes(full.size()), 0);
+  ASSERT_EQ(PackStrip(full, packed), HorizonStripError::kOk);
+  decoded.assign(full.size(), 0);
+  ASSERT_EQ(UnpackStrip(packed, decoded), HorizonStripError::kOk);
+  EXPECT_EQ(decoded,
+            (std::vector<float>{7.5f, 7.5f, 23.5f, 135.5f, 231.5f, 247.5f, 247.5f, 247.5f}));
+}
+
+TEST(PackStrip, RefusesBuffersOfAnotherLengthAndAllocatesNothing) {
+  const std::vector<std::uint8_t> bytes(360, 9);
+  std::vector<std::uint8_t> packed(PackedStripBytes(360) - 1, 77);
+  EXPECT_EQ(PackStrip(bytes, packed), HorizonStripError::kBadOutputSize);
+  EXPECT_EQ(packed, std::vector<std::uint8_t>(PackedStripBytes(360) - 1, 77));  // untouched
+  std::vector<float> strip(361);
+  EXPECT_EQ(UnpackStrip(packed, strip), HorizonStripError::kBadOutputSize);
+  packed.assign(PackedStripBytes(360), 0);
+  strip.assign(360, 0.0f);
+  const AllocationScope scope;
+  ASSERT_EQ(PackStrip(bytes, packed), HorizonStripError::kOk);
+  ASSERT_EQ(UnpackStrip(packed, strip), HorizonStripError::kOk);
+  EXPECT_EQ(scope.allocations(), 0u);
+}
+
 }  // namespace
 }  // namespace skyloc::dsp

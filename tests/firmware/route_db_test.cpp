@@ -70,33 +70,49 @@ void Store(std::uint8_t* p, T v) {
   std::memcpy(p, &v, sizeof v);
 }
 
-// The file (written without strips, complete chunks only) rewritten as an older version,
-// by the layouts docs/ROUTE_DB.md gives, independently of the writer: every frame record
-// becomes the 64-byte fixed part (u64 timestamp, u32 flags, u32 reserved, six f64 pose
-// values) and dim f32 values (16-bit code x 2^exponent); the header says `version`; below
-// version 4 the strip record is cut out, below version 3 the lens record too (those
-// versions have none); version 1 also loses the cap.
-std::vector<std::uint8_t> AsVersion(const std::vector<std::uint8_t>& v5, std::uint32_t version) {
-  std::vector<std::uint8_t> b(v5.begin(), v5.begin() + static_cast<long>(kDataOffset));
-  const std::size_t old_record = 64 + 4 * kDim, new_record = 34 + 2 * kDim;
+// The file (complete chunks only) rewritten as an older version, by the layouts
+// docs/ROUTE_DB.md gives, independently of the writer. Version 5 keeps the compact record
+// (u64 timestamp, u8 flags, i8 exponent, six f32 pose values, dim 16-bit codes); below it
+// every frame record becomes the 64-byte fixed part (u64 timestamp, u32 flags, u32
+// reserved, six f64 pose values) and dim f32 values (16-bit code x 2^exponent). A file
+// with strips (`columns` > 0) gives versions 4 and 5 a byte a column from `strips`
+// (frames x columns, the bytes taught: version 6's 4 bits cannot give them back), and the
+// strip record's bits field (version 6) goes back to its reserved 0. The header says
+// `version`; below version 4 the strip record is cut out, below version 3 the lens record
+// too (those versions have none); version 1 also loses the cap.
+std::vector<std::uint8_t> AsVersion(const std::vector<std::uint8_t>& current, std::uint32_t version,
+                                    std::size_t columns = 0,
+                                    const std::vector<std::uint8_t>& strips = {}) {
+  std::vector<std::uint8_t> b(current.begin(), current.begin() + static_cast<long>(kDataOffset));
+  const std::size_t compact = 34 + 2 * kDim;
+  const std::size_t new_record = compact + (columns > 0 ? 2 + (columns + 1) / 2 : 0);
+  const std::size_t old_columns = version >= 4 ? columns : 0;
+  const std::size_t old_record = (version >= 5 ? compact : 64 + 4 * kDim) + old_columns;
   Store<std::uint32_t>(b.data() + 48, static_cast<std::uint32_t>(old_record));
-  for (std::size_t o = kDataOffset; o + kRouteDbChunkHeaderBytes <= v5.size();) {
+  std::size_t frame = 0;
+  for (std::size_t o = kDataOffset; o + kRouteDbChunkHeaderBytes <= current.size();) {
     std::uint8_t header[kRouteDbChunkHeaderBytes];
-    std::memcpy(header, v5.data() + o, sizeof header);
+    std::memcpy(header, current.data() + o, sizeof header);
     const std::uint32_t count = Load<std::uint32_t>(header + 16);
     std::vector<std::uint8_t> payload(count * old_record, 0);
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::uint8_t* in = v5.data() + o + kRouteDbChunkHeaderBytes + i * new_record;
+    for (std::size_t i = 0; i < count; ++i, ++frame) {
+      const std::uint8_t* in = current.data() + o + kRouteDbChunkHeaderBytes + i * new_record;
       std::uint8_t* out = payload.data() + i * old_record;
-      std::memcpy(out, in, 8);  // timestamp
-      Store<std::uint32_t>(out + 8, in[8]);
-      for (std::size_t k = 0; k < 6; ++k)
-        Store<double>(out + 16 + 8 * k, static_cast<double>(Load<float>(in + 10 + 4 * k)));
-      const int exponent = static_cast<std::int8_t>(in[9]);
-      for (std::size_t k = 0; k < kDim; ++k)
-        Store<float>(
-            out + 64 + 4 * k,
-            std::ldexp(static_cast<float>(Load<std::uint16_t>(in + 34 + 2 * k)), exponent));
+      if (version >= 5) {
+        std::memcpy(out, in, compact);
+      } else {
+        std::memcpy(out, in, 8);  // timestamp
+        Store<std::uint32_t>(out + 8, in[8]);
+        for (std::size_t k = 0; k < 6; ++k)
+          Store<double>(out + 16 + 8 * k, static_cast<double>(Load<float>(in + 10 + 4 * k)));
+        const int exponent = static_cast<std::int8_t>(in[9]);
+        for (std::size_t k = 0; k < kDim; ++k)
+          Store<float>(
+              out + 64 + 4 * k,
+              std::ldexp(static_cast<float>(Load<std::uint16_t>(in + 34 + 2 * k)), exponent));
+      }
+      if (old_columns > 0)
+        std::memcpy(out + old_record - old_columns, strips.data() + frame * columns, columns);
     }
     Store<std::uint32_t>(header + 20, static_cast<std::uint32_t>(payload.size()));
     Store<std::uint32_t>(header + 24, Crc32(payload));
@@ -105,6 +121,9 @@ std::vector<std::uint8_t> AsVersion(const std::vector<std::uint8_t>& v5, std::ui
     b.insert(b.end(), payload.begin(), payload.end());
     o += kRouteDbChunkHeaderBytes + count * new_record;
   }
+  std::uint8_t* strip_record = b.data() + kRouteDbHeaderBytes + kRouteDbLensRecordBytes;
+  Store<std::uint32_t>(strip_record + 16, 0);
+  Store<std::uint32_t>(strip_record + 28, Crc32({strip_record, 28}));
   std::memcpy(b.data() + 8, &version, 4);
   if (version < 4) {
     b.erase(b.begin() + static_cast<long>(RouteDbDataOffset(version)),
@@ -223,14 +242,15 @@ TEST_F(RouteDbTest, RoundTrip) {
   EXPECT_EQ(report.frames, 137u);
   EXPECT_EQ(report.chunks, 14u);
   EXPECT_EQ(report.settings, Settings());  // the lens record too
-  EXPECT_EQ(report.version, 5u);
+  EXPECT_EQ(report.version, 6u);
   ExpectFrames(frames_, 137);
   EXPECT_FALSE(frames_.has_strips());
   // The size follows from the format alone.
   EXPECT_EQ(Bytes().size(), kRouteDbHeaderBytes + kRouteDbLensRecordBytes +
                                 kRouteDbStripRecordBytes + 15 * kRouteDbChunkHeaderBytes +
                                 137 * RouteDbRecordBytes(kRouteDbVersion, kDim, 0));
-  // Version 5's record: u64 timestamp, u8 flags, i8 exponent, six f32, two bytes a value.
+  // Version 5 and 6's record: u64 timestamp, u8 flags, i8 exponent, six f32, two bytes a
+  // value.
   EXPECT_EQ(RouteDbRecordBytes(kRouteDbVersion, kDim, 0), 34 + 2 * kDim);
 }
 
@@ -565,12 +585,12 @@ TEST_F(RouteDbTest, ReadsVersionOneAndRefusesANewerVersion) {
   EXPECT_EQ(report.settings.gravity_cap_cdeg, kNoGravityCap);
   EXPECT_FALSE(report.settings.lens.known);
   ExpectFrames(frames_, 5);
-  std::vector<std::uint8_t> v6 = Bytes();
-  const std::uint32_t six = 6;
-  std::memcpy(v6.data() + 8, &six, 4);
-  s = Parse(v6);
+  std::vector<std::uint8_t> v7 = Bytes();
+  const std::uint32_t seven = 7;
+  std::memcpy(v7.data() + 8, &seven, 4);
+  s = Parse(v7);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(s.message()).find("version 6; this skyloc reads versions 1 to 5"),
+  EXPECT_NE(std::string(s.message()).find("version 7; this skyloc reads versions 1 to 6"),
             std::string::npos)
       << s.message();
 }
@@ -616,12 +636,45 @@ TEST_F(RouteDbTest, VersionTwoFallsBackToTheLensHash) {
   ExpectFrames(frames_, 7);
 }
 
-// Version 4 stores a horizon strip per frame (bytes after the descriptor): they come back
-// byte for byte, and the record grows by exactly the strip's columns.
+// Frame i's strip as taught, a byte a column: frame 0 flat, the others 23 i grey levels wide.
+std::vector<std::uint8_t> TaughtStrips(std::size_t frames, std::size_t columns) {
+  std::vector<std::uint8_t> strips(frames * columns);
+  for (std::size_t i = 0; i < frames; ++i)
+    for (std::size_t j = 0; j < columns; ++j)
+      strips[i * columns + j] = static_cast<std::uint8_t>((i * 29 + 3) * j % (23 * i + 1) + i);
+  return strips;
+}
+
+// Frame i's strip as a route keeps it: the 4-bit levels of its bytes, each within
+// (range + 1) / 32 grey levels of the byte (dsp::PackStrip, tested against a quantiser of
+// its own in tests/dsp), and the same whatever version the file is.
+void ExpectStrips(const RouteFrames& frames, const std::vector<std::uint8_t>& taught,
+                  std::size_t columns) {
+  ASSERT_TRUE(frames.has_strips());
+  std::vector<float> decoded(columns);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::vector<std::uint8_t> packed(frames.strip(i).begin(), frames.strip(i).end());
+    ASSERT_EQ(packed.size(), 2 + (columns + 1) / 2);
+    ASSERT_EQ(dsp::UnpackStrip(packed, decoded), dsp::HorizonStripError::kOk);
+    const std::uint8_t* bytes = taught.data() + i * columns;
+    const int lo = *std::min_element(bytes, bytes + columns);
+    const int hi = *std::max_element(bytes, bytes + columns);
+    EXPECT_EQ(int{packed.front()}, lo) << i;
+    EXPECT_EQ(int{packed[1]}, hi - lo) << i;
+    const float bound = static_cast<float>(hi - lo + 1) / 32.0f;
+    for (std::size_t j = 0; j < columns; ++j)
+      ASSERT_LE(std::fabs(decoded[j] - static_cast<float>(bytes[j])), bound) << i << "," << j;
+  }
+}
+
+// Version 6 stores a horizon strip per frame after the descriptor, 4 bits a column with a
+// byte minimum and range: they come back within the levels' bound, and the record grows
+// by exactly 2 + columns / 2 bytes (an odd column count's last nibble is padding).
 TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
-  constexpr std::size_t kColumns = 24;
+  constexpr std::size_t kColumns = 25;
   RouteDbSettings settings = Settings();
   settings.strip = {static_cast<std::uint32_t>(kColumns), 16, 0, 2000};
+  const std::vector<std::uint8_t> taught = TaughtStrips(10, kColumns);
   {
     RouteDbWriter w;
     ASSERT_TRUE(w.Create(path_.c_str(), settings, 4, true).ok());
@@ -629,10 +682,7 @@ TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
       RouteFrameMeta meta;
       float d[kDim];
       FrameContent(i, &meta, d);
-      std::uint8_t strip[kColumns];
-      for (std::size_t j = 0; j < kColumns; ++j)
-        strip[j] = static_cast<std::uint8_t>(7 * i + j);
-      ASSERT_TRUE(w.Append(meta, d, strip).ok());
+      ASSERT_TRUE(w.Append(meta, d, {taught.data() + i * kColumns, kColumns}).ok());
     }
     // A strip of the wrong length is an error, not a torn record.
     const std::uint8_t short_strip[3] = {};
@@ -641,20 +691,30 @@ TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
     ASSERT_TRUE(w.Commit().ok());
   }
   EXPECT_EQ(Bytes().size(),
-            kDataOffset + 4 * kRouteDbChunkHeaderBytes + 10 * (34 + 2 * kDim + kColumns));
+            kDataOffset + 4 * kRouteDbChunkHeaderBytes + 10 * (34 + 2 * kDim + 2 + 13));
   RouteFrames with_strips;
   ASSERT_TRUE(with_strips.Allocate(20, kDim, kColumns).ok());
   RouteDbLoadReport report;
   Status s = ParseRouteDb(Bytes(), &settings, RouteDbLoadPolicy::kStrict, &with_strips, &report);
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_EQ(report.settings.strip, settings.strip);
+  EXPECT_EQ(report.strip_bits, 4u);
   ExpectFrames(with_strips, 10);
-  ASSERT_TRUE(with_strips.has_strips());
-  for (std::size_t i = 0; i < 10; ++i) {
-    ASSERT_EQ(with_strips.strip(i).size(), kColumns);
-    for (std::size_t j = 0; j < kColumns; ++j)
-      ASSERT_EQ(with_strips.strip(i)[j], static_cast<std::uint8_t>(7 * i + j)) << i << "," << j;
-  }
+  ExpectStrips(with_strips, taught, kColumns);
+  // The strip record names the encoding; version 6 has one, so another is damage, not a
+  // strip to read some other way.
+  std::vector<std::uint8_t> eight = Bytes();
+  std::uint8_t* strip_record = eight.data() + kRouteDbHeaderBytes + kRouteDbLensRecordBytes;
+  EXPECT_EQ(Load<std::uint32_t>(strip_record + 16), 4u);
+  Store<std::uint32_t>(strip_record + 16, 8);
+  Store<std::uint32_t>(strip_record + 28, Crc32({strip_record, 28}));
+  s = ParseRouteDb(eight, &settings, RouteDbLoadPolicy::kStrict, &with_strips, &report);
+  EXPECT_EQ(s.code(), StatusCode::kDataLoss);
+  EXPECT_NE(std::string(s.message())
+                .find("strip record: 8 bits a strip column, version 6 stores 4: the file is "
+                      "corrupt"),
+            std::string::npos)
+      << s.message();
   // A configuration without heading loads the descriptors and ignores the strips.
   const RouteDbSettings no_heading = Settings();
   s = ParseRouteDb(Bytes(), &no_heading, RouteDbLoadPolicy::kStrict, &frames_, &report);
@@ -667,10 +727,52 @@ TEST_F(RouteDbTest, StripsRoundTripAndCostTheirColumnsPerFrame) {
   s = ParseRouteDb(Bytes(), &other, RouteDbLoadPolicy::kStrict, nullptr, nullptr);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(std::string(s.message())
-                .find("taught with a 24-column horizon strip over 0.00..20.00 deg (16 rows), "
+                .find("taught with a 25-column horizon strip over 0.00..20.00 deg (16 rows), "
                       "this configuration has 360 columns"),
             std::string::npos)
       << s.message();
+}
+
+// Versions 4 and 5 stored a byte a column: their strips load packed, as a version-6 file's
+// (one form in memory), and route info says 8 bits.
+TEST_F(RouteDbTest, VersionFourAndFiveStripsArePackedOnLoad) {
+  constexpr std::size_t kColumns = 148;
+  RouteDbSettings settings = Settings();
+  settings.strip = {static_cast<std::uint32_t>(kColumns), 16, 0, 2000};
+  const std::vector<std::uint8_t> taught = TaughtStrips(11, kColumns);
+  {
+    RouteDbWriter w;
+    ASSERT_TRUE(w.Create(path_.c_str(), settings, 4, true).ok());
+    for (std::size_t i = 0; i < 11; ++i) {
+      RouteFrameMeta meta;
+      float d[kDim];
+      FrameContent(i, &meta, d);
+      ASSERT_TRUE(w.Append(meta, d, {taught.data() + i * kColumns, kColumns}).ok());
+    }
+    ASSERT_TRUE(w.Commit().ok());
+  }
+  RouteFrames v6;
+  ASSERT_TRUE(v6.Allocate(20, kDim, kColumns).ok());
+  ASSERT_TRUE(ParseRouteDb(Bytes(), &settings, RouteDbLoadPolicy::kStrict, &v6, nullptr).ok());
+  for (std::uint32_t version : {4u, 5u}) {
+    const std::vector<std::uint8_t> old = AsVersion(Bytes(), version, kColumns, taught);
+    RouteFrames frames;
+    ASSERT_TRUE(frames.Allocate(20, kDim, kColumns).ok());
+    RouteDbLoadReport report;
+    const Status s = ParseRouteDb(old, &settings, RouteDbLoadPolicy::kStrict, &frames, &report);
+    ASSERT_TRUE(s.ok()) << "version " << version << ": " << s.message();
+    EXPECT_EQ(report.version, version);
+    EXPECT_EQ(report.strip_bits, 8u);
+    EXPECT_EQ(old.size(), kDataOffset + 4 * kRouteDbChunkHeaderBytes +
+                              11 * ((version == 5 ? 34 + 2 * kDim : 64 + 4 * kDim) + kColumns));
+    ExpectFrames(frames, 11);
+    ExpectStrips(frames, taught, kColumns);
+    for (std::size_t i = 0; i < 11; ++i) {
+      ASSERT_TRUE(std::equal(frames.strip(i).begin(), frames.strip(i).end(), v6.strip(i).begin(),
+                             v6.strip(i).end()))
+          << "version " << version << ", frame " << i;
+    }
+  }
 }
 
 // A version-3 file has no strips: it loads into a configuration that wants them, with
@@ -1078,7 +1180,7 @@ TEST_F(RouteDbTest, SurvivesKillDuringTeach) {
 // rewritten by the documented layout) loads to the same frames as the version-5 file.
 TEST_F(RouteDbTest, EveryOlderVersionLoadsTheSameFrames) {
   Teach(23, 6, true);
-  for (std::uint32_t version = 1; version <= 4; ++version) {
+  for (std::uint32_t version = 1; version <= 5; ++version) {
     const std::vector<std::uint8_t> old = AsVersion(Bytes(), version);
     RouteDbLoadReport report;
     RouteDbSettings want = Settings();

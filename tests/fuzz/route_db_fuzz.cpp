@@ -3,7 +3,8 @@
 //
 // Two ways to read an input, chosen by its first byte, so both shallow and deep paths get
 // explored: (even) the bytes are a file as they are; (odd) they are edits to a valid
-// route file written by RouteDbWriter at start-up: (offset lo, offset hi, value) triples,
+// route file written by RouteDbWriter at start-up (with 9-column horizon strips, packed at
+// 4 bits a column as the current format stores them): (offset lo, offset hi, value) triples,
 // and with bit 1 set a truncation to a length taken from the second byte. The fuzzing
 // build (FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION) also skips the CRC comparisons in
 // route_db.cpp, so edits are not all stopped by the checksums.
@@ -22,6 +23,8 @@
 
 namespace {
 
+constexpr std::size_t kColumns = 9;  // odd: a packed strip ends in half a byte
+
 std::vector<std::uint8_t> ValidRouteFile() {
   using namespace skyloc::firmware;
   const std::string path = "/tmp/skyloc_route_fuzz_" + std::to_string(::getpid()) + ".db";
@@ -33,6 +36,7 @@ std::vector<std::uint8_t> ValidRouteFile() {
   settings.lens.width = 64;
   settings.lens.height = 48;
   settings.lens.fov_deg = 185;
+  settings.strip = {static_cast<std::uint32_t>(kColumns), 4, 0, 2000};
   RouteDbWriter writer;
   if (!writer.Create(path.c_str(), settings, 3, true).ok())
     std::abort();
@@ -42,7 +46,10 @@ std::vector<std::uint8_t> ValidRouteFile() {
     if (i % 2 == 0)
       meta.pose = skyloc::drivers::Pose{1, 2, 3, 4, 5, 6};
     const float d[4] = {static_cast<float>(i), 1, 2, 3};
-    if (!writer.Append(meta, d).ok())
+    std::uint8_t strip[kColumns];
+    for (std::size_t j = 0; j < kColumns; ++j)
+      strip[j] = static_cast<std::uint8_t>(40 * static_cast<std::size_t>(i) + 9 * j);
+    if (!writer.Append(meta, d, strip).ok())
       std::abort();
   }
   if (!writer.Commit().ok())
@@ -60,7 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace skyloc::firmware;
   static const std::vector<std::uint8_t> kValid = ValidRouteFile();
   static RouteFrames frames;
-  static const bool allocated = frames.Allocate(64, 4).ok();
+  static const bool allocated = frames.Allocate(64, 4, kColumns).ok();
   if (!allocated)
     std::abort();
 
@@ -92,9 +99,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       std::abort();
     // Touch every loaded value: ASan catches a record read past the input.
     float sum = 0;
-    for (std::size_t i = 0; i < frames.size(); ++i)
+    for (std::size_t i = 0; i < frames.size(); ++i) {
       for (float v : frames.descriptor(i))
         sum += v;
+      for (std::uint8_t v : frames.strip(i))
+        sum += v;
+    }
     volatile float sink = sum;
     (void)sink;
   }

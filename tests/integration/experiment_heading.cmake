@@ -42,7 +42,7 @@ if(wrong LESS 1 OR NOT wrong_certain EQUAL 0 OR uncertain LESS wrong)
                       "${uncertain} uncertain in all)")
 endif()
 # frames.csv: one line per correctly matched frame (every frame the summaries count), with
-# the header naming its columns, and a SURF heading on as many lines as the summary says.
+# the header naming its columns (the truth beside the estimates), and a SURF heading on as many lines as the summary says.
 file(STRINGS ${dir}/frames.csv lines)
 list(LENGTH lines line_count)
 list(GET lines 0 header)
@@ -50,12 +50,12 @@ string(JSON matched_frames GET "${json}" all correlation frames)
 string(JSON surf_frames GET "${json}" all surf estimated)
 set(with_surf 0)
 foreach(line IN LISTS lines)
-  if(line MATCHES "^[a-z]+,[0-9]+,[0-9]+,[01],[-0-9.e]+,[-0-9.e]+,[0-9]+$")
+  if(line MATCHES "^[a-z]+,[0-9]+,[0-9]+,[-0-9.e]+,[01],[-0-9.e]+,[-0-9.e]+,[0-9]+$")
     math(EXPR with_surf "${with_surf} + 1")
   endif()
 endforeach()
 math(EXPR rows_in_file "${line_count} - 1")
-if(NOT header STREQUAL "world,query_frame,route_frame,uncertain,correlation_deg,surf_deg,surf_inliers"
+if(NOT header STREQUAL "world,query_frame,route_frame,truth_deg,uncertain,correlation_deg,surf_deg,surf_inliers"
    OR NOT rows_in_file EQUAL matched_frames OR NOT with_surf EQUAL surf_frames)
   message(FATAL_ERROR "frames.csv: header '${header}', ${rows_in_file} frames (${with_surf} "
                       "with a SURF heading); expected ${matched_frames} (${surf_frames})")

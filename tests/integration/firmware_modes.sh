@@ -62,6 +62,10 @@ expect_rc 0 "route info" -- "${RUN[@]}" route info "$DB"
 grep -q "150 frames in 15 chunks, committed" "$WORK/out" || fail "route info: $(cat "$WORK/out")"
 grep -q "lens equidistant 96x96, fov 185.00 degrees, centre 47.50 47.50 px, radius 48.00 px" "$WORK/out" ||
   fail "route info lacks the lens: $(cat "$WORK/out")"
+# the strip's encoding (format 6): 360 columns at 4 bits, a byte minimum and a byte range
+grep -q "format version 6," "$WORK/out" || fail "route info: not format 6: $(cat "$WORK/out")"
+grep -q "horizon strips for heading: 360 columns at 4 bits a column (182 bytes per frame)" "$WORK/out" ||
+  fail "route info lacks the strip's encoding: $(cat "$WORK/out")"
 
 # 2. a taught route is never replaced silently.
 expect_rc 1 "teach over an existing route" -- "${RUN[@]}" teach --route "$DB" --config "$CONFIG" --frames 5
@@ -240,19 +244,19 @@ expect_err "the route is full" "teach capacity"
 expect_err "50 frames committed" "teach capacity"
 
 # 11. disk full during teach (RLIMIT_FSIZE: 20 KiB): the chunk that does not fit is lost,
-# the frames before it are committed and said so; the route loads strictly. Format 5 with
-# small.toml: 240-byte header, chunks of 10 records of 34 + 2 x 24 + 360 (strip) = 442
-# bytes: 240 + 4 x 4452 fits in 20480 bytes, a fifth chunk does not.
+# the frames before it are committed and said so; the route loads strictly. Format 6 with
+# small.toml: 240-byte header, chunks of 10 records of 34 + 2 x 24 + 182 (the strip: 2 +
+# 360 / 2) = 264 bytes: 240 + 7 x 2672 fits in 20480 bytes, an eighth chunk does not.
 (ulimit -f 20 && exec "${RUN[@]}" teach --route "$WORK/fsize.db" --config "$CONFIG" --frames 300) \
   >/dev/null 2>"$WORK/err"
 rc=$?
 [ $rc -eq 1 ] || fail "teach on a full disk exited $rc, expected 1: $(cat "$WORK/err")"
-expect_err "40 frames kept and committed; the last 10 did not fit" "teach on a full disk"
+expect_err "70 frames kept and committed; the last 10 did not fit" "teach on a full disk"
 # The run's closing line is written on the error path too: how far the teach got.
 grep -Eq "skyloc teach: [0-9]+ frames \([0-9]+ LOST, [0-9]+ SEARCHING, [0-9]+ LOCALISED\)" "$WORK/err" ||
   fail "teach on a full disk ended without its frames line: $(cat "$WORK/err")"
 expect_rc 0 "route info after a full disk" -- "${RUN[@]}" route info "$WORK/fsize.db"
-grep -q "40 frames in 4 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
+grep -q "70 frames in 7 chunks, committed" "$WORK/out" || fail "full-disk route: $(cat "$WORK/out")"
 
 # Recording: `skyloc record DIR` and `teach --record DIR` write dataset folders that teach
 # --dataset reads back. The recorder's writer thread cannot start under qemu-user

@@ -109,11 +109,11 @@ for ((round = 1; round <= ROUNDS; round++)); do
   check "race 1 round $round: the first teach said '${said}' frames committed, the route holds '${held}'" -- \
     same_count "$said" "$held"
 
-  # --- 2. a teach --force that commits nothing: a full disk before the first chunk (4 KiB:
-  # the 240-byte header fits, a chunk of 10 frames, 4452 bytes in format 5, does not; stderr is
-  # limited too, and its lines fit) ...
+  # --- 2. a teach --force that commits nothing: a full disk before the first chunk (2 KiB:
+  # the 240-byte header fits, a chunk of 10 frames, 2672 bytes in format 6, does not; stderr is
+  # limited too, and its lines fit: about 1.6 KB) ...
   fresh_route 30
-  (ulimit -f 4 && exec "${RUN[@]}" teach --force --route "$DB" --config "$CONFIG" --frames 50) \
+  (ulimit -f 2 && exec "${RUN[@]}" teach --force --route "$DB" --config "$CONFIG" --frames 50) \
     >/dev/null 2>"$WORK/full.err"
   rc=$?
   check "race 2 round $round: teach on a full disk exited $rc: $(cat "$WORK/full.err")" -- [ "$rc" -eq 1 ]

@@ -17,6 +17,7 @@
 // +psi * n_azimuth / 360 columns.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -50,6 +51,23 @@ const char* HorizonStripErrorMessage(HorizonStripError error);
 // A strip as a route stores it: each column's grey level rounded to the nearest byte,
 // clamped to 0..255. kBadOutputSize when `bytes` is not as long as `strip`. Allocates nothing.
 HorizonStripError StripToBytes(std::span<const float> strip, std::span<std::uint8_t> bytes);
+
+// A strip in 4 bits a column (route format 6, docs/SURF1D.md "What the route stores"):
+// byte 0 is the strip's lowest byte lo, byte 1 its range r = highest - lo, then column
+// 2i in the low nibble and 2i + 1 in the high nibble of byte 2 + i (an odd last column's
+// high nibble is 0). The bytes lo..lo + r, each standing for [v - 0.5, v + 0.5), are cut
+// into 16 equal levels, k = floor((v - lo + 0.5) * 16 / (r + 1)), and a level decodes as
+// its centre, lo - 0.5 + (k + 0.5) (r + 1) / 16: within (r + 1) / 32 grey levels of the
+// byte (8 at the widest range), exact when r = 15, and exact in float on every machine
+// (an integer over 32). Per strip, not per route: teach writes each frame as it comes.
+inline constexpr std::size_t PackedStripBytes(std::size_t columns) {
+  return 2 + (columns + 1) / 2;
+}
+// kBadOutputSize when `packed` is not PackedStripBytes(bytes.size()) long. Allocates nothing.
+HorizonStripError PackStrip(std::span<const std::uint8_t> bytes, std::span<std::uint8_t> packed);
+// The levels' centres as grey levels; kBadOutputSize when `packed` is not
+// PackedStripBytes(strip.size()) long. Allocates nothing.
+HorizonStripError UnpackStrip(std::span<const std::uint8_t> packed, std::span<float> strip);
 
 class HorizonStrip {
  public:
