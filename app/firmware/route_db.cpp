@@ -389,7 +389,7 @@ Status ParseRouteDb(RouteDbSource& source, const RouteDbSettings* expected,
   const std::size_t record_bytes = RouteDbRecordBytes(version, s.dim, s.strip.columns);
   std::vector<std::uint16_t> codes(version >= 5 ? s.dim : 0);  // a version-5 record's codes
   // One chunk's payload at a time, in a buffer that grows to the largest chunk: the peak
-  // memory of a load (docs/ROUTE_DB.md, "Loading").
+  // memory of a load (docs/ROUTE_DB.md, "A chunk at a time").
   FixedArray<std::uint8_t> payload;
 
   std::size_t offset = data_offset;

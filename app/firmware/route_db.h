@@ -275,7 +275,7 @@ struct RouteDbLoadReport {
 
 // Where ParseRouteDb reads a route's bytes: at any offset, so that loading a file needs
 // no copy of it in memory (a 1,000,000-place route is 456 MB at the default settings;
-// docs/ROUTE_DB.md, "Loading").
+// docs/ROUTE_DB.md, "A chunk at a time").
 class RouteDbSource {
  public:
   virtual std::uint64_t size() const = 0;
