@@ -14,6 +14,7 @@
 #include <cstring>
 #include <iterator>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "firmware/route_db_records.h"
@@ -127,10 +128,11 @@ Status CheckSettings(const RouteDbSettings& file, const RouteDbSettings& want) {
 namespace {
 
 // The header, the lens record and the strip record: the file's version and settings into
-// `r`, each checked (checksums, sizes); the chunks are not read.
-Status ParseRouteDbHeader(std::span<const std::uint8_t> bytes, RouteDbLoadReport* r) {
-  const std::size_t size = bytes.size();
-  const std::uint8_t* b = bytes.data();
+// `r`, each checked (checksums, sizes); the chunks are not read. `head`: the file's first
+// min(size, RouteDbDataOffset(kRouteDbVersion)) bytes, `size` the file's.
+Status ParseRouteDbHeader(std::span<const std::uint8_t> head, std::size_t size,
+                          RouteDbLoadReport* r) {
+  const std::uint8_t* b = head.data();
   if (size < kRouteDbHeaderBytes) {
     return Status::Error(StatusCode::kDataLoss,
                          "%zu bytes, shorter than the %zu-byte header: truncated, or not a "
@@ -269,22 +271,42 @@ Status AppendRecords(const std::uint8_t* payload, std::uint32_t count, std::size
   return Status::Ok();
 }
 
+// The first offset at or after `from` where an intact chunk header starts, 0 when there
+// is none. Searched at every byte: a version-5 record (34 + 2 dim + columns bytes) leaves
+// chunks at any alignment. Read in windows of kRouteDbScanWindowBytes, each starting a
+// chunk header less a byte before the end of the last, so every offset is tested once
+// with a whole header's bytes; the window is allocated only here, after damage.
+Status FindIntactChunkHeader(RouteDbSource& source, std::size_t size, std::size_t from,
+                             std::size_t* found) {
+  *found = 0;
+  if (from > size || size - from < kRouteDbChunkHeaderBytes)
+    return Status::Ok();
+  FixedArray<std::uint8_t> window;
+  SKYLOC_TRY(window.Allocate(std::min(kRouteDbScanWindowBytes, size - from)));
+  for (std::size_t o = from; size - o >= kRouteDbChunkHeaderBytes;) {
+    const std::size_t n = std::min(window.size(), size - o);  // >= a chunk header
+    if (Status read = source.Read(o, {window.data(), n}); !read.ok())
+      return read.AddContext("searching for intact data after damage");
+    for (std::size_t i = 0; i + kRouteDbChunkHeaderBytes <= n; ++i) {
+      if (ChunkHeaderIntact(window.data() + i)) {
+        *found = o + i;
+        return Status::Ok();
+      }
+    }
+    o += n - (kRouteDbChunkHeaderBytes - 1);
+  }
+  return Status::Ok();
+}
+
 // After the chunks: what `policy` makes of damage (`problem`, found at `offset`), of bytes
 // after the commit record and of a missing commit record; damage kept is counted in `r`.
-Status CheckEndOfChunks(std::span<const std::uint8_t> bytes, const Status& problem,
+Status CheckEndOfChunks(RouteDbSource& source, std::size_t size, const Status& problem,
                         std::size_t offset, RouteDbLoadPolicy policy, RouteDbLoadReport* r) {
   if (!problem.ok()) {
     // Damage followed by an intact chunk header is in the middle of the route: dropping
-    // the tail would hide the frames after it, so only --salvage does that. Searched at
-    // every byte: a version-5 record (34 + 2 dim + columns bytes) leaves chunks at any
-    // alignment.
+    // the tail would hide the frames after it, so only --salvage does that.
     std::size_t intact_after = 0;
-    for (std::size_t o = offset + 1; o + kRouteDbChunkHeaderBytes <= bytes.size(); ++o) {
-      if (ChunkHeaderIntact(bytes.data() + o)) {
-        intact_after = o;
-        break;
-      }
-    }
+    SKYLOC_TRY(FindIntactChunkHeader(source, size, offset + 1, &intact_after));
     if (intact_after != 0 && policy != RouteDbLoadPolicy::kSalvage) {
       // Short: the Status holds 240 characters and the caller puts the path in front.
       return Status::Error(StatusCode::kDataLoss,
@@ -294,7 +316,7 @@ Status CheckEndOfChunks(std::span<const std::uint8_t> bytes, const Status& probl
     }
     if (policy == RouteDbLoadPolicy::kStrict)
       return problem;
-    r->dropped_bytes = bytes.size() - r->valid_bytes;
+    r->dropped_bytes = size - r->valid_bytes;
     r->damaged_mid_file = intact_after != 0;
   } else if (r->trailing_bytes > 0 && policy == RouteDbLoadPolicy::kStrict) {
     return Status::Error(StatusCode::kDataLoss,
@@ -311,14 +333,43 @@ Status CheckEndOfChunks(std::span<const std::uint8_t> bytes, const Status& probl
   return Status::Ok();
 }
 
+// Bytes in memory as a source (the fuzz target and the tests parse them).
+class SpanSource final : public RouteDbSource {
+ public:
+  explicit SpanSource(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+  std::uint64_t size() const override { return bytes_.size(); }
+  Status Read(std::uint64_t offset, std::span<std::uint8_t> out) override {
+    if (offset > bytes_.size() || bytes_.size() - offset < out.size()) {
+      return Status::Error(StatusCode::kInternal, "read of %zu bytes at offset %llu past the end",
+                           out.size(), static_cast<unsigned long long>(offset));
+    }
+    std::memcpy(out.data(), bytes_.data() + offset, out.size());
+    return Status::Ok();
+  }
+
+ private:
+  std::span<const std::uint8_t> bytes_;
+};
+
 }  // namespace
 
-Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+Status ParseRouteDb(RouteDbSource& source, const RouteDbSettings* expected,
                     RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report) {
+  // Offsets and the report count in size_t: a file larger than this build addresses (4 GiB
+  // on 32 bits) is refused here, so no offset is narrowed below.
+  if (source.size() > std::numeric_limits<std::size_t>::max()) {
+    return Status::Error(StatusCode::kResourceExhausted,
+                         "%llu bytes, more than this build can address: load it on a 64-bit "
+                         "build",
+                         static_cast<unsigned long long>(source.size()));
+  }
+  const auto size = static_cast<std::size_t>(source.size());
   RouteDbLoadReport r;
-  SKYLOC_TRY(ParseRouteDbHeader(bytes, &r));
-  const std::size_t size = bytes.size();
-  const std::uint8_t* b = bytes.data();
+  std::array<std::uint8_t, RouteDbDataOffset(kRouteDbVersion)> head{};
+  const std::span<std::uint8_t> head_bytes(head.data(), std::min(size, head.size()));
+  if (Status read = source.Read(0, head_bytes); !read.ok())
+    return read.AddContext("header");
+  SKYLOC_TRY(ParseRouteDbHeader(head_bytes, size, &r));
   const RouteDbSettings& s = r.settings;
   const std::size_t data_offset = RouteDbDataOffset(r.version);
   if (expected != nullptr)
@@ -337,6 +388,9 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   const std::uint32_t version = r.version;
   const std::size_t record_bytes = RouteDbRecordBytes(version, s.dim, s.strip.columns);
   std::vector<std::uint16_t> codes(version >= 5 ? s.dim : 0);  // a version-5 record's codes
+  // One chunk's payload at a time, in a buffer that grows to the largest chunk: the peak
+  // memory of a load (docs/ROUTE_DB.md, "A chunk at a time").
+  FixedArray<std::uint8_t> payload;
 
   std::size_t offset = data_offset;
   std::size_t chunk = 0;  // 1-based number of the chunk being read, for messages
@@ -344,7 +398,6 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   while (offset < size) {
     ++chunk;
     const std::size_t left = size - offset;
-    const std::uint8_t* h = b + offset;
     if (left < kRouteDbChunkHeaderBytes) {
       problem = Status::Error(StatusCode::kDataLoss,
                               "chunk %zu at offset %zu: truncated header "
@@ -352,6 +405,9 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                               chunk, offset, left, kRouteDbChunkHeaderBytes);
       break;
     }
+    std::uint8_t h[kRouteDbChunkHeaderBytes];
+    if (Status read = source.Read(offset, h); !read.ok())
+      return read.AddContext("chunk %zu at offset %zu", chunk, offset);
     if (!ChunkHeaderIntact(h)) {
       problem = Status::Error(StatusCode::kDataLoss,
                               "chunk %zu at offset %zu: header checksum mismatch", chunk, offset);
@@ -388,6 +444,9 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                               chunk, offset, type, count, payload_bytes);
       break;
     }
+    // Before anything is allocated for it: a damaged header (in the fuzzing build, one
+    // whose checksum is not compared) must not make the loader allocate more than the
+    // file holds.
     if (left - kRouteDbChunkHeaderBytes < payload_bytes) {
       problem = Status::Error(StatusCode::kDataLoss,
                               "chunk %zu at offset %zu: truncated (%zu of "
@@ -395,8 +454,15 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
                               chunk, offset, left - kRouteDbChunkHeaderBytes, payload_bytes);
       break;
     }
-    const std::uint8_t* payload = h + kRouteDbChunkHeaderBytes;
-    if (!CrcMatches(payload_crc, payload, payload_bytes)) {
+    if (payload.size() < payload_bytes) {
+      if (Status grown = payload.Allocate(payload_bytes); !grown.ok())
+        return grown.AddContext("chunk %zu at offset %zu", chunk, offset);
+    }
+    if (Status read =
+            source.Read(offset + kRouteDbChunkHeaderBytes, {payload.data(), payload_bytes});
+        !read.ok())
+      return read.AddContext("chunk %zu at offset %zu", chunk, offset);
+    if (!CrcMatches(payload_crc, payload.data(), payload_bytes)) {
       problem = Status::Error(StatusCode::kDataLoss,
                               "chunk %zu at offset %zu: checksum mismatch "
                               "(frames %zu..%zu)",
@@ -404,8 +470,8 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
       break;
     }
     if (out != nullptr)
-      SKYLOC_TRY(AppendRecords(payload, count, record_bytes, version, s.dim, keep_strips, chunk,
-                               codes, out));
+      SKYLOC_TRY(AppendRecords(payload.data(), count, record_bytes, version, s.dim, keep_strips,
+                               chunk, codes, out));
     r.frames += count;
     ++r.chunks;
     offset += kRouteDbChunkHeaderBytes + payload_bytes;
@@ -414,57 +480,97 @@ Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* 
   if (r.valid_bytes == 0)
     r.valid_bytes = data_offset;
 
-  SKYLOC_TRY(CheckEndOfChunks(bytes, problem, offset, policy, &r));
+  SKYLOC_TRY(CheckEndOfChunks(source, size, problem, offset, policy, &r));
   if (report != nullptr)
     *report = r;
   return Status::Ok();
 }
 
-namespace {
-Status ReadAll(const char* path, int fd, std::vector<std::uint8_t>* bytes) {
+Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report) {
+  SpanSource source(bytes);
+  return ParseRouteDb(source, expected, policy, out, report);
+}
+
+Status RouteDbFile::Open(const char* path) {
+  UniqueFd fd;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, "route database", &fd));
+  return Attach(std::move(fd), path);
+}
+
+Status RouteDbFile::Attach(UniqueFd fd, const char* path) {
+  fd_ = std::move(fd);
   struct stat st {};
-  if (::fstat(fd, &st) != 0)
-    return Status::FromErrno(errno, "cannot stat %s", path);
-  bytes->resize(static_cast<std::size_t>(st.st_size));
-  std::size_t done = 0;
-  while (done < bytes->size()) {
-    const ssize_t n = ::read(fd, bytes->data() + done, bytes->size() - done);
-    if (n < 0 && errno == EINTR)
-      continue;
-    if (n < 0)
-      return Status::FromErrno(errno, "cannot read %s", path);
-    if (n == 0)
-      break;
-    done += static_cast<std::size_t>(n);
+  if (::fstat(fd_.get(), &st) != 0) {
+    const int e = errno;
+    return Status::FromErrno(e, "cannot stat %s", path);
   }
-  bytes->resize(done);
+  size_ = static_cast<std::uint64_t>(st.st_size);  // a regular file's: >= 0
   return Status::Ok();
 }
 
-Status ReadWholeFile(const char* path, std::vector<std::uint8_t>* bytes) {
-  UniqueFd fd;
-  SKYLOC_TRY(OpenRegularFile(path, O_RDONLY, "route database", &fd));
-  return ReadAll(path, fd.get(), bytes);
+Status RouteDbFile::Read(std::uint64_t offset, std::span<std::uint8_t> out) {
+  std::size_t done = 0;
+  while (done < out.size()) {
+    // Within size_, which came from an off_t: the offset fits one.
+    const auto at = static_cast<off_t>(offset + done);
+    const ssize_t n = ::pread(fd_.get(), out.data() + done, out.size() - done, at);
+    if (n < 0) {
+      const int e = errno;
+      if (e == EINTR)
+        continue;
+      return Status::FromErrno(e, "cannot read %zu bytes at offset %llu", out.size() - done,
+                               static_cast<unsigned long long>(offset + done));
+    }
+    if (n == 0) {
+      return Status::Error(StatusCode::kDataLoss,
+                           "the file ends at offset %llu but had %llu bytes when opened: it was "
+                           "cut while being read; load it again once nothing writes it",
+                           static_cast<unsigned long long>(offset + done),
+                           static_cast<unsigned long long>(size_));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return Status::Ok();
 }
-
-}  // namespace
 
 Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoadPolicy policy,
                    RouteFrames* out, RouteDbLoadReport* report) {
-  std::vector<std::uint8_t> bytes;
-  SKYLOC_TRY(ReadWholeFile(path, &bytes));
-  Status s = ParseRouteDb(bytes, expected, policy, out, report);
+  RouteDbFile file;
+  SKYLOC_TRY(file.Open(path));
+  Status s = ParseRouteDb(file, expected, policy, out, report);
   if (!s.ok())
     s.AddContext("route database %s", path);
   return s;
 }
 
+namespace {
+
+// The whole of `source` into fd, a window at a time (salvage's copy of the damaged
+// original: as the load, without a buffer as large as the file).
+Status CopyAll(RouteDbSource& source, int fd) {
+  FixedArray<std::uint8_t> window;
+  SKYLOC_TRY(window.Allocate(kRouteDbScanWindowBytes));
+  for (std::uint64_t o = 0; o < source.size();) {
+    const std::uint64_t left = source.size() - o;
+    const std::size_t n =
+        left < window.size() ? static_cast<std::size_t>(left) : window.size();  // fits: < window
+    if (Status read = source.Read(o, {window.data(), n}); !read.ok())
+      return read;
+    SKYLOC_TRY(WriteAll(fd, window.data(), n));
+    o += n;
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage) {
-  UniqueFd fd;
-  SKYLOC_TRY(OpenRegularFile(path, O_RDWR, "route database", &fd));
+  UniqueFd locked;
+  SKYLOC_TRY(OpenRegularFile(path, O_RDWR, "route database", &locked));
   // A running teach holds this lock while it writes: recovering under it would cut the
   // chunk it is appending.
-  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
+  if (::flock(locked.get(), LOCK_EX | LOCK_NB) != 0) {
     const int e = errno;
     if (e == EWOULDBLOCK)
       return Status::Error(StatusCode::kUnavailable,
@@ -473,12 +579,13 @@ Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage)
                            path);
     return Status::FromErrno(e, "cannot lock %s", path);
   }
-  std::vector<std::uint8_t> bytes;
-  SKYLOC_TRY(ReadAll(path, fd.get(), &bytes));
+  RouteDbFile file;
+  SKYLOC_TRY(file.Attach(std::move(locked), path));
+  const int fd = file.fd();
   RouteDbLoadReport r;
   Status s = ParseRouteDb(
-      bytes, nullptr,
-      salvage ? RouteDbLoadPolicy::kSalvage : RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &r);
+      file, nullptr, salvage ? RouteDbLoadPolicy::kSalvage : RouteDbLoadPolicy::kRecoverInterrupted,
+      nullptr, &r);
   if (!s.ok())
     return s.AddContext("route database %s", path);
   if (!r.committed && r.frames == 0) {
@@ -493,27 +600,30 @@ Status RecoverRouteDb(const char* path, RouteDbLoadReport* report, bool salvage)
     char copy[300];
     std::snprintf(copy, sizeof copy, "%s.damaged", path);
     UniqueFd out(::open(copy, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
-    if (!out.is_valid())
-      return Status::FromErrno(errno, "cannot keep the damaged original as %s (remove or move it)",
+    if (!out.is_valid()) {
+      const int e = errno;
+      return Status::FromErrno(e, "cannot keep the damaged original as %s (remove or move it)",
                                copy);
-    if (Status w = WriteAll(out.get(), bytes.data(), bytes.size()); !w.ok())
-      return w.AddContext("%s", copy);
-    if (::fsync(out.get()) != 0)
-      return Status::FromErrno(errno, "cannot sync %s", copy);
+    }
+    if (Status w = CopyAll(file, out.get()); !w.ok())
+      return w.AddContext("copying %s to %s", path, copy);
+    if (::fsync(out.get()) != 0) {
+      const int e = errno;
+      return Status::FromErrno(e, "cannot sync %s", copy);
+    }
   }
   if (!r.committed || r.trailing_bytes > 0) {
-    if (::ftruncate(fd.get(), static_cast<off_t>(r.valid_bytes)) != 0 ||
-        ::lseek(fd.get(), 0, SEEK_END) < 0)
+    if (::ftruncate(fd, static_cast<off_t>(r.valid_bytes)) != 0 || ::lseek(fd, 0, SEEK_END) < 0)
       return Status::FromErrno(errno, "cannot cut the torn tail of %s", path);
   }
   if (!r.committed) {
     std::uint8_t commit[kRouteDbChunkHeaderBytes];
     EncodeChunkHeader(kChunkCommit, r.frames, 0, 0, Crc32({}), commit);
     // Not SKYLOC_TRY(x.AddContext()): that binds a reference to a destroyed temporary.
-    if (Status w = WriteAll(fd.get(), commit, sizeof commit); !w.ok())
+    if (Status w = WriteAll(fd, commit, sizeof commit); !w.ok())
       return w.AddContext("%s", path);
   }
-  if ((!r.committed || r.trailing_bytes > 0) && ::fdatasync(fd.get()) != 0)
+  if ((!r.committed || r.trailing_bytes > 0) && ::fdatasync(fd) != 0)
     return Status::FromErrno(errno, "cannot sync %s", path);
   if (report != nullptr)
     *report = r;
@@ -532,12 +642,12 @@ RouteTmpReport InspectRouteTmp(const char* route_path) {
     return r;
   r.exists = true;
   r.bytes = static_cast<std::uint64_t>(st.st_size);
-  std::vector<std::uint8_t> bytes;
-  if (!ReadWholeFile(tmp, &bytes).ok())
+  RouteDbFile file;
+  if (!file.Open(tmp).ok())
     return r;
   RouteDbLoadReport parsed;
   r.loads =
-      ParseRouteDb(bytes, nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &parsed).ok();
+      ParseRouteDb(file, nullptr, RouteDbLoadPolicy::kRecoverInterrupted, nullptr, &parsed).ok();
   r.frames = r.loads ? parsed.frames : 0;
   return r;
 }

@@ -273,13 +273,58 @@ struct RouteDbLoadReport {
   std::size_t trailing_bytes = 0;
 };
 
-// Parses a whole file's bytes (the loader and the fuzz target share this). `expected`
-// (may be null: accept what the file says) must equal the stored settings. On success
-// `out` holds the frames; on error the Status names the chunk and its byte offset.
+// Where ParseRouteDb reads a route's bytes: at any offset, so that loading a file needs
+// no copy of it in memory (a 1,000,000-place route is 456 MB at the default settings;
+// docs/ROUTE_DB.md, "A chunk at a time").
+class RouteDbSource {
+ public:
+  virtual std::uint64_t size() const = 0;
+  // Exactly out.size() bytes from `offset` (offset + out.size() <= size()), or an error
+  // naming the offset: never fewer bytes.
+  virtual Status Read(std::uint64_t offset, std::span<std::uint8_t> out) = 0;
+
+ protected:
+  ~RouteDbSource() = default;
+};
+
+// A route file read with pread. Its size is taken when it is opened: a file that ends
+// before that size (cut while it was being read) and a read error are errors naming the
+// offset (LoadRouteDb puts the path in front).
+class RouteDbFile final : public RouteDbSource {
+ public:
+  // Opens `path` read-only; anything but a regular file is refused (OpenRegularFile).
+  Status Open(const char* path);
+  // Reads through `fd`, a regular file `path` names (recovery opens it read-write and
+  // locks it first, so the size is taken under the lock).
+  Status Attach(UniqueFd fd, const char* path);
+  std::uint64_t size() const override { return size_; }
+  Status Read(std::uint64_t offset, std::span<std::uint8_t> out) override;
+  int fd() const { return fd_.get(); }
+
+ private:
+  UniqueFd fd_;
+  std::uint64_t size_ = 0;
+};
+
+// The window in which the loader searches for an intact chunk header after damage
+// (whether the damage is mid-file); windows overlap by a chunk header less a byte, so a
+// header across an edge is found whole in the next one.
+inline constexpr std::size_t kRouteDbScanWindowBytes = 16384;
+
+// Parses a route file's bytes, the header and the lens and strip records once, then a
+// chunk at a time into a buffer as large as the largest chunk (the loader, recovery and
+// the fuzz target share this one parser). `expected` (may be null: accept what the file
+// says) must equal the stored settings. On success `out` holds the frames; on error the
+// Status names the chunk and its byte offset. A read error is returned as it is, whatever
+// the policy: it is not damage to recover from.
+Status ParseRouteDb(RouteDbSource& source, const RouteDbSettings* expected,
+                    RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report);
+// The same on bytes in memory (the fuzz target and the tests).
 Status ParseRouteDb(std::span<const std::uint8_t> bytes, const RouteDbSettings* expected,
                     RouteDbLoadPolicy policy, RouteFrames* out, RouteDbLoadReport* report);
 
-// Reads and parses `path`. Start-up only (reads the file into a temporary buffer).
+// Reads and parses `path` chunk by chunk (RouteDbFile). Start-up only: it allocates a
+// buffer as large as the file's largest chunk, not one as large as the file.
 Status LoadRouteDb(const char* path, const RouteDbSettings* expected, RouteDbLoadPolicy policy,
                    RouteFrames* out, RouteDbLoadReport* report);
 
@@ -331,7 +376,8 @@ struct RouteTmpReport {
   bool loads = false;      // its intact chunks parse (as `route recover` would keep them)
   std::size_t frames = 0;  // intact frames in it
 };
-// Reads FILE.db.tmp of the route at `route_path` (start-up only: a temporary buffer).
+// Reads FILE.db.tmp of the route at `route_path` (start-up only: as LoadRouteDb, a chunk at
+// a time).
 RouteTmpReport InspectRouteTmp(const char* route_path);
 
 // Writes a route database during teach. Append() copies into a chunk buffer allocated by

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "skyloc/platform/alloc_counter.h"
 #include "skyloc/platform/crc32.h"
 #include "support/emulator.h"
 #include "support/scratch_dir.h"
@@ -1258,6 +1259,285 @@ TEST_F(RouteDbTest, SameBitsOfATaughtRoute) {
   char crc[11];
   std::snprintf(crc, sizeof crc, "0x%08x", Crc32(Bytes()));
   EXPECT_EQ(std::string(crc), "0x610deb7c") << "the value is x86-64's";
+}
+
+// ---------------------------------------------------------------------------------------
+// Loading a chunk at a time (issue 33): LoadRouteDb reads the file through RouteDbFile,
+// the fuzz target and the tests above parse bytes in memory; one parser, so the file gives
+// the same frames, reports and errors as its bytes.
+
+// Every frame of `a` as in `b`: time, pose, descriptor and packed strip, bit for bit.
+void ExpectSameFrames(const RouteFrames& a, const RouteFrames& b) {
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.has_strips(), b.has_strips());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const RouteFrameMeta ma = a.meta(i), mb = b.meta(i);
+    ASSERT_EQ(ma.timestamp_ns, mb.timestamp_ns) << i;
+    ASSERT_EQ(ma.pose.has_value(), mb.pose.has_value()) << i;
+    if (ma.pose) {
+      const double pa[6] = {ma.pose->x_m,      ma.pose->y_m,       ma.pose->z_m,
+                            ma.pose->roll_deg, ma.pose->pitch_deg, ma.pose->yaw_deg};
+      const double pb[6] = {mb.pose->x_m,      mb.pose->y_m,       mb.pose->z_m,
+                            mb.pose->roll_deg, mb.pose->pitch_deg, mb.pose->yaw_deg};
+      for (std::size_t k = 0; k < 6; ++k)
+        ASSERT_EQ(pa[k], pb[k]) << i << "," << k;
+    }
+    ASSERT_EQ(std::vector<float>(a.descriptor(i).begin(), a.descriptor(i).end()),
+              std::vector<float>(b.descriptor(i).begin(), b.descriptor(i).end()))
+        << i;
+    ASSERT_EQ(std::vector<std::uint8_t>(a.strip(i).begin(), a.strip(i).end()),
+              std::vector<std::uint8_t>(b.strip(i).begin(), b.strip(i).end()))
+        << i;
+  }
+}
+
+// `bytes` as the file at `path`, a new file: ext4 flushes a file truncated to zero when it
+// is closed (auto_da_alloc), 3 ms a case in the table below.
+void WriteNewFile(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  std::remove(path.c_str());
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<long>(bytes.size()));
+}
+
+void ExpectSameReport(const RouteDbLoadReport& a, const RouteDbLoadReport& b) {
+  EXPECT_EQ(a.settings, b.settings);
+  EXPECT_EQ(a.version, b.version);
+  EXPECT_EQ(a.strip_bits, b.strip_bits);
+  EXPECT_EQ(a.frames, b.frames);
+  EXPECT_EQ(a.chunks, b.chunks);
+  EXPECT_EQ(a.committed, b.committed);
+  EXPECT_EQ(a.valid_bytes, b.valid_bytes);
+  EXPECT_EQ(a.dropped_bytes, b.dropped_bytes);
+  EXPECT_EQ(a.damaged_mid_file, b.damaged_mid_file);
+  EXPECT_EQ(a.trailing_bytes, b.trailing_bytes);
+}
+
+// The bytes allocated while a route loads are one chunk's payload and a few small things,
+// the same for a route four times longer: reading the whole file first allocated the file.
+// The frames are those the bytes parse to, and those taught.
+TEST_F(RouteDbTest, LoadingAllocatesAChunkNotTheFile) {
+  ASSERT_TRUE(AllocationCounterActive());
+  constexpr std::size_t kColumns = 25, kFlush = 100;
+  RouteDbSettings settings = Settings();
+  settings.strip = {static_cast<std::uint32_t>(kColumns), 16, 0, 2000};
+  const std::size_t payload = kFlush * RouteDbRecordBytes(kRouteDbVersion, kDim, kColumns);
+  std::uint64_t allocated[2] = {};
+  const std::size_t routes[2] = {3000, 12000};
+  for (std::size_t r = 0; r < 2; ++r) {
+    const std::size_t places = routes[r];
+    const std::vector<std::uint8_t> taught = TaughtStrips(places, kColumns);
+    {
+      RouteDbWriter w;
+      ASSERT_TRUE(w.Create(path_.c_str(), settings, kFlush, true).ok());
+      for (std::size_t i = 0; i < places; ++i) {
+        RouteFrameMeta meta;
+        float d[kDim];
+        FrameContent(i, &meta, d);
+        ASSERT_TRUE(w.Append(meta, d, {taught.data() + i * kColumns, kColumns}).ok());
+      }
+      ASSERT_TRUE(w.Commit().ok());
+    }
+    RouteFrames loaded, parsed;
+    ASSERT_TRUE(loaded.Allocate(places, kDim, kColumns).ok());
+    ASSERT_TRUE(parsed.Allocate(places, kDim, kColumns).ok());
+    RouteDbLoadReport load_report, parse_report;
+    Status s;
+    {
+      const AllocationScope scope;
+      s = LoadRouteDb(path_.c_str(), &settings, RouteDbLoadPolicy::kStrict, &loaded, &load_report);
+      allocated[r] = scope.bytes();
+    }
+    ASSERT_TRUE(s.ok()) << s.message();
+    const std::vector<std::uint8_t> bytes = Bytes();
+    std::printf("%zu places, %zu-byte file, %zu-byte chunks: the load allocated %llu bytes\n",
+                places, bytes.size(), payload, static_cast<unsigned long long>(allocated[r]));
+    EXPECT_LE(allocated[r], payload + 1024) << places;
+    s = ParseRouteDb(bytes, &settings, RouteDbLoadPolicy::kStrict, &parsed, &parse_report);
+    ASSERT_TRUE(s.ok()) << s.message();
+    ExpectSameReport(load_report, parse_report);
+    EXPECT_EQ(load_report.frames, places);
+    ExpectSameFrames(loaded, parsed);
+    ExpectFrames(loaded, places);
+    ExpectStrips(loaded, taught, kColumns);
+  }
+  EXPECT_EQ(allocated[0], allocated[1]) << "the load's memory grows with the route";
+}
+
+// Every damaged file of the tests above (each truncation, each byte with a bit flipped,
+// junk after the commit record, a chunk header claiming 3.96 GB), under every policy:
+// loading the file gives what parsing its bytes gives, errors word for word (after the
+// path), reports field by field, frames bit for bit.
+TEST_F(RouteDbTest, LoadingAFileAnswersAsParsingItsBytes) {
+  constexpr std::size_t kFlush = 4;
+  Teach(10, kFlush, true);
+  const std::vector<std::uint8_t> good = Bytes();
+  std::vector<std::vector<std::uint8_t>> cases;
+  for (std::size_t len = 0; len <= good.size(); ++len)
+    cases.emplace_back(good.begin(), good.begin() + static_cast<long>(len));
+  std::mt19937 rng(7);
+  for (std::size_t byte = 0; byte < good.size(); ++byte) {
+    cases.push_back(good);
+    cases.back()[byte] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+  }
+  cases.push_back(good);
+  cases.back().insert(cases.back().end(), 8, 0x5a);
+  // Chunk 2's header (intact checksum) claiming 90,000,000 frames: 3,960,000,000 payload
+  // bytes, which the file does not hold. Allocating them first would fail or take 4 GB.
+  cases.push_back(good);
+  {
+    std::uint8_t* h = cases.back().data() + ChunkOffset(2, kFlush, 10);
+    const std::uint32_t count = 90000000u;
+    Store<std::uint32_t>(h + 16, count);
+    Store<std::uint32_t>(
+        h + 20, count * static_cast<std::uint32_t>(RouteDbRecordBytes(kRouteDbVersion, kDim, 0)));
+    Store<std::uint32_t>(h + 28, Crc32({h, 28}));
+  }
+  const RouteDbSettings want = Settings();
+  RouteFrames parsed;
+  ASSERT_TRUE(parsed.Allocate(10000, kDim).ok());
+  std::size_t loads_ok = 0, errors = 0;
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    const std::vector<std::uint8_t>& bytes = cases[c];
+    WriteNewFile(path_, bytes);
+    for (RouteDbLoadPolicy policy :
+         {RouteDbLoadPolicy::kStrict, RouteDbLoadPolicy::kRecoverInterrupted,
+          RouteDbLoadPolicy::kSalvage}) {
+      RouteDbLoadReport load_report, parse_report;
+      const Status loaded = LoadRouteDb(path_.c_str(), &want, policy, &frames_, &load_report);
+      Status from_bytes = ParseRouteDb(bytes, &want, policy, &parsed, &parse_report);
+      ASSERT_EQ(loaded.ok(), from_bytes.ok()) << c << ": " << loaded.message();
+      if (!loaded.ok()) {
+        ++errors;
+        EXPECT_EQ(loaded.code(), from_bytes.code()) << c;
+        from_bytes.AddContext("route database %s", path_.c_str());
+        EXPECT_STREQ(loaded.message(), from_bytes.message()) << c;
+        continue;
+      }
+      ++loads_ok;
+      ExpectSameReport(load_report, parse_report);
+      ExpectSameFrames(frames_, parsed);
+    }
+  }
+  // The table holds both: a comparison of errors only could not fail on a frame.
+  EXPECT_GT(loads_ok, 100u);
+  EXPECT_GT(errors, 1000u);
+
+  // The huge claim is refused as a truncated chunk, and nothing near it is allocated.
+  WriteNewFile(path_, cases.back());
+  const AllocationScope scope;
+  const Status s =
+      LoadRouteDb(path_.c_str(), &want, RouteDbLoadPolicy::kSalvage, &frames_, nullptr);
+  const std::uint64_t bytes = scope.bytes();
+  EXPECT_TRUE(s.ok()) << s.message();  // salvage keeps chunk 1
+  EXPECT_EQ(frames_.size(), kFlush);
+  EXPECT_LT(bytes, 1u << 16);
+  const Status strict =
+      LoadRouteDb(path_.c_str(), &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+  EXPECT_NE(
+      std::string(strict.message())
+          .find(
+              "chunk 2 at offset " + std::to_string(ChunkOffset(2, kFlush, 10)) + ": truncated (" +
+              std::to_string(good.size() - ChunkOffset(2, kFlush, 10) - kRouteDbChunkHeaderBytes) +
+              " of 3960000000 payload bytes)"),
+      std::string::npos)
+      << strict.message();
+}
+
+// After damage the loader searches the rest of the file for an intact chunk header in
+// windows of kRouteDbScanWindowBytes: one that lies across a window's edge is found, at the
+// offset where the writer put it (ChunkOffset), and --salvage keeps the chunk before.
+TEST_F(RouteDbTest, IntactDataAfterDamageIsFoundAcrossAScanWindowsEdge) {
+  const std::size_t record = RouteDbRecordBytes(kRouteDbVersion, kDim, 0);
+  const std::size_t around = kRouteDbScanWindowBytes / record;
+  std::size_t across_edge = 0;
+  for (std::size_t flush = around - 2; flush <= around + 2; ++flush) {
+    Teach(3 * flush, flush, true);
+    std::vector<std::uint8_t> bytes = Bytes();
+    const std::size_t damaged = ChunkOffset(2, flush, 3 * flush);
+    const std::size_t intact = ChunkOffset(3, flush, 3 * flush);
+    // The search starts a byte after the damaged chunk's start; windows start every
+    // kRouteDbScanWindowBytes - 31 bytes.
+    const std::size_t in_first_window = intact - (damaged + 1);
+    if (in_first_window < kRouteDbScanWindowBytes &&
+        in_first_window + kRouteDbChunkHeaderBytes > kRouteDbScanWindowBytes)
+      ++across_edge;
+    bytes[damaged + kRouteDbChunkHeaderBytes + 7] ^= 0x01;
+    WriteNewFile(path_, bytes);
+    const RouteDbSettings want = Settings();
+    Status s = LoadRouteDb(path_.c_str(), &want, RouteDbLoadPolicy::kStrict, &frames_, nullptr);
+    EXPECT_NE(
+        std::string(s.message())
+            .find("intact data follows at offset " + std::to_string(intact) + ": damaged mid-file"),
+        std::string::npos)
+        << flush << ": " << s.message();
+    RouteDbLoadReport report;
+    s = LoadRouteDb(path_.c_str(), &want, RouteDbLoadPolicy::kSalvage, &frames_, &report);
+    ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_TRUE(report.damaged_mid_file);
+    EXPECT_EQ(report.dropped_bytes, bytes.size() - damaged);
+    ExpectFrames(frames_, flush);
+  }
+  EXPECT_GT(across_edge, 0u) << "no chunk header fell across a window's edge";
+}
+
+// A file cut while it is being read (its size was taken when it was opened) and a read
+// error are errors naming the chunk and the offset, under every policy: neither is a torn
+// tail that recovery may cut off.
+TEST_F(RouteDbTest, AFileCutWhileBeingReadOrUnreadableIsAnError) {
+  const std::size_t chunk2 = ChunkOffset(2, 10, 30);
+  for (RouteDbLoadPolicy policy :
+       {RouteDbLoadPolicy::kStrict, RouteDbLoadPolicy::kRecoverInterrupted,
+        RouteDbLoadPolicy::kSalvage}) {
+    Teach(30, 10, true);
+    RouteDbFile file;
+    ASSERT_TRUE(file.Open(path_.c_str()).ok());
+    ASSERT_EQ(::truncate(path_.c_str(), static_cast<off_t>(chunk2 + 40)), 0);
+    const Status s = ParseRouteDb(file, nullptr, policy, &frames_, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kDataLoss);
+    EXPECT_NE(
+        std::string(s.message())
+            .find("chunk 2 at offset " + std::to_string(chunk2) + ": the file ends at offset " +
+                  std::to_string(chunk2 + 40) + " but had " + std::to_string(file.size()) +
+                  " bytes when opened: it was cut while being "
+                  "read"),
+        std::string::npos)
+        << s.message();
+  }
+
+  // A source whose reads fail from chunk 3 on, as a disk's would.
+  class FailingSource final : public RouteDbSource {
+   public:
+    FailingSource(RouteDbSource* inner, std::uint64_t from) : inner_(inner), from_(from) {}
+    std::uint64_t size() const override { return inner_->size(); }
+    Status Read(std::uint64_t offset, std::span<std::uint8_t> out) override {
+      if (offset + out.size() > from_)
+        return Status::FromErrno(EIO, "cannot read %zu bytes at offset %llu", out.size(),
+                                 static_cast<unsigned long long>(offset));
+      return inner_->Read(offset, out);
+    }
+
+   private:
+    RouteDbSource* inner_;
+    std::uint64_t from_;
+  };
+  Teach(30, 10, true);
+  RouteDbFile file;
+  ASSERT_TRUE(file.Open(path_.c_str()).ok());
+  const std::size_t chunk3 = ChunkOffset(3, 10, 30);
+  FailingSource failing(&file, chunk3);
+  for (RouteDbLoadPolicy policy :
+       {RouteDbLoadPolicy::kStrict, RouteDbLoadPolicy::kRecoverInterrupted,
+        RouteDbLoadPolicy::kSalvage}) {
+    const Status s = ParseRouteDb(failing, nullptr, policy, &frames_, nullptr);
+    EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();  // EIO's
+    EXPECT_NE(std::string(s.message())
+                  .find("chunk 3 at offset " + std::to_string(chunk3) + ": cannot read"),
+              std::string::npos)
+        << s.message();
+  }
+  // The same file, read whole, loads.
+  EXPECT_TRUE(ParseRouteDb(file, nullptr, RouteDbLoadPolicy::kStrict, &frames_, nullptr).ok());
+  ExpectFrames(frames_, 30);
 }
 
 }  // namespace
