@@ -343,7 +343,10 @@ class SpanSource final : public RouteDbSource {
       return Status::Error(StatusCode::kInternal, "read of %zu bytes at offset %llu past the end",
                            out.size(), static_cast<unsigned long long>(offset));
     }
-    std::memcpy(out.data(), bytes_.data() + offset, out.size());
+    // An empty read may come with null pointers (an empty file's span), which memcpy must
+    // not be given even for no bytes.
+    if (!out.empty())
+      std::memcpy(out.data(), bytes_.data() + offset, out.size());
     return Status::Ok();
   }
 
